@@ -1,0 +1,40 @@
+"""facemech: physics and kinematics of the speaking face.
+
+A three-layer mass-spring-damper face moved by Hill-type muscles and a jaw hinge, driven by
+processed EMG or by muscle activity (Lucero & Munhall 1999). SI units inside; +x the subject's
+left, +y up, +z forward.
+"""
+
+from __future__ import annotations
+
+from importlib.metadata import PackageNotFoundError, version
+
+try:
+    __version__ = version("facemech")
+except PackageNotFoundError:  # running from a source tree
+    __version__ = "0.0.0+unknown"
+
+from .emg import EMGActivity, process_emg
+from .errors import FacemechError, InputError, SimulationBlowUp
+from .geometry.builder import BuildOptions, FaceModel, build_face, default_face, load_face
+from .geometry.surface_io import read_landmarks, read_surface
+from .io.activity import read_activity, seven_channel_control, write_activity
+from .io.emg import read_emg
+from .io.markers import MarkerTable, read_marker_csv, write_marker_csv
+from .io.results import read_results, write_results
+from .params import EMG_CHANNELS, MUSCLE_GROUPS, PRESETS, Parameters, preset
+from .physics.assembly import Physics
+from .solvers.forward import Simulation, simulate
+from .solvers.jaw import angles_from_chin
+from .solvers.state import State
+from .solvers.step import INTEGRATORS, Stepper
+
+__all__ = [
+    "__version__",
+    "BuildOptions", "EMGActivity", "EMG_CHANNELS", "FaceModel", "FacemechError", "INTEGRATORS",
+    "InputError", "MUSCLE_GROUPS", "MarkerTable", "PRESETS", "Parameters", "Physics",
+    "Simulation", "SimulationBlowUp", "State", "Stepper", "angles_from_chin", "build_face",
+    "default_face", "load_face", "preset", "process_emg", "read_activity", "read_emg",
+    "read_landmarks", "read_marker_csv", "read_results", "read_surface", "seven_channel_control",
+    "simulate", "write_activity", "write_marker_csv", "write_results",
+]

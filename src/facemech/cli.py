@@ -1,0 +1,363 @@
+"""The ``facemech`` command line: thin wrappers that parse, call one library function, report.
+
+Errors in the input end the command with one line on stderr naming the file and the field, and
+exit status 2; nothing is left half-written.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+from typing import Annotated
+
+import numpy as np
+import typer
+from rich.console import Console
+from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+from .errors import FacemechError, InputError
+
+app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_enable=False,
+                  help="Physics and kinematics of the speaking face.")
+face_app = typer.Typer(no_args_is_help=True, help="Build and inspect face models.")
+emg_app = typer.Typer(no_args_is_help=True, help="Process EMG recordings.")
+app.add_typer(face_app, name="face")
+app.add_typer(emg_app, name="emg")
+
+err = Console(stderr=True)
+out = Console()
+
+
+def _progress():
+    return Progress(TextColumn("{task.description}"), BarColumn(), TextColumn("{task.completed}/"
+                    "{task.total}"), TimeElapsedColumn(), console=err, transient=True,
+                    disable=not err.is_terminal)
+
+
+def _interval(text: str | None, field: str) -> tuple[float, float] | None:
+    if text is None:
+        return None
+    try:
+        a, b = (float(v) for v in text.split(","))
+    except ValueError:
+        raise InputError("expected START,STOP in seconds", field=field) from None
+    if not b > a:
+        raise InputError("STOP must be after START", field=field)
+    return a, b
+
+
+# ---------------------------------------------------------------------------------------------
+@app.command()
+def demo(
+    output: Annotated[Path, typer.Option("-o", "--output", help="output folder")] = Path(
+        "demo-output"),
+    integrator: Annotated[str, typer.Option(help="euler (the paper's) or rosenbrock")] = "euler",
+    video: Annotated[bool, typer.Option(help="render the MP4")] = True,
+):
+    """Simulate a synthetic utterance on the built-in face; write results, plots and a movie."""
+    from .demo import run_demo
+
+    with _progress() as prog:
+        tasks: dict[str, int] = {}
+
+        def report(stage, done, total):
+            if stage not in tasks:
+                tasks[stage] = prog.add_task(stage, total=total)
+            prog.update(tasks[stage], completed=done)
+
+        err.print(f"facemech demo: building the face and simulating ({integrator}) ...")
+        s = run_demo(output, integrator=integrator, video=video, progress=report)
+    out.print(f"[bold]facemech demo[/bold] -> {output}/")
+    out.print(f"  frames: {s.frames} ({s.simulated_seconds:.2f} s at 60 Hz)")
+    out.print(f"  simulation: {s.simulation_seconds:.1f} s wall, real-time factor "
+              f"{s.real_time_factor:.2f} ({s.integrator})")
+    out.print(f"  largest lip displacement: {s.largest_lip_displacement_mm:.2f} mm")
+    out.print(f"  total wall time: {s.wall_seconds:.1f} s")
+    for k, v in s.output.items():
+        out.print(f"  {k}: {output / v}")
+
+
+# ---------------------------------------------------------------------------------------------
+@face_app.command("build")
+def face_build(
+    surface: Annotated[Path, typer.Argument(help="OBJ, PLY or STL surface of the face")],
+    landmarks: Annotated[Path, typer.Argument(help="landmark CSV: name,x,y,z")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="face model file (.npz)")],
+    units: Annotated[str, typer.Option(help="length unit of both files")] = "mm",
+    name: Annotated[str | None, typer.Option(help="model name")] = None,
+):
+    """Build a three-layer face model from a surface mesh and landmarks."""
+    from .geometry.builder import build_face
+    from .geometry.surface_io import read_landmarks, read_surface
+
+    v, f = read_surface(surface, units=units)
+    lm = read_landmarks(landmarks, units=units)
+    model = build_face(v, f, lm, name=name or surface.stem, source=str(surface))
+    model.save(output)
+    s = model.summary()
+    out.print(f"built {s['name']}: {s['nodes_per_layer']['epidermis']} nodes per layer, "
+              f"{s['springs']} springs, {s['prisms']} prisms, {s['muscles']} muscles -> {output}")
+
+
+@face_app.command("info")
+def face_info(
+    face: Annotated[str, typer.Argument(help="face file, or 'default'")] = "default",
+    as_json: Annotated[bool, typer.Option("--json", help="print JSON")] = False,
+):
+    """Counts of a face model: nodes per layer, springs by kind, prisms, muscles, free fascia."""
+    from .geometry.builder import load_face
+
+    s = load_face(face).summary()
+    if as_json:
+        print(json.dumps(s, indent=2))
+        return
+    out.print_json(json.dumps(s))
+
+
+@face_app.command("export-default")
+def face_export_default(
+    output: Annotated[Path, typer.Option("-o", "--output", help="output folder")],
+):
+    """Write the built-in face's surface (OBJ, mm) and landmarks (CSV, mm) as a template."""
+    import trimesh
+
+    from .geometry.builder import default_surface
+    from .geometry.surface_io import write_landmarks
+    from .io.atomic import atomic_path
+
+    v, f, lm = default_surface()
+    output.mkdir(parents=True, exist_ok=True)
+    with atomic_path(output / "generic_face.obj", suffix=".obj") as tmp:
+        trimesh.Trimesh(v * 1e3, f, process=False).export(tmp, file_type="obj")
+    write_landmarks(output / "generic_face_landmarks.csv", lm)
+    out.print(f"wrote {output / 'generic_face.obj'} and {output / 'generic_face_landmarks.csv'}")
+
+
+# ---------------------------------------------------------------------------------------------
+@emg_app.command("process")
+def emg_process(
+    emg: Annotated[Path, typer.Argument(help="raw EMG: CSV (time + channels) or C3D")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="activity CSV")],
+    rate: Annotated[float, typer.Option(help="output rate, Hz")] = 60.0,
+    baseline: Annotated[str | None, typer.Option(help="rest interval START,STOP (s)")] = None,
+    calibration: Annotated[Path | None, typer.Option(help="recording of maximal gestures")] = None,
+    calibration_baseline: Annotated[str | None, typer.Option(
+        help="rest interval in the calibration recording START,STOP (s)")] = None,
+):
+    """Rectify, integrate (17-ms trapezoid), downsample and normalise EMG to activity in [0, 1]."""
+    from .emg import process_emg
+    from .io.activity import write_activity
+    from .io.emg import read_emg
+
+    sig, fs, names = read_emg(emg)
+    cal = cal_fs = None
+    if calibration is not None:
+        cal, cal_fs, cal_names = read_emg(calibration)
+        if tuple(n.upper() for n in cal_names) != tuple(n.upper() for n in names):
+            raise InputError("calibration channels differ from the recording's",
+                             source=str(calibration), field="header")
+    res = process_emg(sig, fs, names, out_rate=rate, baseline=_interval(baseline, "baseline"),
+                      calibration=cal, calibration_rate=cal_fs,
+                      calibration_baseline=_interval(calibration_baseline, "calibration-baseline"),
+                      source=str(emg))
+    write_activity(output, res.time, res.activity, res.channels)
+    out.print(f"{len(res.time)} frames at {rate:g} Hz, channels {', '.join(res.channels)} "
+              f"-> {output}")
+
+
+# ---------------------------------------------------------------------------------------------
+def _jaw_from_chin(path: Path, marker: str, model, times: np.ndarray, bite_block: bool,
+                   units: str | None):
+    from .io.markers import read_marker_csv
+    from .solvers.jaw import angles_from_chin
+
+    table = read_marker_csv(path, units=units)
+    y = table.marker(marker, source=str(path))[:, 1]
+    if times[0] < table.time[0] - 1e-6 or times[-1] > table.time[-1] + 1e-6:
+        raise InputError("the chin trajectory does not cover the activity's time span",
+                         source=str(path), field="time")
+    y = np.interp(times, table.time, y)
+    node = model.markers.get(marker, model.landmarks["chin"])
+    chin_rest = model.rest_positions[node + 2 * model.n_surface]
+    return angles_from_chin(y, chin_rest, model.hinge_point, model.hinge_axis,
+                            bite_block=bite_block)
+
+
+def _jaw_from_csv(path: Path, times: np.ndarray) -> np.ndarray:
+    from .io.tables import read_table
+
+    t, cols = read_table(path)
+    cols.pop("__meta__")
+    if "jaw_angle" in cols:
+        a = cols["jaw_angle"]
+    elif "jaw_angle_deg" in cols:
+        a = np.radians(cols["jaw_angle_deg"])
+    else:
+        raise InputError("needs a jaw_angle (rad) or jaw_angle_deg column", source=str(path),
+                         field="jaw_angle")
+    if not np.all(np.isfinite(a)):
+        raise InputError("empty or NaN values", source=str(path), field="jaw_angle")
+    if times[0] < t[0] - 1e-6 or times[-1] > t[-1] + 1e-6:
+        raise InputError("the jaw series does not cover the activity's time span",
+                         source=str(path), field="time")
+    return np.interp(times, t, a)
+
+
+@app.command()
+def simulate(
+    output: Annotated[Path, typer.Option("-o", "--output", help="results file (.nc)")],
+    face: Annotated[str, typer.Option(help="face file or 'default'")] = "default",
+    activity: Annotated[Path | None, typer.Option(help="activity CSV (time + groups)")] = None,
+    emg: Annotated[Path | None, typer.Option(help="raw EMG (CSV or C3D), 7-channel control")]
+    = None,
+    emg_baseline: Annotated[str | None, typer.Option(help="EMG rest interval START,STOP (s)")]
+    = None,
+    emg_calibration: Annotated[Path | None, typer.Option(help="EMG of maximal gestures")] = None,
+    jaw_chin: Annotated[Path | None, typer.Option(help="marker CSV with the chin marker")]
+    = None,
+    chin_marker: Annotated[str, typer.Option(help="name of the chin marker")] = "R01",
+    marker_units: Annotated[str | None, typer.Option(
+        help="length unit of the marker file if it does not say")] = None,
+    jaw_angle: Annotated[Path | None, typer.Option(help="CSV: time, jaw_angle (rad) or "
+                                                        "jaw_angle_deg")] = None,
+    bite_block: Annotated[bool, typer.Option(help="hold the jaw at its initial angle")] = False,
+    preset: Annotated[str, typer.Option(help="lucero1999 or pitermann2001")] = "lucero1999",
+    integrator: Annotated[str, typer.Option(help="euler, implicit or rosenbrock")] = "euler",
+    substeps: Annotated[int, typer.Option(help="steps per frame (implicit integrators)")] = 4,
+    dt: Annotated[float | None, typer.Option(help="Euler step, s (default 0.33e-3)")] = None,
+    jaw_drive: Annotated[str, typer.Option(help="ramp or hold")] = "ramp",
+    video: Annotated[Path | None, typer.Option(help="also render an MP4")] = None,
+    audio: Annotated[Path | None, typer.Option(help="WAV to mux into the MP4")] = None,
+):
+    """Simulate the face driven by muscle activity or EMG and a jaw trajectory."""
+    from . import params as P
+    from .emg import process_emg
+    from .geometry.builder import load_face
+    from .io.activity import read_activity, seven_channel_control
+    from .io.emg import read_emg
+    from .io.results import file_hash, write_results
+    from .solvers.forward import simulate as run
+
+    if (activity is None) == (emg is None):
+        raise InputError("give exactly one of --activity and --emg", field="activity")
+    if jaw_chin is not None and jaw_angle is not None:
+        raise InputError("give at most one of --jaw-chin and --jaw-angle", field="jaw")
+    prm = P.preset(preset)
+    model = load_face(face)
+    inputs = {}
+    if activity is not None:
+        times, act = read_activity(activity, frame_rate=prm.frame_rate)
+        inputs["activity"] = file_hash(activity)
+        src = str(activity)
+    else:
+        sig, fs, names = read_emg(emg)
+        cal = cal_fs = None
+        if emg_calibration is not None:
+            cal, cal_fs, _ = read_emg(emg_calibration)
+            inputs["emg_calibration"] = file_hash(emg_calibration)
+        res = process_emg(sig, fs, names, out_rate=prm.frame_rate,
+                          baseline=_interval(emg_baseline, "emg-baseline"), calibration=cal,
+                          calibration_rate=cal_fs, source=str(emg))
+        times = res.time
+        act = seven_channel_control(dict(zip(res.channels, res.activity.T, strict=True)))
+        inputs["emg"] = file_hash(emg)
+        src = str(emg)
+    if jaw_chin is not None:
+        jaw = _jaw_from_chin(jaw_chin, chin_marker, model, times, bite_block, marker_units)
+        inputs["jaw_chin"] = file_hash(jaw_chin)
+    elif jaw_angle is not None:
+        jaw = _jaw_from_csv(jaw_angle, times)
+        if bite_block:
+            jaw = np.full_like(jaw, jaw[0])
+        inputs["jaw_angle"] = file_hash(jaw_angle)
+    else:
+        jaw = np.zeros(len(times))
+    with _progress() as prog:
+        task = prog.add_task(f"simulate ({integrator})", total=len(times) - 1)
+        sim = run(model, act, jaw, params=prm, integrator=integrator, substeps=substeps, dt=dt,
+                  jaw_drive=jaw_drive, source=src,
+                  progress=lambda d, n: prog.update(task, completed=d))
+    write_results(output, sim, inputs=inputs)
+    out.print(f"{len(times)} frames, {sim.wall_seconds:.1f} s wall "
+              f"(real-time factor {sim.real_time_factor:.2f}) -> {output}")
+    if video is not None:
+        _render(sim.positions, model.faces, video, audio, sim.params.frame_rate)
+
+
+def _render(positions, faces, path, audio, fps):
+    from .viz.movie import write_movie
+
+    with _progress() as prog:
+        task = prog.add_task("render", total=len(positions))
+        write_movie(path, positions, faces, fps=fps, audio=audio,
+                    progress=lambda d, n: prog.update(task, completed=d))
+    out.print(f"movie -> {path}")
+
+
+@app.command()
+def render(
+    result: Annotated[Path, typer.Argument(help="results file (.nc)")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="movie (.mp4)")],
+    audio: Annotated[Path | None, typer.Option(help="WAV to mux in")] = None,
+):
+    """Render a results file to an H.264 MP4 (frontal and profile), optionally with audio."""
+    from .io.results import read_results
+
+    ds = read_results(result)
+    fps = float(ds.attrs.get("frame_rate_hz", 60.0))
+    _render(ds["positions"].values, ds["triangles"].values, output, audio, fps)
+
+
+@app.command()
+def plot(
+    result: Annotated[Path, typer.Argument(help="results file (.nc)")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="figure (.png)")],
+    markers: Annotated[str, typer.Option(help="comma-separated marker names")] = "R03,R05,R07",
+    measured: Annotated[Path | None, typer.Option(help="measured markers CSV (same names)")]
+    = None,
+    marker_units: Annotated[str | None, typer.Option(help="unit of the measured file")] = None,
+):
+    """Plot displacement and acceleration (vertical, protrusion) of markers, like Figs. 4-6."""
+    from .io.markers import read_marker_csv
+    from .io.results import read_results
+    from .viz.plots import kinematics_figure
+
+    ds = read_results(result)
+    names = [m.strip() for m in markers.split(",") if m.strip()]
+    have = list(ds["marker"].values)
+    for n in names:
+        if n not in have:
+            raise InputError(f"no such marker in the results (have {', '.join(have[:20])})",
+                             source=str(result), field=n)
+    time = ds["time"].values
+    traj = {n: ds["markers"].sel(marker=n).values for n in names}
+    meas = None
+    if measured is not None:
+        table = read_marker_csv(measured, units=marker_units)
+        meas = {}
+        for n in names:
+            if n in table.names:
+                m = table.marker(n)
+                meas[n] = np.column_stack([np.interp(time, table.time, m[:, a])
+                                           for a in range(3)])
+    kinematics_figure(output, time, traj, rate=float(ds.attrs.get("frame_rate_hz", 60.0)),
+                      measured=meas, title=str(result.name))
+    out.print(f"figure -> {output}")
+
+
+def main() -> None:
+    """Entry point: run the app; a FacemechError becomes one line on stderr and exit 2."""
+    try:
+        app()
+    except FacemechError as exc:
+        err.print(f"facemech: error: {exc.one_line()}", highlight=False, markup=False,
+                  soft_wrap=True)
+        sys.exit(2)
+    except KeyboardInterrupt:
+        err.print("facemech: interrupted")
+        sys.exit(130)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,55 @@
+"""Errors that carry the file and the field they are about.
+
+The CLI turns a :class:`FacemechError` into one line on stderr and a non-zero exit; library
+users can catch it and read ``source`` and ``field``.
+"""
+
+from __future__ import annotations
+
+
+class FacemechError(Exception):
+    """A user-facing error: bad input, an impossible request, a numerical blow-up.
+
+    Parameters
+    ----------
+    message : str
+        What went wrong, in one line.
+    source : str, optional
+        The file (or other input) the problem is in.
+    field : str, optional
+        The field, column, channel or parameter inside ``source``.
+    """
+
+    def __init__(self, message: str, *, source: str | None = None, field: str | None = None):
+        self.message = message
+        self.source = None if source is None else str(source)
+        self.field = field
+        super().__init__(self.one_line())
+
+    def one_line(self) -> str:
+        where = []
+        if self.source:
+            where.append(self.source)
+        if self.field:
+            where.append(f"field '{self.field}'")
+        prefix = ": ".join(where)
+        text = f"{prefix}: {self.message}" if prefix else self.message
+        return " ".join(text.split())
+
+
+class InputError(FacemechError):
+    """A file or argument that cannot be used as given."""
+
+
+class SimulationBlowUp(FacemechError):
+    """The simulation produced non-finite or runaway values.
+
+    Attributes
+    ----------
+    frame : int
+        The 60-Hz output frame in which the blow-up was detected.
+    """
+
+    def __init__(self, message: str, *, frame: int, source: str | None = None):
+        self.frame = int(frame)
+        super().__init__(f"numerical blow-up at frame {frame}: {message}", source=source)

@@ -1,0 +1,1 @@
+"""Face geometry: the built-in generic face, surface and landmark files, the model builder."""

@@ -1,0 +1,1 @@
+"""Pure numerical kernels of the face model: springs, muscles, prisms, and their assembly."""

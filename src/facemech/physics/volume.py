@@ -1,0 +1,86 @@
+"""Prism elements: volume and shape preservation (Lucero & Munhall 1999, eq. 9).
+
+A prism is a surface triangle (a, b, c) and its copy (d, e, f) in the layer below, wound alike.
+The kernels work on a (6, 3) array of the prism's node positions and write no temporaries, so
+the assembly can call them for every element in the hot loop.
+"""
+
+from __future__ import annotations
+
+import numba as nb
+import numpy as np
+
+# outward-oriented triangles of the prism's closed surface, as indices into its 6 nodes
+PRISM_TRIANGLES = np.array(
+    [[0, 1, 2], [3, 5, 4], [0, 3, 4], [0, 4, 1], [1, 4, 5], [1, 5, 2], [2, 5, 3], [2, 3, 0]],
+    dtype=np.int64,
+)
+
+
+@nb.njit(cache=True, inline="always")
+def prism_volume(p):
+    """Volume (m^3) of a (possibly warped) prism, p of shape (6, 3), by the divergence theorem.
+
+    The quadrilateral sides are split into two triangles each; the result is exact for planar
+    sides and independent of the origin (it is computed about the element's centre).
+    """
+    cx = (p[0, 0] + p[1, 0] + p[2, 0] + p[3, 0] + p[4, 0] + p[5, 0]) / 6.0
+    cy = (p[0, 1] + p[1, 1] + p[2, 1] + p[3, 1] + p[4, 1] + p[5, 1]) / 6.0
+    cz = (p[0, 2] + p[1, 2] + p[2, 2] + p[3, 2] + p[4, 2] + p[5, 2]) / 6.0
+    v = 0.0
+    for t in range(8):
+        a = PRISM_TRIANGLES[t, 0]
+        b = PRISM_TRIANGLES[t, 1]
+        c = PRISM_TRIANGLES[t, 2]
+        ax, ay, az = p[a, 0] - cx, p[a, 1] - cy, p[a, 2] - cz
+        bx, by, bz = p[b, 0] - cx, p[b, 1] - cy, p[b, 2] - cz
+        qx, qy, qz = p[c, 0] - cx, p[c, 1] - cy, p[c, 2] - cz
+        v += ax * (by * qz - bz * qy) - ay * (bx * qz - bz * qx) + az * (bx * qy - by * qx)
+    return v / 6.0
+
+
+@nb.njit(cache=True, inline="always")
+def _unit_normal(p, i, j, k):
+    ux, uy, uz = p[j, 0] - p[i, 0], p[j, 1] - p[i, 1], p[j, 2] - p[i, 2]
+    wx, wy, wz = p[k, 0] - p[i, 0], p[k, 1] - p[i, 1], p[k, 2] - p[i, 2]
+    nx, ny, nz = uy * wz - uz * wy, uz * wx - ux * wz, ux * wy - uy * wx
+    s = np.sqrt(nx * nx + ny * ny + nz * nz) + 1e-300
+    return nx / s, ny / s, nz / s
+
+
+@nb.njit(cache=True, inline="always")
+def prism_forces(p, rest_volume, rest_rel, k_volume, k_shape, out):
+    """Forces (N) of eq. (9) on the 6 nodes of a prism, written into ``out`` (6, 3).
+
+    ``q_i = k_e1 (V - V~) n_i + k_e2 (p_i - p~_i)`` is a left-hand-side term of eq. (8), so the
+    force on node i is ``-q_i``. ``n_i`` is the unit normal pointing out of the element at node i:
+    the epidermal-side normal on the top face and its opposite on the bottom face (our reading of
+    "the epidermal normal"; it makes the term restore the volume). ``p_i`` is the node relative to
+    the element's centre of mass; as published this term is not rotation-invariant.
+
+    Returns the current volume (m^3).
+    """
+    v = prism_volume(p)
+    tx, ty, tz = _unit_normal(p, 0, 1, 2)
+    bx, by, bz = _unit_normal(p, 3, 4, 5)
+    cx = (p[0, 0] + p[1, 0] + p[2, 0] + p[3, 0] + p[4, 0] + p[5, 0]) / 6.0
+    cy = (p[0, 1] + p[1, 1] + p[2, 1] + p[3, 1] + p[4, 1] + p[5, 1]) / 6.0
+    cz = (p[0, 2] + p[1, 2] + p[2, 2] + p[3, 2] + p[4, 2] + p[5, 2]) / 6.0
+    dv = k_volume * (v - rest_volume)
+    for k in range(6):
+        if k < 3:
+            nx, ny, nz = tx, ty, tz
+        else:
+            nx, ny, nz = -bx, -by, -bz
+        out[k, 0] = -dv * nx - k_shape * ((p[k, 0] - cx) - rest_rel[k, 0])
+        out[k, 1] = -dv * ny - k_shape * ((p[k, 1] - cy) - rest_rel[k, 1])
+        out[k, 2] = -dv * nz - k_shape * ((p[k, 2] - cz) - rest_rel[k, 2])
+    return v
+
+
+def rest_geometry(positions: np.ndarray, prism_nodes: np.ndarray):
+    """Rest volumes (p,) and rest node offsets from the centre (p, 6, 3) of all prisms."""
+    p = positions[prism_nodes]  # (p, 6, 3)
+    rel = p - p.mean(axis=1, keepdims=True)
+    vols = np.array([prism_volume(q) for q in p])
+    return vols, rel

@@ -1,0 +1,1 @@
+"""Solvers: the explicit state, the step function, integrators, the jaw and forward simulation."""

@@ -1,0 +1,50 @@
+"""The explicit, immutable state of the face model.
+
+Both the forward simulation and the inverse solver advance a :class:`State` with
+:func:`facemech.solvers.step.advance`; a state can be kept and restarted from at any frame.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+def _frozen(a: np.ndarray) -> np.ndarray:
+    a = np.array(a, dtype=float, copy=True)
+    a.flags.writeable = False
+    return a
+
+
+@dataclass(frozen=True, eq=False)
+class State:
+    """Model state at one instant.
+
+    Attributes
+    ----------
+    positions : (nodes, 3) array, metres
+    velocities : (nodes, 3) array, m/s
+    muscle_force : (muscles,) array, N -- the filtered force M of eq. (4)
+    muscle_force_rate : (muscles,) array, N/s -- dM/dt
+    jaw_angle : float, radians (positive opens the mouth)
+    time : float, seconds
+    """
+
+    positions: np.ndarray
+    velocities: np.ndarray
+    muscle_force: np.ndarray
+    muscle_force_rate: np.ndarray
+    jaw_angle: float = 0.0
+    time: float = 0.0
+
+    def __post_init__(self):
+        for name in ("positions", "velocities", "muscle_force", "muscle_force_rate"):
+            object.__setattr__(self, name, _frozen(getattr(self, name)))
+
+    @classmethod
+    def at_rest(cls, rest_positions: np.ndarray, n_muscles: int, jaw_angle: float = 0.0,
+                time: float = 0.0) -> State:
+        """The rest state: rest positions, no motion, no muscle force."""
+        return cls(rest_positions, np.zeros_like(rest_positions), np.zeros(n_muscles),
+                   np.zeros(n_muscles), jaw_angle, time)

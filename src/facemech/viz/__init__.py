@@ -1,0 +1,1 @@
+"""Pictures: a CPU rasteriser for the shaded skin, movies and kinematic plots (imported lazily)."""

@@ -1,0 +1,108 @@
+"""Kinematic plots like Figs. 4-6 of Lucero & Munhall (1999): vertical (y) and protrusion (z)
+displacement and acceleration of a marker against time, simulated and (optionally) measured,
+with their cross-correlation."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from scipy.signal import savgol_filter
+
+from ..io.atomic import atomic_path
+
+
+def acceleration(x: np.ndarray, rate: float, window_s: float = 0.1, order: int = 3) -> np.ndarray:
+    """Second derivative along axis 0 by a Savitzky-Golay filter (unit per s^2)."""
+    n = len(x)
+    win = max(order + 2, int(round(window_s * rate)) | 1)
+    if win > n:
+        win = n if n % 2 else n - 1
+    if win <= order:
+        return np.zeros_like(x)
+    return savgol_filter(x, win, order, deriv=2, delta=1.0 / rate, axis=0)
+
+
+def cross_correlation(a: np.ndarray, b: np.ndarray) -> float:
+    """Zero-lag normalised cross-correlation (Pearson) of two series."""
+    a = a - a.mean()
+    b = b - b.mean()
+    den = np.sqrt(np.sum(a * a) * np.sum(b * b))
+    return float(np.sum(a * b) / den) if den > 0 else float("nan")
+
+
+def kinematics_figure(path: str | Path, time: np.ndarray, trajectories: dict[str, np.ndarray],
+                      *, rate: float = 60.0, measured: dict[str, np.ndarray] | None = None,
+                      title: str = "") -> Path:
+    """Write a PNG with, per marker, displacement and acceleration in y and z.
+
+    Parameters
+    ----------
+    time : (frames,) s
+    trajectories : name -> (frames, 3) positions in metres (simulated)
+    measured : name -> (frames, 3) measured positions in metres (dashed), optional
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    names = list(trajectories)
+    fig, axes = plt.subplots(4, len(names), figsize=(3.2 * len(names), 8.5), sharex=True,
+                             squeeze=False)
+    rows = [("y displacement (mm)", 1, False), ("z displacement (mm)", 2, False),
+            ("y acceleration (m/s²)", 1, True), ("z acceleration (m/s²)", 2, True)]
+    for c, name in enumerate(names):
+        sim = trajectories[name] - trajectories[name][0]
+        meas = None
+        if measured is not None and name in measured:
+            meas = measured[name] - measured[name][0]
+        for r, (label, axis, acc) in enumerate(rows):
+            ax = axes[r, c]
+            s = acceleration(sim[:, axis], rate) if acc else sim[:, axis] * 1e3
+            ax.plot(time, s, "k-", lw=1.2, label="model")
+            if meas is not None:
+                m = acceleration(meas[:, axis], rate) if acc else meas[:, axis] * 1e3
+                ax.plot(time, m, "k--", lw=1.0, label="measured")
+                ax.set_title(f"r = {cross_correlation(s, m):.2f}", fontsize=8)
+            if c == 0:
+                ax.set_ylabel(label, fontsize=8)
+            if r == 0:
+                ax.set_title(name if meas is None else f"{name}  {ax.get_title()}", fontsize=9)
+            ax.tick_params(labelsize=7)
+        axes[-1, c].set_xlabel("time (s)", fontsize=8)
+    if title:
+        fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    with atomic_path(path, suffix=".png") as tmp:
+        fig.savefig(tmp, dpi=110)
+    plt.close(fig)
+    return Path(path)
+
+
+def activity_figure(path: str | Path, time: np.ndarray, activity: np.ndarray,
+                    groups: tuple[str, ...], jaw_angle: np.ndarray | None = None) -> Path:
+    """Write a PNG of the muscle activity (and jaw angle) driving a simulation."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    used = [g for g in range(activity.shape[1]) if np.any(activity[:, g] > 0)]
+    n = len(used) + (jaw_angle is not None)
+    fig, axes = plt.subplots(max(n, 1), 1, figsize=(7, 0.9 * max(n, 1) + 0.8), sharex=True,
+                             squeeze=False)
+    for r, g in enumerate(used):
+        axes[r, 0].fill_between(time, activity[:, g], color="0.35", lw=0)
+        axes[r, 0].set_ylim(0, 1.05)
+        axes[r, 0].set_ylabel(groups[g], rotation=0, ha="right", fontsize=8)
+        axes[r, 0].tick_params(labelsize=7)
+    if jaw_angle is not None:
+        axes[-1, 0].plot(time, np.degrees(jaw_angle), "k-")
+        axes[-1, 0].set_ylabel("jaw (°)", rotation=0, ha="right", fontsize=8)
+    axes[-1, 0].set_xlabel("time (s)")
+    fig.tight_layout()
+    with atomic_path(path, suffix=".png") as tmp:
+        fig.savefig(tmp, dpi=110)
+    plt.close(fig)
+    return Path(path)
