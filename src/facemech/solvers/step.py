@@ -140,7 +140,7 @@ class Stepper:
             step = p.dt if dt is None else float(dt)
             if not step > 0:
                 raise InputError("dt must be positive", field="dt")
-            self.n_steps = max(1, round(self.frame_duration / step))
+            self.n_steps = max(1, int(self.frame_duration / step + 1e-9))  # 50 at 0.33 ms
         else:
             if substeps < 1:
                 raise InputError("substeps must be at least 1", field="substeps")

@@ -1,0 +1,30 @@
+"""Shared fixtures. Caches of matplotlib and Mesa go to a temporary folder, never ~/.cache."""
+
+from __future__ import annotations
+
+import os
+import tempfile
+
+_CACHE = tempfile.mkdtemp(prefix="facemech-test-cache-")
+os.environ.setdefault("MPLCONFIGDIR", _CACHE)
+os.environ.setdefault("XDG_CACHE_HOME", _CACHE)
+os.environ.setdefault("MPLBACKEND", "Agg")
+
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+
+from facemech import MUSCLE_GROUPS, default_face  # noqa: E402
+
+
+@pytest.fixture(scope="session")
+def face():
+    """The built-in generic face."""
+    return default_face()
+
+
+def activity(frames: int, **levels: float) -> np.ndarray:
+    """Constant activity (frames, 16) with the named groups at the given levels."""
+    a = np.zeros((frames, len(MUSCLE_GROUPS)))
+    for g, v in levels.items():
+        a[:, MUSCLE_GROUPS.index(g)] = v
+    return a

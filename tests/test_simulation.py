@@ -1,0 +1,141 @@
+"""Forward simulation on the built-in face: muscle actions, jaw, lips, integrators, blow-up."""
+
+import numpy as np
+import pytest
+
+from conftest import activity
+from facemech import SimulationBlowUp, Stepper, simulate
+from facemech.physics.assembly import Physics
+from facemech.params import Parameters
+from facemech.solvers.jaw import angle_for_drop, angles_from_chin, rotate_about
+from facemech.solvers.state import State
+
+FRAMES = 25
+
+
+def moved(face, frames=FRAMES, jaw=None, integrator="euler", **levels):
+    sim = simulate(face, activity(frames, **levels), jaw, integrator=integrator)
+    d = sim.positions[-1] - sim.positions[0]
+    return sim, {k: d[v] for k, v in face.landmarks.items()}
+
+
+def test_rest_is_an_equilibrium(face):
+    sim, d = moved(face, frames=10)
+    assert np.abs(sim.positions - sim.positions[0]).max() < 1e-12
+
+
+def test_zygomatic_major_lifts_the_mouth_corner_up_and_out(face):
+    _, d = moved(face, ZYG=1.0)
+    assert d["mouth_corner_right"][1] > 0.02e-3 and d["mouth_corner_right"][0] < -0.01e-3
+    assert d["mouth_corner_left"][1] > 0.02e-3 and d["mouth_corner_left"][0] > 0.01e-3
+
+
+def test_depressor_anguli_oris_pulls_the_corner_down(face):
+    _, d = moved(face, DAO=1.0)
+    assert d["mouth_corner_right"][1] < -0.05e-3 and d["mouth_corner_left"][1] < -0.05e-3
+
+
+def test_levator_labii_lifts_the_upper_lip(face):
+    _, d = moved(face, LLS=1.0)
+    assert d["upper_lip_center"][1] > 0.08e-3
+    assert abs(d["lower_lip_center"][1]) < 0.3 * d["upper_lip_center"][1]
+
+
+def test_depressor_labii_lowers_the_lower_lip(face):
+    _, d = moved(face, DLI=1.0)
+    assert d["lower_lip_center"][1] < -0.08e-3
+    assert abs(d["upper_lip_center"][1]) < 0.3 * abs(d["lower_lip_center"][1])
+
+
+def test_orbicularis_oris_narrows_the_mouth(face):
+    sim, d = moved(face, OOS=1.0, OOI=1.0)
+    lm = face.landmarks
+    width = np.linalg.norm(sim.positions[:, lm["mouth_corner_left"]]
+                           - sim.positions[:, lm["mouth_corner_right"]], axis=1)
+    assert width[-1] < width[0] - 1.0e-3
+    # left and right act alike: the face stays symmetric
+    assert d["mouth_corner_left"][0] == pytest.approx(-d["mouth_corner_right"][0], rel=1e-3)
+
+
+def test_frontalis_raises_the_brows(face):
+    _, d = moved(face, FRM=1.0, FRL=1.0, FRI=1.0)
+    assert d["brow_left"][1] > 0.0 and d["brow_right"][1] > 0.0
+
+
+def lip_gaps(face, sim):
+    up, lo = face.lip_pairs.T
+    return np.einsum("tqa,qa->tq", sim.positions[:, up[up < face.n_surface]]
+                     - sim.positions[:, lo[lo < face.n_surface]],
+                     face.lip_normals[up < face.n_surface])
+
+
+def test_jaw_opening_lowers_lower_lip_and_chin_without_interpenetration(face):
+    chin = face.rest_positions[face.landmarks["chin"] + 2 * face.n_surface]
+    theta = angle_for_drop(chin, face.hinge_point, face.hinge_axis, -8e-3)
+    jaw = np.concatenate([np.linspace(0, theta, 15), np.full(15, theta)])
+    sim, d = moved(face, frames=30, jaw=jaw)
+    assert d["chin"][1] < -6e-3
+    assert d["lower_lip_center"][1] < -4e-3
+    assert abs(d["upper_lip_center"][1]) < 1e-3
+    assert lip_gaps(face, sim).min() > -1e-5
+    # and closing again with the lips pressed together by the sphincter keeps them apart
+    back = np.concatenate([jaw, np.linspace(theta, 0, 15), np.zeros(15)])
+    act = np.zeros((60, 16))
+    act[30:, 6:8] = 1.0  # OOS and OOI
+    sim2 = simulate(face, act, back)
+    assert lip_gaps(face, sim2).min() > -0.15e-3
+
+
+def test_jaw_angle_from_chin_marker():
+    point, axis = np.array([0.0, -0.046, -0.073]), np.array([1.0, 0.0, 0.0])
+    chin = np.array([0.0, -0.112, 0.0])
+    drops = np.array([0.0, -1e-3, -4e-3, -8e-3, -8e-3, -2e-3])
+    y = chin[1] + drops
+    angles = angles_from_chin(y, chin, point, axis, lead=0)
+    for a, dy in zip(angles, drops, strict=True):
+        assert rotate_about(chin, point, axis, a)[1] - chin[1] == pytest.approx(dy, abs=1e-12)
+    assert np.all(angles[1:4] > 0)  # opening angles are positive
+    led = angles_from_chin(y, chin, point, axis)  # 33 ms (2 samples) early
+    np.testing.assert_allclose(led[:4], angles[2:6])
+    np.testing.assert_allclose(led[4:], angles[5])
+    bite = angles_from_chin(y, chin, point, axis, bite_block=True)
+    np.testing.assert_allclose(bite, led[0])
+
+
+def test_fast_integrators_follow_the_paper_integrator(face):
+    act = activity(30, OOS=0.8, OOI=0.8, ZYG=0.5, DLI=0.6)
+    jaw = np.radians(4.0) * np.sin(np.linspace(0, np.pi, 30)) ** 2
+    ref = simulate(face, act, jaw, integrator="euler")
+    for integ in ("rosenbrock", "implicit"):
+        sim = simulate(face, act, jaw, integrator=integ, substeps=8)
+        dev = np.linalg.norm(sim.markers - ref.markers, axis=2).max()
+        amp = np.linalg.norm(ref.markers - ref.markers[0], axis=2).max()
+        assert dev < 0.1 * amp, (integ, dev, amp)
+
+
+def test_state_restart_is_exact(face):
+    """Advancing 10 frames, or 5 then 5 from the saved state, gives the same state."""
+    ph = Physics.build(face, Parameters())
+    st = Stepper(ph, integrator="euler")
+    a = activity(1, DAO=0.7, LLS=0.4)[0]
+    s0 = State.at_rest(face.rest_positions, ph.n_muscles)
+    s = s0
+    for _ in range(10):
+        s = st.advance(s, a, 0.02)
+    mid = s0
+    for _ in range(5):
+        mid = st.advance(mid, a, 0.02)
+    again = mid
+    for _ in range(5):
+        again = st.advance(again, a, 0.02)
+    np.testing.assert_array_equal(again.positions, s.positions)
+    np.testing.assert_array_equal(again.muscle_force, s.muscle_force)
+    assert not s.positions.flags.writeable  # states are immutable
+    assert s.time == pytest.approx(10 / 60)
+
+
+def test_blow_up_is_caught_with_the_frame(face):
+    with pytest.raises(SimulationBlowUp) as info:
+        simulate(face, activity(20, OOS=1.0), integrator="euler", dt=4e-3)
+    assert info.value.frame >= 1
+    assert "time step" in str(info.value)
