@@ -4,7 +4,6 @@ import numpy as np
 import pytest
 
 from facemech.params import Parameters
-from facemech.physics.assembly import accumulate_forces
 from facemech.physics.springs import scaled_stiffness
 from facemech.solvers.step import _euler_frame
 

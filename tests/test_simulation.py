@@ -5,8 +5,8 @@ import pytest
 
 from conftest import activity
 from facemech import SimulationBlowUp, Stepper, simulate
-from facemech.physics.assembly import Physics
 from facemech.params import Parameters
+from facemech.physics.assembly import Physics
 from facemech.solvers.jaw import angle_for_drop, angles_from_chin, rotate_about
 from facemech.solvers.state import State
 

@@ -82,14 +82,18 @@ def write_movie(
         finally:
             writer.close()
         if audio is not None:
-            with atomic_path(path.with_name(path.stem + ".av.mp4"), suffix=".mp4") as muxed:
+            muxed = video.with_name(video.stem + ".mux.mp4")
+            try:
                 cmd = [exe, "-y", "-loglevel", "error", "-i", str(video), "-i", str(audio),
                        "-c:v", "copy", "-c:a", "aac", "-shortest", str(muxed)]
                 run = subprocess.run(cmd, capture_output=True, text=True)
                 if run.returncode != 0:
-                    raise InputError(f"ffmpeg could not mux the audio: "
-                                     f"{run.stderr.strip().splitlines()[-1:]}", source=str(audio))
+                    last = (run.stderr.strip().splitlines() or ["unknown error"])[-1]
+                    raise InputError(f"ffmpeg could not mux the audio: {last}",
+                                     source=str(audio))
                 muxed.replace(video)
+            finally:
+                muxed.unlink(missing_ok=True)
     return path
 
 

@@ -1,0 +1,112 @@
+"""Forward-simulation benchmark on the built-in face (prints JSON).
+
+For the demo utterance: mesh counts; for each integrator the wall seconds per simulated second
+(one core: numba runs single-threaded here) and the real-time factor; the largest deviation of
+each fast integrator from the paper's explicit Euler (all epidermal nodes and the markers); and
+where one step's time goes (force assembly, sparse solve).
+
+Usage: python benchmarks/forward.py [--quick]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import time
+
+os.environ.setdefault("NUMBA_NUM_THREADS", "1")
+
+import numpy as np  # noqa: E402
+
+from facemech import Parameters, Physics, Stepper, default_face, simulate  # noqa: E402
+from facemech.demo import utterance  # noqa: E402
+from facemech.physics.assembly import accumulate_forces, force_arguments  # noqa: E402
+
+
+def timed(fn, repeat=3):
+    best = np.inf
+    out = None
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        out = fn()
+        best = min(best, time.perf_counter() - t0)
+    return best, out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--quick", action="store_true", help="first 60 frames only, one repeat")
+    args = ap.parse_args()
+    face = default_face()
+    t, act, jaw = utterance()
+    if args.quick:
+        t, act, jaw = t[:60], act[:60], jaw[:60]
+    simulated = len(t) / 60.0
+    repeat = 1 if args.quick else 3
+    # warm up the compiled kernels
+    simulate(face, act[:3], jaw[:3])
+    simulate(face, act[:3], jaw[:3], integrator="rosenbrock")
+    runs = {"euler": {}, "implicit": {"substeps": 4}, "rosenbrock": {"substeps": 4}}
+    variants = [("euler", "euler", {}), ("euler-1ms", "euler", {"dt": 1e-3}),
+                ("implicit-4", "implicit", {"substeps": 4}),
+                ("implicit-8", "implicit", {"substeps": 8}),
+                ("rosenbrock-2", "rosenbrock", {"substeps": 2}),
+                ("rosenbrock-4", "rosenbrock", {"substeps": 4}),
+                ("rosenbrock-8", "rosenbrock", {"substeps": 8})]
+    results = {}
+    sims = {}
+    for label, integ, kw in variants:
+        wall, sim = timed(lambda i=integ, k=kw: simulate(face, act, jaw, integrator=i, **k),
+                          repeat)
+        sims[label] = sim
+        results[label] = {"integrator": integ, **kw,
+                          "wall_s_per_simulated_s": wall / simulated,
+                          "real_time_factor": simulated / wall}
+    ref = sims["euler"]
+    for label, sim in sims.items():
+        if label == "euler":
+            continue
+        nodes = np.linalg.norm(sim.positions - ref.positions, axis=2)
+        marks = np.linalg.norm(sim.markers - ref.markers, axis=2)
+        results[label]["max_deviation_nodes_mm"] = float(nodes.max() * 1e3)
+        results[label]["max_deviation_markers_mm"] = float(marks.max() * 1e3)
+        results[label]["rms_deviation_nodes_mm"] = float(np.sqrt(np.mean(nodes**2)) * 1e3)
+    # where the time of one step goes
+    ph = Physics.build(face, Parameters())
+    st = Stepper(ph, integrator="rosenbrock", substeps=4)
+    fargs = force_arguments(ph, np.zeros(ph.n_muscles), st._tied_rest, st._tied_normal,
+                            face.lip_normals)
+    pos = face.rest_positions.copy()
+    vel = np.zeros_like(pos)
+    out = np.zeros_like(pos)
+    n = 300
+    t0 = time.perf_counter()
+    for _ in range(n):
+        accumulate_forces(pos, vel, out, *fargs)
+    force_ms = (time.perf_counter() - t0) / n * 1e3
+    rhs = np.random.default_rng(0).normal(size=(ph.n_dynamic, 3))
+    t0 = time.perf_counter()
+    for _ in range(n):
+        st._lu.solve(rhs)
+    solve_ms = (time.perf_counter() - t0) / n * 1e3
+    s = face.summary()
+    report = {
+        "benchmark": "forward",
+        "utterance_frames": len(t),
+        "simulated_seconds": simulated,
+        "mesh": {"epidermal_nodes": s["nodes_per_layer"]["epidermis"], "nodes": s["nodes"],
+                 "springs": s["springs"], "prisms": s["prisms"], "muscles": s["muscles"],
+                 "dynamic_nodes": ph.n_dynamic},
+        "integrators": results,
+        "per_step_ms": {"force_assembly": force_ms, "sparse_solve_3_axes": solve_ms,
+                        "euler_step_estimate": force_ms,
+                        "rosenbrock_step_estimate": 2 * (force_ms + solve_ms)},
+        "threads": 1,
+    }
+    del runs
+    print(json.dumps(report, indent=2))
+
+
+if __name__ == "__main__":
+    main()
