@@ -5,7 +5,7 @@ import pytest
 
 from facemech import (
     InputError,
-    MarkerTable,
+    MarkerSet,
     process_emg,
     read_activity,
     read_marker_csv,
@@ -127,7 +127,7 @@ def test_activity_bad_input(tmp_path, text, field):
 def test_marker_csv_round_trip_with_units_and_gaps(tmp_path):
     pos = np.random.default_rng(1).normal(size=(5, 2, 3)) * 0.01
     pos[2, 1] = np.nan
-    table = MarkerTable(np.arange(5) / 60, ("chin", "lip"), pos)
+    table = MarkerSet(pos, ("chin", "lip"), 60.0)
     write_marker_csv(tmp_path / "m.csv", table, units="mm")
     back = read_marker_csv(tmp_path / "m.csv")
     assert back.names == table.names

@@ -20,8 +20,14 @@ from .geometry.builder import BuildOptions, FaceModel, build_face, default_face,
 from .geometry.surface_io import read_landmarks, read_surface
 from .io.activity import read_activity, seven_channel_control, write_activity
 from .io.emg import read_emg
-from .io.markers import MarkerTable, read_marker_csv, write_marker_csv
+from .io.markers import read_marker_csv, read_markers, write_marker_csv, write_markers
 from .io.results import read_results, write_results
+from .kinematics.frames import align_to_model, to_anatomical_frame
+from .kinematics.gaps import fill_gaps, find_gaps
+from .kinematics.mapping import closest_nodes, read_mapping, scale_adapt
+from .kinematics.resample import derivative, resample
+from .kinematics.rigid import head_correct, rigid_fit
+from .markerset import MarkerSet
 from .params import EMG_CHANNELS, MUSCLE_GROUPS, PRESETS, Parameters, preset
 from .physics.assembly import Physics
 from .solvers.forward import Simulation, simulate
@@ -32,9 +38,12 @@ from .solvers.step import INTEGRATORS, Stepper
 __all__ = [
     "__version__",
     "BuildOptions", "EMGActivity", "EMG_CHANNELS", "FaceModel", "FacemechError", "INTEGRATORS",
-    "InputError", "MUSCLE_GROUPS", "MarkerTable", "PRESETS", "Parameters", "Physics",
-    "Simulation", "SimulationBlowUp", "State", "Stepper", "angles_from_chin", "build_face",
-    "default_face", "load_face", "preset", "process_emg", "read_activity", "read_emg",
-    "read_landmarks", "read_marker_csv", "read_results", "read_surface", "seven_channel_control",
-    "simulate", "write_activity", "write_marker_csv", "write_results",
+    "InputError", "MUSCLE_GROUPS", "MarkerSet", "PRESETS", "Parameters", "Physics",
+    "Simulation", "SimulationBlowUp", "State", "Stepper", "align_to_model", "angles_from_chin",
+    "build_face", "closest_nodes", "default_face", "derivative", "fill_gaps", "find_gaps",
+    "head_correct", "load_face", "preset", "process_emg", "read_activity", "read_emg",
+    "read_landmarks", "read_mapping", "read_marker_csv", "read_markers", "read_results",
+    "read_surface", "resample", "rigid_fit", "scale_adapt", "seven_channel_control",
+    "simulate", "to_anatomical_frame", "write_activity", "write_marker_csv", "write_markers",
+    "write_results",
 ]

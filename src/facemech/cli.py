@@ -23,7 +23,9 @@ app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_
 face_app = typer.Typer(no_args_is_help=True, help="Build and inspect face models.")
 emg_app = typer.Typer(no_args_is_help=True, help="Process EMG recordings.")
 app.add_typer(face_app, name="face")
+markers_app = typer.Typer(no_args_is_help=True, help="Read, convert and clean marker data.")
 app.add_typer(emg_app, name="emg")
+app.add_typer(markers_app, name="markers")
 
 err = Console(stderr=True)
 out = Console()
@@ -167,13 +169,137 @@ def emg_process(
 
 
 # ---------------------------------------------------------------------------------------------
+UnitsOpt = Annotated[str | None, typer.Option("--units", help="length unit if the file has none")]
+
+
+@markers_app.command("info")
+def markers_info(
+    path: Annotated[Path, typer.Argument(help="marker file: .c3d, .trc, .csv or .tsv")],
+    units: UnitsOpt = None,
+    as_json: Annotated[bool, typer.Option("--json", help="print JSON")] = False,
+):
+    """Rate, units, markers and gaps of a marker file."""
+    from .io.markers import read_markers
+    from .kinematics.gaps import find_gaps
+
+    ms = read_markers(path, units=units)
+    gaps = find_gaps(ms)
+    info = {
+        "file": str(path), "format": ms.meta.get("format"), "rate_hz": ms.rate,
+        "frames": ms.n_frames, "duration_s": float(ms.time[-1] - ms.time[0]),
+        "units": ms.source_units, "markers": list(ms.names),
+        "missing_samples": int((~ms.valid).sum()),
+        "gaps": [{"marker": g.marker, "start": g.start, "frames": g.length,
+                  "interior": g.interior} for g in gaps],
+    }
+    if as_json:
+        print(json.dumps(info, indent=2))
+        return
+    out.print(f"{path}: {info['format']}, {ms.rate:g} Hz, {ms.n_frames} frames "
+              f"({info['duration_s']:.2f} s), unit {ms.source_units}, {ms.n_markers} markers")
+    out.print("markers: " + ", ".join(ms.names))
+    out.print(f"gaps: {len(gaps)} ({info['missing_samples']} missing samples)")
+    for g in gaps[:50]:
+        out.print(f"  {g.marker}: frames {g.start}-{g.stop - 1} ({g.length})"
+                  + ("" if g.interior else " at an end"))
+
+
+@markers_app.command("convert")
+def markers_convert(
+    source: Annotated[Path, typer.Argument(help="input marker file")],
+    target: Annotated[Path, typer.Argument(help="output: .c3d, .trc or .csv")],
+    units: UnitsOpt = None,
+    out_units: Annotated[str | None, typer.Option(help="unit of the output (default: input's)")]
+    = None,
+):
+    """Convert between C3D, TRC, CSV (and read Qualisys TSV)."""
+    from .io.markers import read_markers, write_markers
+
+    ms = read_markers(source, units=units)
+    write_markers(target, ms, units=out_units)
+    out.print(f"{ms.n_markers} markers, {ms.n_frames} frames -> {target}")
+
+
+@markers_app.command("head-correct")
+def markers_head_correct(
+    source: Annotated[Path, typer.Argument(help="input marker file")],
+    head: Annotated[str, typer.Option(help="comma-separated head markers (at least 3)")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="output marker file")],
+    reference: Annotated[int | None, typer.Option(help="reference frame (default: first "
+                                                        "with every head marker)")] = None,
+    units: UnitsOpt = None,
+    report: Annotated[Path | None, typer.Option(help="write the per-frame residuals (JSON)")]
+    = None,
+):
+    """Remove head motion by a per-frame rigid fit of head markers to a reference frame."""
+    from .io.atomic import atomic_path
+    from .io.markers import read_markers, write_markers
+    from .kinematics.rigid import head_correct
+
+    ms = read_markers(source, units=units)
+    names = [h.strip() for h in head.split(",") if h.strip()]
+    res = head_correct(ms, names, reference=reference)
+    write_markers(output, res.markers)
+    if report is not None:
+        data = {**res.summary(), "residual_mm": (res.residual * 1e3).tolist(),
+                "head_markers_used": res.head_markers_used.tolist()}
+        with atomic_path(report, suffix=".json") as tmp:
+            tmp.write_text(json.dumps(data, allow_nan=True))
+    s = res.summary()
+    out.print(f"head-corrected {ms.n_frames} frames against frame {s['reference_frame']}: "
+              f"median residual {s['residual_mm']['median']:.3f} mm, max "
+              f"{s['residual_mm']['max']:.3f} mm -> {output}")
+    if len(res.unfixed_frames):
+        err.print(f"facemech: warning: {len(res.unfixed_frames)} frames had fewer than 3 usable "
+                  f"head markers and are left empty: {res.unfixed_frames[:20].tolist()}")
+
+
+@markers_app.command("resample")
+def markers_resample(
+    source: Annotated[Path, typer.Argument(help="input marker file")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="output marker file")],
+    rate: Annotated[float, typer.Option(help="new rate, Hz")] = 60.0,
+    units: UnitsOpt = None,
+):
+    """Resample to a new rate with anti-aliasing (gaps stay gaps)."""
+    from .io.markers import read_markers, write_markers
+    from .kinematics.resample import resample as run
+
+    ms = read_markers(source, units=units)
+    res = run(ms, rate)
+    write_markers(output, res)
+    out.print(f"{ms.rate:g} Hz -> {rate:g} Hz, {res.n_frames} frames -> {output}")
+
+
+@markers_app.command("fill-gaps")
+def markers_fill_gaps(
+    source: Annotated[Path, typer.Argument(help="input marker file")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="output marker file")],
+    max_gap: Annotated[float, typer.Option(help="longest gap to fill, seconds")] = 0.1,
+    units: UnitsOpt = None,
+):
+    """Fill interior gaps up to --max-gap with a cubic spline; filled samples are flagged."""
+    from .io.markers import read_markers, write_markers
+    from .kinematics.gaps import fill_gaps
+
+    ms = read_markers(source, units=units)
+    res, done, left = fill_gaps(ms, int(round(max_gap * ms.rate)))
+    write_markers(output, res)
+    out.print(f"filled {len(done)} gaps ({sum(g.length for g in done)} samples); "
+              f"{len(left)} left -> {output}")
+    for g in left[:20]:
+        err.print(f"  not filled: {g.marker} frames {g.start}-{g.stop - 1} ({g.length})"
+                  + ("" if g.interior else " at an end"))
+
+
+# ---------------------------------------------------------------------------------------------
 def _jaw_from_chin(path: Path, marker: str, model, times: np.ndarray, bite_block: bool,
                    units: str | None):
-    from .io.markers import read_marker_csv
+    from .io.markers import read_markers
     from .solvers.jaw import angles_from_chin
 
-    table = read_marker_csv(path, units=units)
-    y = table.marker(marker, source=str(path))[:, 1]
+    table = read_markers(path, units=units)
+    y = table.marker(marker)[:, 1]
     if times[0] < table.time[0] - 1e-6 or times[-1] > table.time[-1] + 1e-6:
         raise InputError("the chin trajectory does not cover the activity's time span",
                          source=str(path), field="time")
@@ -214,7 +340,7 @@ def simulate(
     emg_baseline: Annotated[str | None, typer.Option(help="EMG rest interval START,STOP (s)")]
     = None,
     emg_calibration: Annotated[Path | None, typer.Option(help="EMG of maximal gestures")] = None,
-    jaw_chin: Annotated[Path | None, typer.Option(help="marker CSV with the chin marker")]
+    jaw_chin: Annotated[Path | None, typer.Option(help="marker file with the chin marker")]
     = None,
     chin_marker: Annotated[str, typer.Option(help="name of the chin marker")] = "R01",
     marker_units: Annotated[str | None, typer.Option(
@@ -319,7 +445,7 @@ def plot(
     marker_units: Annotated[str | None, typer.Option(help="unit of the measured file")] = None,
 ):
     """Plot displacement and acceleration (vertical, protrusion) of markers, like Figs. 4-6."""
-    from .io.markers import read_marker_csv
+    from .io.markers import read_markers
     from .io.results import read_results
     from .viz.plots import kinematics_figure
 
@@ -334,7 +460,7 @@ def plot(
     traj = {n: ds["markers"].sel(marker=n).values for n in names}
     meas = None
     if measured is not None:
-        table = read_marker_csv(measured, units=marker_units)
+        table = read_markers(measured, units=marker_units)
         meas = {}
         for n in names:
             if n in table.names:

@@ -1,45 +1,43 @@
-"""Marker trajectories in the documented wide CSV: ``time, NAME_x, NAME_y, NAME_z, ...``.
+"""Marker files: wide CSV (read/write), Qualisys TSV (read), and dispatch over all formats.
 
-The length unit is given by a comment line ``# units: mm`` (or m, cm) or by the caller; it is
-never guessed. Empty cells are missing samples (NaN).
+Wide CSV: a comment line ``# units: mm`` (or m, cm), a header ``time, NAME_x, NAME_y, NAME_z,
+...`` and one row per frame; empty cells are missing samples; an optional ``# filled:`` comment
+lists the samples a gap filler made up. The unit is never guessed: a file without one needs the
+caller's ``units``.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import InputError
+from ..markerset import MarkerSet
 from ..units import length_scale
 from .atomic import atomic_path
 from .tables import read_table
 
-
-@dataclass(frozen=True)
-class MarkerTable:
-    """Markers (frames, markers, 3) in metres with their names and times (s)."""
-
-    time: np.ndarray
-    names: tuple[str, ...]
-    positions: np.ndarray
-
-    def marker(self, name: str, *, source: str | None = None) -> np.ndarray:
-        if name not in self.names:
-            raise InputError(f"no such marker (have {', '.join(self.names[:12])})",
-                             source=source, field=name)
-        return self.positions[:, self.names.index(name)]
+FORMATS = {".csv": "csv", ".trc": "trc", ".c3d": "c3d", ".tsv": "tsv"}
 
 
-def read_marker_csv(path: str | Path, *, units: str | None = None) -> MarkerTable:
+def _rate_of(t: np.ndarray, source: str) -> float:
+    d = np.diff(t)
+    step = float(np.median(d))
+    if np.max(np.abs(d - step)) > 0.01 * step:
+        raise InputError("samples are not evenly spaced", source=source, field="time")
+    return 1.0 / step
+
+
+def read_marker_csv(path: str | Path, *, units: str | None = None) -> MarkerSet:
     """Read a wide marker CSV; positions are returned in metres."""
+    path = Path(path)
     t, cols = read_table(path)
     meta = cols.pop("__meta__")
     unit = units or meta.get("units")
     if unit is None:
-        raise InputError("no length unit: add a '# units: mm' line or pass units", source=str(path),
-                         field="units")
+        raise InputError("no length unit: add a '# units: mm' line or pass units (--units)",
+                         source=str(path), field="units")
     scale = length_scale(unit, source=str(path))
     names: list[str] = []
     for col in cols:
@@ -49,24 +47,124 @@ def read_marker_csv(path: str | Path, *, units: str | None = None) -> MarkerTabl
                              source=str(path), field=col)
         if base not in names:
             names.append(base)
+    lookup = {c.lower(): c for c in cols}
     pos = np.empty((len(t), len(names), 3))
     for m, name in enumerate(names):
         for a, axis in enumerate("xyz"):
-            key = next((c for c in cols if c.lower() == f"{name}_{axis}".lower()), None)
+            key = lookup.get(f"{name}_{axis}".lower())
             if key is None:
                 raise InputError("missing coordinate column", source=str(path),
                                  field=f"{name}_{axis}")
             pos[:, m, a] = cols[key] * scale
-    return MarkerTable(t, tuple(names), pos)
+    filled = None
+    if "filled" in meta:
+        filled = np.zeros(pos.shape[:2], bool)
+        for part in meta["filled"].split(";"):
+            name, _, frames = part.strip().partition("=")
+            if name not in names:
+                raise InputError("filled samples of an unknown marker", source=str(path),
+                                 field=name)
+            filled[np.asarray(frames.split(), int), names.index(name)] = True
+    return MarkerSet(pos, tuple(names), _rate_of(t, str(path)), time=t, source_units=unit,
+                     filled=filled, meta={"source": str(path), "format": "csv"})
 
 
-def write_marker_csv(path: str | Path, table: MarkerTable, *, units: str = "mm") -> None:
-    """Write a marker table (metres inside) as wide CSV in ``units``, atomically."""
+def write_marker_csv(path: str | Path, ms: MarkerSet, *, units: str | None = None) -> None:
+    """Write a marker set as wide CSV in ``units`` (default: its source unit), atomically."""
+    units = units or ms.source_units
     scale = length_scale(units)
     with atomic_path(path) as tmp, open(tmp, "w") as fh:
         fh.write(f"# units: {units}\n")
-        fh.write("time," + ",".join(f"{n}_{a}" for n in table.names for a in "xyz") + "\n")
-        for k, t in enumerate(table.time):
-            vals = table.positions[k].reshape(-1) / scale
-            fh.write(f"{t:.6f}," + ",".join("" if not np.isfinite(v) else f"{v:.6f}"
+        if ms.filled.any():
+            parts = [f"{n}=" + " ".join(map(str, np.nonzero(ms.filled[:, k])[0]))
+                     for k, n in enumerate(ms.names) if ms.filled[:, k].any()]
+            fh.write(f"# filled: {'; '.join(parts)}\n")
+        fh.write("time," + ",".join(f"{n}_{a}" for n in ms.names for a in "xyz") + "\n")
+        for k, t in enumerate(ms.time):
+            vals = ms.positions[k].reshape(-1) / scale
+            fh.write(f"{t:.6f}," + ",".join("" if not np.isfinite(v) else repr(float(v))
                                              for v in vals) + "\n")
+
+
+def read_qualisys_tsv(path: str | Path, *, units: str | None = None) -> MarkerSet:
+    """Read a Qualisys Track Manager 3-D TSV export.
+
+    The header lines (``NO_OF_FRAMES``, ``FREQUENCY``, ``MARKER_NAMES``, ...) give the rate and
+    labels; QTM's 3-D export is in millimetres by definition of the format (``units`` overrides).
+    Samples with all three coordinates exactly 0 are QTM's missing samples.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise InputError("file not found", source=str(path))
+    header: dict[str, list[str]] = {}
+    rows: list[list[str]] = []
+    with path.open() as fh:
+        for line in fh:
+            cells = line.rstrip("\r\n").split("\t")
+            if not cells or not cells[0].strip():
+                continue
+            key = cells[0].strip()
+            if key.replace("_", "").isalpha() and key.isupper():
+                header[key] = cells[1:]
+            elif key.lower() == "frame":
+                continue  # column titles of newer exports
+            else:
+                rows.append(cells)
+    for need in ("FREQUENCY", "MARKER_NAMES"):
+        if need not in header:
+            raise InputError("missing header line", source=str(path), field=need)
+    names = tuple(n.strip() for n in header["MARKER_NAMES"] if n.strip())
+    try:
+        rate = float(header["FREQUENCY"][0])
+        data = np.array([[float(c) if c.strip() else np.nan for c in r] for r in rows])
+    except (ValueError, IndexError):
+        raise InputError("non-numeric data", source=str(path), field="data") from None
+    n3 = 3 * len(names)
+    if data.ndim != 2 or data.shape[1] < n3:
+        raise InputError(f"expected {n3} coordinate columns", source=str(path), field="data")
+    coords = data[:, -n3:].reshape(len(data), len(names), 3)
+    coords[np.all(coords == 0.0, axis=2)] = np.nan
+    unit = units or "mm"
+    return MarkerSet(coords * length_scale(unit, source=str(path)), names, rate,
+                     source_units=unit, meta={"source": str(path), "format": "tsv"})
+
+
+def read_markers(path: str | Path, *, units: str | None = None) -> MarkerSet:
+    """Read any supported marker file (CSV, TRC, C3D, Qualisys TSV), positions in metres."""
+    path = Path(path)
+    fmt = FORMATS.get(path.suffix.lower())
+    if fmt is None:
+        raise InputError(f"unknown marker format {path.suffix!r} (expected "
+                         f"{', '.join(FORMATS)})", source=str(path))
+    if not path.is_file():
+        raise InputError("file not found", source=str(path))
+    if fmt == "csv":
+        return read_marker_csv(path, units=units)
+    if fmt == "tsv":
+        return read_qualisys_tsv(path, units=units)
+    if fmt == "trc":
+        from .trc import read_trc
+
+        return read_trc(path, units=units)
+    from .c3d import read_c3d_points
+
+    return read_c3d_points(path, units=units)
+
+
+def write_markers(path: str | Path, ms: MarkerSet, *, units: str | None = None) -> Path:
+    """Write a marker set as CSV, TRC or C3D (by extension), atomically, in ``units``."""
+    path = Path(path)
+    fmt = FORMATS.get(path.suffix.lower())
+    if fmt not in ("csv", "trc", "c3d"):
+        raise InputError("can write .csv, .trc or .c3d", source=str(path))
+    if fmt == "csv":
+        write_marker_csv(path, ms, units=units)
+    elif fmt == "trc":
+        from .trc import write_trc
+
+        write_trc(path, ms, units=units)
+    else:
+        from .c3d import write_c3d_points
+
+        write_c3d_points(path, ms, units=units)
+    return path

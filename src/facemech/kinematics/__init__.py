@@ -1,0 +1,1 @@
+"""Marker kinematics: head-motion correction, face frames, gaps, resampling, mapping to nodes."""

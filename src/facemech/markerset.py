@@ -1,0 +1,127 @@
+"""The marker-set type: labelled marker trajectories with rate, units and validity.
+
+A :class:`MarkerSet` holds positions (frames, markers, 3) in metres, NaN where a sample is
+missing, the sampling rate, the unit of the file it came from (``source_units``, kept for writing
+back), and per sample flags: ``filled`` marks samples that a gap filler made up, so that no
+filled sample passes for a measured one. ``to_xarray`` gives the ecosystem's labelled array.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from .errors import InputError
+
+
+@dataclass(frozen=True, eq=False)
+class MarkerSet:
+    """Marker trajectories.
+
+    Attributes
+    ----------
+    positions : (frames, markers, 3) float array, metres; NaN = missing
+    names : marker labels
+    rate : sampling rate, Hz
+    time : (frames,) s (defaults to frame / rate)
+    source_units : length unit of the file the data came from (``mm``, ``m``, ...)
+    filled : (frames, markers) bool, samples made up by a gap filler
+    meta : free-form provenance (file, reader, processing steps)
+    """
+
+    positions: np.ndarray
+    names: tuple[str, ...]
+    rate: float
+    time: np.ndarray | None = None
+    source_units: str = "m"
+    filled: np.ndarray | None = None
+    meta: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        pos = np.asarray(self.positions, float)
+        if pos.ndim != 3 or pos.shape[2] != 3:
+            raise InputError(f"marker positions must be (frames, markers, 3), got {pos.shape}",
+                             field="positions")
+        names = tuple(str(n) for n in self.names)
+        if len(names) != pos.shape[1]:
+            raise InputError(f"{len(names)} names for {pos.shape[1]} markers", field="names")
+        if len(set(names)) != len(names):
+            dup = next(n for n in names if names.count(n) > 1)
+            raise InputError("duplicate marker label", field=dup)
+        if not self.rate > 0:
+            raise InputError("sampling rate must be positive", field="rate")
+        t = (np.arange(pos.shape[0]) / self.rate if self.time is None
+             else np.asarray(self.time, float))
+        filled = (np.zeros(pos.shape[:2], bool) if self.filled is None
+                  else np.asarray(self.filled, bool))
+        for name, a in (("positions", pos), ("time", t), ("filled", filled)):
+            a.flags.writeable = False
+            object.__setattr__(self, name, a)
+        object.__setattr__(self, "names", names)
+        object.__setattr__(self, "rate", float(self.rate))
+
+    # ---- views ------------------------------------------------------------------------------
+    @property
+    def n_frames(self) -> int:
+        return self.positions.shape[0]
+
+    @property
+    def n_markers(self) -> int:
+        return self.positions.shape[1]
+
+    @property
+    def valid(self) -> np.ndarray:
+        """(frames, markers) True where a sample is present (measured or filled)."""
+        return np.all(np.isfinite(self.positions), axis=2)
+
+    @property
+    def measured(self) -> np.ndarray:
+        """(frames, markers) True where a sample was measured (present and not filled)."""
+        return self.valid & ~self.filled
+
+    def index(self, name: str) -> int:
+        if name not in self.names:
+            raise InputError(f"no such marker (have {', '.join(self.names[:12])}"
+                             f"{', ...' if len(self.names) > 12 else ''})",
+                             source=self.meta.get("source"), field=name)
+        return self.names.index(name)
+
+    def marker(self, name: str) -> np.ndarray:
+        """(frames, 3) trajectory of one marker, metres."""
+        return self.positions[:, self.index(name)]
+
+    def select(self, names) -> MarkerSet:
+        """A marker set with only the named markers, in that order."""
+        idx = [self.index(n) for n in names]
+        return replace(self, positions=self.positions[:, idx], names=tuple(names),
+                       filled=self.filled[:, idx])
+
+    def with_positions(self, positions: np.ndarray, **changes) -> MarkerSet:
+        """A copy with new positions (and any other field changed)."""
+        return replace(self, positions=positions, **changes)
+
+    # ---- xarray -----------------------------------------------------------------------------
+    def to_xarray(self):
+        """An :class:`xarray.DataArray` (time, marker, axis) in metres with the metadata."""
+        import xarray as xr
+
+        return xr.DataArray(
+            self.positions, dims=("time", "marker", "axis"),
+            coords={"time": ("time", self.time, {"units": "s"}), "marker": list(self.names),
+                    "axis": ["x", "y", "z"],
+                    "filled": (("time", "marker"), self.filled)},
+            attrs={"units": "m", "rate_hz": self.rate, "source_units": self.source_units},
+            name="markers",
+        )
+
+    @classmethod
+    def from_xarray(cls, da) -> MarkerSet:
+        """Inverse of :meth:`to_xarray`."""
+        if da.attrs.get("units", "m") != "m":
+            raise InputError("marker array must be in metres", field="units")
+        filled = da.coords["filled"].values if "filled" in da.coords else None
+        return cls(da.transpose("time", "marker", "axis").values,
+                   tuple(str(m) for m in da["marker"].values), float(da.attrs["rate_hz"]),
+                   time=da["time"].values, source_units=da.attrs.get("source_units", "m"),
+                   filled=filled)
