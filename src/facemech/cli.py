@@ -271,6 +271,29 @@ def markers_resample(
     out.print(f"{ms.rate:g} Hz -> {rate:g} Hz, {res.n_frames} frames -> {output}")
 
 
+@markers_app.command("frame")
+def markers_frame(
+    source: Annotated[Path, typer.Argument(help="input marker file (head-corrected)")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="output marker file")],
+    right: Annotated[str, typer.Option(help="marker on the subject's right (sets +x)")],
+    left: Annotated[str, typer.Option(help="marker on the subject's left")],
+    front: Annotated[str, typer.Option(help="marker in front of them on the same plane")],
+    origin: Annotated[str | None, typer.Option(help="origin marker (default: --front)")] = None,
+    reference: Annotated[int, typer.Option(help="frame the axes are taken from")] = 0,
+    units: UnitsOpt = None,
+):
+    """Express markers in an anatomical frame: +x right->left, +y up, +z forward."""
+    from .io.markers import read_markers, write_markers
+    from .kinematics.frames import to_anatomical_frame
+
+    ms = read_markers(source, units=units)
+    res = to_anatomical_frame(ms, right=right, left=left, front=front, origin=origin,
+                              reference=reference)
+    write_markers(output, res)
+    out.print(f"markers in the frame of {right}, {left}, {front} (origin {origin or front}) "
+              f"-> {output}")
+
+
 @markers_app.command("fill-gaps")
 def markers_fill_gaps(
     source: Annotated[Path, typer.Argument(help="input marker file")],
