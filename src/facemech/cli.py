@@ -24,11 +24,13 @@ face_app = typer.Typer(no_args_is_help=True, help="Build and inspect face models
 emg_app = typer.Typer(no_args_is_help=True, help="Process EMG recordings.")
 app.add_typer(face_app, name="face")
 markers_app = typer.Typer(no_args_is_help=True, help="Read, convert and clean marker data.")
+experiment_app = typer.Typer(no_args_is_help=True, help="The seeds' experiments, reproduced.")
+app.add_typer(experiment_app, name="experiment")
 app.add_typer(emg_app, name="emg")
 app.add_typer(markers_app, name="markers")
 
 err = Console(stderr=True)
-out = Console()
+out = Console(soft_wrap=True)
 
 
 def _progress():
@@ -493,6 +495,131 @@ def plot(
     kinematics_figure(output, time, traj, rate=float(ds.attrs.get("frame_rate_hz", 60.0)),
                       measured=meas, title=str(result.name))
     out.print(f"figure -> {output}")
+
+
+def _ranges(text: str | None, n: int, field: str) -> list[int] | None:
+    """'1-30' or '1,3,5-7' (1-based, inclusive) -> 0-based indices."""
+    if text is None:
+        return None
+    out: list[int] = []
+    try:
+        for part in text.split(","):
+            a, _, b = part.strip().partition("-")
+            lo, hi = int(a), int(b or a)
+            out.extend(range(lo - 1, hi))
+    except ValueError:
+        raise InputError("expected ranges such as 1-30 or 1,3,5-7", field=field) from None
+    if any(i < 0 or i >= n for i in out):
+        raise InputError(f"utterance numbers must lie in 1..{n}", field=field)
+    return out
+
+
+def _length(text: str | None, field: str) -> float | None:
+    """'0.5mm', '0.05cm' or '0.0005' (metres) -> metres; None or 'auto' -> None."""
+    if text is None or text == "auto":
+        return None
+    from .units import LENGTH_TO_M
+
+    t = text.strip().lower()
+    for unit in sorted(LENGTH_TO_M, key=len, reverse=True):
+        if t.endswith(unit):
+            try:
+                return float(t[: -len(unit)]) * LENGTH_TO_M[unit]
+            except ValueError:
+                break
+    try:
+        return float(t)
+    except ValueError:
+        raise InputError(f"not a length: {text!r} (e.g. 0.5mm)", field=field) from None
+
+
+@app.command()
+def regions(
+    files: Annotated[list[Path], typer.Argument(help="marker files, one utterance each")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="output folder")],
+    k: Annotated[int | None, typer.Option("-k", help="independent markers (default: "
+                                                     "min(epsilon-rank, 10))")] = None,
+    eps: Annotated[str | None, typer.Option(help="data precision, e.g. 0.5mm (default: "
+                                                 "estimated noise floor)")] = None,
+    neutral: Annotated[str, typer.Option(help="'first' or a marker file whose first frame is "
+                                              "the neutral")] = "first",
+    train: Annotated[str | None, typer.Option(help="utterances to fit, e.g. 1-30")] = None,
+    test: Annotated[str | None, typer.Option(help="held-out utterances, e.g. 31-40")] = None,
+    method: Annotated[str, typer.Option(help="qrcp or strong")] = "qrcp",
+    units: UnitsOpt = None,
+):
+    """Independent markers and eigenregions by QR with column pivoting (Lucero & Munhall 2008)."""
+    from .analysis.lucero2008 import analyse
+    from .io.markers import read_markers
+
+    sets = [read_markers(f, units=units) for f in files]
+    names = sets[0].names
+    for f, ms in zip(files, sets, strict=True):
+        if ms.names != names:
+            missing = sorted(set(names) ^ set(ms.names))
+            raise InputError("markers differ from the first file's", source=str(f),
+                             field=missing[0] if missing else "order")
+    neutral_pos: str | np.ndarray = "first"
+    if neutral != "first":
+        nm = read_markers(Path(neutral), units=units)
+        neutral_pos = nm.select(names).positions[0]
+    s = analyse([ms.positions for ms in sets], names, output, k=k, eps=_length(eps, "eps"),
+                method=method, train=_ranges(train, len(sets), "train"),
+                test=_ranges(test, len(sets), "test"), neutral=neutral_pos, rate=sets[0].rate)
+    s.pop("_model", None)
+    out.print(f"epsilon {s['eps_mm']:.3f} mm, rank {s['rank']} of {s['markers']}; k = {s['k']}")
+    out.print("independent markers: " + ", ".join(s["selected"]))
+    out.print(f"summary and figures -> {output}/")
+
+
+@experiment_app.command("lucero2008")
+def experiment_lucero2008(
+    output: Annotated[Path, typer.Option("-o", "--output", help="output folder")] = Path(
+        "lucero2008"),
+    utterances: Annotated[int, typer.Option(help="utterances in the corpus")] = 40,
+    frames: Annotated[int, typer.Option(help="frames per utterance (60 Hz)")] = 60,
+    k: Annotated[int, typer.Option("-k", help="independent markers of the basis")] = 10,
+    video: Annotated[bool, typer.Option(help="render the animation from k markers")] = True,
+):
+    """Lucero & Munhall (2008) on the embedded corpus, our numbers beside the paper's."""
+    from .analysis.lucero2008 import run_lucero2008
+
+    if utterances < 8:
+        raise InputError("needs at least 8 utterances", field="utterances")
+    with _progress() as prog:
+        tasks: dict[str, int] = {}
+
+        def report(stage, done, total):
+            if stage not in tasks:
+                tasks[stage] = prog.add_task(stage, total=total)
+            prog.update(tasks[stage], completed=done)
+
+        s = run_lucero2008(output, n_utterances=utterances, frames=frames, k=k, video=video,
+                           progress=report)
+    p, a = s["paper"], s["all_utterances"]
+    out.print("[bold]Lucero & Munhall (2008) on the embedded corpus[/bold]  (ours | paper, S1)")
+    out.print(f"  epsilon-rank: {a['rank']} of 57 | {p['rank']} of 57")
+    out.print(f"  last two R values: {a['r_before_last_mm']:.2f}, {a['r_last_mm']:.4f} mm | "
+              f"{p['r_56_mm']:.2f}, {p['r_57_mm']:.2f} mm")
+    out.print(f"  last selected: {a['last_selected']} (copied pair {', '.join(s['copied_pair'])})"
+              f" | {p['copied_marker_selected']}")
+    out.print(f"  first selected: {', '.join(s['order'][:4])} | {p['first_selected']}")
+    if "trajectory" in s:
+        e = s["trajectory"]["max_error_xyz_mm"]
+        q = p["jaw_marker_max_error_k10_mm"]
+        out.print(f"  jaw marker max error, k = {s['k']} (x, y, z): "
+                  f"{e[0]:.2f}, {e[1]:.2f}, {e[2]:.2f} mm | {q[0]}, {q[1]}, {q[2]} mm")
+    for row in s.get("held_out_error", [])[:: max(1, len(s.get("held_out_error", [])) // 6)]:
+        out.print(f"  k = {row['k']:2d}: held-out error {row['mean_abs_error_mm']:.3f} mm "
+                  f"(relative {row['relative_error']:.2f}; PCA {row['pca_mean_abs_error_mm']:.3f})")
+    sr = s["strong_rrqr"]
+    out.print(f"  max |X|: QRCP {sr['qrcp_max_abs_coefficient']:.2f}, strong RRQR "
+              f"{sr['max_abs_coefficient']:.2f} (bound {sr['bound']})")
+    mi = s["muscle_insertions"]
+    out.print(f"  first 10 selected markers lie {mi['selected_mean_mm']:.1f} mm from the nearest "
+              f"muscle insertion; random markers {mi['random_mean_mm']:.1f} mm "
+              f"(p = {mi['random_p_value']:.3f})")
+    out.print(f"  summary and figures -> {output}/")
 
 
 def main() -> None:

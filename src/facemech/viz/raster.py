@@ -64,7 +64,8 @@ def _rasterise(px, py, pz, shade, faces, zbuf, img, colour):
                 zbuf[yy, xx] = z
                 s = w0 * shade[i0] + w1 * shade[i1] + w2 * shade[i2]
                 for ch in range(3):
-                    v = colour[ch] * s[0] + s[1]
+                    c = (w0 * colour[i0, ch] + w1 * colour[i1, ch] + w2 * colour[i2, ch])
+                    v = c * s[0] + s[1]
                     img[yy, xx, ch] = min(max(v, 0.0), 1.0)
 
 
@@ -92,6 +93,7 @@ def render(
         Half-height of the view in the vertices' unit; defaults to fit the mesh.
     centre : (3,) array, optional
         Model point at the image centre; defaults to the bounding-box centre.
+    colour : (3,) RGB in [0, 1] for the whole surface, or (n, 3) per vertex
 
     Returns
     -------
@@ -119,6 +121,9 @@ def render(
     zbuf = np.full((h, w), -np.inf)
     img = np.empty((h, w, 3))
     img[:] = BACKGROUND_RGB
+    colours = np.asarray(colour, float)
+    if colours.ndim == 1:
+        colours = np.broadcast_to(colours, (len(v), 3))
     _rasterise(px, py, pz, shade, np.ascontiguousarray(faces, dtype=np.int64), zbuf, img,
-               np.asarray(colour, float))
+               np.ascontiguousarray(colours))
     return (img * 255 + 0.5).astype(np.uint8)
