@@ -622,6 +622,183 @@ def experiment_lucero2008(
     out.print(f"  summary and figures -> {output}/")
 
 
+@app.command()
+def invert(
+    markers: Annotated[Path, typer.Option(help="marker file in the model's frame, 60 Hz")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="results file (.nc)")],
+    face: Annotated[str, typer.Option(help="face file or 'default'")] = "default",
+    map_file: Annotated[Path | None, typer.Option("--map", help="marker,node CSV (default: "
+                                                                "closest nodes)")] = None,
+    method: Annotated[str, typer.Option(help="lsq (fast) or powell (the seeds')")] = "lsq",
+    positive: Annotated[bool, typer.Option(help="keep activity >= 0")] = True,
+    controls: Annotated[str, typer.Option(help="emg7, all, or comma-separated groups")] = "emg7",
+    chin_marker: Annotated[str | None, typer.Option(help="drive the jaw from this marker")]
+    = None,
+    window: Annotated[int, typer.Option(help="frames ahead in each frame's fit (lsq)")] = 2,
+    smooth: Annotated[float, typer.Option(help="smoothness weight, mm per unit activity")]
+    = 0.0,
+    effort: Annotated[float, typer.Option(help="effort weight, mm per unit activity")] = 0.0,
+    scale_pair: Annotated[str | None, typer.Option(help="A,B: adapt the markers by per-axis "
+                                                        "scaling from two markers far apart")]
+    = None,
+    preset: Annotated[str, typer.Option(help="lucero1999 or pitermann2001")] = "lucero1999",
+    dt: Annotated[float, typer.Option(help="Euler step of every evaluation, s")] = 1e-3,
+    units: UnitsOpt = None,
+):
+    """Recover muscle activity frame by frame from markers, and re-animate the face."""
+    from . import params as P
+    from .geometry.builder import load_face
+    from .inverse.invert import invert as run
+    from .io.markers import read_markers
+    from .io.results import file_hash, write_results
+    from .kinematics.mapping import closest_nodes, read_mapping, scale_adapt
+    from .solvers.forward import Simulation, marker_nodes
+    from .solvers.jaw import angles_from_chin
+
+    prm = P.preset(preset)
+    model = load_face(face)
+    ms = read_markers(markers, units=units)
+    mapping = (read_mapping(map_file, ms, model) if map_file is not None
+               else closest_nodes(ms, model))
+    if scale_pair is not None:
+        a, _, b = scale_pair.partition(",")
+        ms = scale_adapt(ms, model, mapping, (a.strip(), b.strip())).markers
+    jaw = None
+    if chin_marker is not None:
+        node = mapping.get(chin_marker)
+        if node is None:
+            raise InputError("chin marker has no node", source=str(markers), field=chin_marker)
+        jaw = angles_from_chin(ms.marker(chin_marker)[:, 1],
+                               model.rest_positions[node + 2 * model.n_surface],
+                               model.hinge_point, model.hinge_axis)
+    ctrl = controls if controls in ("emg7", "all") else [c.strip().upper()
+                                                         for c in controls.split(",")]
+    with _progress() as prog:
+        task = prog.add_task(f"invert ({method})", total=ms.n_frames - 1)
+        res = run(model, ms, mapping, method=method, positive=positive, controls=ctrl,
+                  jaw_angle=jaw, params=prm, dt=dt, smooth=smooth, effort=effort, window=window,
+                  progress=lambda d, n: prog.update(task, completed=d))
+    act = np.clip(res.activity, -1.0, 1.0)
+    names, nodes = marker_nodes(model)
+    sim = Simulation(model=model, params=prm, time=np.arange(ms.n_frames) / prm.frame_rate,
+                     positions=res.positions, markers=res.positions[:, nodes],
+                     marker_names=names, activity=act, jaw_angle=res.jaw_angle,
+                     final_state=None, integrator=f"euler (inversion, {method})", dt=dt,
+                     wall_seconds=res.wall_seconds,
+                     attrs={"inversion_method": method, "positive": int(positive),
+                            "window": window, "controls": ",".join(res.control_names),
+                            "rms_error_mm_median": float(np.median(res.rms_error[1:]) * 1e3),
+                            "condition_median": float(np.nanmedian(res.condition))
+                            if np.isfinite(res.condition).any() else -1.0,
+                            "notes": " | ".join(res.notes)})
+    write_results(output, sim, inputs={"markers": file_hash(markers)},
+                  extra={"rms_error": (("time",), res.rms_error, {"units": "m"}),
+                         "condition": (("time",), res.condition, {"units": "1"}),
+                         "markers_used": (("time",), res.markers_used, {"units": "1"})})
+    out.print(f"{ms.n_frames} frames inverted ({method}) in {res.wall_seconds:.1f} s; median "
+              f"per-frame error {np.median(res.rms_error[1:]) * 1e3:.3f} mm -> {output}")
+    for note in res.notes:
+        err.print(f"facemech: note: {note}")
+
+
+@app.command()
+def compare(
+    a: Annotated[Path, typer.Argument(help="results (.nc) or marker file: the model")],
+    b: Annotated[Path, typer.Argument(help="results (.nc) or marker file: the data")],
+    markers: Annotated[str | None, typer.Option(help="comma-separated markers (default: all "
+                                                     "shared)")] = None,
+    as_json: Annotated[bool, typer.Option("--json", help="print JSON")] = False,
+    units: UnitsOpt = None,
+):
+    """3-D statistics, per-axis correlations and per-frame errors of A against B."""
+    from .inverse.stats import compare as run
+
+    def load(p: Path):
+        if p.suffix.lower() == ".nc":
+            from .io.results import read_results
+
+            ds = read_results(p)
+            return [str(m) for m in ds["marker"].values], ds["markers"].values, float(
+                ds.attrs.get("frame_rate_hz", 60.0))
+        from .io.markers import read_markers
+
+        ms = read_markers(p, units=units)
+        return list(ms.names), ms.positions, ms.rate
+
+    na, pa, ra = load(a)
+    nb, pb, rb = load(b)
+    if abs(ra - rb) > 1e-3 * ra or len(pa) != len(pb):
+        raise InputError(f"A has {len(pa)} frames at {ra:g} Hz, B {len(pb)} at {rb:g} Hz",
+                         source=str(b), field="time")
+    names = ([m.strip() for m in markers.split(",")] if markers
+             else [n for n in na if n in nb])
+    for n in names:
+        if n not in na or n not in nb:
+            raise InputError("marker not in both inputs", field=n)
+    if not names:
+        raise InputError("no marker names shared by the inputs", field="markers")
+    res = run(pa[:, [na.index(n) for n in names]], pb[:, [nb.index(n) for n in names]], names,
+              ra)
+    if as_json:
+        print(json.dumps(res, indent=2))
+        return
+    e = res["frame_error_mm"]
+    out.print(f"{res['frames']} frames, {len(names)} markers; per-frame error (mm) min "
+              f"{e['min']:.3f} q1 {e['q1']:.3f} median {e['median']:.3f} q3 {e['q3']:.3f} max "
+              f"{e['max']:.3f}; movement {res['movement_mm']:.3f} mm")
+    for n, v in res["markers"].items():
+        out.print(f"  {n}: 3-D r {v['corr3d_published']:.3f} (unbiased "
+                  f"{v['corr3d_unbiased']:.3f})")
+
+
+@experiment_app.command("pitermann2001-synthetic")
+def experiment_pitermann_synthetic(
+    method: Annotated[str, typer.Option(help="lsq, powell or both")] = "lsq",
+    noise: Annotated[float, typer.Option(help="Gaussian marker noise, mm")] = 0.0,
+    output: Annotated[Path | None, typer.Option("-o", "--output", help="JSON file")] = None,
+):
+    """Pitermann & Munhall (2001) Experiment 1: Tables I, II and the top of Table III."""
+    from .geometry.builder import default_face
+    from .inverse.experiments import run_synthetic
+
+    if method not in ("lsq", "powell", "both"):
+        raise InputError("method must be lsq, powell or both", field="method")
+    methods = ("lsq", "powell") if method == "both" else (method,)
+    with _progress() as prog:
+        tasks: dict[str, int] = {}
+
+        def report(stage, done, total):
+            if stage not in tasks:
+                tasks[stage] = prog.add_task(stage, total=total)
+            prog.update(tasks[stage], completed=done)
+
+        res = run_synthetic(default_face(), methods=methods, noise=noise * 1e-3,
+                            progress=report)
+    paper = res["paper"]
+    out.print("[bold]Pitermann & Munhall (2001), Experiment 1[/bold] (ours | paper)")
+    for label, r in res["runs"].items():
+        out.print(f"[bold]{label}[/bold]: {r['wall_s']:.1f} s, {r['evaluations']} steps")
+        t1 = r["table1_activity_correlation"]
+        ref = paper["activity_correlations_no_constraint"]
+        out.print("  Table I, activity correlation: " + ", ".join(
+            f"{k} {v:.2f}" + (f" | {ref[k]:.2f}" if "no constraint" in label else "")
+            for k, v in t1.items()))
+        out.print(f"  Table II, 3-D correlations >= 0.95: {r['corr3d_at_least_0.95']} of 19; "
+                  f"> 0.8: {r['corr3d_above_0.8']} of 19 | {paper['kinematic_corr_above_0.8']} "
+                  "over both conditions")
+        e = r["table3_frame_error_mm"]
+        pe = paper["median_error_mm"]["positive" if "positive" in label else "no_constraint"]
+        out.print(f"  Table III, per-frame error (mm): min {e['min']:.3f} q1 {e['q1']:.3f} "
+                  f"median {e['median']:.3f} | {pe} q3 {e['q3']:.3f} max {e['max']:.3f}; "
+                  f"movement {r['movement_mm']:.3f} | {paper['movement_mm']} mm")
+    if output is not None:
+        from .io.atomic import atomic_path
+
+        with atomic_path(output, suffix=".json") as tmp:
+            tmp.write_text(json.dumps(res, indent=2))
+        out.print(f"tables -> {output}")
+
+
 def main() -> None:
     """Entry point: run the app; a FacemechError becomes one line on stderr and exit 2."""
     try:

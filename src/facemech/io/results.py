@@ -36,7 +36,7 @@ def array_hash(*arrays: np.ndarray) -> str:
     return h.hexdigest()[:16]
 
 
-def to_dataset(sim, inputs: dict[str, str] | None = None):
+def to_dataset(sim, inputs: dict[str, str] | None = None, extra: dict | None = None):
     """An :class:`xarray.Dataset` of a :class:`~facemech.solvers.forward.Simulation`."""
     import xarray as xr
 
@@ -66,7 +66,7 @@ def to_dataset(sim, inputs: dict[str, str] | None = None):
             "node": np.arange(model.n_surface),
         },
         attrs={
-            "title": "facemech forward simulation",
+            "title": "facemech simulation",
             "facemech_version": __version__,
             "face": model.name,
             "preset": sim.params.name,
@@ -81,12 +81,18 @@ def to_dataset(sim, inputs: dict[str, str] | None = None):
                for k, v in sim.attrs.items()},
         },
     )
+    for name, var in (extra or {}).items():
+        ds[name] = var
     return ds
 
 
-def write_results(path: str | Path, sim, inputs: dict[str, str] | None = None) -> Path:
-    """Write a simulation to NetCDF atomically (nothing is left behind on failure)."""
-    ds = to_dataset(sim, inputs)
+def write_results(path: str | Path, sim, inputs: dict[str, str] | None = None,
+                  extra: dict | None = None) -> Path:
+    """Write a simulation to NetCDF atomically (nothing is left behind on failure).
+
+    ``extra`` adds variables, name -> (dims, values, attrs), e.g. an inversion's diagnostics.
+    """
+    ds = to_dataset(sim, inputs, extra)
     for name in ("positions", "markers"):
         if not np.all(np.isfinite(ds[name].values)):
             raise InputError("refusing to write non-finite values", source=str(path), field=name)

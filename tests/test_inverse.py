@@ -1,0 +1,149 @@
+"""Dynamic inversion (Pitermann & Munhall 2001): statistics, twin experiments, bad input."""
+
+import json
+import sys
+
+import numpy as np
+import pytest
+
+from facemech import InputError, MarkerSet, read_results, simulate, write_markers
+from facemech.inverse import stats
+from facemech.inverse.experiments import synthetic_data, triangle_sequence
+from facemech.inverse.invert import _FrameProblem, control_matrix, invert
+from facemech.params import Parameters
+from facemech.physics.assembly import Physics
+from facemech.solvers.state import State
+from facemech.solvers.step import Stepper
+
+
+def test_3d_statistics_as_published_and_unbiased():
+    rng = np.random.default_rng(0)
+    v = rng.normal(size=(20, 3))
+    n = len(v)
+    assert stats.corr3d(v, v) == pytest.approx((n - 1) / n)
+    assert stats.corr3d(v, v, published=False) == pytest.approx(1.0)
+    assert stats.corr3d(v, 2 * v + 1, published=False) == pytest.approx(1.0)
+    assert stats.corr3d(v, -v, published=False) == pytest.approx(-1.0)
+    d = v - v.mean(axis=0)
+    assert stats.std3d(v) == pytest.approx(np.sqrt(np.sum(d * d) / (n - 1)))
+    two = np.stack([v, 3 * v], axis=1)
+    s = np.array([stats.std3d(v), stats.std3d(3 * v)])
+    assert stats.movement(two) == pytest.approx(2 * np.sqrt(np.mean(s**2)))
+    err = stats.frame_errors(two + np.array([0.0, 0.0, 1.0]), two)
+    np.testing.assert_allclose(err, 1.0)
+    assert stats.summary5(np.arange(5.0)) == {"min": 0, "q1": 1, "median": 2, "q3": 3, "max": 4}
+    ax = stats.axis_correlations(v, v)
+    assert ax["displacement"]["x"] == pytest.approx(1.0)
+
+
+def test_triangle_sequence():
+    t = triangle_sequence()
+    assert len(t) == 36 and t[6] == 1.0 and t[1] == pytest.approx(1 / 6) and t[11] == t[1]
+
+
+def twin(face, frames=10):
+    """Markers from known activity of three groups (the well-posed case)."""
+    names, g = control_matrix(["DLI", "OOS", "LLS"])
+    t = np.arange(frames) / 60
+    c = np.stack([0.5 + 0.4 * np.sin(2 * np.pi * 2 * t), 0.3 + 0.2 * np.cos(2 * np.pi * t),
+                  0.2 + 0.2 * np.sin(2 * np.pi * 1.5 * t)], axis=1)
+    sim = simulate(face, c @ g.T, integrator="euler", dt=1e-3)
+    mk = list(face.markers)
+    ms = MarkerSet(sim.positions[:, [face.markers[n] for n in mk]], tuple(mk), 60.0)
+    mapping = {n: face.markers[n] for n in mk if n.startswith("R")}
+    return ms, mapping, c
+
+
+def test_twin_experiment_recovers_known_activity(face):
+    ms, mapping, truth = twin(face)
+    res = invert(face, ms, mapping, controls=["DLI", "OOS", "LLS"])
+    np.testing.assert_allclose(res.controls[:-1], truth[:-1], atol=0.03)
+    assert np.median(res.rms_error[1:]) < 1e-6
+    assert np.all(np.isfinite(res.condition[1:])) and np.nanmax(res.condition) < 1e4
+    # the re-animation is the forward simulation of the recovered activity
+    again = simulate(face, np.clip(res.activity, 0, 1), integrator="euler", dt=1e-3)
+    np.testing.assert_allclose(again.positions, res.positions, atol=1e-12)
+
+
+def test_jacobian_matches_central_differences(face):
+    ms, mapping, truth = twin(face, frames=3)
+    names, g = control_matrix(["DLI", "OOS", "LLS"])
+    st = Stepper(Physics.build(face, Parameters()), integrator="euler", dt=1e-3)
+    s0 = State.at_rest(face.rest_positions, st.physics.n_muscles)
+    nodes = np.array(list(mapping.values()))
+    data = ms.select(list(mapping)).positions
+    ok = np.ones(len(nodes), bool)
+    fp = _FrameProblem(st, s0, g, nodes, data, np.zeros(3), 0, ok, data[1] * 1e3, 1)
+    c = np.array([0.4, 0.3, 0.2])
+    fp.lsq(c, 0.0, 1.0, 8, 0.0, 0.0, None, 0.0)
+    fwd = fp._cache["jm"]
+    # the forward-difference Jacobian at the solution, against central differences there
+    x = fp._cache["x"]
+    cen = np.empty_like(fwd)
+    for j in range(3):
+        e = np.zeros(3)
+        e[j] = 1e-4
+        cen[:, j] = (fp.marker_residual(x + e) - fp.marker_residual(x - e)) / 2e-4
+    fwd_at_x = np.empty_like(fwd)
+    r0 = fp.marker_residual(x)
+    for j in range(3):
+        e = np.zeros(3)
+        e[j] = 1e-3
+        fwd_at_x[:, j] = (fp.marker_residual(x + e) - r0) / 1e-3
+    # column by column (the skull and lip contacts switch, so single entries may jump)
+    rel = np.linalg.norm(fwd_at_x - cen, axis=0) / np.linalg.norm(cen, axis=0)
+    assert np.all(rel < 0.1), rel
+
+
+def test_powell_baseline_with_the_positive_constraint(face):
+    ms, mapping, truth = twin(face, frames=4)
+    res = invert(face, ms, mapping, method="powell", controls=["DLI", "OOS", "LLS"],
+                 max_evaluations=150)
+    assert np.all(res.controls >= 0)
+    assert np.median(res.rms_error[1:]) < 0.02e-3
+    assert res.evaluations[1:].min() > 10
+
+
+def test_experiment1_synthetic_data(face):
+    data, truth = synthetic_data(face)
+    assert data.n_frames == 36 and len(data.names) == 19
+    assert truth[:, :8].max() == 1.0 and truth[:, 8:].max() == 0.0
+
+
+def test_inversion_bad_input(face):
+    ms, mapping, _ = twin(face, frames=4)
+    with pytest.raises(InputError, match="resample first"):
+        invert(face, MarkerSet(ms.positions, ms.names, 120.0), mapping)
+    with pytest.raises(InputError, match="coordinates for 16 muscles"):
+        invert(face, ms, {"R03": mapping["R03"], "R05": mapping["R05"]}, controls="all")
+    gap = ms.positions.copy()
+    gap[2, ms.index("R05")] = np.nan
+    res = invert(face, ms.with_positions(gap), mapping, controls=["DLI", "OOS", "LLS"])
+    assert res.markers_used[2] == 10 and any("missing" in n for n in res.notes)
+    few = ms.positions.copy()
+    few[2, [ms.index(n) for n in mapping][1:]] = np.nan
+    with pytest.raises(InputError, match="frame 2: 1 usable markers"):
+        invert(face, ms.with_positions(few), mapping, controls=["DLI", "OOS", "LLS", "MEN"])
+
+
+def test_invert_and_compare_commands(face, tmp_path, monkeypatch, capsys):
+    from facemech.cli import main
+
+    ms, mapping, _ = twin(face, frames=6)
+    write_markers(tmp_path / "m.csv", ms.select(list(mapping)), units="mm")
+    monkeypatch.setattr(sys, "argv", ["facemech", "invert", "--markers", str(tmp_path / "m.csv"),
+                                      "--controls", "DLI,OOS,LLS", "-o", str(tmp_path / "r.nc")])
+    with pytest.raises(SystemExit) as info:
+        main()
+    assert info.value.code in (0, None), capsys.readouterr().err
+    ds = read_results(tmp_path / "r.nc")
+    assert "rms_error" in ds and ds["rms_error"].values[1:].max() < 1e-5
+    assert ds.attrs["inversion_method"] == "lsq"
+    capsys.readouterr()
+    monkeypatch.setattr(sys, "argv", ["facemech", "compare", str(tmp_path / "r.nc"),
+                                      str(tmp_path / "m.csv"), "--json"])
+    with pytest.raises(SystemExit) as info:
+        main()
+    res = json.loads(capsys.readouterr().out)
+    assert res["frame_error_mm"]["max"] < 0.01
+    assert res["markers"]["R05"]["corr3d_unbiased"] > 0.99
