@@ -147,3 +147,37 @@ def test_invert_and_compare_commands(face, tmp_path, monkeypatch, capsys):
     res = json.loads(capsys.readouterr().out)
     assert res["frame_error_mm"]["max"] < 0.01
     assert res["markers"]["R05"]["corr3d_unbiased"] > 0.99
+
+
+def test_second_talker_adaptation_by_scaling_and_warp(face):
+    from facemech import scale_adapt, warp_face
+    from facemech.inverse.experiments import CROSS_EXTRA, second_talker
+
+    other = second_talker()
+    names = [*other.markers, *CROSS_EXTRA]
+    rest_other = np.array([other.rest_positions[other.markers.get(n, other.landmarks.get(n))]
+                           for n in names])
+    ms = MarkerSet(rest_other[None].repeat(2, axis=0), tuple(names), 60.0)
+    mapping = {n: face.markers.get(n, face.landmarks.get(n)) for n in names}
+    rest_face = face.rest_positions[[mapping[n] for n in names]]
+    assert np.abs(rest_other - rest_face).max() > 3e-3  # a different talker
+    sc = scale_adapt(ms, face, mapping, ("R02", "L07"))
+    np.testing.assert_allclose(sc.markers.positions[0], rest_face, atol=1e-12)
+    warped = warp_face(face, ms, mapping)
+    np.testing.assert_allclose(warped.rest_positions[[mapping[n] for n in names]], rest_other,
+                               atol=1e-9)
+    # the warped face is a working model: a short simulation stays finite and moves
+    act = np.zeros((6, 16))
+    act[:, 6:8] = 0.5
+    sim = simulate(warped, act)
+    assert np.isfinite(sim.positions).all() and np.ptp(sim.positions[:, :, 0], axis=0).max() > 0
+
+
+def test_crosstalker_experiment_runs(face):
+    from facemech.inverse.experiments import run_crosstalker
+
+    res = run_crosstalker(face, frames=10)
+    assert set(res["runs"]) == {"lsq, positive, scaling", "lsq, positive, warp"}
+    for r in res["runs"].values():
+        assert len(r["table6_corr3d"]) == 22
+        assert np.isfinite(r["frame_error_mm"]["median"])

@@ -24,7 +24,7 @@ from .io.markers import read_marker_csv, read_markers, write_marker_csv, write_m
 from .io.results import read_results, write_results
 from .kinematics.frames import align_to_model, to_anatomical_frame
 from .kinematics.gaps import fill_gaps, find_gaps
-from .kinematics.mapping import closest_nodes, read_mapping, scale_adapt
+from .kinematics.mapping import closest_nodes, read_mapping, scale_adapt, warp_face
 from .kinematics.resample import derivative, resample
 from .kinematics.rigid import head_correct, rigid_fit
 from .markerset import MarkerSet
@@ -44,6 +44,6 @@ __all__ = [
     "head_correct", "load_face", "preset", "process_emg", "read_activity", "read_emg",
     "read_landmarks", "read_mapping", "read_marker_csv", "read_markers", "read_results",
     "read_surface", "resample", "rigid_fit", "scale_adapt", "seven_channel_control",
-    "simulate", "to_anatomical_frame", "write_activity", "write_marker_csv", "write_markers",
-    "write_results",
+    "simulate", "to_anatomical_frame", "warp_face", "write_activity", "write_marker_csv",
+    "write_markers", "write_results",
 ]

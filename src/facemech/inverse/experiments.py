@@ -105,3 +105,101 @@ def run_synthetic(face, *, methods=("lsq",), dt: float = 1e-3, noise: float = 0.
                 if np.isfinite(res.condition).any() else None,
             }
     return out
+
+
+# ---- Experiment 3 analogue: another talker ---------------------------------------------------
+CROSS_HELD_OUT = ("L03", "L05", "L07", "L08")
+CROSS_EXTRA = ("upper_lip_center", "lower_lip_center", "nose_tip")
+
+
+def second_talker():
+    """A second talker: the generic surface reshaped (wider and shorter, a fuller lower face)."""
+    from ..geometry.builder import build_face, default_surface
+
+    v, f, lm = default_surface()
+
+    def reshape(p):
+        p = np.array(p, float)
+        y = p[..., 1]
+        x_scale = 1.06 + 0.05 * np.tanh((-0.07 - y) / 0.03)  # wider jaw than forehead
+        out = p.copy()
+        out[..., 0] = p[..., 0] * x_scale
+        out[..., 1] = 0.93 * y
+        out[..., 2] = 1.04 * p[..., 2] + 0.002 * np.exp(-(((y + 0.09) / 0.02) ** 2))
+        return out
+
+    return build_face(reshape(v), f, {k: reshape(p) for k, p in lm.items()}, name="talker-2")
+
+
+def gesture_controls(frames: int = 120):
+    """Activity (frames, 16) and jaw angles of /baeb beb daed ded/-like gestures."""
+    t = np.arange(frames) / 60.0
+    act = np.zeros((frames, len(MUSCLE_GROUPS)))
+    jaw = np.zeros(frames)
+    seg = t[-1] / 4 if frames > 1 else 1.0
+
+    def bump(c, w):
+        return 0.5 * (1 + np.cos(2 * np.pi * np.clip((t - c) / w, -0.5, 0.5)))
+
+    for k, (vowel_deg, bilabial) in enumerate(((9.0, True), (5.0, True), (9.0, False),
+                                               (5.0, False))):
+        start = k * seg
+        jaw += np.radians(vowel_deg) * bump(start + 0.5 * seg, 0.8 * seg)
+        for edge in (start + 0.1 * seg, start + 0.9 * seg):
+            close = bump(edge, 0.4 * seg)
+            if bilabial:
+                act[:, MUSCLE_GROUPS.index("OOS")] += 0.7 * close
+                act[:, MUSCLE_GROUPS.index("OOI")] += 0.8 * close
+            else:
+                act[:, MUSCLE_GROUPS.index("LLS")] += 0.3 * close
+        act[:, MUSCLE_GROUPS.index("DLI")] += 0.4 * bump(start + 0.5 * seg, 0.6 * seg)
+        if vowel_deg < 7:  # /e/: some spreading
+            act[:, MUSCLE_GROUPS.index("ZYG")] += 0.3 * bump(start + 0.5 * seg, 0.6 * seg)
+            act[:, MUSCLE_GROUPS.index("LAO")] += 0.3 * bump(start + 0.5 * seg, 0.6 * seg)
+    return np.clip(act, 0, 1), jaw
+
+
+def run_crosstalker(face, *, frames: int = 120, dt: float = 1e-3,
+                    progress: Callable[[str, int, int], None] | None = None) -> dict:
+    """Experiment 3 analogue: markers of a second talker, inverted on the default face after
+    per-axis scaling, and separately after a thin-plate-spline warp of the face (Table VI)."""
+    from ..kinematics.mapping import scale_adapt, warp_face
+    from ..solvers.forward import simulate
+    from ..solvers.jaw import angles_from_chin
+
+    other = second_talker()
+    act, jaw = gesture_controls(frames)
+    sim = simulate(other, act, jaw, integrator="euler", dt=dt)
+    names = [*other.markers, *CROSS_EXTRA]
+    nodes_other = [other.markers.get(n, other.landmarks.get(n)) for n in names]
+    data = MarkerSet(sim.positions[:, nodes_other], tuple(names), 60.0)
+    mapping_all = {n: face.markers.get(n, face.landmarks.get(n)) for n in names}
+    used = {n: v for n, v in mapping_all.items() if n not in CROSS_HELD_OUT}
+    out: dict = {"frames": frames, "markers": names, "held_out": list(CROSS_HELD_OUT),
+                 "runs": {}}
+    for adaptation in ("scaling", "warp"):
+        if adaptation == "scaling":
+            adapted = scale_adapt(data, face, mapping_all, ("R02", "L07")).markers
+            model = face
+        else:
+            adapted = data
+            model = warp_face(face, data, mapping_all)
+        chin = model.rest_positions[mapping_all["R01"] + 2 * model.n_surface]
+        jaw_est = angles_from_chin(adapted.marker("R01")[:, 1], chin, model.hinge_point,
+                                   model.hinge_axis)
+        label = f"lsq, positive, {adaptation}"
+        t0 = time.perf_counter()
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)
+            res = invert(model, adapted, used, positive=True, jaw_angle=jaw_est, dt=dt,
+                         progress=None if progress is None else
+                         (lambda d, n, _l=label: progress(_l, d, n)))
+        idx = [mapping_all[n] for n in names]
+        mod = res.positions[:, idx]
+        table6 = {n: float(stats.corr3d(mod[:, m], adapted.positions[:, m]))
+                  for m, n in enumerate(names)}
+        err = stats.frame_errors(mod[1:], adapted.positions[1:])
+        out["runs"][label] = {"wall_s": time.perf_counter() - t0, "table6_corr3d": table6,
+                              "frame_error_mm": stats.summary5(err * 1e3),
+                              "movement_mm": stats.movement(adapted.positions) * 1e3}
+    return out

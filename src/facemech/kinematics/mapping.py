@@ -99,3 +99,29 @@ def scale_adapt(ms: MarkerSet, model, mapping: dict[str, int], far_pair: tuple[s
         offsets[m] = rest[node] - scaled[reference, m]
     out = ms.with_positions(scaled + offsets, meta={**ms.meta, "scale_factors": factors.tolist()})
     return ScalingAdaptation(factors, offsets, out)
+
+
+def warp_face(model, ms: MarkerSet, mapping: dict[str, int], *, reference: int = 0,
+              smoothing: float = 0.0):
+    """Adapt the face to a talker: a thin-plate-spline warp of every node (all three layers, the
+    hinge) that carries the mapped marker nodes onto the talker's rest markers.
+
+    Returns a new :class:`~facemech.geometry.builder.FaceModel`; the markers stay as measured.
+    """
+    from dataclasses import replace
+
+    from scipy.interpolate import RBFInterpolator
+
+    names = [n for n in ms.names if n in mapping]
+    if len(names) < 5:
+        raise InputError("the warp needs at least 5 mapped markers", field="mapping")
+    src = model.rest_positions[[mapping[n] for n in names]]
+    dst = np.array([ms.marker(n)[reference] for n in names])
+    if not np.all(np.isfinite(dst)):
+        raise InputError(f"mapped markers missing at the reference frame {reference}",
+                         field="reference")
+    rbf = RBFInterpolator(src, dst - src, kernel="thin_plate_spline", degree=1,
+                          smoothing=smoothing)
+    rest = model.rest_positions + rbf(model.rest_positions)
+    hinge = model.hinge_point + rbf(model.hinge_point[None])[0]
+    return replace(model, rest_positions=rest, hinge_point=hinge, name=f"{model.name}-warped")
