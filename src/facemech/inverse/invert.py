@@ -12,9 +12,10 @@ Methods:
     Powell's direction-set minimisation of E = sum_i |m_i - n_i|^2 (mm^2); with the positive
     constraint, E' = E if every activity is >= 0, else 1e6 (1 + |sum of the negative ones|).
 ``lsq`` (default)
-    bounded nonlinear least squares (trust-region reflective) on the marker residuals, activity in
-    [0, 1] (or [-1, 1] without the positive constraint), with a forward-difference Jacobian whose
-    columns each cost one step from the frame's state. Optional regularisation rows, weights in
+    bounded Gauss-Newton on the marker residuals, activity in [0, 1] (or [-1, 1] without the
+    positive constraint): a forward-difference Jacobian (each column one step from the frame's
+    state) taken once at the warm start and renewed only when a step fails, each linearised step
+    solved exactly within the bounds. Optional regularisation rows, weights in
     mm per unit of activity: ``smooth`` (a - a_previous), ``effort`` (a), ``prior`` (a - EMG).
     Per frame it reports the residual, the controls on a bound and the Jacobian's condition
     number, and warns when the muscles are barely identifiable.
@@ -28,7 +29,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.optimize import least_squares, minimize
+from scipy.optimize import minimize
 
 from ..errors import InputError
 from ..markerset import MarkerSet
@@ -259,44 +260,67 @@ class _FrameProblem:
                        options={"xtol": 1e-3, "ftol": 1e-9, "maxfev": max_evaluations})
         return res.x
 
+    def jacobian(self, c, r0, hi):
+        """Forward-difference Jacobian (residuals x controls) at c, one step per column."""
+        jm = np.empty((len(r0), self.nc))
+        for j in range(self.nc):
+            h = 1e-3 if c[j] + 1e-3 <= hi else -1e-3
+            cj = c.copy()
+            cj[j] += h
+            jm[:, j] = (self.marker_residual(cj) - r0) / h
+        return jm
+
     def lsq(self, c_prev, lo, hi, max_evaluations, smooth, effort, prior, prior_weight):
+        """Bounded Gauss-Newton with a chord Jacobian.
+
+        The Jacobian is computed once at the warm start; each iteration solves the linearised
+        problem with bounds exactly (bounded-variable least squares) and is accepted if the full
+        residual falls. A new Jacobian is taken only when a step fails; at most
+        ``max_evaluations`` step-function calls. Returns the activity and the condition number.
+        """
+        from scipy.optimize import lsq_linear
+
         nc = self.nc
-        weights = []  # regularisation rows: (weight, offset)
+        regs = []  # regularisation rows: (weight, offset)
         if smooth > 0:
-            weights.append((smooth, c_prev))
+            regs.append((smooth, np.asarray(c_prev, float)))
         if effort > 0:
-            weights.append((effort, np.zeros(nc)))
+            regs.append((effort, np.zeros(nc)))
         if prior is not None and prior_weight > 0:
-            weights.append((prior_weight, np.asarray(prior, float)))
-        cache = self._cache
+            regs.append((prior_weight, np.asarray(prior, float)))
 
-        def fun(c):
-            r = self.marker_residual(c)
-            cache["x"], cache["r"] = c.copy(), r
-            return np.concatenate([r, *(w * (c - off) for w, off in weights)])
+        def total(c, r):
+            return float(np.sum(r * r) + sum(np.sum((w * (c - off)) ** 2) for w, off in regs))
 
-        def jac(c):
-            if "x" in cache and np.array_equal(cache["x"], c):
-                r0 = cache["r"]
+        c = np.clip(np.asarray(c_prev, float), lo, hi)
+        r = self.marker_residual(c)
+        jm = self.jacobian(c, r, hi)
+        self._cache.update({"jm": jm, "x": c.copy(), "r": r})
+        cost = total(c, r)
+        fresh = True
+        for _ in range(12):
+            if self.counter[0] >= max_evaluations:
+                break
+            a = np.vstack([jm, *(w * np.eye(nc) for w, _ in regs)])
+            b = -np.concatenate([r, *(w * (c - off) for w, off in regs)])
+            step = lsq_linear(a, b, bounds=(lo - c, hi - c), method="bvls").x
+            if np.max(np.abs(step)) < 1e-5:
+                break
+            trial = np.clip(c + step, lo, hi)
+            r_trial = self.marker_residual(trial)
+            cost_trial = total(trial, r_trial)
+            if cost_trial < cost:
+                improvement = (cost - cost_trial) / max(cost, 1e-30)
+                c, r, cost = trial, r_trial, cost_trial
+                fresh = False
+                if improvement < 1e-4:
+                    break
+            elif fresh:
+                break  # even a fresh Jacobian's step does not help: done
             else:
-                r0 = self.marker_residual(c)
-            jm = np.empty((len(r0), nc))
-            for j in range(nc):
-                h = 1e-3 if c[j] + 1e-3 <= hi else -1e-3
-                cj = c.copy()
-                cj[j] += h
-                jm[:, j] = (self.marker_residual(cj) - r0) / h
-            cache["jm"] = jm
-            return np.vstack([jm, *(w * np.eye(nc) for w, _ in weights)])
-
-        # start a little inside the bounds: the trust region's first radius is |x0|, so a start
-        # at exactly zero would never move
-        margin = 0.02 * (hi - lo)
-        x0 = np.clip(c_prev, lo + margin, hi - margin)
-        res = least_squares(fun, x0, jac=jac, bounds=(lo, hi), method="trf",
-                            max_nfev=max(3, max_evaluations // (nc + 1)), xtol=1e-6, ftol=1e-10)
-        cond = np.nan
-        if "jm" in cache:
-            sv = np.linalg.svd(cache["jm"], compute_uv=False)
-            cond = sv[0] / sv[-1] if sv[-1] > 0 else np.inf
-        return res.x, cond
+                jm = self.jacobian(c, r, hi)  # the chord went stale: renew it
+                fresh = True
+        self._cache.update({"jm": jm, "x": c.copy(), "r": r})
+        sv = np.linalg.svd(jm, compute_uv=False)
+        cond = sv[0] / sv[-1] if sv[-1] > 0 else np.inf
+        return c, cond
