@@ -6,6 +6,7 @@ exit status 2; nothing is left half-written.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import sys
 from pathlib import Path
@@ -39,6 +40,20 @@ def _progress():
                     disable=not err.is_terminal)
 
 
+@contextlib.contextmanager
+def _staged_progress():
+    """A progress display with one bar per stage; yields report(stage, done, total)."""
+    with _progress() as prog:
+        tasks: dict[str, int] = {}
+
+        def report(stage, done, total):
+            if stage not in tasks:
+                tasks[stage] = prog.add_task(stage, total=total)
+            prog.update(tasks[stage], completed=done)
+
+        yield report
+
+
 def _interval(text: str | None, field: str) -> tuple[float, float] | None:
     if text is None:
         return None
@@ -62,14 +77,7 @@ def demo(
     """Simulate a synthetic utterance on the built-in face; write results, plots and a movie."""
     from .demo import run_demo
 
-    with _progress() as prog:
-        tasks: dict[str, int] = {}
-
-        def report(stage, done, total):
-            if stage not in tasks:
-                tasks[stage] = prog.add_task(stage, total=total)
-            prog.update(tasks[stage], completed=done)
-
+    with _staged_progress() as report:
         err.print(f"facemech demo: building the face and simulating ({integrator}) ...")
         s = run_demo(output, integrator=integrator, video=video, progress=report)
     out.print(f"[bold]facemech demo[/bold] -> {output}/")
@@ -586,14 +594,7 @@ def experiment_lucero2008(
 
     if utterances < 8:
         raise InputError("needs at least 8 utterances", field="utterances")
-    with _progress() as prog:
-        tasks: dict[str, int] = {}
-
-        def report(stage, done, total):
-            if stage not in tasks:
-                tasks[stage] = prog.add_task(stage, total=total)
-            prog.update(tasks[stage], completed=done)
-
+    with _staged_progress() as report:
         s = run_lucero2008(output, n_utterances=utterances, frames=frames, k=k, video=video,
                            progress=report)
     p, a = s["paper"], s["all_utterances"]
@@ -764,14 +765,7 @@ def experiment_pitermann_synthetic(
     if method not in ("lsq", "powell", "both"):
         raise InputError("method must be lsq, powell or both", field="method")
     methods = ("lsq", "powell") if method == "both" else (method,)
-    with _progress() as prog:
-        tasks: dict[str, int] = {}
-
-        def report(stage, done, total):
-            if stage not in tasks:
-                tasks[stage] = prog.add_task(stage, total=total)
-            prog.update(tasks[stage], completed=done)
-
+    with _staged_progress() as report:
         res = run_synthetic(default_face(), methods=methods, noise=noise * 1e-3,
                             progress=report)
     paper = res["paper"]
@@ -810,14 +804,7 @@ def experiment_pitermann_crosstalker(
 
     if frames < 8:
         raise InputError("needs at least 8 frames", field="frames")
-    with _progress() as prog:
-        tasks: dict[str, int] = {}
-
-        def report(stage, done, total):
-            if stage not in tasks:
-                tasks[stage] = prog.add_task(stage, total=total)
-            prog.update(tasks[stage], completed=done)
-
+    with _staged_progress() as report:
         res = run_crosstalker(default_face(), frames=frames, progress=report)
     out.print("[bold]Pitermann & Munhall (2001), Experiment 3 analogue[/bold] (paper, Table VI: "
               "3-D correlations mostly 0.75-0.97, upper lip centre poor)")

@@ -33,6 +33,14 @@ PAPER = {
 }
 
 
+def _invert_quietly(face, data, used, label, progress, **kw):
+    """invert() with its ill-posedness warning kept for the tables, progress under a label."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        return invert(face, data, used, **kw, progress=None if progress is None else
+                      (lambda d, n: progress(label, d, n)))
+
+
 def triangle_sequence(repeats: int = 3) -> np.ndarray:
     """0, 1/6, ..., 1, 5/6, ..., 1/6, repeated: (12 * repeats,) activity."""
     one = np.concatenate([np.arange(0, 7) / 6, np.arange(5, 0, -1) / 6])
@@ -74,11 +82,8 @@ def run_synthetic(face, *, methods=("lsq",), dt: float = 1e-3, noise: float = 0.
         for positive in (False, True):
             label = f"{method}, {'positive' if positive else 'no constraint'}"
             t0 = time.perf_counter()
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", UserWarning)
-                res = invert(face, data, used, method=method, positive=positive, dt=dt,
-                             progress=None if progress is None else
-                             (lambda d, n, _l=label: progress(_l, d, n)))
+            res = _invert_quietly(face, data, used, label, progress, method=method,
+                                  positive=positive, dt=dt)
             wall = time.perf_counter() - t0
             model = res.positions[:, all_nodes]
             table1 = {}
@@ -189,11 +194,8 @@ def run_crosstalker(face, *, frames: int = 120, dt: float = 1e-3,
                                    model.hinge_axis)
         label = f"lsq, positive, {adaptation}"
         t0 = time.perf_counter()
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", UserWarning)
-            res = invert(model, adapted, used, positive=True, jaw_angle=jaw_est, dt=dt,
-                         progress=None if progress is None else
-                         (lambda d, n, _l=label: progress(_l, d, n)))
+        res = _invert_quietly(model, adapted, used, label, progress, positive=True,
+                              jaw_angle=jaw_est, dt=dt)
         idx = [mapping_all[n] for n in names]
         mod = res.positions[:, idx]
         table6 = {n: float(stats.corr3d(mod[:, m], adapted.positions[:, m]))
