@@ -162,3 +162,24 @@ def test_results_refuse_non_finite(face, tmp_path):
     with pytest.raises(InputError, match="non-finite"):
         write_results(tmp_path / "r.nc", sim)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_emg_from_c3d_analog_channels(tmp_path):
+    ezc3d = pytest.importorskip("ezc3d")
+    from facemech import read_emg
+
+    t, x = burst_emg(duration=2.0)
+    c = ezc3d.c3d()
+    c["parameters"]["POINT"]["RATE"]["value"] = [100.0]
+    c["parameters"]["POINT"]["LABELS"]["value"] = ("chin",)
+    c["parameters"]["POINT"]["UNITS"]["value"] = ["mm"]
+    c["data"]["points"] = np.ones((4, 1, 200))
+    c["parameters"]["ANALOG"]["RATE"]["value"] = [2500.0]
+    c["parameters"]["ANALOG"]["LABELS"]["value"] = ("DLI", "OOS")
+    c["data"]["analogs"] = x.T[None]
+    c.write(str(tmp_path / "emg.c3d"))
+    sig, rate, names = read_emg(tmp_path / "emg.c3d")
+    assert rate == 2500.0 and names == ("DLI", "OOS")
+    np.testing.assert_allclose(sig, x, atol=1e-5)
+    res = process_emg(sig, rate, names)
+    assert res.activity[(res.time > 1.1) & (res.time < 1.4), 0].mean() > 0.6

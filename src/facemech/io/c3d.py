@@ -8,9 +8,11 @@ POINT:UNITS is honoured; a file without it needs the caller's ``units``.
 
 from __future__ import annotations
 
-import multiprocessing as mp
-import queue as queue_mod
-import time
+import json
+import os
+import subprocess
+import sys
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -20,38 +22,38 @@ from ..markerset import MarkerSet
 from ..units import length_scale
 from .atomic import atomic_path
 
+_CHILD = r"""
+import json, sys
+import numpy as np
+import ezc3d
 
-def _labels(group: dict, key: str = "LABELS") -> list[str]:
-    out: list[str] = []
-    for suffix in ("", *map(str, range(2, 100))):
-        k = f"{key}{suffix}"
-        if k not in group:
+def labels(group, key="LABELS"):
+    out = []
+    for suffix in ["", *map(str, range(2, 100))]:
+        if key + suffix not in group:
             break
-        out.extend(str(s).strip() for s in group[k]["value"])
+        out.extend(str(s).strip() for s in group[key + suffix]["value"])
     return out
 
-
-def _read_child(path: str, what: str, q) -> None:  # pragma: no cover - runs in the child
-    try:
-        import ezc3d
-
-        c = ezc3d.c3d(path)
-        if what == "analog":
-            group = c["parameters"]["ANALOG"]
-            rate = float(group["RATE"]["value"][0])
-            data = np.asarray(c["data"]["analogs"], float)[0].T  # (samples, channels)
-            q.put(("ok", (rate, _labels(group), data)))
-            return
-        group = c["parameters"]["POINT"]
-        rate = float(group["RATE"]["value"][0])
-        units = [str(u).strip() for u in group.get("UNITS", {}).get("value", [])]
-        pts = np.asarray(c["data"]["points"], float)[:3].transpose(2, 1, 0).copy()
-        res = np.asarray(c["data"]["meta_points"]["residuals"], float)[0].T
-        pts[res < 0] = np.nan
-        labels = _labels(group)[: pts.shape[1]]
-        q.put(("ok", (rate, labels, units[0] if units else "", pts)))
-    except Exception as exc:
-        q.put(("error", f"{type(exc).__name__}: {exc}"))
+path, what, target = sys.argv[1:4]
+c = ezc3d.c3d(path)
+if what == "analog":
+    g = c["parameters"]["ANALOG"]
+    rate = float(g["RATE"]["value"][0])
+    data = np.asarray(c["data"]["analogs"], float)[0].T
+    meta = {"rate": rate, "labels": labels(g), "units": ""}
+else:
+    g = c["parameters"]["POINT"]
+    rate = float(g["RATE"]["value"][0])
+    units = [str(u).strip() for u in g.get("UNITS", {}).get("value", [])]
+    data = np.asarray(c["data"]["points"], float)[:3].transpose(2, 1, 0).copy()
+    res = np.asarray(c["data"]["meta_points"]["residuals"], float)[0].T
+    data[res < 0] = np.nan
+    meta = {"rate": rate, "labels": labels(g)[: data.shape[1]],
+            "units": units[0] if units else ""}
+with open(target, "wb") as fh:
+    np.savez(fh, data=data, meta=np.array(json.dumps(meta)))
+"""
 
 
 def check_header(path: Path) -> None:
@@ -93,39 +95,36 @@ def check_header(path: Path) -> None:
 
 
 def _isolated_read(path: str | Path, what: str, timeout: float = 60.0):
+    """Read points or analogs with ezc3d in a separate interpreter (crash- and hang-proof)."""
     path = Path(path)
     if not path.is_file():
         raise InputError("file not found", source=str(path))
-    check_header(path)
     try:
         import ezc3d  # noqa: F401
     except ImportError:
         raise InputError("reading C3D needs ezc3d (pip install 'facemech[c3d]')",
                          source=str(path)) from None
-    ctx = mp.get_context("spawn")
-    q = ctx.Queue()
-    proc = ctx.Process(target=_read_child, args=(str(path), what, q), daemon=True)
-    proc.start()
-    deadline = time.monotonic() + timeout
+    check_header(path)
+    fd, target = tempfile.mkstemp(suffix=".npz")
+    os.close(fd)
     try:
-        while True:
-            try:
-                status, payload = q.get(timeout=0.2)
-                break
-            except queue_mod.Empty:
-                if not proc.is_alive() or time.monotonic() > deadline:
-                    proc.kill()
-                    proc.join(timeout=5)
-                    why = ("timed out" if proc.exitcode in (None, -9)
-                           else f"exit code {proc.exitcode}")
-                    raise InputError(f"corrupt C3D: the reader stopped ({why})",
-                                     source=str(path)) from None
+        try:
+            run = subprocess.run([sys.executable, "-c", _CHILD, str(path), what, target],
+                                 capture_output=True, text=True, timeout=timeout)
+        except subprocess.TimeoutExpired:
+            raise InputError("corrupt C3D: the reader stopped (timed out)",
+                             source=str(path)) from None
+        if run.returncode != 0:
+            last = (run.stderr.strip().splitlines() or [f"exit code {run.returncode}"])[-1]
+            raise InputError(f"corrupt C3D ({last[-160:]})", source=str(path))
+        with np.load(target) as z:
+            data = z["data"]
+            meta = json.loads(str(z["meta"]))
     finally:
-        proc.join(timeout=5)
-        q.close()
-    if status != "ok":
-        raise InputError(f"corrupt C3D ({payload})", source=str(path))
-    return payload
+        Path(target).unlink(missing_ok=True)
+    if what == "analog":
+        return meta["rate"], meta["labels"], data
+    return meta["rate"], meta["labels"], meta["units"], data
 
 
 def read_c3d_analog(path: str | Path):
