@@ -47,7 +47,6 @@ def main() -> None:
     # warm up the compiled kernels
     simulate(face, act[:3], jaw[:3])
     simulate(face, act[:3], jaw[:3], integrator="rosenbrock")
-    runs = {"euler": {}, "implicit": {"substeps": 4}, "rosenbrock": {"substeps": 4}}
     variants = [("euler", "euler", {}), ("euler-1ms", "euler", {"dt": 1e-3}),
                 ("implicit-4", "implicit", {"substeps": 4}),
                 ("implicit-8", "implicit", {"substeps": 8}),
@@ -104,7 +103,6 @@ def main() -> None:
                         "rosenbrock_step_estimate": 2 * (force_ms + solve_ms)},
         "threads": 1,
     }
-    del runs
     print(json.dumps(report, indent=2))
 
 

@@ -161,6 +161,23 @@ class Stepper:
             np.nonzero(physics.tied_on_jaw)[0], tied_rest0, tied_normal0,
             self._tied_rest, self._tied_normal,
         )
+        self._warm_up()
+
+    def _warm_up(self) -> None:
+        """Compile (or load) the numba kernels now, so that timings of the first frame are not
+        the compiler's: a frame of zero steps touches every kernel and changes nothing."""
+        ph = self.physics
+        pos = ph.model.rest_positions.copy()
+        vel = np.zeros_like(pos)
+        m = np.zeros(ph.n_muscles)
+        place_jaw(pos, vel, 0.0, 0.0, *self._jargs)
+        fargs = force_arguments(ph, m, self._tied_rest, self._tied_normal, ph.model.lip_normals)
+        if self.integrator == "euler":
+            _euler_frame(pos, vel, m, m.copy(), m.copy(), 0, self.dt, 1.0, ph.n_dynamic,
+                         ph.params.tau_activation, self._out, fargs, 0.0, 0.0, self._jargs)
+        else:
+            accumulate_forces(pos, vel, self._out, *fargs)
+            _filter_exact(m, m.copy(), m.copy(), ph.params.tau_activation, self.dt)
 
     # -- the implicit system --------------------------------------------------------------
     def _factorise(self, h: float):
