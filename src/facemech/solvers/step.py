@@ -13,7 +13,7 @@ Each advances an immutable :class:`~facemech.solvers.state.State` through one co
     (damping C, rest tangent stiffness K of springs, shape and restoration terms), factorised
     once with SuperLU and reused: ``A dv = h (f(x, v) - h K v)``. The nonlinear forces are
     evaluated exactly each step, so only the stability, not the consistency, rests on K.
-``rosenbrock`` (the fast default of the CLI)
+``rosenbrock``
     the two-stage Rosenbrock-W method ROS2 (Verwer et al. 1999), second order for any
     approximation of the Jacobian, so one constant factorised matrix (gamma h in place of h)
     serves every step: two force evaluations and two solves per step.
