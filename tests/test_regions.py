@@ -47,6 +47,9 @@ def test_selection_is_scipys_pivot_order_and_residual_is_R22():
         resid = np.linalg.norm(a[:, piv[k:]] - a[:, piv[:k]] @ x)
         assert m.residual_ == pytest.approx(resid, rel=1e-9)
         np.testing.assert_allclose(m.coef_, x, atol=1e-8)
+        k_view = IndependentMarkers(k=1, eps=1e-9).fit(utts).with_k(k)
+        np.testing.assert_array_equal(k_view.selected_, m.selected_)
+        np.testing.assert_allclose(k_view.coef_, m.coef_, atol=1e-12)
 
 
 def test_stacking_rows_are_sample_then_axis():

@@ -211,21 +211,41 @@ class IndependentMarkers:
         self.swaps_ = 0
         if self.method == "strong":
             r, perm, self.swaps_ = strong_rrqr(a, k, self.bound)
-        self.k_ = k
         self.R_ = r
         self.order_ = np.asarray(perm)
+        self.r_values_ = np.abs(np.diag(r)) / norm
+        self.n_markers_ = n
+        # principal directions of A = Q R P^T are those of R P^T (no SVD of the tall matrix)
+        rp = np.empty_like(r)
+        rp[:, self.order_] = r
+        self._vt = np.linalg.svd(rp, full_matrices=False)[2]
+        self._set_k(k)
+        return self
+
+    def _set_k(self, k: int) -> None:
+        """Selection, fit coefficients and residual for k, from the stored factorisation."""
+        r, n = self.R_, self.n_markers_
+        self.k_ = k
         self.selected_ = self.order_[:k]
         self.secondary_ = self.order_[k:]
-        self.r_values_ = np.abs(np.diag(r)) / norm
         self.coef_ = (sla.solve_triangular(r[:k, :k], r[:k, k:]) if k < n
                       else np.zeros((k, 0)))
         self.residual_ = float(np.linalg.norm(r[k:, k:]))
-        self.n_markers_ = n
-        # principal directions of A = Q R P^T are those of R P^T (no SVD of the tall matrix)
-        rp = np.empty_like(self.R_) if self.method == "qrcp" else np.empty_like(r)
-        rp[:, self.order_] = self.R_
-        self._vt = np.linalg.svd(rp, full_matrices=False)[2]
-        return self
+
+    def with_k(self, k: int) -> IndependentMarkers:
+        """The fitted QRCP model truncated at another k, without factorising again (the pivot
+        order of column pivoting does not depend on k; strong RRQR's does, so refit that)."""
+        import copy
+
+        if self.method != "qrcp":
+            raise InputError("with_k needs method='qrcp' (strong RRQR swaps depend on k)",
+                             field="method")
+        if not 1 <= k <= self.n_markers_:
+            raise InputError(f"k = {k} outside 1..{self.n_markers_}", field="k")
+        out = copy.copy(self)
+        out.k = k
+        out._set_k(k)
+        return out
 
     def pca(self, k: int | None = None) -> PCABaseline:
         """The principal-component baseline with the same (or a given) k."""
