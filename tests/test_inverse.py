@@ -75,7 +75,7 @@ def test_jacobian_matches_central_differences(face):
     ok = np.ones(len(nodes), bool)
     fp = _FrameProblem(st, s0, g, nodes, data, np.zeros(3), 0, ok, data[1] * 1e3, 1)
     c = np.array([0.4, 0.3, 0.2])
-    fp.lsq(c, 0.0, 1.0, 8, 0.0, 0.0, None, 0.0)
+    fp.lsq(c, 0.0, 1.0, 8, 0.0, 0.0, None, 0.0)  # fresh Jacobian at the start
     fwd = fp._cache["jm"]
     # the forward-difference Jacobian at the solution, against central differences there
     x = fp._cache["x"]

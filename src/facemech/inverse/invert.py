@@ -169,6 +169,7 @@ def invert(
     positions[0] = state.positions[: face.n_surface]
     notes: list[str] = []
     gaps = 0
+    jm_prev = None  # the chord Jacobian carried from frame to frame (lsq)
     t0 = time.perf_counter()
     for k in range(frames - 1):
         target = data[k + 1] * 1e3  # mm
@@ -182,8 +183,9 @@ def invert(
         if method == "powell":
             c = frame.powell(c_prev, positive, lo, hi, max_evaluations)
         else:
-            c, cond[k + 1] = frame.lsq(c_prev, lo, hi, max_evaluations, smooth, effort,
-                                       None if prior is None else prior[k], prior_weight)
+            c, cond[k + 1], jm_prev = frame.lsq(c_prev, lo, hi, max_evaluations, smooth,
+                                                effort, None if prior is None else prior[k],
+                                                prior_weight, jm_prev)
         state, _ = frame.nodes_after(c)
         counter = frame.counter
         out_c[k] = c
@@ -270,13 +272,15 @@ class _FrameProblem:
             jm[:, j] = (self.marker_residual(cj) - r0) / h
         return jm
 
-    def lsq(self, c_prev, lo, hi, max_evaluations, smooth, effort, prior, prior_weight):
+    def lsq(self, c_prev, lo, hi, max_evaluations, smooth, effort, prior, prior_weight,
+            jm_prev=None):
         """Bounded Gauss-Newton with a chord Jacobian.
 
-        The Jacobian is computed once at the warm start; each iteration solves the linearised
-        problem with bounds exactly (bounded-variable least squares) and is accepted if the full
-        residual falls. A new Jacobian is taken only when a step fails; at most
-        ``max_evaluations`` step-function calls. Returns the activity and the condition number.
+        The chord Jacobian is the previous frame's (``jm_prev``) or is computed at the warm start;
+        each iteration solves the linearised problem with bounds exactly (bounded-variable least
+        squares) and is accepted if the full residual falls. A new Jacobian is taken only when a
+        step fails; at most ``max_evaluations`` step-function calls. Returns the activity, the
+        condition number and the Jacobian (to seed the next frame).
         """
         from scipy.optimize import lsq_linear
 
@@ -294,10 +298,12 @@ class _FrameProblem:
 
         c = np.clip(np.asarray(c_prev, float), lo, hi)
         r = self.marker_residual(c)
-        jm = self.jacobian(c, r, hi)
+        if jm_prev is not None and jm_prev.shape == (len(r), nc):
+            jm, fresh = jm_prev, False
+        else:
+            jm, fresh = self.jacobian(c, r, hi), True
         self._cache.update({"jm": jm, "x": c.copy(), "r": r})
         cost = total(c, r)
-        fresh = True
         for _ in range(12):
             if self.counter[0] >= max_evaluations:
                 break
@@ -323,4 +329,4 @@ class _FrameProblem:
         self._cache.update({"jm": jm, "x": c.copy(), "r": r})
         sv = np.linalg.svd(jm, compute_uv=False)
         cond = sv[0] / sv[-1] if sv[-1] > 0 else np.inf
-        return c, cond
+        return c, cond, jm
