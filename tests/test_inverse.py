@@ -181,3 +181,19 @@ def test_crosstalker_experiment_runs(face):
     for r in res["runs"].values():
         assert len(r["table6_corr3d"]) == 22
         assert np.isfinite(r["frame_error_mm"]["median"])
+
+
+def test_experiment1_command_prints_the_tables(tmp_path, monkeypatch, capsys):
+    from facemech.cli import main
+
+    monkeypatch.setattr(sys, "argv", ["facemech", "experiment", "pitermann2001-synthetic",
+                                      "-o", str(tmp_path / "t.json")])
+    with pytest.raises(SystemExit) as info:
+        main()
+    assert info.value.code in (0, None)
+    out = capsys.readouterr().out
+    assert "Table I" in out and "Table III" in out and "| 0.293" in out
+    res = json.loads((tmp_path / "t.json").read_text())
+    run = res["runs"]["lsq, positive"]
+    assert run["table3_frame_error_mm"]["median"] <= 0.10
+    assert run["corr3d_above_0.8"] >= 17

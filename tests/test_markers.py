@@ -338,3 +338,16 @@ def test_markers_cli(face, tmp_path):
     r = run_cli("markers", "info", tmp_path / "nounit.csv")
     assert r.returncode == 2 and "units" in r.stderr
     assert run_cli("markers", "info", tmp_path / "nounit.csv", "--units", "mm").returncode == 0
+
+
+def test_markers_frame_command(tmp_path):
+    local = {"right": [-0.02, 0, 0], "left": [0.02, 0, 0], "incisor": [0, 0, 0.03]}
+    p = np.array(list(local.values()))
+    r = rotation_matrix([0.3, 1.0, 0.2], 0.5)
+    world = (p @ r.T + np.array([0.1, 0.2, 0.3]))[None].repeat(4, axis=0)
+    write_markers(tmp_path / "w.csv", MarkerSet(world, tuple(local), 60.0, source_units="mm"))
+    run = run_cli("markers", "frame", tmp_path / "w.csv", "--right", "right", "--left", "left",
+                  "--front", "incisor", "--origin", "incisor", "-o", tmp_path / "f.csv")
+    assert run.returncode == 0, run.stderr
+    back = read_markers(tmp_path / "f.csv")
+    np.testing.assert_allclose(back.positions[2], p - p[2], atol=1e-9)
