@@ -192,13 +192,15 @@ class FaceModel:
 
 
 # ------------------------------------------------------------------------------------------------
-def _vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """Area-weighted unit vertex normals (n, 3) of a triangle mesh."""
     a, b, c = (vertices[faces[:, k]] for k in range(3))
     fn = np.cross(b - a, c - a)
     vn = np.zeros_like(vertices)
     for k in range(3):
         np.add.at(vn, faces[:, k], fn)
-    return vn / np.linalg.norm(vn, axis=1, keepdims=True)
+    norm = np.linalg.norm(vn, axis=1, keepdims=True)
+    return vn / np.where(norm > 0, norm, 1.0)
 
 
 def _edges(faces: np.ndarray) -> np.ndarray:
@@ -313,7 +315,7 @@ def build_face(
         raise InputError(f"surface too coarse ({len(vertices)} vertices)", source=source,
                          field="vertices")
     check_manifold(faces, source=source)
-    normals = _vertex_normals(vertices, faces)
+    normals = vertex_normals(vertices, faces)
     if normals[:, 2].mean() < 0:  # faces must be wound so normals point out of the face
         faces = faces[:, ::-1].copy()
         normals = -normals
@@ -339,7 +341,7 @@ def build_face(
 
     vertices, faces, cut_pairs, path = _cut_mouth(vertices, faces, corner_r, corner_l, line_y)
     n = len(vertices)
-    normals = _vertex_normals(vertices, faces)
+    normals = vertex_normals(vertices, faces)
     # the two copies of a cut node share one normal (the lip line's)
     avg = 0.5 * (normals[cut_pairs[:, 0]] + normals[cut_pairs[:, 1]])
     avg /= np.linalg.norm(avg, axis=1, keepdims=True)

@@ -16,17 +16,9 @@ from ..errors import InputError
 from ..markerset import MarkerSet
 from ..units import length_scale
 from .atomic import atomic_path
-from .tables import read_table
+from .tables import read_table, uniform_rate
 
 FORMATS = {".csv": "csv", ".trc": "trc", ".c3d": "c3d", ".tsv": "tsv"}
-
-
-def _rate_of(t: np.ndarray, source: str) -> float:
-    d = np.diff(t)
-    step = float(np.median(d))
-    if np.max(np.abs(d - step)) > 0.01 * step:
-        raise InputError("samples are not evenly spaced", source=source, field="time")
-    return 1.0 / step
 
 
 def read_marker_csv(path: str | Path, *, units: str | None = None) -> MarkerSet:
@@ -65,8 +57,9 @@ def read_marker_csv(path: str | Path, *, units: str | None = None) -> MarkerSet:
                 raise InputError("filled samples of an unknown marker", source=str(path),
                                  field=name)
             filled[np.asarray(frames.split(), int), names.index(name)] = True
-    return MarkerSet(pos, tuple(names), _rate_of(t, str(path)), time=t, source_units=unit,
-                     filled=filled, meta={"source": str(path), "format": "csv"})
+    return MarkerSet(pos, tuple(names), uniform_rate(t, source=str(path)), time=t,
+                     source_units=unit, filled=filled,
+                     meta={"source": str(path), "format": "csv"})
 
 
 def write_marker_csv(path: str | Path, ms: MarkerSet, *, units: str | None = None) -> None:

@@ -9,19 +9,10 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
+from ..geometry.builder import vertex_normals
+
 SKIN_RGB = np.array([0.87, 0.68, 0.58])
 BACKGROUND_RGB = np.array([0.16, 0.17, 0.20])
-
-
-def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    """Area-weighted unit vertex normals, (n, 3)."""
-    a, b, c = vertices[faces[:, 0]], vertices[faces[:, 1]], vertices[faces[:, 2]]
-    fn = np.cross(b - a, c - a)
-    vn = np.zeros_like(vertices)
-    for k in range(3):
-        np.add.at(vn, faces[:, k], fn)
-    norm = np.linalg.norm(vn, axis=1, keepdims=True)
-    return vn / np.where(norm > 0, norm, 1.0)
 
 
 def view_rotation(azimuth_deg: float, elevation_deg: float = 0.0) -> np.ndarray:
