@@ -381,7 +381,8 @@ def simulate(
     jaw_angle: Annotated[Path | None, typer.Option(help="CSV: time, jaw_angle (rad) or "
                                                         "jaw_angle_deg")] = None,
     bite_block: Annotated[bool, typer.Option(help="hold the jaw at its initial angle")] = False,
-    preset: Annotated[str, typer.Option(help="lucero1999 or pitermann2001")] = "lucero1999",
+    preset: Annotated[str, typer.Option(help="lucero1999, pitermann2001 or calibrated")]
+    = "lucero1999",
     integrator: Annotated[str, typer.Option(help="euler, implicit or rosenbrock")] = "euler",
     substeps: Annotated[int, typer.Option(help="steps per frame (implicit integrators)")] = 4,
     dt: Annotated[float | None, typer.Option(help="Euler step, s (default 0.33e-3)")] = None,
@@ -635,14 +636,17 @@ def invert(
     controls: Annotated[str, typer.Option(help="emg7, all, or comma-separated groups")] = "emg7",
     chin_marker: Annotated[str | None, typer.Option(help="drive the jaw from this marker")]
     = None,
-    window: Annotated[int, typer.Option(help="frames ahead in each frame's fit (lsq)")] = 2,
+    window: Annotated[int, typer.Option(help="frames ahead in each frame's fit (lsq)")] = 3,
+    tol: Annotated[float, typer.Option(help="stop a frame's fit when the RMS error improves by "
+                                            "less than this, mm (lsq)")] = 1e-3,
     smooth: Annotated[float, typer.Option(help="smoothness weight, mm per unit activity")]
     = 0.0,
     effort: Annotated[float, typer.Option(help="effort weight, mm per unit activity")] = 0.0,
     scale_pair: Annotated[str | None, typer.Option(help="A,B: adapt the markers by per-axis "
                                                         "scaling from two markers far apart")]
     = None,
-    preset: Annotated[str, typer.Option(help="lucero1999 or pitermann2001")] = "lucero1999",
+    preset: Annotated[str, typer.Option(help="lucero1999, pitermann2001 or calibrated")]
+    = "lucero1999",
     dt: Annotated[float, typer.Option(help="Euler step of every evaluation, s")] = 1e-3,
     units: UnitsOpt = None,
 ):
@@ -678,7 +682,7 @@ def invert(
         task = prog.add_task(f"invert ({method})", total=ms.n_frames - 1)
         res = run(model, ms, mapping, method=method, positive=positive, controls=ctrl,
                   jaw_angle=jaw, params=prm, dt=dt, smooth=smooth, effort=effort, window=window,
-                  progress=lambda d, n: prog.update(task, completed=d))
+                  tol=tol, progress=lambda d, n: prog.update(task, completed=d))
     act = np.clip(res.activity, -1.0, 1.0)
     names, nodes = marker_nodes(model)
     sim = Simulation(model=model, params=prm, time=np.arange(ms.n_frames) / prm.frame_rate,
@@ -687,7 +691,8 @@ def invert(
                      final_state=None, integrator=f"euler (inversion, {method})", dt=dt,
                      wall_seconds=res.wall_seconds,
                      attrs={"inversion_method": method, "positive": int(positive),
-                            "window": window, "controls": ",".join(res.control_names),
+                            "window": window, "tol_mm": tol,
+                            "controls": ",".join(res.control_names),
                             "rms_error_mm_median": float(np.median(res.rms_error[1:]) * 1e3),
                             "condition_median": float(np.nanmedian(res.condition))
                             if np.isfinite(res.condition).any() else -1.0,
@@ -756,18 +761,22 @@ def compare(
 def experiment_pitermann_synthetic(
     method: Annotated[str, typer.Option(help="lsq, powell or both")] = "lsq",
     noise: Annotated[float, typer.Option(help="Gaussian marker noise, mm")] = 0.0,
+    preset: Annotated[str, typer.Option(help="lucero1999, pitermann2001 or calibrated")]
+    = "lucero1999",
+    dt: Annotated[float, typer.Option(help="Euler step of synthesis and inversion, s")] = 1e-3,
     output: Annotated[Path | None, typer.Option("-o", "--output", help="JSON file")] = None,
 ):
     """Pitermann & Munhall (2001) Experiment 1: Tables I, II and the top of Table III."""
     from .geometry.builder import default_face
     from .inverse.experiments import run_synthetic
+    from .params import preset as get_preset
 
     if method not in ("lsq", "powell", "both"):
         raise InputError("method must be lsq, powell or both", field="method")
     methods = ("lsq", "powell") if method == "both" else (method,)
     with _staged_progress() as report:
         res = run_synthetic(default_face(), methods=methods, noise=noise * 1e-3,
-                            progress=report)
+                            params=get_preset(preset), dt=dt, progress=report)
     paper = res["paper"]
     out.print("[bold]Pitermann & Munhall (2001), Experiment 1[/bold] (ours | paper)")
     for label, r in res["runs"].items():
@@ -785,6 +794,11 @@ def experiment_pitermann_synthetic(
         out.print(f"  Table III, per-frame error (mm): min {e['min']:.3f} q1 {e['q1']:.3f} "
                   f"median {e['median']:.3f} | {pe} q3 {e['q3']:.3f} max {e['max']:.3f}; "
                   f"movement {r['movement_mm']:.3f} | {paper['movement_mm']} mm")
+        if "vs_noise_free" in r:
+            v = r["vs_noise_free"]
+            out.print(f"  against the noise-free markers: median error "
+                      f"{v['frame_error_mm']['median']:.3f} mm; 3-D correlations > 0.8: "
+                      f"{v['corr3d_above_0.8']} of 19")
     if output is not None:
         from .io.atomic import atomic_path
 
@@ -796,16 +810,21 @@ def experiment_pitermann_synthetic(
 @experiment_app.command("pitermann2001-crosstalker")
 def experiment_pitermann_crosstalker(
     frames: Annotated[int, typer.Option(help="frames of the gesture sequence (60 Hz)")] = 120,
+    preset: Annotated[str, typer.Option(help="lucero1999, pitermann2001 or calibrated")]
+    = "lucero1999",
+    dt: Annotated[float, typer.Option(help="Euler step of synthesis and inversion, s")] = 1e-3,
     output: Annotated[Path | None, typer.Option("-o", "--output", help="JSON file")] = None,
 ):
     """Experiment 3 analogue: another talker inverted on the default face (Table VI)."""
     from .geometry.builder import default_face
     from .inverse.experiments import run_crosstalker
+    from .params import preset as get_preset
 
     if frames < 8:
         raise InputError("needs at least 8 frames", field="frames")
     with _staged_progress() as report:
-        res = run_crosstalker(default_face(), frames=frames, progress=report)
+        res = run_crosstalker(default_face(), frames=frames, params=get_preset(preset), dt=dt,
+                              progress=report)
     out.print("[bold]Pitermann & Munhall (2001), Experiment 3 analogue[/bold] (paper, Table VI: "
               "3-D correlations mostly 0.75-0.97, upper lip centre poor)")
     for label, r in res["runs"].items():

@@ -47,7 +47,7 @@ def triangle_sequence(repeats: int = 3) -> np.ndarray:
     return np.tile(one, repeats)
 
 
-def synthetic_data(face, *, dt: float = 1e-3, noise: float = 0.0, seed: int = 0):
+def synthetic_data(face, *, dt: float = 1e-3, noise: float = 0.0, seed: int = 0, params=None):
     """The synthetic markers (MarkerSet, metres), the true group activity (36, 16)."""
     from ..solvers.forward import simulate
 
@@ -55,7 +55,7 @@ def synthetic_data(face, *, dt: float = 1e-3, noise: float = 0.0, seed: int = 0)
     act = np.zeros((len(tri), len(MUSCLE_GROUPS)))
     for g in PERIORAL:
         act[:, MUSCLE_GROUPS.index(g)] = tri
-    sim = simulate(face, act, integrator="euler", dt=dt)
+    sim = simulate(face, act, integrator="euler", dt=dt, params=params)
     names = [n for n in face.markers if n[0] in "RL"]
     pos = sim.positions[:, [face.markers[n] for n in names]]
     if noise > 0:
@@ -63,15 +63,18 @@ def synthetic_data(face, *, dt: float = 1e-3, noise: float = 0.0, seed: int = 0)
     return MarkerSet(pos, tuple(names), 60.0), act
 
 
-def run_synthetic(face, *, methods=("lsq",), dt: float = 1e-3, noise: float = 0.0,
+def run_synthetic(face, *, methods=("lsq",), dt: float = 1e-3, noise: float = 0.0, params=None,
                   progress: Callable[[str, int, int], None] | None = None) -> dict:
     """Experiment 1 for each method, with and without the positive constraint (tables as dicts).
 
     Table I: correlation of each recovered control with the true activity; Table II: 3-D
     correlations (published and unbiased) of every marker, the 8 held-out ones included;
-    Table III (top): per-frame error summary and movement.
+    Table III (top): per-frame error summary and movement. With ``noise`` (m) the re-animation is
+    also compared with the noise-free markers (``vs_noise_free``).
     """
-    data, truth = synthetic_data(face, dt=dt, noise=noise)
+    data, truth = synthetic_data(face, dt=dt, noise=noise, params=params)
+    # with noise, the re-animation is also compared with the noise-free markers (the true motion)
+    clean = synthetic_data(face, dt=dt, params=params)[0] if noise > 0 else None
     used = {n: face.markers[n] for n in data.names if n.startswith("R")}
     all_nodes = [face.markers[n] for n in data.names]
     out: dict = {"frames": data.n_frames, "noise_mm": noise * 1e3, "dt_s": dt,
@@ -83,7 +86,7 @@ def run_synthetic(face, *, methods=("lsq",), dt: float = 1e-3, noise: float = 0.
             label = f"{method}, {'positive' if positive else 'no constraint'}"
             t0 = time.perf_counter()
             res = _invert_quietly(face, data, used, label, progress, method=method,
-                                  positive=positive, dt=dt)
+                                  positive=positive, dt=dt, params=params)
             wall = time.perf_counter() - t0
             model = res.positions[:, all_nodes]
             table1 = {}
@@ -97,7 +100,7 @@ def run_synthetic(face, *, methods=("lsq",), dt: float = 1e-3, noise: float = 0.
                       for m, n in enumerate(data.names)}
             err = stats.frame_errors(model[1:, :len(used)], data.positions[1:, :len(used)])
             corr = np.array([v["published"] for v in table2.values()])
-            out["runs"][label] = {
+            run = out["runs"][label] = {
                 "method": method, "positive": positive, "wall_s": wall,
                 "evaluations": int(res.evaluations.sum()),
                 "table1_activity_correlation": table1,
@@ -109,6 +112,16 @@ def run_synthetic(face, *, methods=("lsq",), dt: float = 1e-3, noise: float = 0.
                 "condition_median": float(np.nanmedian(res.condition))
                 if np.isfinite(res.condition).any() else None,
             }
+            if clean is not None:
+                true = clean.positions
+                c_true = np.array([stats.corr3d(model[:, m], true[:, m])
+                                   for m in range(len(all_nodes))])
+                e_true = stats.frame_errors(model[1:, :len(used)], true[1:, :len(used)])
+                run["vs_noise_free"] = {
+                    "corr3d": dict(zip(data.names, c_true.tolist(), strict=True)),
+                    "corr3d_above_0.8": int(np.sum(c_true > 0.8)),
+                    "frame_error_mm": stats.summary5(e_true * 1e3),
+                }
     return out
 
 
@@ -164,7 +177,7 @@ def gesture_controls(frames: int = 120):
     return np.clip(act, 0, 1), jaw
 
 
-def run_crosstalker(face, *, frames: int = 120, dt: float = 1e-3,
+def run_crosstalker(face, *, frames: int = 120, dt: float = 1e-3, params=None,
                     progress: Callable[[str, int, int], None] | None = None) -> dict:
     """Experiment 3 analogue: markers of a second talker, inverted on the default face after
     per-axis scaling, and separately after a thin-plate-spline warp of the face (Table VI)."""
@@ -174,7 +187,7 @@ def run_crosstalker(face, *, frames: int = 120, dt: float = 1e-3,
 
     other = second_talker()
     act, jaw = gesture_controls(frames)
-    sim = simulate(other, act, jaw, integrator="euler", dt=dt)
+    sim = simulate(other, act, jaw, integrator="euler", dt=dt, params=params)
     names = [*other.markers, *CROSS_EXTRA]
     nodes_other = [other.markers.get(n, other.landmarks.get(n)) for n in names]
     data = MarkerSet(sim.positions[:, nodes_other], tuple(names), 60.0)
@@ -195,7 +208,7 @@ def run_crosstalker(face, *, frames: int = 120, dt: float = 1e-3,
         label = f"lsq, positive, {adaptation}"
         t0 = time.perf_counter()
         res = _invert_quietly(model, adapted, used, label, progress, positive=True,
-                              jaw_angle=jaw_est, dt=dt)
+                              jaw_angle=jaw_est, dt=dt, params=params)
         idx = [mapping_all[n] for n in names]
         mod = res.positions[:, idx]
         table6 = {n: float(stats.corr3d(mod[:, m], adapted.positions[:, m]))

@@ -109,7 +109,8 @@ def invert(
     prior: np.ndarray | None = None,
     prior_weight: float = 0.0,
     max_evaluations: int = 400,
-    window: int = 2,
+    window: int = 3,
+    tol: float = 1e-3,
     progress: Callable[[int, int], None] | None = None,
 ) -> InversionResult:
     """Recover muscle activity frame by frame (see the module doc).
@@ -131,9 +132,17 @@ def invert(
         is kept (a receding horizon; 1 is the seeds' one-frame inversion, which on this model
         swings between the bounds from frame to frame: the activation filter makes one frame's
         activity show mostly in the frames after it)
+    tol : mm (lsq). A frame's iterations stop once a step lowers the RMS marker residual by
+        less than ``tol``. The default, 1 um, lies far below any motion-capture precision; a
+        smaller one costs more steps without a better answer (the extra steps only move activity
+        along directions the markers barely see; see docs/inversion.md)
     """
     if method not in ("lsq", "powell"):
         raise InputError(f"unknown method {method!r} (lsq or powell)", field="method")
+    if window < 1:
+        raise InputError(f"window must be at least 1 frame (got {window})", field="window")
+    if not tol >= 0:
+        raise InputError(f"tol must be >= 0 mm (got {tol})", field="tol")
     params = params or Parameters()
     if abs(markers.rate - params.frame_rate) > 1e-3 * params.frame_rate:
         raise InputError(f"markers at {markers.rate:g} Hz, the model runs at "
@@ -185,7 +194,7 @@ def invert(
         else:
             c, cond[k + 1], jm_prev = frame.lsq(c_prev, lo, hi, max_evaluations, smooth,
                                                 effort, None if prior is None else prior[k],
-                                                prior_weight, jm_prev)
+                                                prior_weight, jm_prev, tol)
         state, _ = frame.nodes_after(c)
         counter = frame.counter
         out_c[k] = c
@@ -228,10 +237,16 @@ class _FrameProblem:
         self.counter = [0]
         self.nc = gmat.shape[1]
         self._cache: dict = {}
+        self._last = None  # (activity, state after one frame) of the latest evaluation
 
     def nodes_after(self, c):
+        """State and marker nodes (mm) one frame after the frame's state under activity c."""
+        c = np.array(c, float)
+        if self._last is not None and np.array_equal(self._last[0], c):
+            return self._last[1], self._last[1].positions[self.nodes] * 1e3
         self.counter[0] += 1
         s = self.stepper.advance(self.state, self.gmat @ c, self.jaw[self.k + 1])
+        self._last = (c, s)
         return s, s.positions[self.nodes] * 1e3
 
     def marker_residual(self, c):
@@ -273,14 +288,15 @@ class _FrameProblem:
         return jm
 
     def lsq(self, c_prev, lo, hi, max_evaluations, smooth, effort, prior, prior_weight,
-            jm_prev=None):
+            jm_prev=None, tol=1e-3):
         """Bounded Gauss-Newton with a chord Jacobian.
 
         The chord Jacobian is the previous frame's (``jm_prev``) or is computed at the warm start;
         each iteration solves the linearised problem with bounds exactly (bounded-variable least
         squares) and is accepted if the full residual falls. A new Jacobian is taken only when a
-        step fails; at most ``max_evaluations`` step-function calls. Returns the activity, the
-        condition number and the Jacobian (to seed the next frame).
+        step fails; the iterations stop when an accepted step lowers the RMS marker residual by
+        less than ``tol`` mm, and after at most ``max_evaluations`` step-function calls. Returns
+        the activity, the condition number and the Jacobian (to seed the next frame).
         """
         from scipy.optimize import lsq_linear
 
@@ -316,10 +332,11 @@ class _FrameProblem:
             r_trial = self.marker_residual(trial)
             cost_trial = total(trial, r_trial)
             if cost_trial < cost:
+                gain = (np.sqrt(cost) - np.sqrt(cost_trial)) / np.sqrt(max(len(r), 1) / 3)
                 improvement = (cost - cost_trial) / max(cost, 1e-30)
                 c, r, cost = trial, r_trial, cost_trial
                 fresh = False
-                if improvement < 1e-4:
+                if improvement < 1e-4 or gain < tol:
                     break
             elif fresh:
                 break  # even a fresh Jacobian's step does not help: done

@@ -35,7 +35,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
-from ..errors import InputError
+from ..errors import InputError, SimulationBlowUp
 from ..physics.assembly import Physics, accumulate_forces, force_arguments
 from ..physics.muscle import activation_euler, activation_exact
 from .state import State
@@ -247,8 +247,15 @@ class Stepper:
         h = self.dt
         inv_m = 1.0 / p.node_mass
         if self.integrator == "euler":
-            _euler_frame(pos, vel, m_force, m_rate, m_steady, self.n_steps, h, inv_m, nd,
-                         p.tau_activation, self._out, fargs, start, rate, self._jargs)
+            try:
+                _euler_frame(pos, vel, m_force, m_rate, m_steady, self.n_steps, h, inv_m, nd,
+                             p.tau_activation, self._out, fargs, start, rate, self._jargs)
+            except ZeroDivisionError:  # a spring or prism collapsed: nodes met mid-frame
+                frame = int(round(state.time * p.frame_rate)) + 1
+                raise SimulationBlowUp(
+                    "nodes collapsed onto each other within the frame; likely cause: the time "
+                    f"step ({h * 1e3:.3g} ms) is too large for the stiffness and damping (try a "
+                    "smaller --dt)", frame=frame) from None
         elif self.integrator == "implicit":
             for step in range(self.n_steps):
                 place_jaw(pos, vel, start + rate * step * h, rate, *self._jargs)
