@@ -206,3 +206,28 @@ def test_demo_runs_without_data(tmp_path, monkeypatch, capsys):
     assert np.all(np.isfinite(ds["positions"].values))
     for name in ("kinematics.png", "activity.png", "snapshot.png", "activity.csv"):
         assert (tmp_path / "d" / name).stat().st_size > 1000
+
+
+def test_experiment_and_invert_options_are_checked(tmp_path, monkeypatch, capsys):
+    code, _, err = cli(monkeypatch, capsys, "experiment", "pitermann2001-synthetic",
+                       "--preset", "stiff")
+    assert_one_line_error(code, err, "preset", "calibrated")
+    code, _, err = cli(monkeypatch, capsys, "experiment", "pitermann2001-crosstalker",
+                       "--preset", "stiff")
+    assert_one_line_error(code, err, "preset")
+    from facemech import default_face
+
+    face = default_face()
+    mk = tmp_path / "m.csv"
+    rows = ["# units: mm", "time," + ",".join(f"{n}_{a}" for n in ("R03", "R05", "R07")
+                                               for a in "xyz")]
+    for k in range(3):
+        pts = [face.rest_positions[face.markers[n]] * 1e3 for n in ("R03", "R05", "R07")]
+        rows.append(f"{k / 60}," + ",".join(f"{v:.4f}" for p in pts for v in p))
+    mk.write_text("\n".join(rows) + "\n")
+    res = tmp_path / "r.nc"
+    code, _, err = cli(monkeypatch, capsys, "invert", "--markers", mk, "--tol", "-1", "-o", res)
+    assert_one_line_error(code, err, "tol")
+    code, _, err = cli(monkeypatch, capsys, "invert", "--markers", mk, "--window", "0", "-o", res)
+    assert_one_line_error(code, err, "window")
+    assert not res.exists()
