@@ -8,7 +8,7 @@ import wave
 import numpy as np
 import pytest
 
-from facemech import read_results
+from facemech import default_face, read_results
 from facemech.cli import main
 from facemech.geometry.builder import default_surface
 
@@ -206,6 +206,18 @@ def test_demo_runs_without_data(tmp_path, monkeypatch, capsys):
     assert np.all(np.isfinite(ds["positions"].values))
     for name in ("kinematics.png", "activity.png", "snapshot.png", "activity.csv"):
         assert (tmp_path / "d" / name).stat().st_size > 1000
+    # the calibrated preset moves the lips further under the same activity and jaw
+    code, out, err = cli(monkeypatch, capsys, "demo", "-o", tmp_path / "c", "--no-video",
+                         "--preset", "calibrated")
+    assert code == 0, err
+    cal = json.loads((tmp_path / "c" / "summary.json").read_text())
+    assert cal["preset"] == "calibrated"
+    corner = default_face().landmarks["mouth_corner_left"]
+    reach = []
+    for d in ("d", "c"):
+        p = read_results(tmp_path / d / "result.nc")["positions"].values[:, corner]
+        reach.append(np.linalg.norm(p - p[0], axis=1).max())
+    assert reach[1] > 1.3 * reach[0]  # 7.8 against 4.9 mm
 
 
 def test_experiment_and_invert_options_are_checked(tmp_path, monkeypatch, capsys):
@@ -215,8 +227,6 @@ def test_experiment_and_invert_options_are_checked(tmp_path, monkeypatch, capsys
     code, _, err = cli(monkeypatch, capsys, "experiment", "pitermann2001-crosstalker",
                        "--preset", "stiff")
     assert_one_line_error(code, err, "preset")
-    from facemech import default_face
-
     face = default_face()
     mk = tmp_path / "m.csv"
     rows = ["# units: mm", "time," + ",".join(f"{n}_{a}" for n in ("R03", "R05", "R07")

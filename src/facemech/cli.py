@@ -73,13 +73,15 @@ def demo(
         "demo-output"),
     integrator: Annotated[str, typer.Option(help="euler (the paper's) or rosenbrock")] = "euler",
     video: Annotated[bool, typer.Option(help="render the MP4")] = True,
+    preset: Annotated[str, typer.Option(help="lucero1999, pitermann2001 or calibrated")]
+    = "lucero1999",
 ):
     """Simulate a synthetic utterance on the built-in face; write results, plots and a movie."""
     from .demo import run_demo
 
     with _staged_progress() as report:
         err.print(f"facemech demo: building the face and simulating ({integrator}) ...")
-        s = run_demo(output, integrator=integrator, video=video, progress=report)
+        s = run_demo(output, integrator=integrator, video=video, preset=preset, progress=report)
     out.print(f"[bold]facemech demo[/bold] -> {output}/")
     out.print(f"  frames: {s.frames} ({s.simulated_seconds:.2f} s at 60 Hz)")
     out.print(f"  simulation: {s.simulation_seconds:.1f} s wall, real-time factor "

@@ -80,26 +80,31 @@ class DemoSummary:
     largest_lip_displacement_mm: float
     integrator: str
     output: dict
+    preset: str = "lucero1999"
 
     def as_dict(self) -> dict:
         return self.__dict__.copy()
 
 
 def run_demo(out_dir: str | Path, *, integrator: str = "euler", video: bool = True,
+             preset: str = "lucero1999",
              progress: Callable[[str, int, int], None] | None = None) -> DemoSummary:
     """Build the generic face, simulate the synthetic utterance and write results and pictures.
 
     Writes ``result.nc``, ``activity.csv``, ``kinematics.png``, ``activity.png``,
     ``snapshot.png``, ``summary.json`` and (with ``video``) ``movie.mp4`` into ``out_dir``.
+    ``preset`` names the parameter preset (:func:`facemech.params.preset`).
     """
     from .geometry.builder import default_face
     from .io.activity import write_activity
     from .io.results import array_hash, write_results
+    from .params import preset as get_preset
     from .solvers.forward import simulate
     from .viz.movie import write_movie, write_snapshot
     from .viz.plots import activity_figure, kinematics_figure
 
     t0 = time.perf_counter()
+    params = get_preset(preset)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     face = default_face()
@@ -108,7 +113,8 @@ def run_demo(out_dir: str | Path, *, integrator: str = "euler", video: bool = Tr
     def step(stage):
         return None if progress is None else (lambda d, n: progress(stage, d, n))
 
-    sim = simulate(face, act, jaw, integrator=integrator, progress=step("simulate"))
+    sim = simulate(face, act, jaw, params=params, integrator=integrator,
+                   progress=step("simulate"))
     files = {}
     write_activity(out / "activity.csv", t, act)
     files["activity"] = "activity.csv"
@@ -136,6 +142,7 @@ def run_demo(out_dir: str | Path, *, integrator: str = "euler", video: bool = Tr
         wall_seconds=time.perf_counter() - t0, simulation_seconds=sim.wall_seconds,
         real_time_factor=sim.real_time_factor,
         largest_lip_displacement_mm=float(disp.max() * 1e3), integrator=integrator,
+        preset=preset,
         output=files,
     )
     (out / "summary.json").write_text(json.dumps(summary.as_dict(), indent=2))
