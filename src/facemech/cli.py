@@ -641,6 +641,8 @@ def invert(
     window: Annotated[int, typer.Option(help="frames ahead in each frame's fit (lsq)")] = 3,
     tol: Annotated[float, typer.Option(help="stop a frame's fit when the RMS error improves by "
                                             "less than this, mm (lsq)")] = 1e-3,
+    bend: Annotated[float, typer.Option(help="weight of second differences of activity across "
+                                             "the window, mm per unit (lsq)")] = 0.03,
     smooth: Annotated[float, typer.Option(help="smoothness weight, mm per unit activity")]
     = 0.0,
     effort: Annotated[float, typer.Option(help="effort weight, mm per unit activity")] = 0.0,
@@ -684,7 +686,7 @@ def invert(
         task = prog.add_task(f"invert ({method})", total=ms.n_frames - 1)
         res = run(model, ms, mapping, method=method, positive=positive, controls=ctrl,
                   jaw_angle=jaw, params=prm, dt=dt, smooth=smooth, effort=effort, window=window,
-                  tol=tol, progress=lambda d, n: prog.update(task, completed=d))
+                  tol=tol, bend=bend, progress=lambda d, n: prog.update(task, completed=d))
     act = np.clip(res.activity, -1.0, 1.0)
     names, nodes = marker_nodes(model)
     sim = Simulation(model=model, params=prm, time=np.arange(ms.n_frames) / prm.frame_rate,
@@ -693,7 +695,7 @@ def invert(
                      final_state=None, integrator=f"euler (inversion, {method})", dt=dt,
                      wall_seconds=res.wall_seconds,
                      attrs={"inversion_method": method, "positive": int(positive),
-                            "window": window, "tol_mm": tol,
+                            "window": window, "tol_mm": tol, "bend": bend,
                             "controls": ",".join(res.control_names),
                             "rms_error_mm_median": float(np.median(res.rms_error[1:]) * 1e3),
                             "condition_median": float(np.nanmedian(res.condition))

@@ -12,13 +12,18 @@ Methods:
     Powell's direction-set minimisation of E = sum_i |m_i - n_i|^2 (mm^2); with the positive
     constraint, E' = E if every activity is >= 0, else 1e6 (1 + |sum of the negative ones|).
 ``lsq`` (default)
-    bounded Gauss-Newton on the marker residuals, activity in [0, 1] (or [-1, 1] without the
-    positive constraint): a forward-difference Jacobian (each column one step from the frame's
-    state) taken once at the warm start and renewed only when a step fails, each linearised step
-    solved exactly within the bounds. Optional regularisation rows, weights in
-    mm per unit of activity: ``smooth`` (a - a_previous), ``effort`` (a), ``prior`` (a - EMG).
-    Per frame it reports the residual, the controls on a bound and the Jacobian's condition
-    number, and warns when the muscles are barely identifiable.
+    a receding horizon: the activity of each of the next ``window`` frames is fitted to the
+    markers of those frames and only the first frame's is kept. Bounded Gauss-Newton on the
+    marker residuals, activity in [0, 1] (or [-1, 1] without the positive constraint): the
+    Jacobian is built from forward differences of the markers with respect to the first frame's
+    activity (one roll of the window per control, from the frame's state), taken as
+    time-invariant within the window, carried from frame to frame and renewed only when a step
+    fails; each linearised step is solved exactly within the bounds. Regularisation rows,
+    weights in mm per unit of activity: ``bend`` (second differences of activity across the
+    window; on by default, 0.03), ``smooth`` (first differences, from the previous frame's),
+    ``effort`` (a), ``prior`` (a - EMG). Per frame it reports the residual, the controls on a
+    bound and the condition number of the frame's own Jacobian columns, and warns when the
+    muscles are barely identifiable.
 """
 
 from __future__ import annotations
@@ -31,7 +36,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import minimize
 
-from ..errors import InputError
+from ..errors import InputError, SimulationBlowUp
 from ..markerset import MarkerSet
 from ..params import EMG_CHANNELS, MUSCLE_GROUPS, Parameters
 from ..physics.assembly import Physics
@@ -111,6 +116,7 @@ def invert(
     max_evaluations: int = 400,
     window: int = 3,
     tol: float = 1e-3,
+    bend: float = 0.03,
     progress: Callable[[int, int], None] | None = None,
 ) -> InversionResult:
     """Recover muscle activity frame by frame (see the module doc).
@@ -127,11 +133,13 @@ def invert(
     dt : explicit Euler step used by every evaluation (s; the paper's is 0.33e-3)
     smooth, effort, prior_weight : regularisation weights (mm per unit activity), lsq only
     prior : (frames, c) prior activity (e.g. processed EMG) for ``prior_weight``
-    window : frames ahead in each frame's cost (lsq): the trial activity is held over
-        ``window`` frames and the markers of all of them are fitted, but only the first frame
-        is kept (a receding horizon; 1 is the seeds' one-frame inversion, which on this model
-        swings between the bounds from frame to frame: the activation filter makes one frame's
-        activity show mostly in the frames after it)
+    window : frames in each frame's fit (lsq): the activity of each of them is fitted to
+        their markers and only the first frame's is kept (a receding horizon; 1 is the seeds'
+        one-frame inversion, which on this model swings between the bounds from frame to frame:
+        the activation filter makes one frame's activity show mostly in the frames after it)
+    bend : weight (mm per unit activity) of the second differences of activity across the
+        window (lsq); it settles the last frames of the window, which their markers barely see,
+        and does not bias activity that changes at a steady rate
     tol : mm (lsq). A frame's iterations stop once a step lowers the RMS marker residual by
         less than ``tol``. The default, 1 um, lies far below any motion-capture precision; a
         smaller one costs more steps without a better answer (the extra steps only move activity
@@ -143,6 +151,10 @@ def invert(
         raise InputError(f"window must be at least 1 frame (got {window})", field="window")
     if not tol >= 0:
         raise InputError(f"tol must be >= 0 mm (got {tol})", field="tol")
+    for name, value in (("smooth", smooth), ("effort", effort), ("prior_weight", prior_weight),
+                        ("bend", bend)):
+        if not value >= 0:
+            raise InputError(f"{name} must be >= 0 (got {value})", field=name)
     params = params or Parameters()
     if abs(markers.rate - params.frame_rate) > 1e-3 * params.frame_rate:
         raise InputError(f"markers at {markers.rate:g} Hz, the model runs at "
@@ -178,25 +190,30 @@ def invert(
     positions[0] = state.positions[: face.n_surface]
     notes: list[str] = []
     gaps = 0
-    jm_prev = None  # the chord Jacobian carried from frame to frame (lsq)
+    lags_prev = x_prev = None  # lag responses and window solution carried (lsq)
     t0 = time.perf_counter()
     for k in range(frames - 1):
-        target = data[k + 1] * 1e3  # mm
-        ok = np.all(np.isfinite(target), axis=1)
+        ok = np.all(np.isfinite(data[k + 1]), axis=1)
         if 3 * ok.sum() < nc:
             raise InputError(f"frame {k + 1}: {int(ok.sum())} usable markers for {nc} muscles",
                              field="markers")
         gaps += int((~ok).sum())
-        frame = _FrameProblem(stepper, state, gmat, nodes, data, jaw, k, ok, target,
+        frame = _FrameProblem(stepper, state, gmat, nodes, data, jaw, k,
                               window if method == "lsq" else 1)
         if method == "powell":
             c = frame.powell(c_prev, positive, lo, hi, max_evaluations)
+            state = frame.state_after(c)
+        elif frame.horizon < window and x_prev is not None and len(x_prev) > 1:
+            # the data end inside the window: the last full window already fitted every frame
+            # left, so its activity is kept rather than refitted on ever fewer frames
+            c = x_prev[1].copy()
+            x_prev = x_prev[1:]
+            state = frame.state_after(c)
+            cond[k + 1] = cond[k]
         else:
-            c, cond[k + 1], jm_prev = frame.lsq(c_prev, lo, hi, max_evaluations, smooth,
-                                                effort, None if prior is None else prior[k],
-                                                prior_weight, jm_prev, tol)
-        state, _ = frame.nodes_after(c)
-        counter = frame.counter
+            c, state, cond[k + 1], x_prev, lags_prev = frame.lsq(
+                c_prev, x_prev, lo, hi, max_evaluations, smooth=smooth, effort=effort,
+                prior=prior, prior_weight=prior_weight, bend=bend, lags_prev=lags_prev, tol=tol)
         out_c[k] = c
         c_prev = c
         bound[k + 1] = (c <= lo + 1e-6) | (c >= hi - 1e-6)
@@ -204,7 +221,7 @@ def invert(
         d = model_now[ok] - data[k + 1][ok]
         rms[k + 1] = np.sqrt(np.sum(d * d) / ok.sum())
         used[k + 1] = int(ok.sum())
-        nfev[k + 1] = counter[0]
+        nfev[k + 1] = frame.counter[0]
         positions[k + 1] = state.positions[: face.n_surface]
         if progress is not None:
             progress(k + 1, frames - 1)
@@ -228,36 +245,55 @@ def invert(
 
 
 class _FrameProblem:
-    """One frame's fit: trial activity held from the frame's state, markers compared (mm)."""
+    """One frame's fit over a window of ``horizon`` frames, markers compared in mm.
 
-    def __init__(self, stepper, state, gmat, nodes, data, jaw, k, ok, target, horizon):
+    The unknowns are the activity of each frame of the window, ``x`` of shape (horizon, c);
+    the residual stacks the markers of frames ``k + 1 ... k + horizon`` (missing ones left out
+    frame by frame). Only the first frame's activity is kept (a receding horizon).
+    """
+
+    def __init__(self, stepper, state, gmat, nodes, data, jaw, k, horizon):
         self.stepper, self.state, self.gmat, self.nodes = stepper, state, gmat, nodes
-        self.data, self.jaw, self.k, self.ok, self.target = data, jaw, k, ok, target
+        self.data, self.jaw, self.k = data, jaw, k
         self.horizon = min(horizon, len(data) - 1 - k)
-        self.counter = [0]
+        self.targets = data[k + 1:k + 1 + self.horizon] * 1e3  # (w, markers, 3) mm
+        self.oks = np.all(np.isfinite(self.targets), axis=2)  # (w, markers)
+        self.counter = [0]  # step-function calls (one per frame simulated)
         self.nc = gmat.shape[1]
-        self._cache: dict = {}
-        self._last = None  # (activity, state after one frame) of the latest evaluation
+        self._last = None  # (x, state after the first frame) of the latest roll
 
-    def nodes_after(self, c):
-        """State and marker nodes (mm) one frame after the frame's state under activity c."""
-        c = np.array(c, float)
-        if self._last is not None and np.array_equal(self._last[0], c):
-            return self._last[1], self._last[1].positions[self.nodes] * 1e3
+    def _window(self, x) -> np.ndarray:
+        x = np.asarray(x, float)
+        return x.reshape(-1, self.nc)[: self.horizon]
+
+    def roll(self, x):
+        """Simulate the window under x: marker nodes (w, markers, 3) mm and the first state."""
+        x = self._window(x)
+        s, first, pos = self.state, None, []
+        for a in range(len(x)):
+            s = self.stepper.advance(s, self.gmat @ x[a], self.jaw[self.k + 1 + a])
+            self.counter[0] += 1
+            first = s if a == 0 else first
+            pos.append(s.positions[self.nodes] * 1e3)
+        self._last = (x.copy(), first)
+        return np.array(pos), first
+
+    def residual_of(self, pos) -> np.ndarray:
+        return np.concatenate([(pos[a][ok] - self.targets[a][ok]).reshape(-1)
+                               for a, ok in enumerate(self.oks[: len(pos)])])
+
+    def marker_residual(self, x) -> np.ndarray:
+        """Marker residuals (mm) of the window under x (flattened or (w, c); for a one-frame
+        window, x may be the c activities of the frame)."""
+        return self.residual_of(self.roll(x)[0])
+
+    def state_after(self, c) -> State:
+        """The state one frame on when the frame's activity is c (reuses the latest roll)."""
+        c = np.asarray(c, float)
+        if self._last is not None and np.array_equal(self._last[0][0], c):
+            return self._last[1]
         self.counter[0] += 1
-        s = self.stepper.advance(self.state, self.gmat @ c, self.jaw[self.k + 1])
-        self._last = (c, s)
-        return s, s.positions[self.nodes] * 1e3
-
-    def marker_residual(self, c):
-        s, pos = self.nodes_after(c)
-        parts = [(pos[self.ok] - self.target[self.ok]).reshape(-1)]
-        for j in range(2, self.horizon + 1):
-            s = self.stepper.advance(s, self.gmat @ c, self.jaw[self.k + j])
-            tj = self.data[self.k + j] * 1e3
-            okj = np.all(np.isfinite(tj), axis=1)
-            parts.append((s.positions[self.nodes][okj] * 1e3 - tj[okj]).reshape(-1))
-        return np.concatenate(parts)
+        return self.stepper.advance(self.state, self.gmat @ c, self.jaw[self.k + 1])
 
     def powell(self, c_prev, positive, lo, hi, max_evaluations):
         def cost(c):
@@ -266,7 +302,7 @@ class _FrameProblem:
                 return PENALTY * (1.0 + abs(neg.sum()))
             try:
                 return float(np.sum(self.marker_residual(c) ** 2))
-            except (ZeroDivisionError, FloatingPointError):
+            except (ZeroDivisionError, FloatingPointError, SimulationBlowUp):
                 return PENALTY * 10.0
 
         # activity is normalised to at most 1 (and at least -1 without the positive
@@ -277,73 +313,136 @@ class _FrameProblem:
                        options={"xtol": 1e-3, "ftol": 1e-9, "maxfev": max_evaluations})
         return res.x
 
-    def jacobian(self, c, r0, hi):
-        """Forward-difference Jacobian (residuals x controls) at c, one step per column."""
-        jm = np.empty((len(r0), self.nc))
+    def lag_responses(self, x, pos0, hi) -> np.ndarray:
+        """Forward differences of all marker nodes with respect to the first frame's activity.
+
+        Returns H of shape (w, 3 markers, c): ``H[a]`` is the response of frame ``k + 1 + a`` to
+        the activity of frame ``k`` (one roll of the window per control, from the frame's state).
+        """
+        x = self._window(x)
+        h_all = np.empty((len(x), pos0[0].size, self.nc))
         for j in range(self.nc):
-            h = 1e-3 if c[j] + 1e-3 <= hi else -1e-3
-            cj = c.copy()
-            cj[j] += h
-            jm[:, j] = (self.marker_residual(cj) - r0) / h
+            h = 1e-3 if x[0, j] + 1e-3 <= hi else -1e-3
+            xj = x.copy()
+            xj[0, j] += h
+            h_all[:, :, j] = (self.roll(xj)[0] - pos0).reshape(len(x), -1) / h
+        return h_all
+
+    def jacobian(self, lags) -> np.ndarray:
+        """Window Jacobian (residuals x w c) from lag responses, taken as time-invariant
+        within the window: the block of frame a and activity b is ``lags[a - b]``."""
+        w, nc = self.horizon, self.nc
+        rows = [np.repeat(ok, 3) for ok in self.oks]
+        jm = np.zeros((sum(int(r.sum()) for r in rows), w * nc))
+        r0 = 0
+        for a in range(w):
+            n = int(rows[a].sum())
+            for b in range(a + 1):
+                jm[r0:r0 + n, b * nc:(b + 1) * nc] = lags[a - b][rows[a]]
+            r0 += n
         return jm
 
-    def lsq(self, c_prev, lo, hi, max_evaluations, smooth, effort, prior, prior_weight,
-            jm_prev=None, tol=1e-3):
-        """Bounded Gauss-Newton with a chord Jacobian.
+    def regularisation(self, c_prev, smooth, effort, prior, prior_weight, bend):
+        """Rows (A, b) of the regularisation residual A x + b (mm) over the window."""
+        w, nc = self.horizon, self.nc
+        eye = np.eye(nc)
+        blocks, offsets = [], []
 
-        The chord Jacobian is the previous frame's (``jm_prev``) or is computed at the warm start;
-        each iteration solves the linearised problem with bounds exactly (bounded-variable least
-        squares) and is accepted if the full residual falls. A new Jacobian is taken only when a
-        step fails; the iterations stop when an accepted step lowers the RMS marker residual by
-        less than ``tol`` mm, and after at most ``max_evaluations`` step-function calls. Returns
-        the activity, the condition number and the Jacobian (to seed the next frame).
+        def row(terms, offset, weight):
+            a = np.zeros((nc, w * nc))
+            for idx, coef in terms:
+                a[:, idx * nc:(idx + 1) * nc] += coef * eye
+            blocks.append(weight * a)
+            offsets.append(weight * offset)
+
+        c_prev = np.asarray(c_prev, float)
+        if bend > 0:  # second differences within the window (x_0 itself stays free)
+            for a in range(1, w - 1):
+                row([(a - 1, 1.0), (a, -2.0), (a + 1, 1.0)], np.zeros(nc), bend)
+        if smooth > 0:  # first differences, x_{-1} = c_prev
+            for a in range(w):
+                row([(a, 1.0)] + ([(a - 1, -1.0)] if a > 0 else []),
+                    -c_prev if a == 0 else np.zeros(nc), smooth)
+        if effort > 0:
+            for a in range(w):
+                row([(a, 1.0)], np.zeros(nc), effort)
+        if prior is not None and prior_weight > 0:
+            for a in range(min(w, len(prior) - self.k)):
+                row([(a, 1.0)], -np.asarray(prior[self.k + a], float), prior_weight)
+        if not blocks:
+            return np.zeros((0, w * nc)), np.zeros(0)
+        return np.vstack(blocks), np.concatenate(offsets)
+
+    def lsq(self, c_prev, x_prev, lo, hi, max_evaluations, *, smooth=0.0, effort=0.0,
+            prior=None, prior_weight=0.0, bend=0.0, lags_prev=None, tol=1e-3):
+        """Bounded Gauss-Newton over the window with a chord Jacobian.
+
+        The lag responses are the previous frame's (``lags_prev``) or are taken at the warm
+        start; each iteration solves the linearised problem with bounds exactly (bounded-variable
+        least squares) and is accepted if the full cost falls. New lag responses are taken only
+        when a step fails; the iterations stop when an accepted step lowers the RMS marker
+        residual by less than ``tol`` mm, and after at most ``max_evaluations`` frame steps.
+
+        Returns the frame's activity, the state one frame on, the condition number of the
+        frame's own Jacobian columns, the window solution (to warm-start the next frame) and
+        the lag responses (to seed its chord).
         """
         from scipy.optimize import lsq_linear
 
-        nc = self.nc
-        regs = []  # regularisation rows: (weight, offset)
-        if smooth > 0:
-            regs.append((smooth, np.asarray(c_prev, float)))
-        if effort > 0:
-            regs.append((effort, np.zeros(nc)))
-        if prior is not None and prior_weight > 0:
-            regs.append((prior_weight, np.asarray(prior, float)))
-
-        def total(c, r):
-            return float(np.sum(r * r) + sum(np.sum((w * (c - off)) ** 2) for w, off in regs))
-
-        c = np.clip(np.asarray(c_prev, float), lo, hi)
-        r = self.marker_residual(c)
-        if jm_prev is not None and jm_prev.shape == (len(r), nc):
-            jm, fresh = jm_prev, False
+        w, nc = self.horizon, self.nc
+        if x_prev is not None and len(x_prev):
+            x = np.vstack([x_prev[1:], x_prev[-1:]])
+            x = np.vstack([x, np.repeat(x[-1:], max(0, w - len(x)), axis=0)])[:w]
         else:
-            jm, fresh = self.jacobian(c, r, hi), True
-        self._cache.update({"jm": jm, "x": c.copy(), "r": r})
-        cost = total(c, r)
+            x = np.tile(np.asarray(c_prev, float), (w, 1))
+        x = np.clip(x, lo, hi)
+        a_reg, b_reg = self.regularisation(c_prev, smooth, effort, prior, prior_weight, bend)
+
+        def total(xv, r):
+            q = a_reg @ xv.reshape(-1) + b_reg
+            return float(r @ r + q @ q)
+
+        pos, first = self.roll(x)
+        r = self.residual_of(pos)
+        n_markers = max(len(r) / 3.0, 1.0)
+        if lags_prev is not None and lags_prev.shape[0] >= w and lags_prev.shape[1] == pos[0].size:
+            lags, fresh = lags_prev[:w], False
+        else:
+            lags, fresh = self.lag_responses(x, pos, hi), True
+        jm = self.jacobian(lags)
+        cost = total(x, r)
         for _ in range(12):
             if self.counter[0] >= max_evaluations:
                 break
-            a = np.vstack([jm, *(w * np.eye(nc) for w, _ in regs)])
-            b = -np.concatenate([r, *(w * (c - off) for w, off in regs)])
-            step = lsq_linear(a, b, bounds=(lo - c, hi - c), method="bvls").x
-            if np.max(np.abs(step)) < 1e-5:
+            a = np.vstack([jm, a_reg])
+            b = -np.concatenate([r, a_reg @ x.reshape(-1) + b_reg])
+            flat = x.reshape(-1)
+            step = lsq_linear(a, b, bounds=(lo - flat, hi - flat), method="bvls").x
+            if np.max(np.abs(step)) < 1e-6:
                 break
-            trial = np.clip(c + step, lo, hi)
-            r_trial = self.marker_residual(trial)
-            cost_trial = total(trial, r_trial)
+            trial = np.clip(flat + step, lo, hi).reshape(w, nc)
+            try:
+                pos_t, first_t = self.roll(trial)
+            except SimulationBlowUp:  # a wild trial collapsed the mesh: a failed step
+                pos_t = None
+            if pos_t is None:
+                cost_trial = np.inf
+            else:
+                r_trial = self.residual_of(pos_t)
+                cost_trial = total(trial, r_trial)
             if cost_trial < cost:
-                gain = (np.sqrt(cost) - np.sqrt(cost_trial)) / np.sqrt(max(len(r), 1) / 3)
-                improvement = (cost - cost_trial) / max(cost, 1e-30)
-                c, r, cost = trial, r_trial, cost_trial
+                gain = (np.sqrt(cost) - np.sqrt(cost_trial)) / np.sqrt(n_markers)
+                x, r, cost, pos, first = trial, r_trial, cost_trial, pos_t, first_t
                 fresh = False
-                if improvement < 1e-4 or gain < tol:
+                if gain < tol:
                     break
             elif fresh:
-                break  # even a fresh Jacobian's step does not help: done
+                break  # even fresh responses give no better step: done
             else:
-                jm = self.jacobian(c, r, hi)  # the chord went stale: renew it
-                fresh = True
-        self._cache.update({"jm": jm, "x": c.copy(), "r": r})
-        sv = np.linalg.svd(jm, compute_uv=False)
+                lags, fresh = self.lag_responses(x, pos, hi), True  # the chord went stale
+                jm = self.jacobian(lags)
+        own = jm[:, :nc]
+        sv = np.linalg.svd(own, compute_uv=False) if own.size else np.zeros(1)
         cond = sv[0] / sv[-1] if sv[-1] > 0 else np.inf
-        return c, cond, jm
+        self._last = (x.copy(), first)
+        return x[0].copy(), first, cond, x, lags
