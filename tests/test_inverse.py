@@ -252,3 +252,22 @@ def test_noisy_experiment_is_also_scored_against_the_true_motion(face):
         assert 0.7 < noisy < 1.0
         assert true < 0.6 * noisy
         assert set(run["vs_noise_free"]["corr3d"]) == set(res["markers_used"] + res["held_out"])
+
+
+def test_regularisation_pulls_activity_as_documented(face):
+    ms, mapping, truth = twin(face, frames=6)
+    kw = dict(controls=["DLI", "OOS", "LLS"])
+    free = invert(face, ms, mapping, **kw)
+    # a strong prior (e.g. processed EMG) wins over the markers
+    prior = np.clip(truth + 0.2, 0, 1)
+    led = invert(face, ms, mapping, prior=prior, prior_weight=100.0, **kw)
+    np.testing.assert_allclose(led.controls[:-1], prior[:-1], atol=0.01)
+    # a strong effort term drives activity towards zero, at a cost in marker error
+    lazy = invert(face, ms, mapping, effort=100.0, **kw)
+    assert np.abs(lazy.controls[:-1]).max() < 0.02 < np.abs(free.controls[:-1]).max()
+    assert np.median(lazy.rms_error[1:]) > 10 * np.median(free.rms_error[1:])
+    # a strong smoothness term holds activity near the previous frame's (zero at the start)
+    still = invert(face, ms, mapping, smooth=100.0, **kw)
+    assert np.abs(np.diff(still.controls[:-1], axis=0)).max() < 0.02
+    with pytest.raises(InputError, match="bend"):
+        invert(face, ms, mapping, bend=-1.0, **kw)
