@@ -159,13 +159,15 @@ def test_invert_and_compare_commands(face, tmp_path, monkeypatch, capsys):
     ms, mapping, _ = twin(face, frames=6)
     write_markers(tmp_path / "m.csv", ms.select(list(mapping)), units="mm")
     monkeypatch.setattr(sys, "argv", ["facemech", "invert", "--markers", str(tmp_path / "m.csv"),
-                                      "--controls", "DLI,OOS,LLS", "-o", str(tmp_path / "r.nc")])
+                                      "--controls", "DLI,OOS,LLS", "-o", str(tmp_path / "r.nc"),
+                                      "--figure", str(tmp_path / "act.png")])
     with pytest.raises(SystemExit) as info:
         main()
     assert info.value.code in (0, None), capsys.readouterr().err
     ds = read_results(tmp_path / "r.nc")
     assert "rms_error" in ds and ds["rms_error"].values[1:].max() < 1e-5
     assert ds.attrs["inversion_method"] == "lsq"
+    assert (tmp_path / "act.png").stat().st_size > 10_000
     capsys.readouterr()
     monkeypatch.setattr(sys, "argv", ["facemech", "compare", str(tmp_path / "r.nc"),
                                       str(tmp_path / "m.csv"), "--json"])
@@ -214,7 +216,8 @@ def test_experiment1_command_prints_the_tables(tmp_path, monkeypatch, capsys):
     from facemech.cli import main
 
     monkeypatch.setattr(sys, "argv", ["facemech", "experiment", "pitermann2001-synthetic",
-                                      "-o", str(tmp_path / "t.json")])
+                                      "-o", str(tmp_path / "t.json"),
+                                      "--figures", str(tmp_path / "figs")])
     with pytest.raises(SystemExit) as info:
         main()
     assert info.value.code in (0, None)
@@ -224,6 +227,13 @@ def test_experiment1_command_prints_the_tables(tmp_path, monkeypatch, capsys):
     run = res["runs"]["lsq, positive"]
     assert run["table3_frame_error_mm"]["median"] <= 0.10
     assert run["corr3d_above_0.8"] >= 17
+    for run in res["runs"].values():
+        ctrl, true = np.array(run["controls"]), np.array(run["true_controls"])
+        assert ctrl.shape == true.shape == (36, 7)
+        # the fast method recovers the triangle: activity within 0.1 on average
+        assert np.abs(ctrl[:-1] - true[:-1]).mean() < 0.1
+    figs = sorted(p.name for p in (tmp_path / "figs").iterdir())
+    assert figs == ["experiment1_lsq_no-constraint.png", "experiment1_lsq_positive.png"]
 
 
 def test_tolerance_stops_early_without_losing_the_fit(face):
@@ -271,3 +281,4 @@ def test_regularisation_pulls_activity_as_documented(face):
     assert np.abs(np.diff(still.controls[:-1], axis=0)).max() < 0.02
     with pytest.raises(InputError, match="bend"):
         invert(face, ms, mapping, bend=-1.0, **kw)
+

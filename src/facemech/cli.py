@@ -653,6 +653,8 @@ def invert(
     = "lucero1999",
     dt: Annotated[float, typer.Option(help="Euler step of every evaluation, s")] = 1e-3,
     units: UnitsOpt = None,
+    figure: Annotated[Path | None, typer.Option(help="PNG of the inverted activity and the "
+                                                     "per-frame error")] = None,
 ):
     """Recover muscle activity frame by frame from markers, and re-animate the face."""
     from . import params as P
@@ -707,6 +709,13 @@ def invert(
                          "markers_used": (("time",), res.markers_used, {"units": "1"})})
     out.print(f"{ms.n_frames} frames inverted ({method}) in {res.wall_seconds:.1f} s; median "
               f"per-frame error {np.median(res.rms_error[1:]) * 1e3:.3f} mm -> {output}")
+    if figure is not None:
+        from .viz.plots import inversion_figure
+
+        inversion_figure(figure, np.arange(ms.n_frames) / prm.frame_rate, res.controls,
+                         res.control_names, rms_error=res.rms_error,
+                         title=f"{markers.name}: inverted activity ({method})")
+        out.print(f"figure -> {figure}")
     for note in res.notes:
         err.print(f"facemech: note: {note}")
 
@@ -769,6 +778,9 @@ def experiment_pitermann_synthetic(
     = "lucero1999",
     dt: Annotated[float, typer.Option(help="Euler step of synthesis and inversion, s")] = 1e-3,
     output: Annotated[Path | None, typer.Option("-o", "--output", help="JSON file")] = None,
+    figures: Annotated[Path | None, typer.Option(help="folder for one PNG per run: inverted "
+                                                      "against true activity, and the error")]
+    = None,
 ):
     """Pitermann & Munhall (2001) Experiment 1: Tables I, II and the top of Table III."""
     from .geometry.builder import default_face
@@ -803,6 +815,18 @@ def experiment_pitermann_synthetic(
             out.print(f"  against the noise-free markers: median error "
                       f"{v['frame_error_mm']['median']:.3f} mm; 3-D correlations > 0.8: "
                       f"{v['corr3d_above_0.8']} of 19")
+    if figures is not None:
+        from .viz.plots import inversion_figure
+
+        figures.mkdir(parents=True, exist_ok=True)
+        for label, r in res["runs"].items():
+            path = figures / f"experiment1_{label.replace(', ', '_').replace(' ', '-')}.png"
+            t = np.arange(res["frames"]) / 60.0
+            inversion_figure(path, t, np.array(r["controls"]), tuple(r["control_names"]),
+                             truth=np.array(r["true_controls"]),
+                             rms_error=np.array(r["rms_error_m"]),
+                             title=f"Experiment 1, {label} ({preset})")
+            out.print(f"figure -> {path}")
     if output is not None:
         from .io.atomic import atomic_path
 

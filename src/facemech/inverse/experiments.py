@@ -69,8 +69,9 @@ def run_synthetic(face, *, methods=("lsq",), dt: float = 1e-3, noise: float = 0.
 
     Table I: correlation of each recovered control with the true activity; Table II: 3-D
     correlations (published and unbiased) of every marker, the 8 held-out ones included;
-    Table III (top): per-frame error summary and movement. With ``noise`` (m) the re-animation is
-    also compared with the noise-free markers (``vs_noise_free``).
+    Table III (top): per-frame error summary and movement. Each run also carries its recovered
+    and true controls and per-frame RMS error (for figures). With ``noise`` (m) the
+    re-animation is also compared with the noise-free markers (``vs_noise_free``).
     """
     data, truth = synthetic_data(face, dt=dt, noise=noise, params=params)
     # with noise, the re-animation is also compared with the noise-free markers (the true motion)
@@ -111,6 +112,11 @@ def run_synthetic(face, *, methods=("lsq",), dt: float = 1e-3, noise: float = 0.
                 "movement_mm": stats.movement(data.positions[:, :len(used)]) * 1e3,
                 "condition_median": float(np.nanmedian(res.condition))
                 if np.isfinite(res.condition).any() else None,
+                "control_names": list(res.control_names),
+                "controls": res.controls.tolist(),
+                "true_controls": truth[:, [MUSCLE_GROUPS.index(c)
+                                           for c in res.control_names]].tolist(),
+                "rms_error_m": res.rms_error.tolist(),
             }
             if clean is not None:
                 true = clean.positions

@@ -106,3 +106,51 @@ def activity_figure(path: str | Path, time: np.ndarray, activity: np.ndarray,
         fig.savefig(tmp, dpi=110)
     plt.close(fig)
     return Path(path)
+
+
+def inversion_figure(path: str | Path, time: np.ndarray, controls: np.ndarray,
+                     names: tuple[str, ...], *, truth: np.ndarray | None = None,
+                     rms_error: np.ndarray | None = None, title: str = "") -> Path:
+    """Write a PNG of inverted muscle activity, one panel per control, and the fit's error.
+
+    Parameters
+    ----------
+    time : (frames,) s
+    controls : (frames, c) recovered activity (the last frame repeats the one before)
+    names : the c control names
+    truth : (frames, c) known activity (dashed), for synthetic data
+    rms_error : (frames,) per-frame RMS marker error in metres (bottom panel)
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    n = len(names) + (rms_error is not None)
+    fig, axes = plt.subplots(n, 1, figsize=(7, 0.85 * n + 1.0), sharex=True, squeeze=False)
+    lo = min(0.0, float(np.min(controls)))
+    for r, name in enumerate(names):
+        ax = axes[r, 0]
+        ax.plot(time[:-1], controls[:-1, r], "k-", lw=1.3, label="inverted")
+        if truth is not None:
+            ax.plot(time[:-1], truth[:-1, r], "k--", lw=1.0, label="true")
+            ax.set_title(f"r = {cross_correlation(controls[:-1, r], truth[:-1, r]):.2f}",
+                         fontsize=7, loc="right", pad=1)
+        ax.set_ylim(lo - 0.05, 1.05)
+        ax.set_ylabel(name, rotation=0, ha="right", fontsize=8)
+        ax.tick_params(labelsize=7)
+    if truth is not None:
+        axes[0, 0].legend(fontsize=7, loc="upper left", frameon=False, ncol=2)
+    if rms_error is not None:
+        ax = axes[-1, 0]
+        ax.plot(time[1:], rms_error[1:] * 1e3, "k.-", lw=0.8, ms=3)
+        ax.set_ylabel("error\n(mm)", rotation=0, ha="right", fontsize=8)
+        ax.tick_params(labelsize=7)
+    axes[-1, 0].set_xlabel("time (s)")
+    if title:
+        fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    with atomic_path(path, suffix=".png") as tmp:
+        fig.savefig(tmp, dpi=110)
+    plt.close(fig)
+    return Path(path)
