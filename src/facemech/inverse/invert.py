@@ -380,8 +380,9 @@ class _FrameProblem:
         The lag responses are the previous frame's (``lags_prev``) or are taken at the warm
         start; each iteration solves the linearised problem with bounds exactly (bounded-variable
         least squares) and is accepted if the full cost falls. New lag responses are taken only
-        when a step fails; the iterations stop when an accepted step lowers the RMS marker
-        residual by less than ``tol`` mm, and after at most ``max_evaluations`` frame steps.
+        when a step fails; the iterations stop when an accepted step lowers the residual (the
+        markers' and the regularisation rows', as an RMS per marker) by less than ``tol`` mm,
+        and after at most ``max_evaluations`` frame steps.
 
         Returns the frame's activity, the state one frame on, the condition number of the
         frame's own Jacobian columns, the window solution (to warm-start the next frame) and
