@@ -31,6 +31,19 @@ def cross_correlation(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.sum(a * b) / den) if den > 0 else float("nan")
 
 
+def save_figure(fig, path: str | Path, title: str = "") -> Path:
+    """Title, lay out and write a figure as PNG (atomically), then close it."""
+    import matplotlib.pyplot as plt
+
+    if title:
+        fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    with atomic_path(path, suffix=".png") as tmp:
+        fig.savefig(tmp, dpi=110)
+    plt.close(fig)
+    return Path(path)
+
+
 def kinematics_figure(path: str | Path, time: np.ndarray, trajectories: dict[str, np.ndarray],
                       *, rate: float = 60.0, measured: dict[str, np.ndarray] | None = None,
                       title: str = "") -> Path:
@@ -71,13 +84,7 @@ def kinematics_figure(path: str | Path, time: np.ndarray, trajectories: dict[str
                 ax.set_title(name if meas is None else f"{name}  {ax.get_title()}", fontsize=9)
             ax.tick_params(labelsize=7)
         axes[-1, c].set_xlabel("time (s)", fontsize=8)
-    if title:
-        fig.suptitle(title, fontsize=10)
-    fig.tight_layout()
-    with atomic_path(path, suffix=".png") as tmp:
-        fig.savefig(tmp, dpi=110)
-    plt.close(fig)
-    return Path(path)
+    return save_figure(fig, path, title)
 
 
 def activity_figure(path: str | Path, time: np.ndarray, activity: np.ndarray,
@@ -101,11 +108,7 @@ def activity_figure(path: str | Path, time: np.ndarray, activity: np.ndarray,
         axes[-1, 0].plot(time, np.degrees(jaw_angle), "k-")
         axes[-1, 0].set_ylabel("jaw (°)", rotation=0, ha="right", fontsize=8)
     axes[-1, 0].set_xlabel("time (s)")
-    fig.tight_layout()
-    with atomic_path(path, suffix=".png") as tmp:
-        fig.savefig(tmp, dpi=110)
-    plt.close(fig)
-    return Path(path)
+    return save_figure(fig, path)
 
 
 def inversion_figure(path: str | Path, time: np.ndarray, controls: np.ndarray,
@@ -147,10 +150,4 @@ def inversion_figure(path: str | Path, time: np.ndarray, controls: np.ndarray,
         ax.set_ylabel("error\n(mm)", rotation=0, ha="right", fontsize=8)
         ax.tick_params(labelsize=7)
     axes[-1, 0].set_xlabel("time (s)")
-    if title:
-        fig.suptitle(title, fontsize=10)
-    fig.tight_layout()
-    with atomic_path(path, suffix=".png") as tmp:
-        fig.savefig(tmp, dpi=110)
-    plt.close(fig)
-    return Path(path)
+    return save_figure(fig, path, title)
