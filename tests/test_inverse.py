@@ -34,6 +34,23 @@ def test_3d_statistics_as_published_and_unbiased():
     assert stats.summary5(np.arange(5.0)) == {"min": 0, "q1": 1, "median": 2, "q3": 3, "max": 4}
     ax = stats.axis_correlations(v, v)
     assert ax["displacement"]["x"] == pytest.approx(1.0)
+    assert ax["acceleration"]["z"] == pytest.approx(1.0)
+    assert "acceleration" not in stats.axis_correlations(v[:4], v[:4])
+
+
+def test_acceleration_and_cross_correlation_analytic():
+    t = np.arange(60) / 60.0
+    # a cubic Savitzky-Golay filter differentiates a parabola exactly: (3 t^2)'' = 6
+    np.testing.assert_allclose(stats.acceleration(3 * t**2, 60.0), 6.0, atol=1e-9)
+    w = 2 * np.pi * 2.0
+    acc = stats.acceleration(np.sin(w * t), 60.0)
+    # a 7-sample cubic window attenuates a 2-Hz sine at 60 Hz by about 3.5 %
+    np.testing.assert_allclose(acc[5:-5], -w**2 * np.sin(w * t[5:-5]), atol=0.05 * w**2)
+    assert np.all(stats.acceleration(t[:3], 60.0) == 0)  # too short for a cubic fit
+    a = np.sin(w * t)
+    assert stats.cross_correlation(a, 2 * a + 1) == pytest.approx(1.0)
+    assert stats.cross_correlation(a, -a) == pytest.approx(-1.0)
+    assert np.isnan(stats.cross_correlation(a, np.ones_like(a)))
 
 
 def test_triangle_sequence():

@@ -35,23 +35,40 @@ def corr3d(v: np.ndarray, w: np.ndarray, *, published: bool = True) -> np.ndarra
     return num / (std3d(v) * std3d(w))
 
 
+def acceleration(x: np.ndarray, rate: float, window_s: float = 0.1, order: int = 3) -> np.ndarray:
+    """Second derivative along axis 0 by a Savitzky-Golay filter (unit per s^2).
+
+    The window (``window_s``, odd, at least ``order + 2`` samples) shrinks to the series'
+    length; a series too short for it gives zeros.
+    """
+    n = len(x)
+    win = max(order + 2, int(round(window_s * rate)) | 1)
+    if win > n:
+        win = n if n % 2 else n - 1
+    if win <= order:
+        return np.zeros_like(x)
+    return savgol_filter(x, win, order, deriv=2, delta=1.0 / rate, axis=0)
+
+
+def cross_correlation(a: np.ndarray, b: np.ndarray) -> float:
+    """Zero-lag normalised cross-correlation (Pearson) of two series (NaN if one is flat)."""
+    a = a - a.mean()
+    b = b - b.mean()
+    den = np.sqrt(np.sum(a * a) * np.sum(b * b))
+    return float(np.sum(a * b) / den) if den > 0 else float("nan")
+
+
 def axis_correlations(a: np.ndarray, b: np.ndarray, rate: float = 60.0) -> dict:
-    """Per-axis Pearson correlations of displacement and of acceleration (Savitzky-Golay)."""
+    """Per-axis Pearson correlations of displacement and of acceleration (Savitzky-Golay,
+    0.1-s cubic; left out for fewer than 5 frames)."""
     out = {}
     for kind in ("displacement", "acceleration"):
         x, y = a - a[0], b - b[0]
         if kind == "acceleration":
-            win = min(len(a) - (1 - len(a) % 2), max(5, int(round(0.1 * rate)) | 1))
-            if win < 5:
+            if len(a) < 5:
                 continue
-            x = savgol_filter(x, win, 3, deriv=2, delta=1 / rate, axis=0)
-            y = savgol_filter(y, win, 3, deriv=2, delta=1 / rate, axis=0)
-        vals = []
-        for ax in range(3):
-            xa, ya = x[:, ax] - x[:, ax].mean(), y[:, ax] - y[:, ax].mean()
-            den = np.sqrt(np.sum(xa * xa) * np.sum(ya * ya))
-            vals.append(float(np.sum(xa * ya) / den) if den > 0 else float("nan"))
-        out[kind] = dict(zip("xyz", vals, strict=True))
+            x, y = acceleration(x, rate), acceleration(y, rate)
+        out[kind] = {ax: cross_correlation(x[:, i], y[:, i]) for i, ax in enumerate("xyz")}
     return out
 
 

@@ -7,28 +7,9 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-from scipy.signal import savgol_filter
 
+from ..inverse.stats import acceleration, cross_correlation
 from ..io.atomic import atomic_path
-
-
-def acceleration(x: np.ndarray, rate: float, window_s: float = 0.1, order: int = 3) -> np.ndarray:
-    """Second derivative along axis 0 by a Savitzky-Golay filter (unit per s^2)."""
-    n = len(x)
-    win = max(order + 2, int(round(window_s * rate)) | 1)
-    if win > n:
-        win = n if n % 2 else n - 1
-    if win <= order:
-        return np.zeros_like(x)
-    return savgol_filter(x, win, order, deriv=2, delta=1.0 / rate, axis=0)
-
-
-def cross_correlation(a: np.ndarray, b: np.ndarray) -> float:
-    """Zero-lag normalised cross-correlation (Pearson) of two series."""
-    a = a - a.mean()
-    b = b - b.mean()
-    den = np.sqrt(np.sum(a * a) * np.sum(b * b))
-    return float(np.sum(a * b) / den) if den > 0 else float("nan")
 
 
 def save_figure(fig, path: str | Path, title: str = "") -> Path:
