@@ -190,7 +190,9 @@ def invert(
     positions[0] = state.positions[: face.n_surface]
     notes: list[str] = []
     gaps = 0
-    lags_prev = x_prev = None  # lag responses and window solution carried (lsq)
+    # carried from frame to frame (lsq): lag responses, window solution, its states
+    lags_prev = x_prev = None
+    states_prev: list = []
     t0 = time.perf_counter()
     for k in range(frames - 1):
         ok = np.all(np.isfinite(data[k + 1]), axis=1)
@@ -208,12 +210,14 @@ def invert(
             # left, so its activity is kept rather than refitted on ever fewer frames
             c = x_prev[1].copy()
             x_prev = x_prev[1:]
-            state = frame.state_after(c)
+            state = states_prev[1]  # simulated in that window's accepted roll
+            states_prev = states_prev[1:]
             cond[k + 1] = cond[k]
         else:
-            c, state, cond[k + 1], x_prev, lags_prev = frame.lsq(
+            c, state, cond[k + 1], x_prev, lags_prev, states_prev = frame.lsq(
                 c_prev, x_prev, lo, hi, max_evaluations, smooth=smooth, effort=effort,
-                prior=prior, prior_weight=prior_weight, bend=bend, lags_prev=lags_prev, tol=tol)
+                prior=prior, prior_weight=prior_weight, bend=bend, lags_prev=lags_prev, tol=tol,
+                known=states_prev[1:])
         out_c[k] = c
         c_prev = c
         bound[k + 1] = (c <= lo + 1e-6) | (c >= hi - 1e-6)
@@ -261,22 +265,31 @@ class _FrameProblem:
         self.counter = [0]  # step-function calls (one per frame simulated)
         self.nc = gmat.shape[1]
         self._last = None  # (x, state after the first frame) of the latest roll
+        self.states: list = []  # states of the latest roll, one per frame of the window
 
     def _window(self, x) -> np.ndarray:
         x = np.asarray(x, float)
         return x.reshape(-1, self.nc)[: self.horizon]
 
-    def roll(self, x):
-        """Simulate the window under x: marker nodes (w, markers, 3) mm and the first state."""
+    def roll(self, x, known=()):
+        """Simulate the window under x: marker nodes (w, markers, 3) mm and the first state.
+
+        ``known`` are states already simulated for the first frames of the window under the
+        same activity (the previous frame's accepted roll); they are used as they are.
+        """
         x = self._window(x)
-        s, first, pos = self.state, None, []
+        s, states, pos = self.state, [], []
         for a in range(len(x)):
-            s = self.stepper.advance(s, self.gmat @ x[a], self.jaw[self.k + 1 + a])
-            self.counter[0] += 1
-            first = s if a == 0 else first
+            if a < len(known):
+                s = known[a]
+            else:
+                s = self.stepper.advance(s, self.gmat @ x[a], self.jaw[self.k + 1 + a])
+                self.counter[0] += 1
+            states.append(s)
             pos.append(s.positions[self.nodes] * 1e3)
-        self._last = (x.copy(), first)
-        return np.array(pos), first
+        self._last = (x.copy(), states[0])
+        self.states = states
+        return np.array(pos), states[0]
 
     def residual_of(self, pos) -> np.ndarray:
         return np.concatenate([(pos[a][ok] - self.targets[a][ok]).reshape(-1)
@@ -374,7 +387,7 @@ class _FrameProblem:
         return np.vstack(blocks), np.concatenate(offsets)
 
     def lsq(self, c_prev, x_prev, lo, hi, max_evaluations, *, smooth=0.0, effort=0.0,
-            prior=None, prior_weight=0.0, bend=0.0, lags_prev=None, tol=1e-3):
+            prior=None, prior_weight=0.0, bend=0.0, lags_prev=None, tol=1e-3, known=()):
         """Bounded Gauss-Newton over the window with a chord Jacobian.
 
         The lag responses are the previous frame's (``lags_prev``) or are taken at the warm
@@ -384,9 +397,12 @@ class _FrameProblem:
         markers' and the regularisation rows', as an RMS per marker) by less than ``tol`` mm,
         and after at most ``max_evaluations`` frame steps.
 
+        ``known``: states of the warm start's first frames already simulated (the previous
+        frame's accepted roll, shifted), reused in the first roll.
+
         Returns the frame's activity, the state one frame on, the condition number of the
-        frame's own Jacobian columns, the window solution (to warm-start the next frame) and
-        the lag responses (to seed its chord).
+        frame's own Jacobian columns, the window solution (to warm-start the next frame), the
+        lag responses (to seed its chord) and the states of the accepted roll.
         """
         from scipy.optimize import lsq_linear
 
@@ -403,7 +419,8 @@ class _FrameProblem:
             q = a_reg @ xv.reshape(-1) + b_reg
             return float(r @ r + q @ q)
 
-        pos, first = self.roll(x)
+        pos, first = self.roll(x, known if x_prev is not None else ())
+        states = self.states
         r = self.residual_of(pos)
         n_markers = max(len(r) / 3.0, 1.0)
         if lags_prev is not None and lags_prev.shape[0] >= w and lags_prev.shape[1] == pos[0].size:
@@ -434,6 +451,7 @@ class _FrameProblem:
             if cost_trial < cost:
                 gain = (np.sqrt(cost) - np.sqrt(cost_trial)) / np.sqrt(n_markers)
                 x, r, cost, pos, first = trial, r_trial, cost_trial, pos_t, first_t
+                states = self.states
                 fresh = False
                 if gain < tol:
                     break
@@ -446,4 +464,4 @@ class _FrameProblem:
         sv = np.linalg.svd(own, compute_uv=False) if own.size else np.zeros(1)
         cond = sv[0] / sv[-1] if sv[-1] > 0 else np.inf
         self._last = (x.copy(), first)
-        return x[0].copy(), first, cond, x, lags
+        return x[0].copy(), first, cond, x, lags, states
