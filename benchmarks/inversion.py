@@ -30,11 +30,13 @@ def main() -> None:
     ap.add_argument("--skip-powell", action="store_true")
     ap.add_argument("--utterance-frames", type=int, default=180)
     ap.add_argument("--preset", default="lucero1999")
-    ap.add_argument("--dt", type=float, default=1e-3, help="Euler step, s")
+    ap.add_argument("--dt", type=float, default=None,
+                    help="Euler step, s (default: the preset's fast step)")
     args = ap.parse_args()
     warnings.simplefilter("ignore")
     face = default_face()
-    prm, dt = preset(args.preset), args.dt
+    prm = preset(args.preset)
+    dt = prm.fast_dt if args.dt is None else args.dt
     data, truth = synthetic_data(face, params=prm, dt=dt)
     data = MarkerSet(data.positions[: args.frames], data.names, 60.0)
     used = {n: face.markers[n] for n in data.names if n.startswith("R")}

@@ -651,7 +651,9 @@ def invert(
     = None,
     preset: Annotated[str, typer.Option(help="lucero1999, pitermann2001 or calibrated")]
     = "lucero1999",
-    dt: Annotated[float, typer.Option(help="Euler step of every evaluation, s")] = 1e-3,
+    dt: Annotated[float | None, typer.Option(help="Euler step of every evaluation, s (default: "
+                                                  "the preset's fast step, 1 ms or 0.33 ms)")]
+    = None,
     units: UnitsOpt = None,
     figure: Annotated[Path | None, typer.Option(help="PNG of the inverted activity and the "
                                                      "per-frame error")] = None,
@@ -694,7 +696,8 @@ def invert(
     sim = Simulation(model=model, params=prm, time=np.arange(ms.n_frames) / prm.frame_rate,
                      positions=res.positions, markers=res.positions[:, nodes],
                      marker_names=names, activity=act, jaw_angle=res.jaw_angle,
-                     final_state=None, integrator=f"euler (inversion, {method})", dt=dt,
+                     final_state=None, integrator=f"euler (inversion, {method})",
+                     dt=prm.fast_dt if dt is None else dt,
                      wall_seconds=res.wall_seconds,
                      attrs={"inversion_method": method, "positive": int(positive),
                             "window": window, "tol_mm": tol, "bend": bend,
@@ -776,7 +779,8 @@ def experiment_pitermann_synthetic(
     noise: Annotated[float, typer.Option(help="Gaussian marker noise, mm")] = 0.0,
     preset: Annotated[str, typer.Option(help="lucero1999, pitermann2001 or calibrated")]
     = "lucero1999",
-    dt: Annotated[float, typer.Option(help="Euler step of synthesis and inversion, s")] = 1e-3,
+    dt: Annotated[float | None, typer.Option(help="Euler step of synthesis and inversion, s "
+                                                  "(default: the preset's fast step)")] = None,
     output: Annotated[Path | None, typer.Option("-o", "--output", help="JSON file")] = None,
     figures: Annotated[Path | None, typer.Option(help="folder for one PNG per run: inverted "
                                                       "against true activity, and the error")]
@@ -840,7 +844,8 @@ def experiment_pitermann_crosstalker(
     frames: Annotated[int, typer.Option(help="frames of the gesture sequence (60 Hz)")] = 120,
     preset: Annotated[str, typer.Option(help="lucero1999, pitermann2001 or calibrated")]
     = "lucero1999",
-    dt: Annotated[float, typer.Option(help="Euler step of synthesis and inversion, s")] = 1e-3,
+    dt: Annotated[float | None, typer.Option(help="Euler step of synthesis and inversion, s "
+                                                  "(default: the preset's fast step)")] = None,
     output: Annotated[Path | None, typer.Option("-o", "--output", help="JSON file")] = None,
 ):
     """Experiment 3 analogue: another talker inverted on the default face (Table VI)."""

@@ -17,7 +17,7 @@ from collections.abc import Callable
 import numpy as np
 
 from ..markerset import MarkerSet
-from ..params import MUSCLE_GROUPS
+from ..params import MUSCLE_GROUPS, Parameters
 from . import stats
 from .invert import invert
 
@@ -47,7 +47,8 @@ def triangle_sequence(repeats: int = 3) -> np.ndarray:
     return np.tile(one, repeats)
 
 
-def synthetic_data(face, *, dt: float = 1e-3, noise: float = 0.0, seed: int = 0, params=None):
+def synthetic_data(face, *, dt: float | None = None, noise: float = 0.0, seed: int = 0,
+                   params=None):
     """The synthetic markers (MarkerSet, metres), the true group activity (36, 16)."""
     from ..solvers.forward import simulate
 
@@ -55,7 +56,9 @@ def synthetic_data(face, *, dt: float = 1e-3, noise: float = 0.0, seed: int = 0,
     act = np.zeros((len(tri), len(MUSCLE_GROUPS)))
     for g in PERIORAL:
         act[:, MUSCLE_GROUPS.index(g)] = tri
-    sim = simulate(face, act, integrator="euler", dt=dt, params=params)
+    params = params or Parameters()
+    sim = simulate(face, act, integrator="euler", dt=params.fast_dt if dt is None else dt,
+                   params=params)
     names = [n for n in face.markers if n[0] in "RL"]
     pos = sim.positions[:, [face.markers[n] for n in names]]
     if noise > 0:
@@ -63,7 +66,8 @@ def synthetic_data(face, *, dt: float = 1e-3, noise: float = 0.0, seed: int = 0,
     return MarkerSet(pos, tuple(names), 60.0), act
 
 
-def run_synthetic(face, *, methods=("lsq",), dt: float = 1e-3, noise: float = 0.0, params=None,
+def run_synthetic(face, *, methods=("lsq",), dt: float | None = None, noise: float = 0.0,
+                  params=None,
                   progress: Callable[[str, int, int], None] | None = None) -> dict:
     """Experiment 1 for each method, with and without the positive constraint (tables as dicts).
 
@@ -73,6 +77,8 @@ def run_synthetic(face, *, methods=("lsq",), dt: float = 1e-3, noise: float = 0.
     and true controls and per-frame RMS error (for figures). With ``noise`` (m) the
     re-animation is also compared with the noise-free markers (``vs_noise_free``).
     """
+    params = params or Parameters()
+    dt = params.fast_dt if dt is None else dt
     data, truth = synthetic_data(face, dt=dt, noise=noise, params=params)
     # with noise, the re-animation is also compared with the noise-free markers (the true motion)
     clean = synthetic_data(face, dt=dt, params=params)[0] if noise > 0 else None
@@ -183,7 +189,7 @@ def gesture_controls(frames: int = 120):
     return np.clip(act, 0, 1), jaw
 
 
-def run_crosstalker(face, *, frames: int = 120, dt: float = 1e-3, params=None,
+def run_crosstalker(face, *, frames: int = 120, dt: float | None = None, params=None,
                     progress: Callable[[str, int, int], None] | None = None) -> dict:
     """Experiment 3 analogue: markers of a second talker, inverted on the default face after
     per-axis scaling, and separately after a thin-plate-spline warp of the face (Table VI)."""
@@ -191,6 +197,8 @@ def run_crosstalker(face, *, frames: int = 120, dt: float = 1e-3, params=None,
     from ..solvers.forward import simulate
     from ..solvers.jaw import angles_from_chin
 
+    params = params or Parameters()
+    dt = params.fast_dt if dt is None else dt
     other = second_talker()
     act, jaw = gesture_controls(frames)
     sim = simulate(other, act, jaw, integrator="euler", dt=dt, params=params)

@@ -108,7 +108,7 @@ def invert(
     controls="emg7",
     jaw_angle: np.ndarray | None = None,
     params: Parameters | None = None,
-    dt: float = 1e-3,
+    dt: float | None = None,
     smooth: float = 0.0,
     effort: float = 0.0,
     prior: np.ndarray | None = None,
@@ -130,7 +130,8 @@ def invert(
     positive : activity kept >= 0 (bounds for lsq, the published penalty for powell)
     controls : "emg7", "all" or a list of groups
     jaw_angle : (frames,) rad, optional (default: jaw closed)
-    dt : explicit Euler step used by every evaluation (s; the paper's is 0.33e-3)
+    dt : explicit Euler step used by every evaluation (s; default ``params.fast_dt``: 1 ms for
+        ``lucero1999``, the paper's 0.33 ms for the other presets)
     smooth, effort, prior_weight : regularisation weights (mm per unit activity), lsq only
     prior : (frames, c) prior activity (e.g. processed EMG) for ``prior_weight``
     window : frames in each frame's fit (lsq): the activity of each of them is fitted to
@@ -156,6 +157,7 @@ def invert(
         if not value >= 0:
             raise InputError(f"{name} must be >= 0 (got {value})", field=name)
     params = params or Parameters()
+    dt = params.fast_dt if dt is None else dt
     if abs(markers.rate - params.frame_rate) > 1e-3 * params.frame_rate:
         raise InputError(f"markers at {markers.rate:g} Hz, the model runs at "
                          f"{params.frame_rate:g} Hz: resample first (facemech markers resample)",
