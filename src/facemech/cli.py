@@ -638,7 +638,7 @@ def invert(
     controls: Annotated[str, typer.Option(help="emg7, all, or comma-separated groups")] = "emg7",
     chin_marker: Annotated[str | None, typer.Option(help="drive the jaw from this marker")]
     = None,
-    window: Annotated[int, typer.Option(help="frames ahead in each frame's fit (lsq)")] = 3,
+    window: Annotated[int, typer.Option(help="frames fitted per frame, first kept (lsq)")] = 3,
     tol: Annotated[float, typer.Option(help="stop a frame's fit when the RMS error improves by "
                                             "less than this, mm (lsq)")] = 1e-3,
     bend: Annotated[float, typer.Option(help="weight of second differences of activity across "
