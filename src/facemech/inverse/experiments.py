@@ -49,7 +49,11 @@ def triangle_sequence(repeats: int = 3) -> np.ndarray:
 
 def synthetic_data(face, *, dt: float | None = None, noise: float = 0.0, seed: int = 0,
                    params=None):
-    """The synthetic markers (MarkerSet, metres), the true group activity (36, 16)."""
+    """The synthetic markers (MarkerSet, metres), the true group activity (36, 16).
+
+    ``params`` defaults to ``lucero1999`` and ``dt`` (s) to its ``fast_dt``; ``noise`` (m) is
+    the standard deviation of Gaussian noise added to every coordinate (seeded by ``seed``).
+    """
     from ..solvers.forward import simulate
 
     tri = triangle_sequence()
