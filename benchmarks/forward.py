@@ -1,9 +1,10 @@
 """Forward-simulation benchmark on the built-in face (prints JSON).
 
-For the demo utterance: mesh counts; for each integrator the wall seconds per simulated second
-(one core: numba runs single-threaded here) and the real-time factor; the largest deviation of
-each fast integrator from the paper's explicit Euler (all epidermal nodes and the markers); and
-where one step's time goes (force assembly, sparse solve).
+For the demo utterance: the default (anatomical) preset's wall seconds per simulated second and
+real-time factor on one core, and where its step's time goes; then, for the seeds' lucero1999,
+mesh counts, each integrator's real-time factor and its largest deviation from the paper's
+explicit Euler (all epidermal nodes and the markers), and one step's force assembly and
+sparse solve.
 
 Usage: python benchmarks/forward.py [--quick]
 """
@@ -19,7 +20,7 @@ os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
 
-from facemech import Parameters, Physics, Stepper, default_face, simulate  # noqa: E402
+from facemech import Physics, Stepper, default_face, preset, simulate  # noqa: E402
 from facemech.demo import utterance  # noqa: E402
 from facemech.physics.assembly import accumulate_forces, force_arguments  # noqa: E402
 
@@ -38,15 +39,44 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--quick", action="store_true", help="first 60 frames only, one repeat")
     args = ap.parse_args()
-    face = default_face()
     t, act, jaw = utterance()
     if args.quick:
         t, act, jaw = t[:60], act[:60], jaw[:60]
     simulated = len(t) / 60.0
     repeat = 1 if args.quick else 3
+    anat = preset("anatomical")
+    anat_face = default_face()
+    simulate(anat_face, act[:3], jaw[:3], params=anat)
+    wall, sim = timed(lambda: simulate(anat_face, act, jaw, params=anat), repeat)
+    ph_a = Physics.build(anat_face, anat)
+    st_a = Stepper(ph_a)
+    fa = force_arguments(ph_a, np.zeros(ph_a.n_muscles), st_a._tied_rest, st_a._tied_normal,
+                         anat_face.lip_normals)
+    pos_a = anat_face.rest_positions.copy()
+    vel_a = np.zeros_like(pos_a)
+    out_a = np.zeros_like(pos_a)
+    t0 = time.perf_counter()
+    for _ in range(200):
+        accumulate_forces(pos_a, vel_a, out_a, *fa)
+    force_a = (time.perf_counter() - t0) / 200 * 1e3
+    rhs_a = np.random.default_rng(0).normal(size=(ph_a.n_dynamic, 3))
+    t0 = time.perf_counter()
+    for _ in range(200):
+        st_a._lu.solve(rhs_a)
+    solve_a = (time.perf_counter() - t0) / 200 * 1e3
+    sa = anat_face.summary()
+    anatomical = {"preset": "anatomical", "integrator": sim.integrator,
+                  "steps_per_frame": sim.attrs["steps_per_frame"],
+                  "wall_s_per_simulated_s": wall / simulated,
+                  "real_time_factor": simulated / wall,
+                  "mesh": {"moving_nodes": sa["moving_nodes"], "springs": sa["springs"],
+                           "prisms": sa["prisms"], "muscles": sa["muscles"]},
+                  "per_step_ms": {"force_assembly": force_a, "sparse_solve_3_axes": solve_a}}
+    face = default_face(tissue="uniform")
+    seeds = preset("lucero1999")
     # warm up the compiled kernels
-    simulate(face, act[:3], jaw[:3])
-    simulate(face, act[:3], jaw[:3], integrator="rosenbrock")
+    simulate(face, act[:3], jaw[:3], params=seeds, integrator="euler")
+    simulate(face, act[:3], jaw[:3], params=seeds, integrator="rosenbrock")
     variants = [("euler", "euler", {}), ("euler-1ms", "euler", {"dt": 1e-3}),
                 ("implicit-4", "implicit", {"substeps": 4}),
                 ("implicit-8", "implicit", {"substeps": 8}),
@@ -56,8 +86,8 @@ def main() -> None:
     results = {}
     sims = {}
     for label, integ, kw in variants:
-        wall, sim = timed(lambda i=integ, k=kw: simulate(face, act, jaw, integrator=i, **k),
-                          repeat)
+        wall, sim = timed(lambda i=integ, k=kw: simulate(face, act, jaw, integrator=i,
+                                                         params=seeds, **k), repeat)
         sims[label] = sim
         results[label] = {"integrator": integ, **kw,
                           "wall_s_per_simulated_s": wall / simulated,
@@ -72,7 +102,7 @@ def main() -> None:
         results[label]["max_deviation_markers_mm"] = float(marks.max() * 1e3)
         results[label]["rms_deviation_nodes_mm"] = float(np.sqrt(np.mean(nodes**2)) * 1e3)
     # where the time of one step goes
-    ph = Physics.build(face, Parameters())
+    ph = Physics.build(face, seeds)
     st = Stepper(ph, integrator="rosenbrock", substeps=4)
     fargs = force_arguments(ph, np.zeros(ph.n_muscles), st._tied_rest, st._tied_normal,
                             face.lip_normals)
@@ -94,6 +124,7 @@ def main() -> None:
         "benchmark": "forward",
         "utterance_frames": len(t),
         "simulated_seconds": simulated,
+        "anatomical": anatomical,
         "mesh": {"epidermal_nodes": s["nodes_per_layer"]["epidermis"], "nodes": s["nodes"],
                  "springs": s["springs"], "prisms": s["prisms"], "muscles": s["muscles"],
                  "dynamic_nodes": ph.n_dynamic},

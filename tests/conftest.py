@@ -18,8 +18,14 @@ from facemech import MUSCLE_GROUPS, default_face  # noqa: E402
 
 @pytest.fixture(scope="session")
 def face():
-    """The built-in generic face."""
+    """The built-in generic face, with the default (anatomical) tissue."""
     return default_face()
+
+
+@pytest.fixture(scope="session")
+def seeds_face():
+    """The built-in generic face with the seeds' uniform 4-mm tissue (Lucero & Munhall 1999)."""
+    return default_face(tissue="uniform")
 
 
 def activity(frames: int, **levels: float) -> np.ndarray:

@@ -1,16 +1,20 @@
 """Dynamics of the assembled kernel with the paper's integrator on small systems."""
 
+import inspect
+
 import numpy as np
 import pytest
 
 from facemech.params import Parameters
+from facemech.physics.assembly import accumulate_forces
 from facemech.physics.springs import scaled_stiffness
 from facemech.solvers.step import _euler_frame
 
 
 def network_args(n_nodes, springs_ij, rest, k, *, damping, biphasic=None, tied=(),
                  tied_rest=None, k_restore=0.0):
-    """Arguments of accumulate_forces after (pos, vel, out) for a bare spring network."""
+    """Arguments of accumulate_forces after (pos, vel, out) for a bare spring network, built by
+    name from the kernel's own signature (nothing but springs and tied nodes)."""
     i = np.array([s[0] for s in springs_ij], np.int64)
     j = np.array([s[1] for s in springs_ij], np.int64)
     l0 = np.linalg.norm(rest[j] - rest[i], axis=1)
@@ -18,24 +22,38 @@ def network_args(n_nodes, springs_ij, rest, k, *, damping, biphasic=None, tied=(
     bip = np.zeros(len(i), bool) if biphasic is None else np.asarray(biphasic)
     tied = np.asarray(tied, np.int64)
     t_rest = rest[tied] if tied_rest is None else np.asarray(tied_rest, float)
-    return (
-        i, j, l0, k, 10 * k, bip, damping, 0.2, 0.98,
-        np.zeros((0, 6), np.int64), np.zeros(0), np.zeros((0, 6, 3)), 0.0, 0.0,
-        np.zeros(0), np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(1, np.int64),
-        np.zeros(0, np.int64), np.zeros(0), np.zeros(0), np.zeros(0), 0.82, 0.5, 0.43, 20.0,
-        tied, tied + n_nodes, np.full(len(tied), -1.0), t_rest, np.zeros((len(tied), 3)),
-        k_restore, np.zeros((0, 2), np.int64), np.zeros((0, 3)), 0.0,
-    )
+    none_i, none_f = np.zeros(0, np.int64), np.zeros(0)
+    values = {
+        "spring_i": i, "spring_j": j, "spring_rest": l0, "k_low": k, "k_high": 10 * k,
+        "biphasic": bip, "damping": np.full(len(i), float(damping)), "knee": 0.2,
+        "sigma": 0.98,
+        "prism_nodes": np.zeros((0, 6), np.int64), "prism_rest_volume": none_f,
+        "prism_rest_rel": np.zeros((0, 6, 3)), "k_volume": 0.0, "k_shape": 0.0,
+        "prism_bulk": none_f,
+        "muscle_force": none_f, "muscle_kind": none_i, "muscle_origin": none_i,
+        "muscle_ptr": np.zeros(1, np.int64), "muscle_nodes": none_i, "muscle_weights": none_f,
+        "muscle_rest": none_f, "muscle_k_passive": none_f, "f1": 0.82, "f2": 0.5, "f3": 0.43,
+        "f4": 20.0, "muscle_pull": 0, "muscle_bead": none_i,
+        "bead_start": np.zeros(1, np.int64), "muscle_offset": np.zeros((0, 3)),
+        "tied": tied, "tied_skull": tied + n_nodes, "tied_height": np.full(len(tied), -1.0),
+        "tied_rest": t_rest, "tied_normal": np.zeros((len(tied), 3)),
+        "k_restore": np.full(len(tied), float(k_restore)), "bone_k": np.zeros(len(tied)),
+        "skull_contact": True, "lip_pairs": np.zeros((0, 2), np.int64),
+        "lip_normals": np.zeros((0, 3)), "k_contact": none_f,
+    }
+    names = inspect.signature(accumulate_forces.py_func).parameters
+    return tuple(values[n] for n in list(names)[3:])
 
 
 def run_euler(pos, vel, fargs, n_dynamic, mass, dt, steps):
     out = np.zeros_like(pos)
     empty = np.zeros(0)
-    jargs = (np.zeros(3), np.array([1.0, 0, 0]), np.zeros(0, np.int64), np.zeros((0, 3)),
-             np.zeros(0, np.int64), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3)),
+    jargs = (np.zeros(3), np.array([1.0, 0, 0]), np.zeros(0, np.int64), np.zeros(0),
+             np.zeros((0, 3)), np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3)),
              np.zeros((0, 3)))
-    _euler_frame(pos, vel, empty, empty, empty, steps, dt, 1.0 / mass, n_dynamic, 0.015, out,
-                 fargs, 0.0, 0.0, jargs)
+    inv_mass = np.full(len(pos), 1.0 / mass)
+    _euler_frame(pos, vel, empty, empty, empty, steps, dt, inv_mass,
+                 np.arange(n_dynamic, dtype=np.int64), 0.015, out, fargs, 0.0, 0.0, jargs)
 
 
 def single_oscillator(dt, duration, mass, k, r, x0=1e-4):

@@ -150,8 +150,8 @@ def test_results_round_trip(face, tmp_path):
     np.testing.assert_array_equal(ds["activity"].values, act)
     np.testing.assert_array_equal(ds["jaw_angle"].values, sim.jaw_angle)
     assert ds["positions"].attrs["units"] == "m"
-    assert ds.attrs["integrator"] == "euler" and ds.attrs["preset"] == "lucero1999"
-    assert ds.attrs["dt_s"] == pytest.approx(1 / 3000)
+    assert ds.attrs["integrator"] == "implicit" and ds.attrs["preset"] == "anatomical"
+    assert ds.attrs["dt_s"] == pytest.approx(1 / 240)
     assert "facemech_version" in ds.attrs and '"activity": "abc"' in ds.attrs["inputs"]
     assert list(tmp_path.iterdir()) == [path]  # no temporary file left
 

@@ -34,7 +34,8 @@ def test_mesh_is_finer_around_the_mouth(face):
     assert np.median(length[near]) < 0.6 * np.median(length[far])
 
 
-def test_layers_springs_prisms_and_muscles(face):
+def test_layers_springs_prisms_and_muscles(seeds_face):
+    face = seeds_face  # the seeds' uniform tissue
     s = face.summary()
     n = face.n_surface
     rest = face.rest_positions
@@ -56,7 +57,8 @@ def test_layers_springs_prisms_and_muscles(face):
     assert all(nm.endswith(("_L", "_R")) for nm in face.muscles.names)
 
 
-def test_free_fascia_is_around_lips_and_cheeks(face):
+def test_free_fascia_is_around_lips_and_cheeks(seeds_face):
+    face = seeds_face  # the seeds' uniform tissue
     n = face.n_surface
     free = face.rest_positions[face.free_fascia]
     lm = face.landmark_positions()
@@ -65,7 +67,8 @@ def test_free_fascia_is_around_lips_and_cheeks(face):
     assert not tied_lip.any()
 
 
-def test_mouth_slit_and_jaw_region(face):
+def test_mouth_slit_and_jaw_region(seeds_face):
+    face = seeds_face  # the seeds' uniform tissue
     n = face.n_surface
     rest = face.rest_positions
     up, lo = face.lip_pairs[: len(face.lip_pairs) // 2].T

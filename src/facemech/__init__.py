@@ -31,19 +31,18 @@ from .markerset import MarkerSet
 from .params import EMG_CHANNELS, MUSCLE_GROUPS, PRESETS, Parameters, preset
 from .physics.assembly import Physics
 from .solvers.forward import Simulation, simulate
-from .solvers.jaw import angles_from_chin
+from .solvers.jaw import angles_from_chin, jaw_angles_from_marker
 from .solvers.state import State
 from .solvers.step import INTEGRATORS, Stepper
 
 __all__ = [
-    "__version__",
-    "BuildOptions", "EMGActivity", "EMG_CHANNELS", "FaceModel", "FacemechError", "INTEGRATORS",
-    "InputError", "MUSCLE_GROUPS", "MarkerSet", "PRESETS", "Parameters", "Physics",
+    "__version__", "BuildOptions", "EMGActivity", "EMG_CHANNELS", "FaceModel", "FacemechError",
+    "INTEGRATORS", "InputError", "MUSCLE_GROUPS", "MarkerSet", "PRESETS", "Parameters", "Physics",
     "Simulation", "SimulationBlowUp", "State", "Stepper", "align_to_model", "angles_from_chin",
     "build_face", "closest_nodes", "default_face", "derivative", "fill_gaps", "find_gaps",
-    "head_correct", "load_face", "preset", "process_emg", "read_activity", "read_emg",
-    "read_landmarks", "read_mapping", "read_marker_csv", "read_markers", "read_results",
-    "read_surface", "resample", "rigid_fit", "scale_adapt", "seven_channel_control",
-    "simulate", "to_anatomical_frame", "warp_face", "write_activity", "write_marker_csv",
-    "write_markers", "write_results",
+    "head_correct", "jaw_angles_from_marker", "load_face", "preset", "process_emg",
+    "read_activity", "read_emg", "read_landmarks", "read_mapping", "read_marker_csv",
+    "read_markers", "read_results", "read_surface", "resample", "rigid_fit", "scale_adapt",
+    "seven_channel_control", "simulate", "to_anatomical_frame", "warp_face", "write_activity",
+    "write_marker_csv", "write_markers", "write_results",
 ]

@@ -30,6 +30,12 @@ app.add_typer(experiment_app, name="experiment")
 app.add_typer(emg_app, name="emg")
 app.add_typer(markers_app, name="markers")
 
+PresetOpt = Annotated[str, typer.Option(help="parameter preset: anatomical (the default), "
+                                             "lucero1999, pitermann2001, calibrated, or a .json "
+                                             "file written by facemech calibrate")]
+FaceOpt = Annotated[str, typer.Option(help="face file (.npz), or a built-in face: default, "
+                                           "default-coarse or default-fine")]
+
 err = Console(stderr=True)
 out = Console(soft_wrap=True)
 
@@ -71,16 +77,16 @@ def _interval(text: str | None, field: str) -> tuple[float, float] | None:
 def demo(
     output: Annotated[Path, typer.Option("-o", "--output", help="output folder")] = Path(
         "demo-output"),
-    integrator: Annotated[str, typer.Option(help="euler (the paper's) or rosenbrock")] = "euler",
+    integrator: Annotated[str | None, typer.Option(
+        help="euler, implicit or rosenbrock (default: the preset's)")] = None,
     video: Annotated[bool, typer.Option(help="render the MP4")] = True,
-    preset: Annotated[str, typer.Option(help="lucero1999, pitermann2001 or calibrated")]
-    = "lucero1999",
+    preset: PresetOpt = "anatomical",
 ):
     """Simulate a synthetic utterance on the built-in face; write results, plots and a movie."""
     from .demo import run_demo
 
     with _staged_progress() as report:
-        err.print(f"facemech demo: building the face and simulating ({integrator}) ...")
+        err.print(f"facemech demo: building the face and simulating ({preset} preset) ...")
         s = run_demo(output, integrator=integrator, video=video, preset=preset, progress=report)
     out.print(f"[bold]facemech demo[/bold] -> {output}/")
     out.print(f"  frames: {s.frames} ({s.simulated_seconds:.2f} s at 60 Hz)")
@@ -100,14 +106,19 @@ def face_build(
     output: Annotated[Path, typer.Option("-o", "--output", help="face model file (.npz)")],
     units: Annotated[str, typer.Option(help="length unit of both files")] = "mm",
     name: Annotated[str | None, typer.Option(help="model name")] = None,
+    tissue: Annotated[str, typer.Option(help="tissue geometry: anatomical (the default "
+                                             "preset's) or uniform (the seeds'); a face is "
+                                             "rebuilt for a preset that needs the other")]
+    = "anatomical",
 ):
     """Build a three-layer face model from a surface mesh and landmarks."""
-    from .geometry.builder import build_face
+    from .geometry.builder import build_face, tissue_options
     from .geometry.surface_io import read_landmarks, read_surface
 
+    opts = tissue_options(tissue)
     v, f = read_surface(surface, units=units)
     lm = read_landmarks(landmarks, units=units)
-    model = build_face(v, f, lm, name=name or surface.stem, source=str(surface))
+    model = build_face(v, f, lm, name=name or surface.stem, source=str(surface), options=opts)
     model.save(output)
     s = model.summary()
     out.print(f"built {s['name']}: {s['nodes_per_layer']['epidermis']} nodes per layer, "
@@ -116,13 +127,16 @@ def face_build(
 
 @face_app.command("info")
 def face_info(
-    face: Annotated[str, typer.Argument(help="face file, or 'default'")] = "default",
+    face: Annotated[str, typer.Argument(help="face file, or default, default-coarse, "
+                                             "default-fine")] = "default",
     as_json: Annotated[bool, typer.Option("--json", help="print JSON")] = False,
+    tissue: Annotated[str | None, typer.Option(help="show it with this tissue geometry "
+                                                    "(anatomical or uniform)")] = None,
 ):
     """Counts of a face model: nodes per layer, springs by kind, prisms, muscles, free fascia."""
     from .geometry.builder import load_face
 
-    s = load_face(face).summary()
+    s = load_face(face, tissue=tissue).summary()
     if as_json:
         print(json.dumps(s, indent=2))
         return
@@ -329,9 +343,9 @@ def markers_fill_gaps(
 
 # ---------------------------------------------------------------------------------------------
 def _jaw_from_chin(path: Path, marker: str, model, times: np.ndarray, bite_block: bool,
-                   units: str | None):
+                   units: str | None, params):
     from .io.markers import read_markers
-    from .solvers.jaw import angles_from_chin
+    from .solvers.jaw import jaw_angles_from_marker
 
     table = read_markers(path, units=units)
     y = table.marker(marker)[:, 1]
@@ -340,9 +354,8 @@ def _jaw_from_chin(path: Path, marker: str, model, times: np.ndarray, bite_block
                          source=str(path), field="time")
     y = np.interp(times, table.time, y)
     node = model.markers.get(marker, model.landmarks["chin"])
-    chin_rest = model.rest_positions[node + 2 * model.n_surface]
-    return angles_from_chin(y, chin_rest, model.hinge_point, model.hinge_axis,
-                            bite_block=bite_block)
+    return jaw_angles_from_marker(model, params, node, y, bite_block=bite_block,
+                                  source=str(path))
 
 
 def _jaw_from_csv(path: Path, times: np.ndarray) -> np.ndarray:
@@ -368,7 +381,7 @@ def _jaw_from_csv(path: Path, times: np.ndarray) -> np.ndarray:
 @app.command()
 def simulate(
     output: Annotated[Path, typer.Option("-o", "--output", help="results file (.nc)")],
-    face: Annotated[str, typer.Option(help="face file or 'default'")] = "default",
+    face: FaceOpt = "default",
     activity: Annotated[Path | None, typer.Option(help="activity CSV (time + groups)")] = None,
     emg: Annotated[Path | None, typer.Option(help="raw EMG (CSV or C3D), 7-channel control")]
     = None,
@@ -383,10 +396,11 @@ def simulate(
     jaw_angle: Annotated[Path | None, typer.Option(help="CSV: time, jaw_angle (rad) or "
                                                         "jaw_angle_deg")] = None,
     bite_block: Annotated[bool, typer.Option(help="hold the jaw at its initial angle")] = False,
-    preset: Annotated[str, typer.Option(help="lucero1999, pitermann2001 or calibrated")]
-    = "lucero1999",
-    integrator: Annotated[str, typer.Option(help="euler, implicit or rosenbrock")] = "euler",
-    substeps: Annotated[int, typer.Option(help="steps per frame (implicit integrators)")] = 4,
+    preset: PresetOpt = "anatomical",
+    integrator: Annotated[str | None, typer.Option(
+        help="euler, implicit or rosenbrock (default: the preset's)")] = None,
+    substeps: Annotated[int | None, typer.Option(
+        help="steps per frame of the implicit integrators (default: the preset's)")] = None,
     dt: Annotated[float | None, typer.Option(help="Euler step, s (default 0.33e-3)")] = None,
     jaw_drive: Annotated[str, typer.Option(help="ramp or hold")] = "ramp",
     video: Annotated[Path | None, typer.Option(help="also render an MP4")] = None,
@@ -406,7 +420,7 @@ def simulate(
     if jaw_chin is not None and jaw_angle is not None:
         raise InputError("give at most one of --jaw-chin and --jaw-angle", field="jaw")
     prm = P.preset(preset)
-    model = load_face(face)
+    model = load_face(face, tissue=prm.tissue)
     inputs = {}
     if activity is not None:
         times, act = read_activity(activity, frame_rate=prm.frame_rate)
@@ -426,7 +440,7 @@ def simulate(
         inputs["emg"] = file_hash(emg)
         src = str(emg)
     if jaw_chin is not None:
-        jaw = _jaw_from_chin(jaw_chin, chin_marker, model, times, bite_block, marker_units)
+        jaw = _jaw_from_chin(jaw_chin, chin_marker, model, times, bite_block, marker_units, prm)
         inputs["jaw_chin"] = file_hash(jaw_chin)
     elif jaw_angle is not None:
         jaw = _jaw_from_csv(jaw_angle, times)
@@ -436,7 +450,7 @@ def simulate(
     else:
         jaw = np.zeros(len(times))
     with _progress() as prog:
-        task = prog.add_task(f"simulate ({integrator})", total=len(times) - 1)
+        task = prog.add_task(f"simulate ({integrator or prm.integrator})", total=len(times) - 1)
         sim = run(model, act, jaw, params=prm, integrator=integrator, substeps=substeps, dt=dt,
                   jaw_drive=jaw_drive, source=src,
                   progress=lambda d, n: prog.update(task, completed=d))
@@ -630,7 +644,7 @@ def experiment_lucero2008(
 def invert(
     markers: Annotated[Path, typer.Option(help="marker file in the model's frame, 60 Hz")],
     output: Annotated[Path, typer.Option("-o", "--output", help="results file (.nc)")],
-    face: Annotated[str, typer.Option(help="face file or 'default'")] = "default",
+    face: FaceOpt = "default",
     map_file: Annotated[Path | None, typer.Option("--map", help="marker,node CSV (default: "
                                                                 "closest nodes)")] = None,
     method: Annotated[str, typer.Option(help="lsq (fast) or powell (the seeds')")] = "lsq",
@@ -649,8 +663,7 @@ def invert(
     scale_pair: Annotated[str | None, typer.Option(help="A,B: adapt the markers by per-axis "
                                                         "scaling from two markers far apart")]
     = None,
-    preset: Annotated[str, typer.Option(help="lucero1999, pitermann2001 or calibrated")]
-    = "lucero1999",
+    preset: PresetOpt = "anatomical",
     dt: Annotated[float | None, typer.Option(help="Euler step of every evaluation, s (default: "
                                                   "the preset's fast step, 1 ms or 0.33 ms)")]
     = None,
@@ -666,10 +679,10 @@ def invert(
     from .io.results import file_hash, write_results
     from .kinematics.mapping import closest_nodes, read_mapping, scale_adapt
     from .solvers.forward import Simulation, marker_nodes
-    from .solvers.jaw import angles_from_chin
+    from .solvers.jaw import jaw_angles_from_marker
 
     prm = P.preset(preset)
-    model = load_face(face)
+    model = load_face(face, tissue=prm.tissue)
     ms = read_markers(markers, units=units)
     mapping = (read_mapping(map_file, ms, model) if map_file is not None
                else closest_nodes(ms, model))
@@ -681,9 +694,8 @@ def invert(
         node = mapping.get(chin_marker)
         if node is None:
             raise InputError("chin marker has no node", source=str(markers), field=chin_marker)
-        jaw = angles_from_chin(ms.marker(chin_marker)[:, 1],
-                               model.rest_positions[node + 2 * model.n_surface],
-                               model.hinge_point, model.hinge_axis)
+        jaw = jaw_angles_from_marker(model, prm, node, ms.marker(chin_marker)[:, 1],
+                                     source=str(markers))
     ctrl = controls if controls in ("emg7", "all") else [c.strip().upper()
                                                          for c in controls.split(",")]
     with _progress() as prog:
@@ -696,7 +708,7 @@ def invert(
     sim = Simulation(model=model, params=prm, time=np.arange(ms.n_frames) / prm.frame_rate,
                      positions=res.positions, markers=res.positions[:, nodes],
                      marker_names=names, activity=act, jaw_angle=res.jaw_angle,
-                     final_state=None, integrator=f"euler (inversion, {method})",
+                     final_state=None, integrator=f"{prm.integrator} (inversion, {method})",
                      dt=prm.fast_dt if dt is None else dt,
                      wall_seconds=res.wall_seconds,
                      attrs={"inversion_method": method, "positive": int(positive),
@@ -777,8 +789,7 @@ def compare(
 def experiment_pitermann_synthetic(
     method: Annotated[str, typer.Option(help="lsq, powell or both")] = "lsq",
     noise: Annotated[float, typer.Option(help="Gaussian marker noise, mm")] = 0.0,
-    preset: Annotated[str, typer.Option(help="lucero1999, pitermann2001 or calibrated")]
-    = "lucero1999",
+    preset: PresetOpt = "anatomical",
     dt: Annotated[float | None, typer.Option(help="Euler step of synthesis and inversion, s "
                                                   "(default: the preset's fast step)")] = None,
     output: Annotated[Path | None, typer.Option("-o", "--output", help="JSON file")] = None,
@@ -795,8 +806,9 @@ def experiment_pitermann_synthetic(
         raise InputError("method must be lsq, powell or both", field="method")
     methods = ("lsq", "powell") if method == "both" else (method,)
     with _staged_progress() as report:
-        res = run_synthetic(default_face(), methods=methods, noise=noise * 1e-3,
-                            params=get_preset(preset), dt=dt, progress=report)
+        prm = get_preset(preset)
+        res = run_synthetic(default_face(tissue=prm.tissue), methods=methods, noise=noise * 1e-3,
+                            params=prm, dt=dt, progress=report)
     paper = res["paper"]
     out.print("[bold]Pitermann & Munhall (2001), Experiment 1[/bold] (ours | paper)")
     for label, r in res["runs"].items():
@@ -842,8 +854,7 @@ def experiment_pitermann_synthetic(
 @experiment_app.command("pitermann2001-crosstalker")
 def experiment_pitermann_crosstalker(
     frames: Annotated[int, typer.Option(help="frames of the gesture sequence (60 Hz)")] = 120,
-    preset: Annotated[str, typer.Option(help="lucero1999, pitermann2001 or calibrated")]
-    = "lucero1999",
+    preset: PresetOpt = "anatomical",
     dt: Annotated[float | None, typer.Option(help="Euler step of synthesis and inversion, s "
                                                   "(default: the preset's fast step)")] = None,
     output: Annotated[Path | None, typer.Option("-o", "--output", help="JSON file")] = None,
@@ -856,7 +867,8 @@ def experiment_pitermann_crosstalker(
     if frames < 8:
         raise InputError("needs at least 8 frames", field="frames")
     with _staged_progress() as report:
-        res = run_crosstalker(default_face(), frames=frames, params=get_preset(preset), dt=dt,
+        prm = get_preset(preset)
+        res = run_crosstalker(default_face(tissue=prm.tissue), frames=frames, params=prm, dt=dt,
                               progress=report)
     out.print("[bold]Pitermann & Munhall (2001), Experiment 3 analogue[/bold] (paper, Table VI: "
               "3-D correlations mostly 0.75-0.97, upper lip centre poor)")
@@ -874,6 +886,73 @@ def experiment_pitermann_crosstalker(
         with atomic_path(output, suffix=".json") as tmp:
             tmp.write_text(json.dumps(res, indent=2))
         out.print(f"tables -> {output}")
+
+
+@app.command()
+def calibrate(
+    gestures: Annotated[list[str] | None, typer.Argument(
+        help="maximal gestures, each FILE:GROUPS (a marker file in the model's frame and the "
+             "muscle groups it uses), e.g. smile.c3d:ZYG,LAO,RIS pucker.trc:OOS,OOI")] = None,
+    output: Annotated[Path, typer.Option("-o", "--output", help="preset file (.json)")]
+    = Path("calibrated-preset.json"),
+    face: FaceOpt = "default",
+    builtin: Annotated[bool, typer.Option("--builtin", help="refit the built-in targets "
+                                                            "(gestures of real faces, docs)")]
+    = False,
+    fit: Annotated[str, typer.Option(help="scales to fit, comma-separated (force, lips, "
+                                          "stiffness, sphincter)")]
+    = "force,lips",
+    map_file: Annotated[Path | None, typer.Option("--map", help="marker,node CSV (default: "
+                                                                "closest nodes)")] = None,
+    max_evaluations: Annotated[int, typer.Option(help="gesture sets simulated at most")] = 30,
+    units: UnitsOpt = None,
+    name: Annotated[str | None, typer.Option(help="preset name (default: the file's)")] = None,
+):
+    """Fit the anatomical preset's global scales to a subject's maximal gestures (or to the
+    built-in targets) and write a preset file that every --preset option accepts."""
+    from .analysis.calibration import check_fit, fit_scales, fit_subject, recorded_gesture
+    from .geometry.builder import load_face
+    from .io.markers import read_markers
+    from .kinematics.mapping import closest_nodes, read_mapping
+    from .params import anatomical, write_preset
+
+    scales = tuple(x.strip() for x in fit.split(",") if x.strip())
+    check_fit(scales)
+    if max_evaluations < 2:
+        raise InputError("max-evaluations must be at least 2", field="max-evaluations")
+    if builtin == bool(gestures):
+        raise InputError("give gestures (FILE:GROUPS ...) or --builtin", field="gestures")
+    if output.suffix.lower() != ".json":
+        raise InputError("the preset file must end in .json", source=str(output),
+                         field="output")
+    model = load_face(face, tissue=anatomical().tissue)
+    with _staged_progress() as report:
+        if builtin:
+            res = fit_scales(model, fit=scales, max_evaluations=max_evaluations,
+                             progress=lambda d, n: report("fit", d, n))
+            fitted_to = "built-in targets"
+        else:
+            recs, mapping = [], None
+            for spec in gestures:
+                path, sep, groups = spec.rpartition(":")
+                if not sep or not path or not groups:
+                    raise InputError("expected FILE:GROUPS, e.g. smile.c3d:ZYG,LAO", field=spec)
+                ms = read_markers(Path(path), units=units)
+                if mapping is None:
+                    mapping = (read_mapping(map_file, ms, model) if map_file is not None
+                               else closest_nodes(ms, model))
+                recs.append(recorded_gesture(ms, groups.split(","), name=Path(path).stem))
+            res = fit_subject(model, recs, mapping, fit=scales, max_evaluations=max_evaluations,
+                              progress=lambda d, n: report("fit", d, n))
+            fitted_to = [r.source for r in recs]
+    write_preset(output, name or output.stem, res.scales,
+                 extra={"fitted_to": fitted_to, "face": model.name, "cost": res.cost,
+                        "evaluations": res.evaluations, "rows": res.rows})
+    out.print(f"[bold]fitted[/bold] {', '.join(f'{k} {v:.3g}' for k, v in res.scales.items())} "
+              f"({res.evaluations} evaluations, cost {res.cost:.4g})")
+    if builtin:
+        out.print(res.table(), markup=False)
+    out.print(f"preset -> {output} (use it as --preset {output})")
 
 
 def main() -> None:

@@ -80,20 +80,21 @@ class DemoSummary:
     largest_lip_displacement_mm: float
     integrator: str
     output: dict
-    preset: str = "lucero1999"
+    preset: str = "anatomical"
 
     def as_dict(self) -> dict:
         return self.__dict__.copy()
 
 
-def run_demo(out_dir: str | Path, *, integrator: str = "euler", video: bool = True,
-             preset: str = "lucero1999",
+def run_demo(out_dir: str | Path, *, integrator: str | None = None, video: bool = True,
+             preset: str = "anatomical",
              progress: Callable[[str, int, int], None] | None = None) -> DemoSummary:
     """Build the generic face, simulate the synthetic utterance and write results and pictures.
 
     Writes ``result.nc``, ``activity.csv``, ``kinematics.png``, ``activity.png``,
     ``snapshot.png``, ``summary.json`` and (with ``video``) ``movie.mp4`` into ``out_dir``.
-    ``preset`` names the parameter preset (:func:`facemech.params.preset`).
+    ``preset`` names the parameter preset (:func:`facemech.params.preset`); ``integrator``
+    defaults to the preset's.
     """
     from .geometry.builder import default_face
     from .io.activity import write_activity
@@ -107,7 +108,7 @@ def run_demo(out_dir: str | Path, *, integrator: str = "euler", video: bool = Tr
     params = get_preset(preset)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    face = default_face()
+    face = default_face(tissue=params.tissue)
     t, act, jaw = utterance()
 
     def step(stage):
@@ -141,7 +142,7 @@ def run_demo(out_dir: str | Path, *, integrator: str = "euler", video: bool = Tr
         frames=len(t), simulated_seconds=len(t) / sim.params.frame_rate,
         wall_seconds=time.perf_counter() - t0, simulation_seconds=sim.wall_seconds,
         real_time_factor=sim.real_time_factor,
-        largest_lip_displacement_mm=float(disp.max() * 1e3), integrator=integrator,
+        largest_lip_displacement_mm=float(disp.max() * 1e3), integrator=sim.integrator,
         preset=preset,
         output=files,
     )

@@ -9,6 +9,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 from types import MappingProxyType
 
+import numpy as np
+
 from .errors import InputError
 from .units import CM, DYNE, GRAM
 
@@ -38,6 +40,15 @@ AREA_CM2 = MappingProxyType({
     "ZMI": 0.10, "RIS": 0.05, "LLSAN": 0.10, "COR": 0.15, "CSU": 0.10,
     "FRM": 0.40, "FRL": 0.20, "FRI": 0.20,
 })  # fmt: skip
+
+
+#: Areas of the anatomical preset, cm^2: Table II (Kennedy & Abbs 1979, via Lucero & Munhall
+#: 1999) where it has them, except zygomatic major, taken from its measured size: 8.5 mm wide
+#: (51 cadavers, Stoltidou et al. 2011) by about 2.2 mm thick (1.5-3 mm, the perioral muscles by
+#: ultrasound, van Alfen et al. 2013), 0.19 cm^2; and risorius, a thin fan (our estimate: about
+#: 15 mm wide and 1 mm thick at the modiolus, 0.15 cm^2; the muscle is variable and sometimes
+#: absent). Table II's 0.10 cm^2 for zygomatic major is about half its measured size.
+ANATOMICAL_AREA_CM2 = MappingProxyType({**AREA_CM2, "ZYG": 0.19, "RIS": 0.15})
 
 
 @dataclass(frozen=True)
@@ -79,10 +90,48 @@ class Parameters:
     fast_dt: float = 1e-3
     frame_rate: float = 60.0  # Hz, control and output rate
     areas_cm2: MappingProxyType = field(default_factory=lambda: AREA_CM2)
+    # ---- how the constants above are read, and what the anatomical preset adds ---------------
+    # "per_spring": the seeds' constants per 1-cm spring and per node (Lucero & Munhall 1999);
+    # "continuum": moduli, density and viscosity of tissue, turned into spring constants and
+    # node masses by the volume of the elements around them (physics/materials.py)
+    material: str = "per_spring"
+    tissue: str = "uniform"  # tissue geometry of the face: "uniform" (the seeds') or "anatomical"
+    integrator: str = "euler"  # the integrator every command uses with this preset
+    substeps: int = 4  # steps per frame of the implicit integrators
+    density: float = 1050.0  # kg/m^3, soft tissue (continuum)
+    shear_superficial: float = 0.0  # Pa, shear modulus between skin and muscle plane (continuum)
+    shear_deep: float = 0.0  # Pa, shear modulus between muscle plane and bone (continuum)
+    lip_stiffness_factor: float = 1.0  # continuum: moduli in the lips / elsewhere
+    poisson: float = 0.45  # Poisson's ratio of the tissue (continuum; the volume term supplies
+    # what the springs, whose lattice has 1/4, lack)
+    skin_modulus_thickness: float = 0.0  # N/m, Young's modulus x thickness of the dermis
+    viscous_time: float = 0.0  # s, tissue viscosity / modulus (stiffness-proportional damping)
+    # continuum: strain stiffening, the stiffness of every spring times this beyond
+    # ``biphasic_knee`` of stretch (eq. 1's law on all springs; 1: linear)
+    stiffening: float = 1.0
+    fixed_skull_contact: bool = True  # eq. (10) on the tied fascia (the seeds')
+    sphincter_scale: float = 1.0  # force of the sphincters (OOS, OOI) relative to eq. (3)
+    tether: float = 0.0  # N/m^3, stiffness per area holding the sliding deep surface (continuum)
+    incisive_area_cm2: float = 0.10  # cm^2, each incisive bundle of orbicularis oris (estimate)
+    k_bone_contact: float = 0.0  # N/m^3, one-sided contact of the sliding surface with the bone
+
+    @property
+    def is_continuum(self) -> bool:
+        """Constants are tissue moduli (the anatomical preset), not per-spring values."""
+        return self.material == "continuum"
+
+    def instance_area(self, name: str, group: str) -> float:
+        """Cross-sectional area (m^2) of one muscle instance: its group's, or for the incisive
+        bundles of orbicularis oris :data:`INCISIVE_AREA_CM2`."""
+        if "incisive" in name:
+            return self.incisive_area_cm2 * CM**2
+        return self.muscle_area(group)
 
     def muscle_area(self, group: str) -> float:
-        """Cross-sectional area of a muscle group in m^2."""
-        return self.areas_cm2[group] * CM**2
+        """Cross-sectional area of a muscle group in m^2 (times ``sphincter_scale`` for the
+        sphincters: the force of eq. (3) is k_f times this)."""
+        scale = self.sphincter_scale if group in ("OOS", "OOI") else 1.0
+        return self.areas_cm2[group] * CM**2 * scale
 
     def passive_stiffness(self, group: str) -> float:
         """Passive muscle stiffness k_m of eq. (6) in N/m (17.3 N/m per cm^2 of area)."""
@@ -99,23 +148,31 @@ class Parameters:
 
 
 def preset(name: str) -> Parameters:
-    """Return a published parameter preset.
+    """Return a parameter preset by name, or one saved by ``facemech calibrate`` (a JSON file).
 
     Parameters
     ----------
-    name : {"lucero1999", "pitermann2001", "calibrated"}
-        ``lucero1999`` uses damping r = 30 dyne s/cm (Lucero & Munhall 1999); ``pitermann2001`` uses
-        r = 0.050 kg/s (Pitermann & Munhall 2001); ``calibrated`` is ``lucero1999`` with the
-        muscle force scale k_f re-selected for the generic face (:data:`CALIBRATED_K_FORCE`).
-        Everything else is shared.
+    name : {"anatomical", "lucero1999", "pitermann2001", "calibrated"} or a path to a ``.json``
+        ``anatomical`` (the default) is the resolution-consistent tissue of physiological
+        constants whose few global scales are calibrated to gesture amplitudes of real faces
+        (:func:`anatomical`); ``lucero1999`` uses the published constants with damping
+        r = 30 dyne s/cm (Lucero & Munhall 1999); ``pitermann2001`` uses r = 0.050 kg/s
+        (Pitermann & Munhall 2001); ``calibrated`` is ``lucero1999`` with the muscle force
+        scale k_f re-selected for the generic face (:data:`CALIBRATED_K_FORCE`).
     """
+    name = str(name)
+    if name == "anatomical":
+        return anatomical()
     if name == "lucero1999":
         return Parameters()
     if name == "pitermann2001":
         return Parameters(name="pitermann2001", damping=0.050, fast_dt=0.33e-3)
     if name == "calibrated":
         return Parameters(name="calibrated", k_force=CALIBRATED_K_FORCE, fast_dt=0.33e-3)
-    raise InputError(f"unknown preset {name!r} (expected {', '.join(PRESETS)})", field="preset")
+    if name.lower().endswith(".json"):
+        return read_preset(name)
+    raise InputError(f"unknown preset {name!r} (expected {', '.join(PRESETS)} or a .json "
+                     "file written by facemech calibrate)", field="preset")
 
 
 #: k_f of eq. (3) re-selected for the generic face (N/m^2): 16 x 2500 dyne/cm^2. Lucero & Munhall
@@ -124,4 +181,117 @@ def preset(name: str) -> Parameters:
 #: 16 times it moves it by 1.99 mm (paper integrator, 0.33-ms Euler steps; docs/model.md).
 CALIBRATED_K_FORCE = 16 * 2500 * DYNE / CM**2
 
-PRESETS = ("lucero1999", "pitermann2001", "calibrated")
+#: Specific tension of human skeletal muscle in vivo, N/m^2: 26.8 N/cm^2, the weighted mean of
+#: a systematic review of 96 values (Persad et al. 2024, J Appl Physiol 137:945); Powell et al.
+#: (1984, J Appl Physiol 57:1715) found 22.5 N/cm^2, Narici et al. (1992) about 25 N/cm^2.
+SPECIFIC_TENSION = 26.8 * 1e4
+
+#: The two global scales of the anatomical preset fitted to the gesture targets of docs/model.md
+#: (``facemech calibrate --builtin``, analysis/calibration.py): the muscle force as a factor on
+#: the specific tension (fitted 1.28, rounded up to leave risorius a margin on its 3-mm target:
+#: 34.8 N/cm^2) and the moduli of the lips relative to the rest of the tissue (fitted 3.11).
+FITTED_FORCE = 1.30
+FITTED_LIPS = 3.1
+
+#: Scales of the anatomical preset a calibration can change (factors on the values above;
+#: ``facemech calibrate`` fits force and lips by default).
+ANATOMICAL_SCALES = MappingProxyType({
+    "force": 1.0,  # x SPECIFIC_TENSION
+    "stiffness": 1.0,  # x the shear moduli of both layers
+    "lips": 1.0,  # moduli in the lips relative to elsewhere
+    "sphincter": 1.0,  # x the force of orbicularis oris's chain through the lips
+})
+
+
+def anatomical(scales: dict | None = None) -> Parameters:
+    """The anatomical preset, optionally with other global scales (see :data:`ANATOMICAL_SCALES`).
+
+    Constants and their sources (docs/model.md has the full table):
+
+    - muscle force: eq. (3) with k_f the specific tension of muscle (26.8 N/cm^2, Persad et al.
+      2024) times ``scales["force"]``, and the cross-sectional areas of Table II of Lucero &
+      Munhall (1999), from Kennedy & Abbs (1979);
+    - tissue: shear moduli 6 kPa between the skin and the muscle plane and 3 kPa under it
+      (Young's moduli of 17 and 9 kPa at Poisson's ratio 0.45), times ``scales["stiffness"]``:
+      relaxed zygomaticus major measures about 15 kPa by shear-wave elastography (Ternifi et al.
+      2019), buccinator 4-17 kPa (Stepanova et al. 2023), face soft tissue 31-42 kPa by
+      aspiration of the skin (Luboz et al. 2014), which includes the dermis; the dermis is a
+      membrane of Young's modulus x thickness 100 N/m (about 70 kPa over its 1-2 mm, Chopra et
+      al. 2015 for the thickness);
+    - density 1050 kg/m^3 (muscle 1050, skin 1100, fat 950: ICRU 46 / White et al. 1987);
+    - viscosity: a viscous time (viscosity / modulus) of 8 ms, chosen so that the slowest
+      motions of the lips are critically damped (no published facial-tissue viscosity serves);
+    - integration: linearly implicit Euler, 4 steps per 60-Hz frame.
+    """
+    s = {**ANATOMICAL_SCALES, **(scales or {})}
+    unknown = set(s) - set(ANATOMICAL_SCALES)
+    if unknown:
+        raise InputError(f"unknown scale {sorted(unknown)[0]!r} (expected "
+                         f"{', '.join(ANATOMICAL_SCALES)})", field="scales")
+    for k, v in s.items():
+        if not (np.isfinite(v) and v > 0):
+            raise InputError(f"scale {k} must be a positive number (got {v!r})", field=k)
+    return Parameters(
+        name="anatomical", material="continuum", tissue="anatomical", integrator="implicit",
+        substeps=4, fast_dt=1.0 / 240.0, dt=1.0 / 240.0,
+        k_force=SPECIFIC_TENSION * FITTED_FORCE * s["force"],
+        shear_superficial=6e3 * s["stiffness"], shear_deep=1.5e3 * s["stiffness"],
+        lip_stiffness_factor=FITTED_LIPS * s["lips"], sphincter_scale=0.05 * s["sphincter"],
+        poisson=0.45, skin_modulus_thickness=100.0,
+        viscous_time=3e-3, density=1050.0,
+        stiffening=2.0, biphasic_knee=0.15,
+        damping=0.0, node_mass=0.0, k_epidermis=0.0, k_fascia=0.0, k_muscle_layer=0.0,
+        k_dermal_low=0.0, k_dermal_high=0.0, sigma=0.0, k_volume=0.0, k_shape=0.0,
+        k_restore=0.0, k_lip_contact=1e5, fixed_skull_contact=False,
+        areas_cm2=ANATOMICAL_AREA_CM2, incisive_area_cm2=0.25, tether=0.0,
+        k_bone_contact=1e7,
+    )
+
+
+def read_preset(path) -> Parameters:
+    """A preset saved by :func:`write_preset` (``facemech calibrate``): JSON with the base preset
+    and the scales fitted to a subject."""
+    import json
+    from pathlib import Path
+
+    path = Path(path)
+    if not path.is_file():
+        raise InputError("file not found", source=str(path))
+    try:
+        data = json.loads(path.read_text())
+    except (ValueError, UnicodeDecodeError):
+        raise InputError("not a JSON preset file", source=str(path)) from None
+    if not isinstance(data, dict) or data.get("format") != "facemech-preset":
+        raise InputError("not a facemech preset file", source=str(path), field="format")
+    if data.get("base") != "anatomical":
+        raise InputError("only presets based on 'anatomical' can be read", source=str(path),
+                         field="base")
+    scales = data.get("scales")
+    if not isinstance(scales, dict):
+        raise InputError("missing scales", source=str(path), field="scales")
+    try:
+        p = anatomical({k: float(v) for k, v in scales.items()})
+    except InputError as exc:
+        raise InputError(exc.message, source=str(path), field=exc.field) from None
+    return p.with_(name=str(data.get("name", path.stem)))
+
+
+def write_preset(path, name: str, scales: dict, extra: dict | None = None) -> None:
+    """Save a calibrated anatomical preset (JSON, written atomically)."""
+    import json
+
+    from .io.atomic import atomic_path
+
+    data = {"format": "facemech-preset", "version": 1, "name": name, "base": "anatomical",
+            "scales": {k: float(v) for k, v in scales.items()}, **(extra or {})}
+    with atomic_path(path, suffix=".json") as tmp:
+        tmp.write_text(json.dumps(data, indent=2))
+
+
+PRESETS = ("anatomical", "lucero1999", "pitermann2001", "calibrated")
+DEFAULT_PRESET = "anatomical"
+
+
+def default_parameters() -> Parameters:
+    """The parameters every command and function uses when none are given: the default preset."""
+    return preset(DEFAULT_PRESET)

@@ -3,9 +3,10 @@
 The 57 sites follow the layout of Lucero & Munhall (2008), Fig. 1 (forehead, brows, eyelids,
 nose, cheeks, lips, chin and jaw line); frontal (x, y) in mm on the generic face, origin at the
 nasion, x < 0 the subject's right. Utterances are random strings of CV syllables whose muscle
-activity and jaw motion are drawn per syllable, simulated with the physical model (explicit
-Euler at dt = 1 ms, which the forward benchmark places within 0.2 mm of the paper's 0.33 ms at
-the markers). Measurement noise (0.5 mm, Gaussian, per coordinate) is added afterwards.
+activity and jaw motion are drawn per syllable, simulated with the seeds' physical model (the
+``lucero1999`` preset on the uniform tissue, explicit Euler at dt = 1 ms, which the forward
+benchmark places within 0.2 mm of the paper's 0.33 ms at the markers). Measurement noise
+(0.5 mm, Gaussian, per coordinate) is added afterwards.
 ``copied_eyelid=True`` reproduces the seed's artifact: the left upper eyelid marker's
 displacement is copied from the right upper eyelid's.
 
@@ -133,14 +134,17 @@ def simulate_corpus(n_utterances: int = 40, frames: int = 60, seed: int = 2008,
     if cache and path.is_file():
         with np.load(path) as z:
             return [z[f"u{k}"] for k in range(n_utterances)]
-    face = default_face()
+    from ..params import preset
+
+    face = default_face(tissue="uniform")
     nodes = site_nodes(face)
     idx = np.array([nodes[n] for n in SITES])
     rng = np.random.default_rng(seed)
     out = []
+    seeds = preset("lucero1999")
     for k in range(n_utterances):
         act, jaw = random_utterance(rng, frames)
-        sim = simulate(face, act, jaw, integrator="euler", dt=1e-3)
+        sim = simulate(face, act, jaw, integrator="euler", dt=1e-3, params=seeds)
         out.append(sim.positions[:, idx])
         if progress is not None:
             progress(k + 1, n_utterances)

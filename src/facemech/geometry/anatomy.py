@@ -22,6 +22,11 @@ class LinearMuscleSite:
     insertion: tuple[float, float]
     on_mandible: bool = False
     description: str = ""
+    name: str = ""  # instance name stem (default: the group)
+    #: anatomical tissue: the origin is in the soft tissue at the depth of the muscle plane
+    #: (a fascia that does not move), not on bone: risorius arises from the parotid and
+    #: masseteric fascia and runs along the cheek under the skin
+    origin_in_fascia: bool = False
 
 
 # Right-side sites; the left twin mirrors x.  (x, y) in mm on the generic face, origin at nasion.
@@ -37,7 +42,7 @@ LINEAR_MUSCLES: tuple[LinearMuscleSite, ...] = (
     LinearMuscleSite("LLSAN", (-13.0, -6.0), (-7.0, -59.0), False,
                      "levator labii superioris alaeque nasi: frontal process -> ala, upper lip"),
     LinearMuscleSite("RIS", (-56.0, -80.0), (-32.0, -75.0), False,
-                     "risorius: masseteric fascia -> modiolus"),
+                     "risorius: masseteric fascia -> modiolus", origin_in_fascia=True),
     LinearMuscleSite("DAO", (-30.0, -113.0), (-31.0, -78.0), True,
                      "depressor anguli oris: oblique line of the mandible -> modiolus"),
     LinearMuscleSite("DLI", (-15.0, -108.0), (-9.0, -84.0), True,
@@ -54,6 +59,20 @@ LINEAR_MUSCLES: tuple[LinearMuscleSite, ...] = (
                      "corrugator: medial superciliary arch -> mid brow skin"),
     LinearMuscleSite("CSU", (-13.0, 4.0), (-21.0, 19.0), False,
                      "corrugator supercilii, superficial slip -> brow skin"),
+)
+
+#: The incisive bundles of orbicularis oris (incisivus labii superioris and inferioris), built
+#: only in the anatomical tissue: accessory slips of the muscle that arise from the alveolar bone
+#: over the lateral incisors, deep to the lip, and run laterally to the modiolus. They are
+#: driven with their part of the sphincter (OOS, OOI) and draw the mouth corners medially and
+#: forward along the dental arch, which, with the lips' volume on the teeth, protrudes the lips.
+INCISIVE_MUSCLES: tuple[LinearMuscleSite, ...] = (
+    LinearMuscleSite("OOS", (-10.0, -55.0), (-29.0, -71.0), False,
+                     "incisivus labii superioris: maxillary alveolus -> modiolus",
+                     name="OOS_incisive"),
+    LinearMuscleSite("OOI", (-10.0, -91.0), (-29.0, -75.0), True,
+                     "incisivus labii inferioris: mandibular alveolus -> modiolus",
+                     name="OOI_incisive"),
 )
 
 #: Sphincter groups: orbicularis oris superior and inferior, each side a half path from the

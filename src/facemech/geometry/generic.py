@@ -164,8 +164,12 @@ def make_surface(rows: int = 48, cols: int = 41, theta_max_deg: float = 86.0) ->
             a, b = r * cols + c, r * cols + c + 1
             d, e = (r + 1) * cols + c, (r + 1) * cols + c + 1
             # rows go downwards and columns to the subject's left: (a, d, b) faces +z
+            # the shorter diagonal; a tie (cells symmetric about their own axis) is broken in
+            # mirror image on the two sides, so that the face is symmetric to the last triangle
             diag_ae = np.linalg.norm(vertices[a] - vertices[e])
-            if diag_ae < np.linalg.norm(vertices[b] - vertices[d]):
+            diag_bd = np.linalg.norm(vertices[b] - vertices[d])
+            tie = abs(diag_ae - diag_bd) <= 1e-9 * max(diag_ae, diag_bd)
+            if (diag_ae < diag_bd and not tie) or (tie and 2 * c < cols - 1):
                 faces += [(a, d, e), (a, e, b)]
             else:
                 faces += [(a, d, b), (b, d, e)]

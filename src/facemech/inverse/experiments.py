@@ -17,7 +17,7 @@ from collections.abc import Callable
 import numpy as np
 
 from ..markerset import MarkerSet
-from ..params import MUSCLE_GROUPS, Parameters
+from ..params import MUSCLE_GROUPS, default_parameters
 from . import stats
 from .invert import invert
 
@@ -51,8 +51,9 @@ def synthetic_data(face, *, dt: float | None = None, noise: float = 0.0, seed: i
                    params=None):
     """The synthetic markers (MarkerSet, metres), the true group activity (36, 16).
 
-    ``params`` defaults to ``lucero1999`` and ``dt`` (s) to its ``fast_dt``; ``noise`` (m) is
-    the standard deviation of Gaussian noise added to every coordinate (seeded by ``seed``).
+    ``params`` defaults to the default preset and ``dt`` (s) to its ``fast_dt`` (used by the
+    explicit integrator of the seeds' presets); ``noise`` (m) is the standard deviation of
+    Gaussian noise added to every coordinate (seeded by ``seed``).
     """
     from ..solvers.forward import simulate
 
@@ -60,9 +61,9 @@ def synthetic_data(face, *, dt: float | None = None, noise: float = 0.0, seed: i
     act = np.zeros((len(tri), len(MUSCLE_GROUPS)))
     for g in PERIORAL:
         act[:, MUSCLE_GROUPS.index(g)] = tri
-    params = params or Parameters()
-    sim = simulate(face, act, integrator="euler", dt=params.fast_dt if dt is None else dt,
-                   params=params)
+    params = params or default_parameters()
+    sim = simulate(face, act, dt=params.fast_dt if dt is None else dt, params=params)
+    face = sim.model
     names = [n for n in face.markers if n[0] in "RL"]
     pos = sim.positions[:, [face.markers[n] for n in names]]
     if noise > 0:
@@ -81,7 +82,7 @@ def run_synthetic(face, *, methods=("lsq",), dt: float | None = None, noise: flo
     and true controls and per-frame RMS error (for figures). With ``noise`` (m) the
     re-animation is also compared with the noise-free markers (``vs_noise_free``).
     """
-    params = params or Parameters()
+    params = params or default_parameters()
     dt = params.fast_dt if dt is None else dt
     data, truth = synthetic_data(face, dt=dt, noise=noise, params=params)
     # with noise, the re-animation is also compared with the noise-free markers (the true motion)
@@ -197,15 +198,17 @@ def run_crosstalker(face, *, frames: int = 120, dt: float | None = None, params=
                     progress: Callable[[str, int, int], None] | None = None) -> dict:
     """Experiment 3 analogue: markers of a second talker, inverted on the default face after
     per-axis scaling, and separately after a thin-plate-spline warp of the face (Table VI)."""
+    from ..geometry.builder import for_tissue
     from ..kinematics.mapping import scale_adapt, warp_face
     from ..solvers.forward import simulate
-    from ..solvers.jaw import angles_from_chin
+    from ..solvers.jaw import jaw_angles_from_marker
 
-    params = params or Parameters()
+    params = params or default_parameters()
     dt = params.fast_dt if dt is None else dt
-    other = second_talker()
+    face = for_tissue(face, params.tissue)
+    other = for_tissue(second_talker(), params.tissue)
     act, jaw = gesture_controls(frames)
-    sim = simulate(other, act, jaw, integrator="euler", dt=dt, params=params)
+    sim = simulate(other, act, jaw, dt=dt, params=params)
     names = [*other.markers, *CROSS_EXTRA]
     nodes_other = [other.markers.get(n, other.landmarks.get(n)) for n in names]
     data = MarkerSet(sim.positions[:, nodes_other], tuple(names), 60.0)
@@ -220,9 +223,8 @@ def run_crosstalker(face, *, frames: int = 120, dt: float | None = None, params=
         else:
             adapted = data
             model = warp_face(face, data, mapping_all)
-        chin = model.rest_positions[mapping_all["R01"] + 2 * model.n_surface]
-        jaw_est = angles_from_chin(adapted.marker("R01")[:, 1], chin, model.hinge_point,
-                                   model.hinge_axis)
+        jaw_est = jaw_angles_from_marker(model, params, mapping_all["R01"],
+                                         adapted.marker("R01")[:, 1])
         label = f"lsq, positive, {adaptation}"
         t0 = time.perf_counter()
         res = _invert_quietly(model, adapted, used, label, progress, positive=True,

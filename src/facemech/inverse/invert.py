@@ -38,7 +38,7 @@ from scipy.optimize import minimize
 
 from ..errors import InputError, SimulationBlowUp
 from ..markerset import MarkerSet
-from ..params import EMG_CHANNELS, MUSCLE_GROUPS, Parameters
+from ..params import EMG_CHANNELS, MUSCLE_GROUPS, Parameters, default_parameters
 from ..physics.assembly import Physics
 from ..solvers.state import State
 from ..solvers.step import Stepper
@@ -130,8 +130,10 @@ def invert(
     positive : activity kept >= 0 (bounds for lsq, the published penalty for powell)
     controls : "emg7", "all" or a list of groups
     jaw_angle : (frames,) rad, optional (default: jaw closed)
+    params : Parameters (default: the default preset, ``anatomical``)
     dt : explicit Euler step used by every evaluation (s; default ``params.fast_dt``: 1 ms for
-        ``lucero1999``, the paper's 0.33 ms for the other presets)
+        ``lucero1999``, the paper's 0.33 ms for ``pitermann2001`` and ``calibrated``); the
+        anatomical preset steps with its implicit integrator and ignores it
     smooth, effort, prior_weight : regularisation weights (mm per unit activity), lsq only
     prior : (frames, c) prior activity (e.g. processed EMG) for ``prior_weight``
     window : frames in each frame's fit (lsq): the activity of each of them is fitted to
@@ -156,7 +158,7 @@ def invert(
                         ("bend", bend)):
         if not value >= 0:
             raise InputError(f"{name} must be >= 0 (got {value})", field=name)
-    params = params or Parameters()
+    params = params or default_parameters()
     dt = params.fast_dt if dt is None else dt
     if abs(markers.rate - params.frame_rate) > 1e-3 * params.frame_rate:
         raise InputError(f"markers at {markers.rate:g} Hz, the model runs at "
@@ -178,7 +180,9 @@ def invert(
         raise InputError("jaw angle series and markers differ in length", field="jaw_angle")
     if prior is not None and np.shape(prior) != (frames, nc):
         raise InputError(f"prior must be (frames, {nc})", field="prior")
-    stepper = Stepper(Physics.build(face, params), integrator="euler", dt=dt)
+    physics = Physics.build(face, params)
+    face = physics.model  # with the preset's tissue geometry (same epidermal nodes)
+    stepper = Stepper(physics, dt=dt if params.integrator == "euler" else None)
     lo, hi = (0.0, 1.0) if positive else (-1.0, 1.0)
     state = State.at_rest(face.rest_positions, stepper.physics.n_muscles, float(jaw[0]))
     c_prev = np.zeros(nc)

@@ -124,4 +124,11 @@ def warp_face(model, ms: MarkerSet, mapping: dict[str, int], *, reference: int =
                           smoothing=smoothing)
     rest = model.rest_positions + rbf(model.rest_positions)
     hinge = model.hinge_point + rbf(model.hinge_point[None])[0]
-    return replace(model, rest_positions=rest, hinge_point=hinge, name=f"{model.name}-warped")
+    surface = None
+    if model.surface is not None:  # so that the warped face can be rebuilt for another tissue
+        sv = np.asarray(model.surface["vertices"], float)
+        lms = {k: np.asarray(v, float) + rbf(np.asarray(v, float)[None])[0]
+               for k, v in model.surface["landmarks"].items()}
+        surface = {"vertices": sv + rbf(sv), "faces": model.surface["faces"], "landmarks": lms}
+    return replace(model, rest_positions=rest, hinge_point=hinge, name=f"{model.name}-warped",
+                   surface=surface)

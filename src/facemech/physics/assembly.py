@@ -14,34 +14,53 @@ from dataclasses import dataclass
 import numba as nb
 import numpy as np
 
-from ..geometry.builder import SPHINCTER, FaceModel
+from ..errors import InputError
+from ..geometry.builder import SPHINCTER, FaceModel, for_tissue
 from ..params import MUSCLE_GROUPS, Parameters
+from .materials import continuum_constants
 from .muscle import hill_force
 from .springs import scaled_stiffness, tension
-from .volume import prism_forces, rest_geometry
+from .volume import prism_forces, prism_pressure, rest_geometry
 
 
 @dataclass(frozen=True, eq=False)
 class Physics:
-    """Flat arrays of a face model with its material constants (SI). Built once, read-only."""
+    """Flat arrays of a face model with its material constants (SI). Built once, read-only.
+
+    ``Physics.build`` reads the constants as the preset says (:attr:`Parameters.material`): the
+    seeds' per-spring values, or tissue moduli turned into per-element constants by
+    :mod:`materials`. It also gives the face the preset's tissue geometry
+    (:func:`~facemech.geometry.builder.for_tissue`): ``physics.model`` is the face simulated.
+    """
 
     model: FaceModel
     params: Parameters
-    n_dynamic: int  # nodes 0..n_dynamic-1 move (epidermis and fascia); the skull is kinematic
+    dynamic: np.ndarray  # nodes that move under forces, ascending
+    inv_mass: np.ndarray  # (nodes,) 1/kg (0 for kinematic nodes)
     spring_i: np.ndarray
     spring_j: np.ndarray
     spring_rest: np.ndarray
     spring_k_low: np.ndarray
     spring_k_high: np.ndarray
     spring_biphasic: np.ndarray
+    spring_damping: np.ndarray  # N s/m per spring
     prism_nodes: np.ndarray
     prism_rest_volume: np.ndarray
     prism_rest_rel: np.ndarray
-    tied: np.ndarray  # tied fascia nodes
-    tied_skull: np.ndarray  # their skull nodes
-    tied_on_jaw: np.ndarray  # bool: the skull node below belongs to the jaw
+    prism_bulk: np.ndarray  # K / V0 of the pressure term (continuum), 0 for the seeds
+    tied: np.ndarray  # nodes held to an anchor on the bone: the seeds' tied fascia (eq. 11),
+    # the continuum's sliding skull nodes (a weak tether standing for the areolar tissue)
+    tied_skull: np.ndarray  # the seeds': their skull nodes (eq. 10)
+    tied_weight: np.ndarray  # share of the jaw's rotation of each anchor
     tied_height: np.ndarray  # m, rest height of each tied fascia node above its skull node
+    restore_k: np.ndarray  # N/m, stiffness holding each tied node to its anchor
+    bone_k: np.ndarray  # N/m, one-sided contact of each tied node with the bone (continuum)
+    skull_contact: bool  # eq. (10) on the tied nodes
     jaw_nodes: np.ndarray
+    jaw_weights: np.ndarray  # share of the jaw's rotation of each jaw node
+    sliding: np.ndarray  # skull nodes that move and rest on bone and teeth
+    sliding_weight: np.ndarray  # share of the jaw's rotation of the bone under each
+    contact_k: np.ndarray  # N/m, lip contact stiffness of each pair
     muscle_group: np.ndarray
     muscle_kind: np.ndarray
     muscle_origin: np.ndarray
@@ -51,45 +70,105 @@ class Physics:
     muscle_rest: np.ndarray
     muscle_area: np.ndarray  # m^2
     muscle_k_passive: np.ndarray  # N/m
+    muscle_pull: int  # 0: each insertion node towards the origin (seeds); 1: along the muscle
+    muscle_offset: np.ndarray  # (m, 3) m, origin point minus origin node (fixed origins)
+    muscle_bead: np.ndarray  # (entries,) global bead of each muscle entry
+    bead_start: np.ndarray  # (muscles + 1,) first global bead of each muscle
 
     @classmethod
     def build(cls, model: FaceModel, params: Parameters) -> Physics:
+        model = for_tissue(model, params.tissue)
         rest = model.rest_positions
         kind = model.spring_kind
         l0 = np.linalg.norm(rest[model.spring_j] - rest[model.spring_i], axis=1)
-        k_ref = np.choose(kind, [params.k_epidermis, params.k_dermal_low, params.k_fascia,
-                                 params.k_muscle_layer])
-        k_low = scaled_stiffness(k_ref, l0, params.spring_ref_length)
-        k_high = np.where(kind == 1,
-                          scaled_stiffness(params.k_dermal_high, l0, params.spring_ref_length),
-                          k_low)
-        vols, rel = rest_geometry(rest, model.prism_nodes)
         n = model.n_surface
-        tied = np.asarray(model.tied_fascia, np.int64)
-        jaw = np.zeros(model.n_nodes, bool)
-        jaw[model.jaw_nodes] = True
+        vols, rel = rest_geometry(rest, model.prism_nodes, symmetric=params.is_continuum)
+        dynamic = model.dynamic_nodes.astype(np.int64)
+        if params.is_continuum:
+            c = continuum_constants(model, params)
+            k_low = c.spring_k
+            # strain stiffening, both ways, of every spring but the mucosa's (skull layer)
+            biphasic = (kind != 4) & (params.stiffening != 1.0)
+            k_high = np.where(biphasic, c.spring_k * params.stiffening, c.spring_k)
+            damping = c.spring_damping
+            mass = c.node_mass
+            if np.any(mass[dynamic] <= 0):
+                raise InputError("a moving node belongs to no tissue element", field="face")
+            inv_mass = np.zeros(model.n_nodes)
+            inv_mass[dynamic] = 1.0 / mass[dynamic]
+            bulk = c.prism_bulk
+            contact = c.contact_k
+            tied = np.sort(np.asarray(model.sliding, np.int64))
+            restore_k = c.tether_k
+            bone_k = c.bone_k
+            tied_skull = tied
+            tied_height = np.zeros(len(tied))
+        else:
+            k_ref = np.choose(np.minimum(kind, 3), [params.k_epidermis, params.k_dermal_low,
+                                                    params.k_fascia, params.k_muscle_layer])
+            k_low = scaled_stiffness(k_ref, l0, params.spring_ref_length)
+            k_high = np.where(kind == 1,
+                              scaled_stiffness(params.k_dermal_high, l0,
+                                               params.spring_ref_length), k_low)
+            biphasic = kind == 1
+            damping = np.full(len(l0), params.damping)
+            inv_mass = np.zeros(model.n_nodes)
+            inv_mass[dynamic] = 1.0 / params.node_mass
+            bulk = np.zeros(len(vols))
+            contact = np.full(len(model.lip_pairs), params.k_lip_contact)
+            tied = np.asarray(model.tied_fascia, np.int64)
+            restore_k = np.full(len(tied), params.k_restore)
+            bone_k = np.zeros(len(tied))
+            tied_skull = tied + n
+            tied_height = np.einsum("ka,ka->k", rest[tied] - rest[tied + n],
+                                    model.skull_normals[tied + n])
+        jaw = np.zeros(model.n_nodes)
+        jaw[model.jaw_nodes] = model.jaw_weight
+        jaw[model.sliding] = model.sliding_weight
+        sliding = np.sort(np.asarray(model.sliding, np.int64))
         groups = [MUSCLE_GROUPS[g] for g in model.muscles.group]
+        mus = model.muscles
+        local = mus.beads()
+        counts = np.array([local[mus.ptr[m]:mus.ptr[m + 1]].max() + 1 if mus.ptr[m + 1] > mus.ptr[m]
+                           else 0 for m in range(len(mus))], np.int64)
+        bead_start = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+        owner = np.repeat(np.arange(len(mus)), np.diff(mus.ptr))
+        muscle_bead = (bead_start[owner] + local).astype(np.int64)
         return cls(
-            model=model, params=params, n_dynamic=2 * n,
+            model=model, params=params, dynamic=dynamic, inv_mass=inv_mass,
             spring_i=model.spring_i.astype(np.int64), spring_j=model.spring_j.astype(np.int64),
-            spring_rest=l0, spring_k_low=k_low, spring_k_high=k_high,
-            spring_biphasic=(kind == 1),
+            spring_rest=l0, spring_k_low=np.asarray(k_low, float),
+            spring_k_high=np.asarray(k_high, float), spring_biphasic=biphasic,
+            spring_damping=np.asarray(damping, float),
             prism_nodes=model.prism_nodes.astype(np.int64), prism_rest_volume=vols,
-            prism_rest_rel=rel, tied=tied, tied_skull=tied + n, tied_on_jaw=jaw[tied + n],
-            tied_height=np.einsum("ka,ka->k", rest[tied] - rest[tied + n],
-                                  model.skull_normals[tied + n]),
+            prism_rest_rel=rel, prism_bulk=np.asarray(bulk, float),
+            tied=tied, tied_skull=tied_skull, tied_weight=jaw[tied_skull],
+            tied_height=tied_height, restore_k=np.asarray(restore_k, float),
+            bone_k=np.asarray(bone_k, float),
+            skull_contact=bool(params.fixed_skull_contact and not params.is_continuum),
             jaw_nodes=np.asarray(model.jaw_nodes, np.int64),
+            jaw_weights=np.asarray(model.jaw_weight, float),
+            sliding=sliding, sliding_weight=jaw[sliding],
+            contact_k=np.asarray(contact, float),
             muscle_group=model.muscles.group, muscle_kind=model.muscles.kind,
             muscle_origin=model.muscles.origin, muscle_ptr=model.muscles.ptr,
             muscle_nodes=model.muscles.nodes, muscle_weights=model.muscles.weights,
             muscle_rest=model.muscles.rest_length,
-            muscle_area=np.array([params.muscle_area(g) for g in groups]),
+            muscle_area=np.array([params.instance_area(nm, g)
+                                  for nm, g in zip(mus.names, groups, strict=True)]),
             muscle_k_passive=np.array([params.passive_stiffness(g) for g in groups]),
+            muscle_pull=1 if params.is_continuum else 0,
+            muscle_bead=muscle_bead, bead_start=bead_start, muscle_offset=mus.offsets(),
         )
 
     @property
     def n_muscles(self) -> int:
         return len(self.muscle_group)
+
+    @property
+    def n_dynamic(self) -> int:
+        """Number of moving nodes."""
+        return len(self.dynamic)
 
     def steady_force(self, activity: np.ndarray) -> np.ndarray:
         """M_bar per muscle instance (N) from group activity (16,) in [0, 1] (eq. 3)."""
@@ -97,19 +176,105 @@ class Physics:
 
 
 @nb.njit(cache=True)
+def bead_positions(pos, vel, nodes, weights, bead, n_beads):
+    """Positions and velocities (beads, 3) of the beads: weighted means of their nodes."""
+    bp = np.zeros((n_beads, 3))
+    bv = np.zeros((n_beads, 3))
+    for e in range(nodes.shape[0]):
+        b = bead[e]
+        w = weights[e]
+        u = nodes[e]
+        for a in range(3):
+            bp[b, a] += w * pos[u, a]
+            bv[b, a] += w * vel[u, a]
+    return bp, bv
+
+
+@nb.njit(cache=True)
+def bead_muscle_forces(pos, vel, out, muscle_force, kind, origin, offset, ptr, nodes, weights,
+                       bead, bead_start, rest_length, k_passive, f1, f2, f3, f4):
+    """Muscle forces (eqs. 5-7) acting through beads (the continuum tissue), added to ``out``.
+
+    A linear muscle pulls its bead (the weighted mean of its insertion nodes) towards its origin;
+    a sphincter's tension acts along the chain of its beads. Each bead's force is shared among
+    its nodes by their weights, so the force on the nodes is minus the tension times the
+    gradient of the muscle's length.
+    """
+    nb_ = bead_start[bead_start.shape[0] - 1]
+    bp, bv = bead_positions(pos, vel, nodes, weights, bead, nb_)
+    fb = np.zeros((nb_, 3))
+    for m in range(kind.shape[0]):
+        b0 = bead_start[m]
+        b1 = bead_start[m + 1]
+        if kind[m] == 1:
+            length = 0.0
+            rate = 0.0
+            for b in range(b0, b1 - 1):
+                dx = bp[b + 1, 0] - bp[b, 0]
+                dy = bp[b + 1, 1] - bp[b, 1]
+                dz = bp[b + 1, 2] - bp[b, 2]
+                seg = np.sqrt(dx * dx + dy * dy + dz * dz)
+                length += seg
+                rate += (dx * (bv[b + 1, 0] - bv[b, 0]) + dy * (bv[b + 1, 1] - bv[b, 1])
+                         + dz * (bv[b + 1, 2] - bv[b, 2])) / seg
+            tf = hill_force(muscle_force[m], length, rest_length[m], rate, k_passive[m],
+                            f1, f2, f3, f4)
+            for b in range(b0, b1 - 1):
+                dx = bp[b + 1, 0] - bp[b, 0]
+                dy = bp[b + 1, 1] - bp[b, 1]
+                dz = bp[b + 1, 2] - bp[b, 2]
+                s = tf / np.sqrt(dx * dx + dy * dy + dz * dz)
+                fb[b, 0] += s * dx
+                fb[b, 1] += s * dy
+                fb[b, 2] += s * dz
+                fb[b + 1, 0] -= s * dx
+                fb[b + 1, 1] -= s * dy
+                fb[b + 1, 2] -= s * dz
+        else:
+            o = origin[m]
+            dx = bp[b0, 0] - pos[o, 0] - offset[m, 0]
+            dy = bp[b0, 1] - pos[o, 1] - offset[m, 1]
+            dz = bp[b0, 2] - pos[o, 2] - offset[m, 2]
+            length = np.sqrt(dx * dx + dy * dy + dz * dz)
+            rate = (dx * (bv[b0, 0] - vel[o, 0]) + dy * (bv[b0, 1] - vel[o, 1])
+                    + dz * (bv[b0, 2] - vel[o, 2])) / length
+            tf = hill_force(muscle_force[m], length, rest_length[m], rate, k_passive[m],
+                            f1, f2, f3, f4)
+            s = tf / length
+            fb[b0, 0] -= s * dx
+            fb[b0, 1] -= s * dy
+            fb[b0, 2] -= s * dz
+    for e in range(nodes.shape[0]):
+        b = bead[e]
+        w = weights[e]
+        u = nodes[e]
+        for a in range(3):
+            out[u, a] += w * fb[b, a]
+
+
+@nb.njit(cache=True)
 def accumulate_forces(
     pos, vel, out,
     spring_i, spring_j, spring_rest, k_low, k_high, biphasic, damping, knee, sigma,
-    prism_nodes, prism_rest_volume, prism_rest_rel, k_volume, k_shape,
+    prism_nodes, prism_rest_volume, prism_rest_rel, k_volume, k_shape, prism_bulk,
     muscle_force, muscle_kind, muscle_origin, muscle_ptr, muscle_nodes, muscle_weights,
-    muscle_rest, muscle_k_passive, f1, f2, f3, f4,
-    tied, tied_skull, tied_height, tied_rest, tied_normal, k_restore,
-    lip_pairs, lip_normals, k_contact,
+    muscle_rest, muscle_k_passive, f1, f2, f3, f4, muscle_pull, muscle_bead, bead_start,
+    muscle_offset, tied, tied_skull, tied_height, tied_rest, tied_normal, k_restore, bone_k,
+    skull_contact, lip_pairs, lip_normals, k_contact,
 ):  # fmt: skip
     """Net force (N) on every node: the terms of eq. (8) moved to the right-hand side.
 
     ``out`` (N, 3) is overwritten. ``tied_rest`` and ``tied_normal`` are the rest positions and
-    outward skull normals under the tied fascia nodes, already rotated with the jaw.
+    outward skull normals under the tied fascia nodes, already rotated with the jaw. ``damping``
+    is the dashpot of each spring (N s/m), acting on the whole relative velocity of its ends (eq.
+    8); ``prism_bulk`` (K / V0 of each prism) switches on the
+    volume-preserving pressure of the continuum tissue, ``k_volume`` and ``k_shape`` eq. (9);
+    ``muscle_pull`` 0 pulls each insertion node towards the origin (the seeds'), 1 pulls them
+    along the muscle (the gradient of its length, so the force does work on its length only);
+    ``k_contact`` is the lip contact stiffness of each pair (N/m), ``k_restore`` the stiffness
+    holding each tied node to its anchor (N/m), ``bone_k`` the stiffness of its one-sided
+    contact with the bone's tangent plane at the anchor (N/m), ``skull_contact`` switches
+    eq. (10) on.
     """
     out[:] = 0.0
     # springs, eqs. (1)-(2), and damping r (v_j - v_i), eq. (8) second term
@@ -122,28 +287,42 @@ def accumulate_forces(
         length = np.sqrt(dx * dx + dy * dy + dz * dz)
         t = tension(length, spring_rest[s], k_low[s], k_high[s], knee, sigma, biphasic[s])
         t /= length
-        fx = t * dx + damping * (vel[j, 0] - vel[i, 0])
-        fy = t * dy + damping * (vel[j, 1] - vel[i, 1])
-        fz = t * dz + damping * (vel[j, 2] - vel[i, 2])
+        r = damping[s]
+        fx = t * dx + r * (vel[j, 0] - vel[i, 0])
+        fy = t * dy + r * (vel[j, 1] - vel[i, 1])
+        fz = t * dz + r * (vel[j, 2] - vel[i, 2])
         out[i, 0] += fx
         out[i, 1] += fy
         out[i, 2] += fz
         out[j, 0] -= fx
         out[j, 1] -= fy
         out[j, 2] -= fz
-    # prism elements, eq. (9)
+    # prism elements, eq. (9), or the continuum's pressure
     p = np.empty((6, 3))
     q = np.empty((6, 3))
+    seeds_prisms = k_volume != 0.0 or k_shape != 0.0
     for e in range(prism_nodes.shape[0]):
+        if not seeds_prisms and prism_bulk[e] == 0.0:
+            continue
         for k in range(6):
             for a in range(3):
                 p[k, a] = pos[prism_nodes[e, k], a]
-        prism_forces(p, prism_rest_volume[e], prism_rest_rel[e], k_volume, k_shape, q)
-        for k in range(6):
-            for a in range(3):
-                out[prism_nodes[e, k], a] += q[k, a]
+        if seeds_prisms:
+            prism_forces(p, prism_rest_volume[e], prism_rest_rel[e], k_volume, k_shape, q)
+            for k in range(6):
+                for a in range(3):
+                    out[prism_nodes[e, k], a] += q[k, a]
+        if prism_bulk[e] != 0.0:
+            prism_pressure(p, prism_rest_volume[e], prism_bulk[e], q)
+            for k in range(6):
+                for a in range(3):
+                    out[prism_nodes[e, k], a] += q[k, a]
     # muscles, eqs. (5)-(7); muscle_force holds the filtered M of eq. (4)
-    for m in range(muscle_kind.shape[0]):
+    if muscle_pull == 1:
+        bead_muscle_forces(pos, vel, out, muscle_force, muscle_kind, muscle_origin, muscle_offset,
+                           muscle_ptr, muscle_nodes, muscle_weights, muscle_bead, bead_start,
+                           muscle_rest, muscle_k_passive, f1, f2, f3, f4)
+    for m in range(muscle_kind.shape[0] if muscle_pull == 0 else 0):
         a0 = muscle_ptr[m]
         a1 = muscle_ptr[m + 1]
         if muscle_kind[m] == 1:  # sphincter path: tension along the chain of nodes
@@ -203,11 +382,19 @@ def accumulate_forces(
                 out[u, 0] += s * dx
                 out[u, 1] += s * dy
                 out[u, 2] += s * dz
-    # restoration of tied fascia nodes, eq. (11)
+    # restoration of tied fascia nodes, eq. (11); the continuum's sliding nodes: a tether to
+    # their anchor and a one-sided contact with the bone's tangent plane there
     for k in range(tied.shape[0]):
         i = tied[k]
         for a in range(3):
-            out[i, a] -= k_restore * (pos[i, a] - tied_rest[k, a])
+            out[i, a] -= k_restore[k] * (pos[i, a] - tied_rest[k, a])
+        if bone_k[k] > 0.0:
+            gap = 0.0
+            for a in range(3):
+                gap += (pos[i, a] - tied_rest[k, a]) * tied_normal[k, a]
+            if gap < 0.0:
+                for a in range(3):
+                    out[i, a] -= bone_k[k] * gap * tied_normal[k, a]
     # lips never pass through each other: penalty on the twin nodes of the lip line
     for c in range(lip_pairs.shape[0]):
         u = lip_pairs[c, 0]
@@ -217,12 +404,12 @@ def accumulate_forces(
             gap += (pos[u, a] - pos[w, a]) * lip_normals[c, a]
         if gap < 0.0:
             for a in range(3):
-                out[u, a] -= k_contact * gap * lip_normals[c, a]
-                out[w, a] += k_contact * gap * lip_normals[c, a]
+                out[u, a] -= k_contact[c] * gap * lip_normals[c, a]
+                out[w, a] += k_contact[c] * gap * lip_normals[c, a]
     # skull non-penetration, eq. (10): cancel the net force on a tied fascia node into the skull
     # while the node sits at or below its rest height above the skull (a node lifted off the
     # skull may come back down; otherwise nothing would ever pull it back)
-    for k in range(tied.shape[0]):
+    for k in range(tied.shape[0] if skull_contact else 0):
         i = tied[k]
         s = tied_skull[k]
         fn = 0.0
@@ -241,12 +428,14 @@ def force_arguments(ph: Physics, muscle_force: np.ndarray, tied_rest: np.ndarray
     p = ph.params
     return (
         ph.spring_i, ph.spring_j, ph.spring_rest, ph.spring_k_low, ph.spring_k_high,
-        ph.spring_biphasic, p.damping, p.biphasic_knee, p.sigma,
+        ph.spring_biphasic, ph.spring_damping, p.biphasic_knee, p.sigma,
         ph.prism_nodes, ph.prism_rest_volume, ph.prism_rest_rel, p.k_volume, p.k_shape,
+        ph.prism_bulk,
         muscle_force, ph.muscle_kind, ph.muscle_origin, ph.muscle_ptr, ph.muscle_nodes,
         ph.muscle_weights, ph.muscle_rest, ph.muscle_k_passive, p.f1, p.f2, p.f3, p.f4,
-        ph.tied, ph.tied_skull, ph.tied_height, tied_rest, tied_normal, p.k_restore,
-        ph.model.lip_pairs, lip_normals, p.k_lip_contact,
+        ph.muscle_pull, ph.muscle_bead, ph.bead_start, ph.muscle_offset,
+        ph.tied, ph.tied_skull, ph.tied_height, tied_rest, tied_normal, ph.restore_k,
+        ph.bone_k, ph.skull_contact, ph.model.lip_pairs, lip_normals, ph.contact_k,
     )
 
 

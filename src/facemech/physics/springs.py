@@ -23,11 +23,19 @@ def tension(length, rest_length, k_low, k_high, knee, sigma, biphasic):
     number); it matches the CGS model for the 1-cm reference spring when the force scale is
     ``k l0``, which we use: the compression stiffness at rest is then ``pi sigma k / 2``
     (1.54 k), and it does not depend on the length unit.
+
+    ``sigma <= 0`` replaces eq. (2) by the mirror image of eq. (1) (the continuum tissue): linear
+    ``k dl`` in compression, stiffening to ``k_high`` beyond ``knee`` of compression for
+    biphasic springs, so that the tissue stiffens both ways and no element collapses.
     """
     dl = length - rest_length
     if dl >= 0.0:
         if biphasic and dl > knee * rest_length:
             return knee * k_low * rest_length + k_high * (dl - knee * rest_length)
+        return k_low * dl
+    if sigma <= 0.0:
+        if biphasic and dl < -knee * rest_length:
+            return -knee * k_low * rest_length + k_high * (dl + knee * rest_length)
         return k_low * dl
     arg = 0.5 * np.pi * sigma * dl / rest_length
     if arg < -0.4999 * np.pi:

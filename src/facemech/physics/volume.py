@@ -15,6 +15,13 @@ PRISM_TRIANGLES = np.array(
     [[0, 1, 2], [3, 5, 4], [0, 3, 4], [0, 4, 1], [1, 4, 5], [1, 5, 2], [2, 5, 3], [2, 3, 0]],
     dtype=np.int64,
 )
+# the same surface with each quadrilateral side split along its other diagonal; the mean of the
+# two is the volume under the sides' bilinear patches, which does not depend on the node order
+# (a mirrored prism gets the same volume)
+PRISM_TRIANGLES_ALT = np.array(
+    [[0, 1, 2], [3, 5, 4], [0, 3, 1], [1, 3, 4], [1, 4, 2], [2, 4, 5], [2, 5, 0], [0, 5, 3]],
+    dtype=np.int64,
+)
 
 
 @nb.njit(cache=True, inline="always")
@@ -78,9 +85,85 @@ def prism_forces(p, rest_volume, rest_rel, k_volume, k_shape, out):
     return v
 
 
-def rest_geometry(positions: np.ndarray, prism_nodes: np.ndarray):
-    """Rest volumes (p,) and rest node offsets from the centre (p, 6, 3) of all prisms."""
+@nb.njit(cache=True, inline="always")
+def _volume_gradient(p, tris, out):
+    """Add the gradient (times 6) of the closed surface ``tris``'s volume to ``out`` (6, 3);
+    returns 6 x the volume. Evaluated about the prism's centre."""
+    cx = (p[0, 0] + p[1, 0] + p[2, 0] + p[3, 0] + p[4, 0] + p[5, 0]) / 6.0
+    cy = (p[0, 1] + p[1, 1] + p[2, 1] + p[3, 1] + p[4, 1] + p[5, 1]) / 6.0
+    cz = (p[0, 2] + p[1, 2] + p[2, 2] + p[3, 2] + p[4, 2] + p[5, 2]) / 6.0
+    v_acc = 0.0
+    for t in range(8):
+        a = tris[t, 0]
+        b = tris[t, 1]
+        c = tris[t, 2]
+        ax, ay, az = p[a, 0] - cx, p[a, 1] - cy, p[a, 2] - cz
+        bx, by, bz = p[b, 0] - cx, p[b, 1] - cy, p[b, 2] - cz
+        qx, qy, qz = p[c, 0] - cx, p[c, 1] - cy, p[c, 2] - cz
+        bcx, bcy, bcz = by * qz - bz * qy, bz * qx - bx * qz, bx * qy - by * qx
+        cax, cay, caz = qy * az - qz * ay, qz * ax - qx * az, qx * ay - qy * ax
+        abx, aby, abz = ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
+        v_acc += ax * bcx + ay * bcy + az * bcz
+        out[a, 0] += bcx
+        out[a, 1] += bcy
+        out[a, 2] += bcz
+        out[b, 0] += cax
+        out[b, 1] += cay
+        out[b, 2] += caz
+        out[c, 0] += abx
+        out[c, 1] += aby
+        out[c, 2] += abz
+    return v_acc
+
+
+@nb.njit(cache=True, inline="always")
+def symmetric_volume(p):
+    """Volume (m^3) of a prism (6, 3) under the bilinear patches of its sides: the mean of the
+    two splits of every side, independent of the order of the nodes."""
+    g = np.zeros((6, 3))
+    return (_volume_gradient(p, PRISM_TRIANGLES, g)
+            + _volume_gradient(p, PRISM_TRIANGLES_ALT, g)) / 12.0
+
+
+@nb.njit(cache=True, inline="always")
+def prism_pressure(p, rest_volume, bulk_per_volume, out):
+    """Volume-preserving pressure on the 6 nodes of a prism, written into ``out`` (6, 3).
+
+    The force is minus the gradient of ``K (V - V0)^2 / (2 V0)`` with ``bulk_per_volume`` =
+    ``K / V0``: ``-K / V0 (V - V0) dV/dp_i``. V is :func:`symmetric_volume`; the gradient of a
+    closed surface's volume at node i is a sixth of the sum, over its triangles at i, of the
+    cross product of the triangle's two other corners (taken in order), here averaged over the
+    two splits of the sides. Returns V.
+    """
+    for k in range(6):
+        out[k, 0] = 0.0
+        out[k, 1] = 0.0
+        out[k, 2] = 0.0
+    v6 = _volume_gradient(p, PRISM_TRIANGLES, out) + _volume_gradient(p, PRISM_TRIANGLES_ALT,
+                                                                      out)
+    vol = v6 / 12.0
+    s = -bulk_per_volume * (vol - rest_volume) / 12.0
+    for k in range(6):
+        out[k, 0] *= s
+        out[k, 1] *= s
+        out[k, 2] *= s
+    return vol
+
+
+def rest_geometry(positions: np.ndarray, prism_nodes: np.ndarray, *, symmetric: bool = False):
+    """Rest volumes (p,) and rest node offsets from the centre (p, 6, 3) of all prisms.
+
+    ``symmetric``: the order-independent :func:`symmetric_volume` (the continuum's) instead of
+    eq. (9)'s :func:`prism_volume`.
+    """
     p = positions[prism_nodes]  # (p, 6, 3)
     rel = p - p.mean(axis=1, keepdims=True)
-    vols = np.array([prism_volume(q) for q in p])
-    return vols, rel
+    return _volumes(np.ascontiguousarray(p), symmetric), rel
+
+
+@nb.njit(cache=True)
+def _volumes(p, symmetric):
+    out = np.empty(p.shape[0])
+    for e in range(p.shape[0]):
+        out[e] = symmetric_volume(p[e]) if symmetric else prism_volume(p[e])
+    return out

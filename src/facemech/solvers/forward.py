@@ -15,7 +15,7 @@ import numpy as np
 
 from ..errors import InputError, SimulationBlowUp
 from ..geometry.builder import FaceModel
-from ..params import MUSCLE_GROUPS, Parameters
+from ..params import MUSCLE_GROUPS, Parameters, default_parameters
 from ..physics.assembly import Physics
 from .state import State
 from .step import Stepper
@@ -112,8 +112,8 @@ def simulate(
     jaw_angle: np.ndarray | None = None,
     *,
     params: Parameters | None = None,
-    integrator: str = "euler",
-    substeps: int = 4,
+    integrator: str | None = None,
+    substeps: int | None = None,
     dt: float | None = None,
     jaw_drive: str = "ramp",
     initial_state: State | None = None,
@@ -127,10 +127,10 @@ def simulate(
     model : FaceModel
     activity : (frames, 16) array in [0, 1], columns :data:`~facemech.params.MUSCLE_GROUPS`
     jaw_angle : (frames,) array, rad, optional (default: jaw closed)
-    params : Parameters (default: ``lucero1999``)
-    integrator : {"euler", "implicit"}
-    substeps : steps per frame of the implicit integrator
-    dt : step of the explicit integrator (default 0.33 ms)
+    params : Parameters (default: the default preset, ``anatomical``)
+    integrator : {"euler", "implicit", "rosenbrock"}, optional (default: the preset's)
+    substeps : steps per frame of the implicit integrators (default: the preset's)
+    dt : step of the explicit integrator (default: the preset's, 0.33 ms for the seeds')
     jaw_drive : {"ramp", "hold"}
         ``ramp`` turns the jaw steadily from each frame's angle to the next; ``hold`` sets each
         frame's angle at the frame's start and holds it (the paper).
@@ -141,7 +141,7 @@ def simulate(
     -------
     Simulation
     """
-    params = params or Parameters()
+    params = params or default_parameters()
     activity = check_activity(activity, source=source)
     frames = len(activity)
     if jaw_angle is None:
@@ -154,6 +154,7 @@ def simulate(
         raise InputError("jaw angle series has non-finite values", source=source,
                          field="jaw_angle")
     physics = Physics.build(model, params)
+    model = physics.model  # with the preset's tissue geometry
     stepper = Stepper(physics, integrator=integrator, substeps=substeps, dt=dt,
                       jaw_drive=jaw_drive)
     names, nodes = marker_nodes(model)
@@ -175,7 +176,8 @@ def simulate(
     return Simulation(
         model=model, params=params, time=np.arange(frames) / params.frame_rate,
         positions=positions, markers=positions[:, nodes], marker_names=names,
-        activity=activity, jaw_angle=jaw_angle, final_state=state, integrator=integrator,
+        activity=activity, jaw_angle=jaw_angle, final_state=state,
+        integrator=stepper.integrator,
         dt=stepper.dt, wall_seconds=wall,
         attrs={"steps_per_frame": stepper.n_steps, "jaw_drive": jaw_drive},
     )

@@ -9,10 +9,10 @@ Each advances an immutable :class:`~facemech.solvers.state.State` through one co
     the other ordering is unstable on undamped modes). The muscle filter of eq. (4) is stepped
     with the same explicit Euler.
 ``implicit``
-    linearly implicit (Baraff-Witkin) Euler with a constant matrix ``A = m I + h C + h^2 K``
-    (damping C, rest tangent stiffness K of springs, shape and restoration terms), factorised
-    once with SuperLU and reused: ``A dv = h (f(x, v) - h K v)``. The nonlinear forces are
-    evaluated exactly each step, so only the stability, not the consistency, rests on K.
+    linearly implicit (Baraff-Witkin) Euler with a constant matrix ``A = M + h C + h^2 K``
+    (masses M, damping C, a rest stiffness K), factorised once with SuperLU and reused:
+    ``A dv = h (f(x, v) - h K v)``. The nonlinear forces are evaluated exactly each step, so
+    only the stability, not the consistency, rests on K.
 ``rosenbrock``
     the two-stage Rosenbrock-W method ROS2 (Verwer et al. 1999), second order for any
     approximation of the Jacobian, so one constant factorised matrix (gamma h in place of h)
@@ -21,11 +21,25 @@ Each advances an immutable :class:`~facemech.solvers.state.State` through one co
 The implicit methods integrate the muscle filter exactly. K and C are isotropic (the same for
 x, y and z) so one factorisation of a nodes x nodes matrix serves the three axes.
 
+For the seeds' constants K is the rest tangent of springs, shape and restoration terms and C
+the damping graph Laplacian. For the continuum tissue (the anatomical preset) C is exact (each
+spring's dashpot), K holds the volume term (the Gram matrix of each prism's volume gradient,
+within a factor 3 of its true rank-one Hessian) and the tethers; the springs themselves need
+no place in K, because their stiffness-proportional damping, exact in C, keeps every mode stable
+for steps below twice the viscous time. Physiological muscle forces make the velocity term of
+the Hill law (eq. 6) a strong damper on the insertion nodes (``M f2 f4 / (1 + (f3 + f4 l')^2)``,
+up to about 10 N s/m per newton of force); it is taken into the implicit solve exactly, as a
+rank-one term per active muscle, by the Sherman-Morrison-Woodbury identity on the constant
+factorisation (:class:`_MuscleDamping`).
+
 The jaw (``jaw_drive``): ``"ramp"`` (default) turns the mandible at a constant rate from the
 state's angle to the frame's angle over the frame; ``"hold"`` sets the frame's angle at the start
-of the frame and holds it, as the paper does. Holding jolts the skull at 60 Hz, and the skin's
-response to those steps is so sensitive to the step size that even the paper integrator changes
-by about 0.1-0.2 mm between dt = 0.33 and 0.1 ms; the ramp removes the jolt.
+of the frame and holds it, as the paper does. Each jaw node turns by its jaw weight times the
+angle (1 on the mandible; the anatomical tissue blends from 1 to 0 lateral to the mouth).
+The skull nodes that slide (lips, vestibule, chin pad) rest on the teeth and bone through a
+one-sided penalty against the bone's tangent plane under each (turned with the jaw), part of the
+force evaluation: contacts stay out of the constant matrix, whose isotropic entries would act as
+a viscosity on sliding and lifting off.
 """
 
 from __future__ import annotations
@@ -38,26 +52,23 @@ from scipy.sparse.linalg import splu
 from ..errors import InputError, SimulationBlowUp
 from ..physics.assembly import Physics, accumulate_forces, force_arguments
 from ..physics.muscle import activation_euler, activation_exact
+from .muscle_implicit import MuscleJacobian
 from .state import State
 
 INTEGRATORS = ("euler", "implicit", "rosenbrock")
 JAW_DRIVES = ("ramp", "hold")
 ROS2_GAMMA = 1.0 + 1.0 / np.sqrt(2.0)
+#: share of the springs' stiffness (of their stiff branch) that the constant matrix of the
+#: continuum carries: with the exact damping in the matrix, a half keeps the slowest modes
+#: relaxing at the tissue's viscous time at 4 steps per frame, without ringing
+IMPLICIT_STIFFNESS_SHARE = 0.3
 
 
 @nb.njit(cache=True)
-def place_jaw(pos, vel, angle, rate, hinge_point, hinge_axis, jaw_nodes, jaw_rest,
-              tied_jaw, tied_rest0, tied_normal0, tied_rest, tied_normal):
-    """Turn the mandible to ``angle`` (rad) turning at ``rate`` (rad/s), in place.
-
-    Sets the positions and velocities of the jaw's skull nodes and the rotated rest positions
-    and skull normals under the tied fascia nodes that lie over the jaw (indices ``tied_jaw``).
-    """
-    ax, ay, az = hinge_axis[0], hinge_axis[1], hinge_axis[2]
+def _rotation(angle, ax, ay, az, r):
     c = np.cos(angle)
     s = np.sin(angle)
     t = 1.0 - c
-    r = np.empty((3, 3))
     r[0, 0] = c + ax * ax * t
     r[0, 1] = ax * ay * t - az * s
     r[0, 2] = ax * az * t + ay * s
@@ -67,37 +78,75 @@ def place_jaw(pos, vel, angle, rate, hinge_point, hinge_axis, jaw_nodes, jaw_res
     r[2, 0] = az * ax * t - ay * s
     r[2, 1] = az * ay * t + ax * s
     r[2, 2] = c + az * az * t
+
+
+@nb.njit(cache=True)
+def _turn_anchors(angle, hinge_point, hinge_axis, weight, rest0, normal0, rest, normal):
+    """Rest points and normals (k, 3) turned about the hinge by weight x angle, in place."""
+    r = np.empty((3, 3))
+    last = np.nan
+    for k in range(rest0.shape[0]):
+        w = weight[k]
+        if w == 0.0:
+            for a in range(3):
+                rest[k, a] = rest0[k, a]
+                normal[k, a] = normal0[k, a]
+            continue
+        if w != last:
+            _rotation(w * angle, hinge_axis[0], hinge_axis[1], hinge_axis[2], r)
+            last = w
+        for a in range(3):
+            rest[k, a] = hinge_point[a]
+            normal[k, a] = 0.0
+            for b in range(3):
+                rest[k, a] += r[a, b] * (rest0[k, b] - hinge_point[b])
+                normal[k, a] += r[a, b] * normal0[k, b]
+
+
+@nb.njit(cache=True)
+def place_jaw(pos, vel, angle, rate, hinge_point, hinge_axis, jaw_nodes, jaw_weights, jaw_rest,
+              tied_weight, tied_rest0, tied_normal0, tied_rest, tied_normal):
+    """Turn the mandible to ``angle`` (rad) turning at ``rate`` (rad/s), in place.
+
+    Each jaw node turns by its weight times the angle. Sets the positions and velocities of the
+    jaw's skull nodes, and the turned anchors and normals of the tied nodes (``tied_*``: the
+    rest positions and skull normals under the seeds' tied fascia, the bone under the
+    continuum's sliding nodes), each turned by its own jaw weight.
+    """
+    ax, ay, az = hinge_axis[0], hinge_axis[1], hinge_axis[2]
+    r = np.empty((3, 3))
+    last = np.nan
     for k in range(jaw_nodes.shape[0]):
         i = jaw_nodes[k]
+        w = jaw_weights[k]
+        if w != last:
+            _rotation(w * angle, ax, ay, az, r)
+            last = w
         for a in range(3):
             pos[i, a] = hinge_point[a] + (r[a, 0] * jaw_rest[k, 0] + r[a, 1] * jaw_rest[k, 1]
                                           + r[a, 2] * jaw_rest[k, 2])
         dx = pos[i, 0] - hinge_point[0]
         dy = pos[i, 1] - hinge_point[1]
         dz = pos[i, 2] - hinge_point[2]
-        vel[i, 0] = rate * (ay * dz - az * dy)
-        vel[i, 1] = rate * (az * dx - ax * dz)
-        vel[i, 2] = rate * (ax * dy - ay * dx)
-    for q in range(tied_jaw.shape[0]):
-        k = tied_jaw[q]
-        for a in range(3):
-            tied_rest[k, a] = hinge_point[a]
-            tied_normal[k, a] = 0.0
-            for b in range(3):
-                tied_rest[k, a] += r[a, b] * (tied_rest0[k, b] - hinge_point[b])
-                tied_normal[k, a] += r[a, b] * tied_normal0[k, b]
+        wr = w * rate
+        vel[i, 0] = wr * (ay * dz - az * dy)
+        vel[i, 1] = wr * (az * dx - ax * dz)
+        vel[i, 2] = wr * (ax * dy - ay * dx)
+    _turn_anchors(angle, hinge_point, hinge_axis, tied_weight, tied_rest0, tied_normal0,
+                  tied_rest, tied_normal)
 
 
 @nb.njit(cache=True)
-def _euler_frame(pos, vel, m_force, m_rate, m_steady, n_steps, dt, inv_mass, n_dynamic, tau,
+def _euler_frame(pos, vel, m_force, m_rate, m_steady, n_steps, dt, inv_mass, dynamic, tau,
                  out, fargs, jaw_start, jaw_rate, jargs):
     for step in range(n_steps):
         if jaw_rate != 0.0:
             place_jaw(pos, vel, jaw_start + jaw_rate * step * dt, jaw_rate, *jargs)
         accumulate_forces(pos, vel, out, *fargs)
-        for i in range(n_dynamic):
+        for q in range(dynamic.shape[0]):
+            i = dynamic[q]
             for a in range(3):
-                vel[i, a] += dt * inv_mass * out[i, a]
+                vel[i, a] += dt * inv_mass[i] * out[i, a]
                 pos[i, a] += dt * vel[i, a]
         for m in range(m_force.shape[0]):
             m_force[m], m_rate[m] = activation_euler(m_force[m], m_rate[m], m_steady[m], tau, dt)
@@ -115,26 +164,36 @@ class Stepper:
     Parameters
     ----------
     physics : Physics
-    integrator : {"euler", "implicit", "rosenbrock"}
+    integrator : {"euler", "implicit", "rosenbrock"}, optional
+        Default: the preset's (``params.integrator``): ``euler`` for the seeds' presets,
+        ``implicit`` for the anatomical one, whose physiological forces and tissue viscosity
+        make explicit steps unstable.
     substeps : int, optional
-        Steps per frame of the implicit integrators (default 4, h = 4.2 ms).
+        Steps per frame of the implicit integrators (default: the preset's, 4: h = 4.2 ms).
     dt : float, optional
         Step of the explicit integrator (default: the preset's 0.33 ms).
     jaw_drive : {"ramp", "hold"}
     """
 
-    def __init__(self, physics: Physics, *, integrator: str = "euler", substeps: int = 4,
-                 dt: float | None = None, jaw_drive: str = "ramp"):
+    def __init__(self, physics: Physics, *, integrator: str | None = None,
+                 substeps: int | None = None, dt: float | None = None,
+                 jaw_drive: str = "ramp"):
+        p = physics.params
+        integrator = p.integrator if integrator is None else integrator
+        substeps = p.substeps if substeps is None else substeps
         if integrator not in INTEGRATORS:
             raise InputError(f"unknown integrator {integrator!r} (expected one of "
                              f"{', '.join(INTEGRATORS)})", field="integrator")
         if jaw_drive not in JAW_DRIVES:
             raise InputError(f"unknown jaw drive {jaw_drive!r} (expected ramp or hold)",
                              field="jaw_drive")
+        if integrator == "euler" and p.is_continuum:
+            raise InputError(f"the {p.name} preset needs an implicit integrator (implicit or "
+                             "rosenbrock): its muscle forces and tissue viscosity make explicit "
+                             "Euler steps unstable", field="integrator")
         self.physics = physics
         self.integrator = integrator
         self.jaw_drive = jaw_drive
-        p = physics.params
         self.frame_duration = 1.0 / p.frame_rate
         if integrator == "euler":
             step = p.dt if dt is None else float(dt)
@@ -151,16 +210,18 @@ class Stepper:
             self._K, self._lu = self._factorise(gamma * self.dt)
         model = physics.model
         self._out = np.zeros_like(model.rest_positions)
-        tied_rest0 = model.rest_positions[physics.tied]
+        rest = model.rest_positions
+        tied_rest0 = rest[physics.tied]
         tied_normal0 = model.skull_normals[physics.tied_skull]
         self._tied_rest = tied_rest0.copy()
         self._tied_normal = tied_normal0.copy()
         self._jargs = (
             np.asarray(model.hinge_point, float), np.asarray(model.hinge_axis, float),
-            physics.jaw_nodes, model.rest_positions[physics.jaw_nodes] - model.hinge_point,
-            np.nonzero(physics.tied_on_jaw)[0], tied_rest0, tied_normal0,
-            self._tied_rest, self._tied_normal,
+            physics.jaw_nodes, physics.jaw_weights, rest[physics.jaw_nodes] - model.hinge_point,
+            physics.tied_weight, tied_rest0, tied_normal0, self._tied_rest, self._tied_normal,
         )
+        self._muscles = (MuscleJacobian(physics, self._lu)
+                         if integrator != "euler" and p.is_continuum else None)
         self._warm_up()
 
     def _warm_up(self) -> None:
@@ -173,51 +234,104 @@ class Stepper:
         place_jaw(pos, vel, 0.0, 0.0, *self._jargs)
         fargs = force_arguments(ph, m, self._tied_rest, self._tied_normal, ph.model.lip_normals)
         if self.integrator == "euler":
-            _euler_frame(pos, vel, m, m.copy(), m.copy(), 0, self.dt, 1.0, ph.n_dynamic,
+            _euler_frame(pos, vel, m, m.copy(), m.copy(), 0, self.dt, ph.inv_mass, ph.dynamic,
                          ph.params.tau_activation, self._out, fargs, 0.0, 0.0, self._jargs)
         else:
             accumulate_forces(pos, vel, self._out, *fargs)
             _filter_exact(m, m.copy(), m.copy(), ph.params.tau_activation, self.dt)
+            if self._muscles is not None:
+                self._muscles.linearise(pos, vel, m + 1.0, m)
 
     # -- the implicit system --------------------------------------------------------------
     def _factorise(self, h: float):
-        """Constant scalar matrices over the dynamic nodes, shared by the x, y and z axes.
+        """Constant scalar matrices over the moving nodes, shared by the x, y and z axes.
 
-        K is the isotropic (per-axis) rest tangent stiffness: springs (mean of the elongation
-        slope k and the compression slope pi sigma k / 2 of eqs. 1-2), the shape term of eq. (9)
-        and the restoration of eq. (11); C is r times the spring graph Laplacian (eq. 8). The
-        isotropic K over-estimates the transverse stiffness of unloaded springs, which only adds
-        numerical damping; the exact forces are evaluated every step.
+        Seeds' constants: K is the isotropic (per-axis) rest tangent stiffness: springs (mean of
+        the elongation slope k and the compression slope pi sigma k / 2 of eqs. 1-2), the shape
+        term of eq. (9) and the restoration of eq. (11); C is r times the spring graph Laplacian
+        (eq. 8). The isotropic K over-estimates the transverse stiffness of unloaded springs,
+        which only adds numerical damping; the exact forces are evaluated every step.
+
+        Continuum: C is the exact Laplacian of the springs' dashpots; K the volume term's Gram
+        matrices and the lip contact (see the module doc).
         """
         ph, p = self.physics, self.physics.params
         nd = ph.n_dynamic
-        k_tan = ph.spring_k_low * 0.5 * (1.0 + 0.5 * np.pi * p.sigma)
-        stiff = _graph_matrix(ph.spring_i, ph.spring_j, k_tan, nd)
-        # shape term of eq. (9): d(-k_e2 (x_a - centroid))/dx_b = -k_e2 (delta_ab - 1/6)
-        pn = ph.prism_nodes
+        row = np.full(ph.model.n_nodes, -1, np.int64)
+        row[ph.dynamic] = np.arange(nd)
+        si, sj = row[ph.spring_i], row[ph.spring_j]
+        pn = row[ph.prism_nodes]
         a_idx = np.repeat(np.arange(6), 6)
         b_idx = np.tile(np.arange(6), 6)
-        coef = p.k_shape * ((a_idx == b_idx).astype(float) - 1.0 / 6.0)
         ra, rb = pn[:, a_idx].reshape(-1), pn[:, b_idx].reshape(-1)
-        cv = np.broadcast_to(coef, (len(pn), 36)).reshape(-1)
-        ok = (ra < nd) & (rb < nd)
-        stiff = stiff + sp.csc_matrix((cv[ok], (ra[ok], rb[ok])), shape=(nd, nd))
-        restore = np.zeros(nd)
-        restore[ph.tied] = p.k_restore
-        stiff = (stiff + sp.diags(restore)).tocsc()
-        damp = p.damping * _graph_matrix(ph.spring_i, ph.spring_j, np.ones(len(ph.spring_i)), nd)
-        a_mat = (sp.identity(nd, format="csc") * p.node_mass + h * damp + h * h * stiff).tocsc()
+        ok = (ra >= 0) & (rb >= 0)
+        if p.is_continuum:
+            # damping exactly as the forces have it (the springs' dashpots): a matrix that
+            # over-damps acts as inertia and makes the step ring; stiffness: a share of each
+            # spring's stiff branch, the volume term's Gram matrices (within a factor 3 of its
+            # rank-one Hessian) and the tethers
+            damp = _graph_matrix(si, sj, ph.spring_damping, nd)
+            k_springs = _graph_matrix(si, sj, IMPLICIT_STIFFNESS_SHARE * ph.spring_k_high, nd)
+            grads = _volume_gradients(ph.model.rest_positions[ph.prism_nodes])  # (p, 6, 3)
+            gram = np.einsum("pac,pbc->pab", grads, grads) * ph.prism_bulk[:, None, None]
+            tether = np.zeros(nd)
+            np.add.at(tether, row[ph.tied], ph.restore_k)
+            stiff = (k_springs + sp.csc_matrix((gram.reshape(-1)[ok], (ra[ok], rb[ok])),
+                                               shape=(nd, nd)) + sp.diags(tether)).tocsc()
+            mass = 1.0 / ph.inv_mass[ph.dynamic]
+        else:
+            k_tan = ph.spring_k_low * 0.5 * (1.0 + 0.5 * np.pi * p.sigma)
+            stiff = _graph_matrix(si, sj, k_tan, nd)
+            # shape term of eq. (9): d(-k_e2 (x_a - centroid))/dx_b = -k_e2 (delta_ab - 1/6)
+            coef = p.k_shape * ((a_idx == b_idx).astype(float) - 1.0 / 6.0)
+            cv = np.broadcast_to(coef, (len(pn), 36)).reshape(-1)
+            stiff = stiff + sp.csc_matrix((cv[ok], (ra[ok], rb[ok])), shape=(nd, nd))
+            restore = np.zeros(nd)
+            restore[row[ph.tied]] = ph.restore_k
+            stiff = stiff + sp.diags(restore)
+            damp = _graph_matrix(si, sj, ph.spring_damping, nd)
+            mass = np.full(nd, p.node_mass)
+        stiff = stiff.tocsc()
+        a_mat = (sp.diags(mass) + h * damp + h * h * stiff).tocsc()
+        self._mass = mass
+        self._damp_matrix = damp.tocsr()
         return stiff.tocsr(), splu(a_mat, permc_spec="COLAMD")
 
-    def _ros2_stage(self, r_x, r_v):
+    def _solve(self, rhs, jac, h):
+        """Solve the implicit system (with the muscles' Jacobian ``jac``) for rhs (nodes, 3)."""
+        if self._muscles is None:
+            return self._lu.solve(rhs)
+        return self._muscles.solve(rhs, jac, h)
+
+    def _stiffness(self, v, jac):
+        """The system's stiffness times v (moving nodes, 3): constant part and muscles."""
+        out = self._K @ v
+        if self._muscles is not None:
+            out += self._muscles.apply_stiffness(v, jac)
+        return out
+
+    def _frame_force_bound(self, m_force, m_rate, m_steady):
+        """The larger of each muscle's filtered force now and at the frame's end (eq. 4)."""
+        end, _ = m_force.copy(), None
+        end_rate = m_rate.copy()
+        _filter_exact(end, end_rate, m_steady, self.physics.params.tau_activation,
+                      self.frame_duration)
+        return np.maximum(m_force, end)
+
+    def _linearise(self, pos, vel, m_force, m_steady):
+        if self._muscles is None:
+            return None
+        return self._muscles.linearise(pos, vel, m_force, m_steady)
+
+    def _ros2_stage(self, r_x, r_v, jac):
         """Solve (I - gamma h J) k = r for the state (x, v) with the constant matrices.
 
         With J = [[0, I], [-K/m, -C/m]]: (m + g C + g^2 K) k_v = m r_v - g K r_x and
         k_x = r_x + g k_v, g = gamma h (the factorised matrix).
         """
         g = ROS2_GAMMA * self.dt
-        m = self.physics.params.node_mass
-        k_v = self._lu.solve(m * r_v - g * (self._K @ r_x))
+        m = self._mass[:, None]
+        k_v = self._solve(m * r_v - g * self._stiffness(r_x, jac), jac, g)
         return r_x + g * k_v, k_v
 
     # -- one frame ------------------------------------------------------------------------
@@ -243,13 +357,13 @@ class Stepper:
         place_jaw(pos, vel, start, rate, *self._jargs)
         fargs = force_arguments(ph, m_force, self._tied_rest, self._tied_normal,
                                 ph.model.lip_normals)
-        nd = ph.n_dynamic
+        dyn = ph.dynamic
         h = self.dt
-        inv_m = 1.0 / p.node_mass
+        inv_m = ph.inv_mass[dyn][:, None]
         if self.integrator == "euler":
             try:
-                _euler_frame(pos, vel, m_force, m_rate, m_steady, self.n_steps, h, inv_m, nd,
-                             p.tau_activation, self._out, fargs, start, rate, self._jargs)
+                _euler_frame(pos, vel, m_force, m_rate, m_steady, self.n_steps, h, ph.inv_mass,
+                             dyn, p.tau_activation, self._out, fargs, start, rate, self._jargs)
             except ZeroDivisionError:  # a spring or prism collapsed: nodes met mid-frame
                 frame = int(round(state.time * p.frame_rate)) + 1
                 raise SimulationBlowUp(
@@ -257,39 +371,63 @@ class Stepper:
                     f"step ({h * 1e3:.3g} ms) is too large for the stiffness and damping (try a "
                     "smaller --dt)", frame=frame) from None
         elif self.integrator == "implicit":
+            jac = self._linearise(pos, vel, self._frame_force_bound(m_force, m_rate, m_steady),
+                                  m_steady)
             for step in range(self.n_steps):
                 place_jaw(pos, vel, start + rate * step * h, rate, *self._jargs)
                 accumulate_forces(pos, vel, self._out, *fargs)
-                rhs = h * (self._out[:nd] - h * (self._K @ vel[:nd]))
-                vel[:nd] += self._lu.solve(rhs)
-                pos[:nd] += h * vel[:nd]
+                v0 = vel[dyn]
+                rhs = h * (self._out[dyn] - h * self._stiffness(v0, jac))
+                vel[dyn] = v0 + self._solve(rhs, jac, h)
+                pos[dyn] += h * vel[dyn]
                 _filter_exact(m_force, m_rate, m_steady, p.tau_activation, h)
         else:
+            jac = self._linearise(pos, vel, self._frame_force_bound(m_force, m_rate, m_steady),
+                                  m_steady)
             for step in range(self.n_steps):
-                x0, v0 = pos[:nd].copy(), vel[:nd].copy()
+                x0, v0 = pos[dyn].copy(), vel[dyn].copy()
                 place_jaw(pos, vel, start + rate * step * h, rate, *self._jargs)
                 accumulate_forces(pos, vel, self._out, *fargs)
-                k1x, k1v = self._ros2_stage(v0, self._out[:nd] * inv_m)
-                pos[:nd] = x0 + h * k1x
-                vel[:nd] = v0 + h * k1v
+                k1x, k1v = self._ros2_stage(v0, self._out[dyn] * inv_m, jac)
+                pos[dyn] = x0 + h * k1x
+                vel[dyn] = v0 + h * k1v
                 _filter_exact(m_force, m_rate, m_steady, p.tau_activation, h)
                 place_jaw(pos, vel, start + rate * (step + 1) * h, rate, *self._jargs)
                 accumulate_forces(pos, vel, self._out, *fargs)
-                k2x, k2v = self._ros2_stage(vel[:nd] - 2.0 * k1x,
-                                            self._out[:nd] * inv_m - 2.0 * k1v)
-                pos[:nd] = x0 + h * (1.5 * k1x + 0.5 * k2x)
-                vel[:nd] = v0 + h * (1.5 * k1v + 0.5 * k2v)
+                k2x, k2v = self._ros2_stage(vel[dyn] - 2.0 * k1x,
+                                            self._out[dyn] * inv_m - 2.0 * k1v, jac)
+                pos[dyn] = x0 + h * (1.5 * k1x + 0.5 * k2x)
+                vel[dyn] = v0 + h * (1.5 * k1v + 0.5 * k2v)
         place_jaw(pos, vel, target, rate, *self._jargs)
         return State(pos, vel, m_force, m_rate, target, state.time + self.frame_duration)
 
 
-def _graph_matrix(i: np.ndarray, j: np.ndarray, w: np.ndarray, nd: int) -> sp.csc_matrix:
-    """Weighted graph Laplacian of edges (i, j) restricted to nodes < nd.
+def _volume_gradients(p: np.ndarray) -> np.ndarray:
+    """Gradients (prisms, 6, 3) of the volumes of prisms (prisms, 6, 3) at their nodes."""
+    from ..physics.volume import PRISM_TRIANGLES, PRISM_TRIANGLES_ALT
 
-    An edge to a kinematic node (>= nd) keeps its diagonal term only.
+    c = p.mean(axis=1, keepdims=True)
+    q = p - c
+    g = np.zeros_like(p)
+    for tris in (PRISM_TRIANGLES, PRISM_TRIANGLES_ALT):
+        for a, b, t in tris:
+            g[:, a] += np.cross(q[:, b], q[:, t])
+            g[:, b] += np.cross(q[:, t], q[:, a])
+            g[:, t] += np.cross(q[:, a], q[:, b])
+    return g / 12.0
+
+
+def _graph_matrix(i: np.ndarray, j: np.ndarray, w: np.ndarray, nd: int) -> sp.csc_matrix:
+    """Weighted graph Laplacian of edges (i, j) over rows 0..nd-1 (-1: a kinematic node).
+
+    An edge to a kinematic node keeps its diagonal term only.
     """
-    both = (i < nd) & (j < nd)
-    rows = np.concatenate([i[i < nd], j[j < nd], i[both], j[both]])
-    cols = np.concatenate([i[i < nd], j[j < nd], j[both], i[both]])
-    vals = np.concatenate([w[i < nd], w[j < nd], -w[both], -w[both]])
+    i = np.asarray(i)
+    j = np.asarray(j)
+    ii = i >= 0
+    jj = j >= 0
+    both = ii & jj
+    rows = np.concatenate([i[ii], j[jj], i[both], j[both]])
+    cols = np.concatenate([i[ii], j[jj], j[both], i[both]])
+    vals = np.concatenate([w[ii], w[jj], -w[both], -w[both]])
     return sp.csc_matrix((vals, (rows, cols)), shape=(nd, nd))

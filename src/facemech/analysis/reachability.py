@@ -1,0 +1,110 @@
+"""Can the face reach the lip positions of real speech? Synthetic targets and their inversion.
+
+The targets are not made by the model: they are marker trajectories laid out by hand from the
+ranges of real speech (issue 11, from an X-ray microbeam / EMA recording: upper lip 3.6 mm
+vertical and 3 mm front to back, lower lip 9 mm and 4.3 mm, the jaw 4.5 mm at the chin), as a
+string of postures (bilabial closure, /a/, /u/, /i/) joined by smooth (raised-cosine)
+transitions. The inversion (lsq, the seeds' seven controls) drives the jaw from the chin marker,
+as a user would, and fits the lip and corner markers; :func:`reach` reports the RMS error.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..markerset import MarkerSet
+
+#: displacements (mm) of each marker group in each posture: (dx, dy, dz); "out" for the corners
+#: is lateral (its sign follows the side). Ranges over the postures: upper lip y 3.6 (-1.6 to
+#: +2.0), z 3.0 (-1.2 to +1.8); lower lip y 9.0 (-9.0 to 0), z 4.3 (-1.5 to +2.8); chin y 4.5.
+POSTURES_MM: dict[str, dict[str, tuple[float, float, float]]] = {
+    "rest": {"upper": (0, 0, 0), "lower": (0, 0, 0), "corner": (0, 0, 0), "chin": (0, 0, 0)},
+    "p": {"upper": (0, -1.6, 0.6), "lower": (0, 0.0, 0.8), "corner": (-1.0, 0, 0.3),
+          "chin": (0, 0, 0)},
+    "a": {"upper": (0, 1.6, -1.0), "lower": (0, -9.0, -1.5), "corner": (0.5, -2.5, -1.0),
+          "chin": (0, -4.5, -2.5)},
+    "u": {"upper": (0, 0.4, 1.8), "lower": (0, -2.0, 2.8), "corner": (-3.0, -0.5, 0.8),
+          "chin": (0, -1.5, -0.8)},
+    "i": {"upper": (0, 2.0, -1.2), "lower": (0, -1.5, -1.5), "corner": (2.0, 1.2, -1.2),
+          "chin": (0, -1.0, -0.5)},
+}
+SEQUENCE = ("rest", "p", "a", "p", "u", "p", "i", "rest")
+#: markers of the built-in face per group (right side first)
+GROUPS = {"upper": ("R05", "L04"), "lower": ("R03", "L02"), "corner": ("R07", "L06"),
+          "chin": ("R01",)}
+
+
+def speech_targets(face, *, posture_s: float = 0.16, transition_s: float = 0.12,
+                   frame_rate: float = 60.0, sequence=SEQUENCE) -> MarkerSet:
+    """Marker trajectories (metres, the face's frame) of the synthetic utterance.
+
+    Each posture is held ``posture_s`` and joined to the next by a raised-cosine transition of
+    ``transition_s``; the markers start at the face's rest positions of their nodes.
+    """
+    keys = []
+    for k, name in enumerate(sequence):
+        keys.append((name, posture_s))
+        if k < len(sequence) - 1:
+            keys.append(("->", transition_s))
+    total = sum(d for _, d in keys)
+    t = np.arange(int(round(total * frame_rate)) + 1) / frame_rate
+    names = [m for g in GROUPS.values() for m in g]
+    disp = np.zeros((len(t), len(names), 3))
+    # piecewise: hold, then blend from the posture before to the one after
+    edges = np.cumsum([0.0] + [d for _, d in keys])
+    seq = list(sequence)
+    for i, (what, _) in enumerate(keys):
+        a, b = edges[i], edges[i + 1]
+        sel = (t >= a - 1e-12) & (t < b - 1e-12) if i < len(keys) - 1 else (t >= a - 1e-12)
+        if what == "->":
+            before, after = seq[i // 2], seq[i // 2 + 1]
+            u = 0.5 - 0.5 * np.cos(np.pi * (t[sel] - a) / (b - a))
+        else:
+            before = after = what
+            u = np.zeros(sel.sum())
+        for m, name in enumerate(names):
+            group = next(g for g, ms in GROUPS.items() if name in ms)
+            side = -1.0 if name.startswith("R") else 1.0
+            p0 = np.array(POSTURES_MM[before][group], float)
+            p1 = np.array(POSTURES_MM[after][group], float)
+            if group == "corner":
+                p0[0] *= side
+                p1[0] *= side
+            disp[sel, m] = (p0 + (p1 - p0) * u[:, None]) * 1e-3
+    rest = np.array([face.rest_positions[face.markers[n]] for n in names])
+    return MarkerSet(rest[None] + disp, tuple(names), frame_rate,
+                     meta={"source": "synthetic speech targets"})
+
+
+@dataclass(frozen=True)
+class Reach:
+    """The result of :func:`reach`: RMS error (m) over frames and fitted markers, per frame."""
+
+    rms: float
+    frame_rms: np.ndarray  # (frames,) m
+    largest: float  # m, the largest single-marker error
+    wall_seconds: float
+    activity_on_bound: float  # share of control values at 0 or 1
+
+
+def reach(face, params=None, *, markers: MarkerSet | None = None, **invert_kw) -> Reach:
+    """Invert the speech targets with the jaw from the chin marker; the fit's errors."""
+    from ..inverse.invert import invert
+    from ..solvers.jaw import jaw_angles_from_marker
+
+    params = params if params is not None else None
+    from ..params import default_parameters
+
+    params = params or default_parameters()
+    ms = markers if markers is not None else speech_targets(face, frame_rate=params.frame_rate)
+    jaw = jaw_angles_from_marker(face, params, face.markers["R01"], ms.marker("R01")[:, 1])
+    fitted = {n: face.markers[n] for n in ms.names if n != "R01"}
+    res = invert(face, ms.select(list(fitted)), fitted, jaw_angle=jaw, params=params,
+                 **invert_kw)
+    err = np.linalg.norm(res.model_markers[1:] - res.data_markers[1:], axis=2)
+    frame = np.sqrt(np.mean(err**2, axis=1))
+    on = np.mean((res.controls <= 1e-6) | (res.controls >= 1 - 1e-6))
+    return Reach(float(np.sqrt(np.mean(err**2))), frame, float(err.max()), res.wall_seconds,
+                 float(on))

@@ -1,0 +1,215 @@
+"""Muscles in the implicit solve: their stiffness and damping, exactly, through beads.
+
+Physiological muscle forces (newtons, eq. 3 with the specific tension of muscle) are strong
+next to soft tissue. Two of their terms are too stiff for the explicit part of a step:
+
+- the velocity term of the Hill law (eq. 6): the tension changes by
+  ``M' f2 f4 / (1 + (f3 + f4 l')^2)`` per m/s of lengthening, about 10 N s/m per newton;
+- the geometric stiffness of a tension: a bead pulled with tension T along a segment of length
+  l resists sideways motion with T / l, which for orbicularis oris at full activity (16 N over
+  6-mm segments) is thousands of N/m.
+
+Every muscle acts on the tissue through a few beads (weighted means of nodes, fixed weights):
+the node forces are ``U f_b`` with ``U = W (x) I3`` constant, W the (moving nodes x beads)
+weights. The force's Jacobian is therefore ``U K_b U^T`` and ``U C_b U^T`` with small dense
+bead-space matrices, and the implicit matrix ``A0 + U S U^T`` (``S = h C_b + h^2 K_b``) is
+solved with the constant factorisation of A0 by the Sherman-Morrison-Woodbury identity:
+``A0^-1 W`` is solved once, when the stepper is made. The muscles are linearised once per frame,
+at the frame's start and with the larger of the filtered force there and at the frame's end
+(an upper bound keeps the explicit remainder stable); each step then costs a back-substitution
+of the small system.
+"""
+
+from __future__ import annotations
+
+import numba as nb
+import numpy as np
+import scipy.sparse as sp
+from scipy.linalg import lu_factor, lu_solve
+
+from ..physics.assembly import bead_positions
+from ..physics.muscle import force_length
+
+
+@nb.njit(cache=True, inline="always")
+def hill_derivatives(m_filtered, length, rest_length, velocity, k_passive, f1, f2, f3, f4):
+    """Tension F (N) of eqs. (5)-(7) and its derivatives dF/dl (N/m) and dF/dl' (N s/m)."""
+    r = length / rest_length
+    u = (r**2.3 - 1.0) / 1.26
+    fl = force_length(length, rest_length)
+    au = abs(u)
+    dfl = 0.0
+    if au > 0.0:
+        sgn = 1.0 if u > 0.0 else -1.0
+        dfl = fl * (-1.62 * au**0.62 * sgn) * (2.3 * r**1.3 / 1.26) / rest_length
+    arg = f3 + f4 * velocity
+    fv = f1 + f2 * np.arctan(arg)
+    tension = m_filtered * fl * fv
+    d_len = m_filtered * dfl * fv
+    if length > rest_length:
+        tension += k_passive * (length - rest_length)
+        d_len += k_passive
+    d_vel = m_filtered * fl * f2 * f4 / (1.0 + arg * arg)
+    return tension, d_len, d_vel
+
+
+@nb.njit(cache=True)
+def bead_jacobian(bp, bv, pos, vel, m_force, kind, origin, offset, bead_start, rest_length,
+                  k_passive, f1, f2, f3, f4, active, stiff, damp):
+    """Bead-space stiffness ``-df/dp`` and damping ``-df/dv`` (3B x 3B, bead-major) of the
+    active muscles, written into ``stiff`` and ``damp`` (zeroed first)."""
+    stiff[:] = 0.0
+    damp[:] = 0.0
+    for q in range(active.shape[0]):
+        m = active[q]
+        b0 = bead_start[m]
+        b1 = bead_start[m + 1]
+        if kind[m] == 1:
+            nseg = b1 - b0 - 1
+            units = np.zeros((nseg, 3))
+            seglen = np.zeros(nseg)
+            length = 0.0
+            rate = 0.0
+            for s in range(nseg):
+                b = b0 + s
+                for a in range(3):
+                    units[s, a] = bp[b + 1, a] - bp[b, a]
+                seglen[s] = np.sqrt(units[s, 0] ** 2 + units[s, 1] ** 2 + units[s, 2] ** 2)
+                for a in range(3):
+                    units[s, a] /= seglen[s]
+                length += seglen[s]
+                for a in range(3):
+                    rate += units[s, a] * (bv[b + 1, a] - bv[b, a])
+            t, dl, dv = hill_derivatives(m_force[m], length, rest_length[m], rate, k_passive[m],
+                                         f1, f2, f3, f4)
+            # gradient of the path length at each bead
+            grad = np.zeros((b1 - b0, 3))
+            for s in range(nseg):
+                for a in range(3):
+                    grad[s, a] -= units[s, a]
+                    grad[s + 1, a] += units[s, a]
+            for i in range(b1 - b0):
+                for j in range(b1 - b0):
+                    for a in range(3):
+                        for c in range(3):
+                            gg = grad[i, a] * grad[j, c]
+                            stiff[3 * (b0 + i) + a, 3 * (b0 + j) + c] += dl * gg
+                            damp[3 * (b0 + i) + a, 3 * (b0 + j) + c] += dv * gg
+            # geometric stiffness of the tension: T / l (I - u u^T) on each segment
+            for s in range(nseg):
+                g = t / seglen[s]
+                for a in range(3):
+                    for c in range(3):
+                        pa = g * ((1.0 if a == c else 0.0) - units[s, a] * units[s, c])
+                        i0 = 3 * (b0 + s)
+                        i1 = 3 * (b0 + s + 1)
+                        stiff[i0 + a, i0 + c] += pa
+                        stiff[i1 + a, i1 + c] += pa
+                        stiff[i0 + a, i1 + c] -= pa
+                        stiff[i1 + a, i0 + c] -= pa
+        else:
+            o = origin[m]
+            d = np.empty(3)
+            for a in range(3):
+                d[a] = bp[b0, a] - pos[o, a] - offset[m, a]
+            length = np.sqrt(d[0] ** 2 + d[1] ** 2 + d[2] ** 2)
+            rate = 0.0
+            for a in range(3):
+                d[a] /= length
+                rate += d[a] * (bv[b0, a] - vel[o, a])
+            t, dl, dv = hill_derivatives(m_force[m], length, rest_length[m], rate, k_passive[m],
+                                         f1, f2, f3, f4)
+            g = t / length
+            for a in range(3):
+                for c in range(3):
+                    uu = d[a] * d[c]
+                    stiff[3 * b0 + a, 3 * b0 + c] += dl * uu + g * ((1.0 if a == c else 0.0) - uu)
+                    damp[3 * b0 + a, 3 * b0 + c] += dv * uu
+
+
+class MuscleJacobian:
+    """Bead-space linearisation of the muscles and the Woodbury solve (see the module doc).
+
+    Parameters
+    ----------
+    physics : Physics
+    lu : the factorisation of A0 (moving nodes x moving nodes, shared by the axes)
+    """
+
+    THRESHOLD = 1e-6  # N: a muscle with less filtered and steady force takes no part
+
+    def __init__(self, physics, lu):
+        ph = physics
+        self.physics = ph
+        self.lu = lu
+        row = np.full(ph.model.n_nodes, -1, np.int64)
+        row[ph.dynamic] = np.arange(ph.n_dynamic)
+        r = row[ph.muscle_nodes]
+        ok = r >= 0
+        self.n_beads = int(ph.bead_start[-1])
+        self.W = sp.csr_matrix((ph.muscle_weights[ok], (r[ok], ph.muscle_bead[ok])),
+                               shape=(ph.n_dynamic, self.n_beads))
+        self.Y = lu.solve(self.W.toarray()) if self.n_beads else np.zeros((ph.n_dynamic, 0))
+        self.G = np.asarray(self.W.T @ self.Y)
+        self._stiff = np.zeros((3 * self.n_beads, 3 * self.n_beads))
+        self._damp = np.zeros_like(self._stiff)
+
+    def linearise(self, pos, vel, m_force, m_steady):
+        """Bead-space Jacobian of the active muscles at a state, or None when none is active.
+
+        Returns (beads, K, C, Wa): the active beads, their stiffness and damping (3 Ba x 3 Ba,
+        bead-major) and their weight columns.
+        """
+        ph = self.physics
+        p = ph.params
+        active = np.nonzero((np.abs(m_force) > self.THRESHOLD)
+                            | (np.abs(m_steady) > self.THRESHOLD))[0].astype(np.int64)
+        if len(active) == 0:
+            return None
+        bp, bv = bead_positions(pos, vel, ph.muscle_nodes, ph.muscle_weights, ph.muscle_bead,
+                                self.n_beads)
+        bead_jacobian(bp, bv, pos, vel, np.asarray(m_force, float), ph.muscle_kind,
+                      ph.muscle_origin, ph.muscle_offset, ph.bead_start, ph.muscle_rest,
+                      ph.muscle_k_passive,
+                      p.f1, p.f2, p.f3, p.f4, active, self._stiff, self._damp)
+        beads = np.concatenate([np.arange(ph.bead_start[m], ph.bead_start[m + 1])
+                                for m in active])
+        idx = (3 * beads[:, None] + np.arange(3)).reshape(-1)
+        return _Linearised(beads, self._stiff[np.ix_(idx, idx)], self._damp[np.ix_(idx, idx)],
+                           self.W[:, beads], self.Y[:, beads],
+                           np.kron(self.G[np.ix_(beads, beads)], np.eye(3)))
+
+    def apply_stiffness(self, v: np.ndarray, jac) -> np.ndarray:
+        """``U K_b U^T v`` for v (moving nodes, 3); zero without active muscles."""
+        if jac is None:
+            return np.zeros_like(v)
+        q = np.asarray(jac.wa.T @ v).reshape(-1)
+        return np.asarray(jac.wa @ (jac.stiff @ q).reshape(-1, 3))
+
+    def solve(self, rhs: np.ndarray, jac, h: float) -> np.ndarray:
+        """``(A0 + U (h C_b + h^2 K_b) U^T)^-1 rhs`` for rhs (moving nodes, 3)."""
+        z = self.lu.solve(rhs)
+        if jac is None:
+            return z
+        s, factor = jac.system(h)
+        q = np.asarray(jac.wa.T @ z).reshape(-1)
+        y = lu_solve(factor, s @ q).reshape(-1, 3)
+        return z - jac.ya @ y
+
+
+class _Linearised:
+    """The active muscles' bead-space Jacobian and, per step size, the factorised small system
+    ``I + S (G x I3)`` of the Woodbury identity (``S = h C_b + h^2 K_b``)."""
+
+    def __init__(self, beads, stiff, damp, wa, ya, g3):
+        self.beads, self.stiff, self.damp, self.wa, self.ya, self.g3 = (beads, stiff, damp, wa,
+                                                                         ya, g3)
+        self._systems: dict = {}
+
+    def system(self, h: float):
+        hit = self._systems.get(h)
+        if hit is None:
+            s = h * self.damp + h * h * self.stiff
+            hit = (s, lu_factor(np.eye(len(s)) + s @ self.g3))
+            self._systems[h] = hit
+        return hit

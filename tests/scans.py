@@ -1,0 +1,58 @@
+"""A scan-like face for tests: the generic surface re-sampled irregularly and reshaped.
+
+A real scan has an irregular triangulation, its own proportions and its own mesh density. This
+one samples the generic surface at jittered points of its (angle, height) parameter plane,
+triangulates them (Delaunay), keeps a row of points on the lip line so that the mouth can be
+cut, and reshapes the result (wider, shorter, a fuller lower face) like another person.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import Delaunay
+
+from facemech.geometry import generic
+
+
+def reshape(p):
+    """Another person's proportions (metres in, metres out)."""
+    p = np.array(p, float)
+    out = p.copy()
+    out[..., 0] = p[..., 0] * 1.05
+    out[..., 1] = p[..., 1] * 0.96
+    out[..., 2] = p[..., 2] * 1.03
+    return out
+
+
+def scan_face(spacing_deg: float = 2.4, spacing_mm: float = 3.0, seed: int = 0):
+    """Vertices (m), triangles and landmarks (m) of the scan-like face."""
+    rng = np.random.default_rng(seed)
+    th = np.arange(-84.0, 84.01, spacing_deg)
+    ys = np.arange(generic.Y_BOTTOM, generic.Y_TOP + 0.01, spacing_mm)
+    tt, yy = np.meshgrid(th, ys)
+    inner = np.zeros(tt.shape, bool)
+    inner[1:-1, 1:-1] = True  # a regular outer ring: no sliver triangles on the hull
+    tt = tt + inner * rng.uniform(-0.3, 0.3, tt.shape) * spacing_deg
+    yy = yy + inner * rng.uniform(-0.3, 0.3, yy.shape) * spacing_mm
+    pts = np.column_stack([tt.ravel(), yy.ravel()])
+    pts = pts[np.abs(pts[:, 1] - generic.Y_STOMION) > 0.8]  # keep the lip line clear
+    # the lip line: the mouth corners' angle and a row of points between them
+    w = float(generic._width(generic.Y_STOMION))
+    corner = np.degrees(np.arcsin((generic.MOUTH_HALF_WIDTH / w) ** (generic.SUPERELLIPSE_N / 2)))
+    line = np.column_stack([np.linspace(-corner, corner, 15), np.full(15, generic.Y_STOMION)])
+    pts = np.concatenate([pts, line])
+    pts[:, 0] = np.clip(pts[:, 0], -84.0, 84.0)
+    pts[:, 1] = np.clip(pts[:, 1], generic.Y_BOTTOM, generic.Y_TOP)
+    tri = Delaunay(pts).simplices
+    theta, y = np.radians(pts[:, 0]), pts[:, 1]
+    bx, bz = generic._row_point(theta, y)
+    verts = np.column_stack([bx, y, bz + generic.features(bx, y)]) * 1e-3
+    # wind every triangle alike in the parameter plane, then so that the front faces +z
+    a, b, c = (pts[tri[:, k]] for k in range(3))
+    area2 = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
+    tri[area2 < 0] = tri[area2 < 0][:, ::-1]
+    a, b, c = (verts[tri[:, k]] for k in range(3))
+    if np.cross(b - a, c - a)[:, 2].sum() < 0:
+        tri = tri[:, ::-1]
+    lm = {k: v * 1e-3 for k, v in generic.landmarks().items()}
+    return reshape(verts), tri.astype(np.int64), {k: reshape(v) for k, v in lm.items()}
