@@ -85,44 +85,87 @@ def prism_forces(p, rest_volume, rest_rel, k_volume, k_shape, out):
     return v
 
 
+# the quadrilateral sides of a prism, each (a, b, c, d) in order around it, outward
+PRISM_QUADS = np.array([[0, 3, 4, 1], [1, 4, 5, 2], [2, 5, 3, 0]], dtype=np.int64)
+
+
 @nb.njit(cache=True, inline="always")
-def _volume_gradient(p, tris, out):
-    """Add the gradient (times 6) of the closed surface ``tris``'s volume to ``out`` (6, 3);
-    returns 6 x the volume. Evaluated about the prism's centre."""
+def _bilinear_volume_gradient(p, out):
+    """Write 12 x the gradient of the prism's volume under the bilinear patches of its sides
+    into ``out`` (6, 3) and return 12 x the volume.
+
+    A side (a, b, c, d) contributes ``(a + b + c + d) . ((c - a) x (d - b)) / 24``, the mean of
+    its two splits into triangles; its gradient at a is ``(n + s x (d - b)) / 24``, at c
+    ``(n - s x (d - b)) / 24``, at b ``(n - s x (c - a)) / 24``, at d ``(n + s x (c - a)) / 24``
+    with ``n = (c - a) x (d - b)``, ``s = a + b + c + d``. The end triangles (a, b, c)
+    contribute ``a . (b x c) / 6``. Evaluated about the prism's centre.
+    """
     cx = (p[0, 0] + p[1, 0] + p[2, 0] + p[3, 0] + p[4, 0] + p[5, 0]) / 6.0
     cy = (p[0, 1] + p[1, 1] + p[2, 1] + p[3, 1] + p[4, 1] + p[5, 1]) / 6.0
     cz = (p[0, 2] + p[1, 2] + p[2, 2] + p[3, 2] + p[4, 2] + p[5, 2]) / 6.0
-    v_acc = 0.0
-    for t in range(8):
-        a = tris[t, 0]
-        b = tris[t, 1]
-        c = tris[t, 2]
+    for k in range(6):
+        out[k, 0] = 0.0
+        out[k, 1] = 0.0
+        out[k, 2] = 0.0
+    v12 = 0.0
+    for t in range(2):  # the end triangles: (0, 1, 2) and (3, 5, 4)
+        a = PRISM_TRIANGLES[t, 0]
+        b = PRISM_TRIANGLES[t, 1]
+        c = PRISM_TRIANGLES[t, 2]
         ax, ay, az = p[a, 0] - cx, p[a, 1] - cy, p[a, 2] - cz
         bx, by, bz = p[b, 0] - cx, p[b, 1] - cy, p[b, 2] - cz
         qx, qy, qz = p[c, 0] - cx, p[c, 1] - cy, p[c, 2] - cz
         bcx, bcy, bcz = by * qz - bz * qy, bz * qx - bx * qz, bx * qy - by * qx
-        cax, cay, caz = qy * az - qz * ay, qz * ax - qx * az, qx * ay - qy * ax
-        abx, aby, abz = ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
-        v_acc += ax * bcx + ay * bcy + az * bcz
-        out[a, 0] += bcx
-        out[a, 1] += bcy
-        out[a, 2] += bcz
-        out[b, 0] += cax
-        out[b, 1] += cay
-        out[b, 2] += caz
-        out[c, 0] += abx
-        out[c, 1] += aby
-        out[c, 2] += abz
-    return v_acc
+        v12 += 2.0 * (ax * bcx + ay * bcy + az * bcz)
+        out[a, 0] += 2.0 * bcx
+        out[a, 1] += 2.0 * bcy
+        out[a, 2] += 2.0 * bcz
+        out[b, 0] += 2.0 * (qy * az - qz * ay)
+        out[b, 1] += 2.0 * (qz * ax - qx * az)
+        out[b, 2] += 2.0 * (qx * ay - qy * ax)
+        out[c, 0] += 2.0 * (ay * bz - az * by)
+        out[c, 1] += 2.0 * (az * bx - ax * bz)
+        out[c, 2] += 2.0 * (ax * by - ay * bx)
+    for q in range(3):
+        ia = PRISM_QUADS[q, 0]
+        ib = PRISM_QUADS[q, 1]
+        ic = PRISM_QUADS[q, 2]
+        idd = PRISM_QUADS[q, 3]
+        ax, ay, az = p[ia, 0] - cx, p[ia, 1] - cy, p[ia, 2] - cz
+        bx, by, bz = p[ib, 0] - cx, p[ib, 1] - cy, p[ib, 2] - cz
+        qx, qy, qz = p[ic, 0] - cx, p[ic, 1] - cy, p[ic, 2] - cz
+        dx, dy, dz = p[idd, 0] - cx, p[idd, 1] - cy, p[idd, 2] - cz
+        ux, uy, uz = qx - ax, qy - ay, qz - az  # c - a
+        wx, wy, wz = dx - bx, dy - by, dz - bz  # d - b
+        nx, ny, nz = uy * wz - uz * wy, uz * wx - ux * wz, ux * wy - uy * wx
+        # halves: 12 x (1/24)
+        nx, ny, nz = 0.5 * nx, 0.5 * ny, 0.5 * nz
+        sx, sy, sz = ax + bx + qx + dx, ay + by + qy + dy, az + bz + qz + dz
+        v12 += sx * nx + sy * ny + sz * nz
+        # s x (d - b) and s x (c - a), halved
+        tx, ty, tz = 0.5 * (sy * wz - sz * wy), 0.5 * (sz * wx - sx * wz), 0.5 * (sx * wy - sy * wx)
+        rx, ry, rz = 0.5 * (sy * uz - sz * uy), 0.5 * (sz * ux - sx * uz), 0.5 * (sx * uy - sy * ux)
+        out[ia, 0] += nx + tx
+        out[ia, 1] += ny + ty
+        out[ia, 2] += nz + tz
+        out[ic, 0] += nx - tx
+        out[ic, 1] += ny - ty
+        out[ic, 2] += nz - tz
+        out[ib, 0] += nx - rx
+        out[ib, 1] += ny - ry
+        out[ib, 2] += nz - rz
+        out[idd, 0] += nx + rx
+        out[idd, 1] += ny + ry
+        out[idd, 2] += nz + rz
+    return v12
 
 
 @nb.njit(cache=True, inline="always")
 def symmetric_volume(p):
     """Volume (m^3) of a prism (6, 3) under the bilinear patches of its sides: the mean of the
     two splits of every side, independent of the order of the nodes."""
-    g = np.zeros((6, 3))
-    return (_volume_gradient(p, PRISM_TRIANGLES, g)
-            + _volume_gradient(p, PRISM_TRIANGLES_ALT, g)) / 12.0
+    g = np.empty((6, 3))
+    return _bilinear_volume_gradient(p, g) / 12.0
 
 
 @nb.njit(cache=True, inline="always")
@@ -133,15 +176,9 @@ def prism_pressure(p, rest_volume, bulk_per_volume, out):
     ``K / V0``: ``-K / V0 (V - V0) dV/dp_i``. V is :func:`symmetric_volume`; the gradient of a
     closed surface's volume at node i is a sixth of the sum, over its triangles at i, of the
     cross product of the triangle's two other corners (taken in order), here averaged over the
-    two splits of the sides. Returns V.
+    two splits of the sides in closed form (:func:`_bilinear_volume_gradient`). Returns V.
     """
-    for k in range(6):
-        out[k, 0] = 0.0
-        out[k, 1] = 0.0
-        out[k, 2] = 0.0
-    v6 = _volume_gradient(p, PRISM_TRIANGLES, out) + _volume_gradient(p, PRISM_TRIANGLES_ALT,
-                                                                      out)
-    vol = v6 / 12.0
+    vol = _bilinear_volume_gradient(p, out) / 12.0
     s = -bulk_per_volume * (vol - rest_volume) / 12.0
     for k in range(6):
         out[k, 0] *= s

@@ -163,15 +163,8 @@ def simulate(
     state = initial_state or State.at_rest(rest, physics.n_muscles, float(jaw_angle[0]))
     positions = np.empty((frames, n, 3))
     t0 = _time.perf_counter()
-    for k in range(frames):
-        positions[k] = state.positions[:n]
-        if k == frames - 1:
-            break
-        target = jaw_angle[k] if jaw_drive == "hold" else jaw_angle[k + 1]
-        state = stepper.advance(state, activity[k], target)
-        _check_state(state, rest, k + 1, activity[k], jaw_angle[k])
-        if progress is not None:
-            progress(k + 1, frames - 1)
+    with single_threaded_blas():
+        state = _run(stepper, state, activity, jaw_angle, jaw_drive, positions, rest, progress)
     wall = _time.perf_counter() - t0
     return Simulation(
         model=model, params=params, time=np.arange(frames) / params.frame_rate,
@@ -181,3 +174,27 @@ def simulate(
         dt=stepper.dt, wall_seconds=wall,
         attrs={"steps_per_frame": stepper.n_steps, "jaw_drive": jaw_drive},
     )
+
+
+def _run(stepper, state, activity, jaw_angle, jaw_drive, positions, rest, progress):
+    """The frame loop of :func:`simulate`: fills ``positions``, returns the last state."""
+    frames = len(activity)
+    n = positions.shape[1]
+    for k in range(frames):
+        positions[k] = state.positions[:n]
+        if k == frames - 1:
+            break
+        target = jaw_angle[k] if jaw_drive == "hold" else jaw_angle[k + 1]
+        state = stepper.advance(state, activity[k], target)
+        _check_state(state, rest, k + 1, activity[k], jaw_angle[k])
+        if progress is not None:
+            progress(k + 1, frames - 1)
+    return state
+
+
+def single_threaded_blas():
+    """A context in which BLAS uses one thread: the implicit step's small dense systems are far
+    slower when OpenBLAS spreads them over the cores of a busy machine."""
+    from threadpoolctl import threadpool_limits
+
+    return threadpool_limits(limits=1, user_api="blas")

@@ -153,13 +153,28 @@ class MuscleJacobian:
         self.G = np.asarray(self.W.T @ self.Y)
         self._stiff = np.zeros((3 * self.n_beads, 3 * self.n_beads))
         self._damp = np.zeros_like(self._stiff)
+        self._subspaces: dict = {}
+
+    def _subspace(self, active):
+        """W, W^T, A0^-1 W and G x I3 restricted to the beads of the active muscles (cached per
+        set of active muscles, which changes seldom)."""
+        key = active.tobytes()
+        hit = self._subspaces.get(key)
+        if hit is None:
+            ph = self.physics
+            beads = np.concatenate([np.arange(ph.bead_start[m], ph.bead_start[m + 1])
+                                    for m in active])
+            wa = self.W[:, beads].tocsr()
+            hit = (beads, (3 * beads[:, None] + np.arange(3)).reshape(-1), wa, wa.T.tocsr(),
+                   np.ascontiguousarray(self.Y[:, beads]),
+                   np.kron(self.G[np.ix_(beads, beads)], np.eye(3)))
+            if len(self._subspaces) > 32:
+                self._subspaces.clear()
+            self._subspaces[key] = hit
+        return hit
 
     def linearise(self, pos, vel, m_force, m_steady):
-        """Bead-space Jacobian of the active muscles at a state, or None when none is active.
-
-        Returns (beads, K, C, Wa): the active beads, their stiffness and damping (3 Ba x 3 Ba,
-        bead-major) and their weight columns.
-        """
+        """Bead-space Jacobian of the active muscles at a state, or None when none is active."""
         ph = self.physics
         p = ph.params
         active = np.nonzero((np.abs(m_force) > self.THRESHOLD)
@@ -170,20 +185,17 @@ class MuscleJacobian:
                                 self.n_beads)
         bead_jacobian(bp, bv, pos, vel, np.asarray(m_force, float), ph.muscle_kind,
                       ph.muscle_origin, ph.muscle_offset, ph.bead_start, ph.muscle_rest,
-                      ph.muscle_k_passive,
-                      p.f1, p.f2, p.f3, p.f4, active, self._stiff, self._damp)
-        beads = np.concatenate([np.arange(ph.bead_start[m], ph.bead_start[m + 1])
-                                for m in active])
-        idx = (3 * beads[:, None] + np.arange(3)).reshape(-1)
+                      ph.muscle_k_passive, p.f1, p.f2, p.f3, p.f4, active, self._stiff,
+                      self._damp)
+        beads, idx, wa, wat, ya, g3 = self._subspace(active)
         return _Linearised(beads, self._stiff[np.ix_(idx, idx)], self._damp[np.ix_(idx, idx)],
-                           self.W[:, beads], self.Y[:, beads],
-                           np.kron(self.G[np.ix_(beads, beads)], np.eye(3)))
+                           wa, wat, ya, g3)
 
     def apply_stiffness(self, v: np.ndarray, jac) -> np.ndarray:
         """``U K_b U^T v`` for v (moving nodes, 3); zero without active muscles."""
         if jac is None:
             return np.zeros_like(v)
-        q = np.asarray(jac.wa.T @ v).reshape(-1)
+        q = np.asarray(jac.wat @ v).reshape(-1)
         return np.asarray(jac.wa @ (jac.stiff @ q).reshape(-1, 3))
 
     def solve(self, rhs: np.ndarray, jac, h: float) -> np.ndarray:
@@ -192,7 +204,7 @@ class MuscleJacobian:
         if jac is None:
             return z
         s, factor = jac.system(h)
-        q = np.asarray(jac.wa.T @ z).reshape(-1)
+        q = np.asarray(jac.wat @ z).reshape(-1)
         y = lu_solve(factor, s @ q).reshape(-1, 3)
         return z - jac.ya @ y
 
@@ -201,9 +213,9 @@ class _Linearised:
     """The active muscles' bead-space Jacobian and, per step size, the factorised small system
     ``I + S (G x I3)`` of the Woodbury identity (``S = h C_b + h^2 K_b``)."""
 
-    def __init__(self, beads, stiff, damp, wa, ya, g3):
-        self.beads, self.stiff, self.damp, self.wa, self.ya, self.g3 = (beads, stiff, damp, wa,
-                                                                         ya, g3)
+    def __init__(self, beads, stiff, damp, wa, wat, ya, g3):
+        self.beads, self.stiff, self.damp = beads, stiff, damp
+        self.wa, self.wat, self.ya, self.g3 = wa, wat, ya, g3
         self._systems: dict = {}
 
     def system(self, h: float):
