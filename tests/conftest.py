@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import sys
 import tempfile
 
 _CACHE = tempfile.mkdtemp(prefix="facemech-test-cache-")
@@ -14,6 +15,7 @@ import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
 from facemech import MUSCLE_GROUPS, default_face  # noqa: E402
+from facemech.cli import main  # noqa: E402
 
 
 @pytest.fixture(scope="session")
@@ -34,3 +36,15 @@ def activity(frames: int, **levels: float) -> np.ndarray:
     for g, v in levels.items():
         a[:, MUSCLE_GROUPS.index(g)] = v
     return a
+
+
+def run_cli(monkeypatch, capsys, *args) -> tuple[int, str, str]:
+    """Run ``facemech ARGS`` in this process: (exit status, stdout, stderr)."""
+    monkeypatch.setattr(sys, "argv", ["facemech", *map(str, args)])
+    code = 0
+    try:
+        main()
+    except SystemExit as exc:
+        code = exc.code if isinstance(exc.code, int) else 1
+    out, err = capsys.readouterr()
+    return code, out, err

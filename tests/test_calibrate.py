@@ -2,14 +2,13 @@
 the preset file it writes is accepted by every --preset option."""
 
 import json
-import sys
 
 import numpy as np
 import pytest
 
+from conftest import run_cli
 from facemech import default_face
 from facemech.analysis.gestures import gesture_activity
-from facemech.cli import main
 from facemech.errors import InputError
 from facemech.io.markers import write_markers
 from facemech.markerset import MarkerSet
@@ -18,16 +17,6 @@ from facemech.solvers.forward import simulate
 
 MARKERS = ("R03", "R05", "R07", "L06", "R01")
 
-
-def run_cli(monkeypatch, capsys, *args):
-    monkeypatch.setattr(sys, "argv", ["facemech", *map(str, args)])
-    code = 0
-    try:
-        main()
-    except SystemExit as exc:
-        code = exc.code if isinstance(exc.code, int) else 1
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def recorded(tmp_path, name, groups, params):

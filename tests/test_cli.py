@@ -8,20 +8,9 @@ import wave
 import numpy as np
 import pytest
 
+from conftest import run_cli as cli
 from facemech import default_face, read_results
-from facemech.cli import main
 from facemech.geometry.builder import default_surface
-
-
-def cli(monkeypatch, capsys, *args):
-    monkeypatch.setattr(sys, "argv", ["facemech", *map(str, args)])
-    code = 0
-    try:
-        main()
-    except SystemExit as exc:
-        code = exc.code if isinstance(exc.code, int) else 1
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def assert_one_line_error(code, err, *needles):

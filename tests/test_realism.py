@@ -2,11 +2,11 @@
 command line, no crease when the jaw opens (built-in face and a scan-like face), the three
 mesh resolutions, the response to a pulse, and the chin marker driving the jaw."""
 
-import sys
 
 import numpy as np
 import pytest
 
+from conftest import run_cli
 from facemech import default_face, read_results
 from facemech.analysis.folds import largest_fold_increase
 from facemech.analysis.gestures import (
@@ -17,21 +17,9 @@ from facemech.analysis.gestures import (
     measure,
     run_gesture,
 )
-from facemech.cli import main
 from facemech.io.activity import write_activity
 from facemech.params import MUSCLE_GROUPS, preset
 from facemech.solvers.forward import simulate
-
-
-def run_cli(monkeypatch, capsys, *args):
-    monkeypatch.setattr(sys, "argv", ["facemech", *map(str, args)])
-    code = 0
-    try:
-        main()
-    except SystemExit as exc:
-        code = exc.code if isinstance(exc.code, int) else 1
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def test_gesture_amplitudes_reach_real_faces_through_the_cli(tmp_path, monkeypatch, capsys):
@@ -131,3 +119,18 @@ def test_a_chin_marker_drives_the_jaw_in_the_tissue(face):
     sim = simulate(face, np.zeros((60, len(MUSCLE_GROUPS))), jaw, params=p)
     drop = sim.positions[-1, node, 1] - sim.positions[0, node, 1]
     assert drop * 1e3 == pytest.approx(-6.0, abs=0.4)
+
+
+def test_an_explicit_step_is_refused_under_the_implicit_preset(tmp_path, monkeypatch, capsys):
+    """``--dt`` sets the explicit Euler step: under the anatomical preset (implicit steps) a dt
+    other than the implicit step is an error naming the field, never silently ignored."""
+    act = tmp_path / "act.csv"
+    write_activity(act, np.arange(3) / 60.0, np.zeros((3, len(MUSCLE_GROUPS))))
+    out = tmp_path / "r.nc"
+    code, _, err = run_cli(monkeypatch, capsys, "simulate", "--face", "default-coarse",
+                           "--activity", act, "--dt", "0.001", "-o", out)
+    assert code == 2 and "dt" in err and "substeps" in err and not out.exists()
+    assert len(err.strip().splitlines()) == 1
+    code, _, err = run_cli(monkeypatch, capsys, "simulate", "--face", "default-coarse",
+                           "--activity", act, "--dt", str(1 / 240), "-o", out)
+    assert code == 0, err

@@ -28,7 +28,16 @@ from .kinematics.mapping import closest_nodes, read_mapping, scale_adapt, warp_f
 from .kinematics.resample import derivative, resample
 from .kinematics.rigid import head_correct, rigid_fit
 from .markerset import MarkerSet
-from .params import EMG_CHANNELS, MUSCLE_GROUPS, PRESETS, Parameters, preset
+from .params import (
+    EMG_CHANNELS,
+    MUSCLE_GROUPS,
+    PRESETS,
+    Parameters,
+    default_parameters,
+    preset,
+    read_preset,
+    write_preset,
+)
 from .physics.assembly import Physics
 from .solvers.forward import Simulation, simulate
 from .solvers.jaw import angles_from_chin, jaw_angles_from_marker
@@ -39,10 +48,10 @@ __all__ = [
     "__version__", "BuildOptions", "EMGActivity", "EMG_CHANNELS", "FaceModel", "FacemechError",
     "INTEGRATORS", "InputError", "MUSCLE_GROUPS", "MarkerSet", "PRESETS", "Parameters", "Physics",
     "Simulation", "SimulationBlowUp", "State", "Stepper", "align_to_model", "angles_from_chin",
-    "build_face", "closest_nodes", "default_face", "derivative", "fill_gaps", "find_gaps",
-    "head_correct", "jaw_angles_from_marker", "load_face", "preset", "process_emg",
+    "build_face", "closest_nodes", "default_face", "default_parameters", "derivative", "fill_gaps",
+    "find_gaps", "head_correct", "jaw_angles_from_marker", "load_face", "preset", "process_emg",
     "read_activity", "read_emg", "read_landmarks", "read_mapping", "read_marker_csv",
-    "read_markers", "read_results", "read_surface", "resample", "rigid_fit", "scale_adapt",
-    "seven_channel_control", "simulate", "to_anatomical_frame", "warp_face", "write_activity",
-    "write_marker_csv", "write_markers", "write_results",
+    "read_markers", "read_preset", "read_results", "read_surface", "resample", "rigid_fit",
+    "scale_adapt", "seven_channel_control", "simulate", "to_anatomical_frame", "warp_face",
+    "write_activity", "write_marker_csv", "write_markers", "write_preset", "write_results",
 ]

@@ -401,7 +401,9 @@ def simulate(
         help="euler, implicit or rosenbrock (default: the preset's)")] = None,
     substeps: Annotated[int | None, typer.Option(
         help="steps per frame of the implicit integrators (default: the preset's)")] = None,
-    dt: Annotated[float | None, typer.Option(help="Euler step, s (default 0.33e-3)")] = None,
+    dt: Annotated[float | None, typer.Option(help="explicit Euler step, s (default: the "
+                                                  "preset's; implicit integrators: --substeps)")]
+    = None,
     jaw_drive: Annotated[str, typer.Option(help="ramp or hold")] = "ramp",
     video: Annotated[Path | None, typer.Option(help="also render an MP4")] = None,
     audio: Annotated[Path | None, typer.Option(help="WAV to mux into the MP4")] = None,
@@ -664,8 +666,9 @@ def invert(
                                                         "scaling from two markers far apart")]
     = None,
     preset: PresetOpt = "anatomical",
-    dt: Annotated[float | None, typer.Option(help="Euler step of every evaluation, s (default: "
-                                                  "the preset's fast step, 1 ms or 0.33 ms)")]
+    dt: Annotated[float | None, typer.Option(help="explicit Euler step of every evaluation, s "
+                                                  "(default: the preset's fast step; the "
+                                                  "anatomical preset steps implicitly, 4.2 ms)")]
     = None,
     units: UnitsOpt = None,
     figure: Annotated[Path | None, typer.Option(help="PNG of the inverted activity and the "

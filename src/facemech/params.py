@@ -211,16 +211,17 @@ def anatomical(scales: dict | None = None) -> Parameters:
     - muscle force: eq. (3) with k_f the specific tension of muscle (26.8 N/cm^2, Persad et al.
       2024) times ``scales["force"]``, and the cross-sectional areas of Table II of Lucero &
       Munhall (1999), from Kennedy & Abbs (1979);
-    - tissue: shear moduli 6 kPa between the skin and the muscle plane and 3 kPa under it
-      (Young's moduli of 17 and 9 kPa at Poisson's ratio 0.45), times ``scales["stiffness"]``:
+    - tissue: shear moduli 6 kPa between the skin and the muscle plane and 1.5 kPa under it
+      (Young's moduli of 17 and 4.4 kPa at Poisson's ratio 0.45), times ``scales["stiffness"]``:
       relaxed zygomaticus major measures about 15 kPa by shear-wave elastography (Ternifi et al.
       2019), buccinator 4-17 kPa (Stepanova et al. 2023), face soft tissue 31-42 kPa by
       aspiration of the skin (Luboz et al. 2014), which includes the dermis; the dermis is a
       membrane of Young's modulus x thickness 100 N/m (about 70 kPa over its 1-2 mm, Chopra et
       al. 2015 for the thickness);
     - density 1050 kg/m^3 (muscle 1050, skin 1100, fat 950: ICRU 46 / White et al. 1987);
-    - viscosity: a viscous time (viscosity / modulus) of 8 ms, chosen so that the slowest
-      motions of the lips are critically damped (no published facial-tissue viscosity serves);
+    - viscosity: a viscous time (viscosity / modulus) of 3 ms (no published facial-tissue
+      viscosity serves): small enough not to slow gestures, large enough for the step's stability
+      (docs/model.md);
     - integration: linearly implicit Euler, 4 steps per 60-Hz frame.
     """
     s = {**ANATOMICAL_SCALES, **(scales or {})}

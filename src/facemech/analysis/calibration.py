@@ -45,7 +45,9 @@ class Target:
     """A gesture amplitude a fit aims at.
 
     ``measure`` is a key of :func:`facemech.analysis.gestures.measure` (mm); ``value`` the
-    amplitude; ``kind`` "equal" (fitted), or "at_least" / "at_most" (count only when violated).
+    amplitude; ``kind`` "equal" (fitted on the log of the ratio), "difference" (fitted on the
+    difference, for a subject's marker coordinates), or "at_least" / "at_most" (count only when
+    violated).
     """
 
     name: str
@@ -104,7 +106,7 @@ class CalibrationResult:
         """The targets and the model's amplitudes, one line each."""
         out = []
         for r in self.rows:
-            rel = {"equal": "=", "at_least": ">=", "at_most": "<="}[r["kind"]]
+            rel = {"equal": "=", "difference": "=", "at_least": ">=", "at_most": "<="}[r["kind"]]
             note = "" if r.get("fitted", True) else ", reported only"
             out.append(f"{r['name']:28s} {r['model']:7.2f} mm  (target {rel} {r['target']:.2f}"
                        f"{note})")
@@ -154,6 +156,8 @@ def _evaluate(face, scales: dict, targets, run) -> tuple[np.ndarray, list]:
         if t.kind == "equal":
             # relative error, symmetric in scale: log of the ratio of magnitudes
             res.append(t.weight * np.log(max(abs(got), 1e-3) / abs(t.value)))
+        elif t.kind == "difference":  # a marker coordinate (mm), weighted by 1 / its scale
+            res.append(t.weight * (got - t.value))
         elif t.kind == "at_least":
             res.append(t.weight * HARD * min(0.0, (got - t.value) / abs(t.value)))
         else:
@@ -299,52 +303,6 @@ def subject_targets(face, recordings, mapping: dict[str, int]):
 def fit_subject(face, recordings, mapping, *, fit=FITTED, max_evaluations: int = 30,
                 progress=None) -> CalibrationResult:
     """Fit the anatomical preset's scales to a subject's recorded maximal gestures."""
-    from scipy.optimize import least_squares
-
-    check_fit(fit)
     targets, run = subject_targets(face, recordings, mapping)
-    base = dict(ANATOMICAL_SCALES)
-    lo = np.log([BOUNDS[k][0] for k in fit]) + OFFSET
-    hi = np.log([BOUNDS[k][1] for k in fit]) + OFFSET
-    x0 = np.log([base[k] for k in fit]) + OFFSET
-    trace: list = []
-    cache: dict = {}
-
-    def scales_of(x):
-        return {**base, **{k: float(np.exp(v - OFFSET)) for k, v in zip(fit, x, strict=True)}}
-
-    def residuals(x):
-        key = tuple(np.round(x, 10))
-        if key in cache:
-            return cache[key][0]
-        s = scales_of(x)
-        params = anatomical(s)
-        got: dict = {}
-        rows = []
-        try:
-            for t in targets:
-                if t.groups not in got:
-                    got[t.groups] = run(face, t.groups, params)
-            res = []
-            for t in targets:
-                m = got[t.groups][t.measure]
-                res.append(t.weight * (m - t.value))
-                rows.append({"name": t.name, "groups": "+".join(t.groups), "measure": t.measure,
-                             "target": t.value, "kind": "equal", "model": m,
-                             "source": t.source})
-            r = np.asarray(res)
-        except SimulationBlowUp:
-            r = np.full(len(targets), 10.0)
-        cache[key] = (r, rows)
-        trace.append((s, float(0.5 * r @ r)))
-        if progress is not None:
-            progress(len(trace), max_evaluations)
-        return r
-
-    sol = least_squares(residuals, x0, bounds=(lo, hi), diff_step=DIFF_STEP,
-                        max_nfev=max(2, max_evaluations // (len(fit) + 1)), method="trf")
-    best = min(cache.items(), key=lambda kv: float(kv[1][0] @ kv[1][0]))
-    r, rows = best[1]
-    return CalibrationResult(scales=scales_of(np.array(best[0])), rows=rows,
-                             cost=float(0.5 * r @ r), evaluations=len(trace), trace=trace,
-                             status=str(sol.message))
+    return fit_scales(face, targets=targets, fit=fit, run=run, max_evaluations=max_evaluations,
+                      progress=progress)

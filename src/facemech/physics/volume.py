@@ -31,19 +31,30 @@ def prism_volume(p):
     The quadrilateral sides are split into two triangles each; the result is exact for planar
     sides and independent of the origin (it is computed about the element's centre).
     """
-    cx = (p[0, 0] + p[1, 0] + p[2, 0] + p[3, 0] + p[4, 0] + p[5, 0]) / 6.0
-    cy = (p[0, 1] + p[1, 1] + p[2, 1] + p[3, 1] + p[4, 1] + p[5, 1]) / 6.0
-    cz = (p[0, 2] + p[1, 2] + p[2, 2] + p[3, 2] + p[4, 2] + p[5, 2]) / 6.0
+    cx, cy, cz = _centre(p)
     v = 0.0
     for t in range(8):
-        a = PRISM_TRIANGLES[t, 0]
-        b = PRISM_TRIANGLES[t, 1]
-        c = PRISM_TRIANGLES[t, 2]
-        ax, ay, az = p[a, 0] - cx, p[a, 1] - cy, p[a, 2] - cz
-        bx, by, bz = p[b, 0] - cx, p[b, 1] - cy, p[b, 2] - cz
-        qx, qy, qz = p[c, 0] - cx, p[c, 1] - cy, p[c, 2] - cz
+        _, _, _, ax, ay, az, bx, by, bz, qx, qy, qz = _triangle_about(p, t, cx, cy, cz)
         v += ax * (by * qz - bz * qy) - ay * (bx * qz - bz * qx) + az * (bx * qy - by * qx)
     return v / 6.0
+
+
+@nb.njit(cache=True, inline="always")
+def _centre(p):
+    """Mean of a prism's six nodes (m)."""
+    return ((p[0, 0] + p[1, 0] + p[2, 0] + p[3, 0] + p[4, 0] + p[5, 0]) / 6.0,
+            (p[0, 1] + p[1, 1] + p[2, 1] + p[3, 1] + p[4, 1] + p[5, 1]) / 6.0,
+            (p[0, 2] + p[1, 2] + p[2, 2] + p[3, 2] + p[4, 2] + p[5, 2]) / 6.0)
+
+
+@nb.njit(cache=True, inline="always")
+def _triangle_about(p, t, cx, cy, cz):
+    """Node indices of triangle t of :data:`PRISM_TRIANGLES` and its corners about (cx, cy, cz)."""
+    a = PRISM_TRIANGLES[t, 0]
+    b = PRISM_TRIANGLES[t, 1]
+    c = PRISM_TRIANGLES[t, 2]
+    return (a, b, c, p[a, 0] - cx, p[a, 1] - cy, p[a, 2] - cz, p[b, 0] - cx, p[b, 1] - cy,
+            p[b, 2] - cz, p[c, 0] - cx, p[c, 1] - cy, p[c, 2] - cz)
 
 
 @nb.njit(cache=True, inline="always")
@@ -100,21 +111,14 @@ def _bilinear_volume_gradient(p, out):
     with ``n = (c - a) x (d - b)``, ``s = a + b + c + d``. The end triangles (a, b, c)
     contribute ``a . (b x c) / 6``. Evaluated about the prism's centre.
     """
-    cx = (p[0, 0] + p[1, 0] + p[2, 0] + p[3, 0] + p[4, 0] + p[5, 0]) / 6.0
-    cy = (p[0, 1] + p[1, 1] + p[2, 1] + p[3, 1] + p[4, 1] + p[5, 1]) / 6.0
-    cz = (p[0, 2] + p[1, 2] + p[2, 2] + p[3, 2] + p[4, 2] + p[5, 2]) / 6.0
+    cx, cy, cz = _centre(p)
     for k in range(6):
         out[k, 0] = 0.0
         out[k, 1] = 0.0
         out[k, 2] = 0.0
     v12 = 0.0
     for t in range(2):  # the end triangles: (0, 1, 2) and (3, 5, 4)
-        a = PRISM_TRIANGLES[t, 0]
-        b = PRISM_TRIANGLES[t, 1]
-        c = PRISM_TRIANGLES[t, 2]
-        ax, ay, az = p[a, 0] - cx, p[a, 1] - cy, p[a, 2] - cz
-        bx, by, bz = p[b, 0] - cx, p[b, 1] - cy, p[b, 2] - cz
-        qx, qy, qz = p[c, 0] - cx, p[c, 1] - cy, p[c, 2] - cz
+        a, b, c, ax, ay, az, bx, by, bz, qx, qy, qz = _triangle_about(p, t, cx, cy, cz)
         bcx, bcy, bcz = by * qz - bz * qy, bz * qx - bx * qz, bx * qy - by * qx
         v12 += 2.0 * (ax * bcx + ay * bcy + az * bcz)
         out[a, 0] += 2.0 * bcx

@@ -171,7 +171,8 @@ class Stepper:
     substeps : int, optional
         Steps per frame of the implicit integrators (default: the preset's, 4: h = 4.2 ms).
     dt : float, optional
-        Step of the explicit integrator (default: the preset's 0.33 ms).
+        Step of the explicit integrator (default: the preset's 0.33 ms). With an implicit
+        integrator it may only repeat the step that ``substeps`` gives (an error otherwise).
     jaw_drive : {"ramp", "hold"}
     """
 
@@ -204,6 +205,11 @@ class Stepper:
             if substeps < 1:
                 raise InputError("substeps must be at least 1", field="substeps")
             self.n_steps = int(substeps)
+            h = self.frame_duration / self.n_steps
+            if dt is not None and abs(float(dt) - h) > 1e-9 * h:
+                raise InputError(f"dt ({float(dt) * 1e3:.3g} ms) is the explicit Euler step; the "
+                                 f"{integrator} integrator takes {self.n_steps} steps per frame "
+                                 f"({h * 1e3:.3g} ms): set substeps instead", field="dt")
         self.dt = self.frame_duration / self.n_steps
         if integrator != "euler":
             gamma = ROS2_GAMMA if integrator == "rosenbrock" else 1.0
