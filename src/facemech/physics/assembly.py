@@ -58,8 +58,6 @@ class Physics:
     skull_contact: bool  # eq. (10) on the tied nodes
     jaw_nodes: np.ndarray
     jaw_weights: np.ndarray  # share of the jaw's rotation of each jaw node
-    sliding: np.ndarray  # skull nodes that move and rest on bone and teeth
-    sliding_weight: np.ndarray  # share of the jaw's rotation of the bone under each
     contact_k: np.ndarray  # N/m, lip contact stiffness of each pair
     muscle_group: np.ndarray
     muscle_kind: np.ndarray
@@ -125,7 +123,6 @@ class Physics:
         jaw = np.zeros(model.n_nodes)
         jaw[model.jaw_nodes] = model.jaw_weight
         jaw[model.sliding] = model.sliding_weight
-        sliding = np.sort(np.asarray(model.sliding, np.int64))
         groups = [MUSCLE_GROUPS[g] for g in model.muscles.group]
         mus = model.muscles
         local = mus.beads()
@@ -148,7 +145,6 @@ class Physics:
             skull_contact=bool(params.fixed_skull_contact and not params.is_continuum),
             jaw_nodes=np.asarray(model.jaw_nodes, np.int64),
             jaw_weights=np.asarray(model.jaw_weight, float),
-            sliding=sliding, sliding_weight=jaw[sliding],
             contact_k=np.asarray(contact, float),
             muscle_group=model.muscles.group, muscle_kind=model.muscles.kind,
             muscle_origin=model.muscles.origin, muscle_ptr=model.muscles.ptr,

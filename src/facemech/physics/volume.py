@@ -172,6 +172,19 @@ def symmetric_volume(p):
     return _bilinear_volume_gradient(p, g) / 12.0
 
 
+@nb.njit(cache=True)
+def volume_gradients(prisms):
+    """Gradients (k, 6, 3) of the volumes of prisms (k, 6, 3) under the bilinear patches of their
+    sides (m^2), as :func:`symmetric_volume` measures them."""
+    out = np.empty_like(prisms)
+    for e in range(prisms.shape[0]):
+        _bilinear_volume_gradient(prisms[e], out[e])
+        for k in range(6):
+            for a in range(3):
+                out[e, k, a] /= 12.0
+    return out
+
+
 @nb.njit(cache=True, inline="always")
 def prism_pressure(p, rest_volume, bulk_per_volume, out):
     """Volume-preserving pressure on the 6 nodes of a prism, written into ``out`` (6, 3).

@@ -23,14 +23,15 @@ x, y and z) so one factorisation of a nodes x nodes matrix serves the three axes
 
 For the seeds' constants K is the rest tangent of springs, shape and restoration terms and C
 the damping graph Laplacian. For the continuum tissue (the anatomical preset) C is exact (each
-spring's dashpot), K holds the volume term (the Gram matrix of each prism's volume gradient,
-within a factor 3 of its true rank-one Hessian) and the tethers; the springs themselves need
-no place in K, because their stiffness-proportional damping, exact in C, keeps every mode stable
-for steps below twice the viscous time. Physiological muscle forces make the velocity term of
-the Hill law (eq. 6) a strong damper on the insertion nodes (``M f2 f4 / (1 + (f3 + f4 l')^2)``,
-up to about 10 N s/m per newton of force); it is taken into the implicit solve exactly, as a
-rank-one term per active muscle, by the Sherman-Morrison-Woodbury identity on the constant
-factorisation (:class:`_MuscleDamping`).
+spring's dashpot acts on the whole relative velocity of its ends), and K holds a share
+(``IMPLICIT_STIFFNESS_SHARE``) of each spring's stiff branch, the volume term (the Gram matrix
+of each prism's volume gradient, within a factor 3 of its true rank-one Hessian) and the
+tethers: with the exact damping in the matrix, the stiffness left explicit is stable for steps
+below 2 b / ((1 - share) k_high) (docs/model.md). Physiological muscle forces make the velocity
+term of the Hill law (eq. 6) and the geometric stiffness of a tension stiff on the insertion
+nodes; both are taken into the implicit solve exactly, through the muscles' beads, by the
+Sherman-Morrison-Woodbury identity on the constant factorisation
+(:class:`~facemech.solvers.muscle_implicit.MuscleJacobian`).
 
 The jaw (``jaw_drive``): ``"ramp"`` (default) turns the mandible at a constant rate from the
 state's angle to the frame's angle over the frame; ``"hold"`` sets the frame's angle at the start
@@ -52,6 +53,7 @@ from scipy.sparse.linalg import splu
 from ..errors import InputError, SimulationBlowUp
 from ..physics.assembly import Physics, accumulate_forces, force_arguments
 from ..physics.muscle import activation_euler, activation_exact
+from ..physics.volume import volume_gradients
 from .muscle_implicit import MuscleJacobian
 from .state import State
 
@@ -59,8 +61,8 @@ INTEGRATORS = ("euler", "implicit", "rosenbrock")
 JAW_DRIVES = ("ramp", "hold")
 ROS2_GAMMA = 1.0 + 1.0 / np.sqrt(2.0)
 #: share of the springs' stiffness (of their stiff branch) that the constant matrix of the
-#: continuum carries: with the exact damping in the matrix, a half keeps the slowest modes
-#: relaxing at the tissue's viscous time at 4 steps per frame, without ringing
+#: continuum carries: with the exact damping in the matrix, the rest left explicit is stable at
+#: 4 steps per frame and the lips do not ring (docs/model.md, Integration)
 IMPLICIT_STIFFNESS_SHARE = 0.3
 
 
@@ -258,8 +260,8 @@ class Stepper:
         (eq. 8). The isotropic K over-estimates the transverse stiffness of unloaded springs,
         which only adds numerical damping; the exact forces are evaluated every step.
 
-        Continuum: C is the exact Laplacian of the springs' dashpots; K the volume term's Gram
-        matrices and the lip contact (see the module doc).
+        Continuum: C is the exact Laplacian of the springs' dashpots; K a share of the springs'
+        stiff branch, the volume term's Gram matrices and the tethers (see the module doc).
         """
         ph, p = self.physics, self.physics.params
         nd = ph.n_dynamic
@@ -278,7 +280,7 @@ class Stepper:
             # rank-one Hessian) and the tethers
             damp = _graph_matrix(si, sj, ph.spring_damping, nd)
             k_springs = _graph_matrix(si, sj, IMPLICIT_STIFFNESS_SHARE * ph.spring_k_high, nd)
-            grads = _volume_gradients(ph.model.rest_positions[ph.prism_nodes])  # (p, 6, 3)
+            grads = volume_gradients(ph.model.rest_positions[ph.prism_nodes])  # (p, 6, 3)
             gram = np.einsum("pac,pbc->pab", grads, grads) * ph.prism_bulk[:, None, None]
             tether = np.zeros(nd)
             np.add.at(tether, row[ph.tied], ph.restore_k)
@@ -300,7 +302,7 @@ class Stepper:
         stiff = stiff.tocsc()
         a_mat = (sp.diags(mass) + h * damp + h * h * stiff).tocsc()
         self._mass = mass
-        self._damp_matrix = damp.tocsr()
+        self._damp_matrix = damp.tocsr()  # kept for checks of the solve against a direct one
         # the matrix is symmetric positive definite: no pivoting and a symmetric ordering fill in
         # less than SuperLU's general settings (a third faster to solve here)
         return stiff.tocsr(), splu(a_mat, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
@@ -321,9 +323,8 @@ class Stepper:
 
     def _frame_force_bound(self, m_force, m_rate, m_steady):
         """The larger of each muscle's filtered force now and at the frame's end (eq. 4)."""
-        end, _ = m_force.copy(), None
-        end_rate = m_rate.copy()
-        _filter_exact(end, end_rate, m_steady, self.physics.params.tau_activation,
+        end = m_force.copy()
+        _filter_exact(end, m_rate.copy(), m_steady, self.physics.params.tau_activation,
                       self.frame_duration)
         return np.maximum(m_force, end)
 
@@ -409,21 +410,6 @@ class Stepper:
                 vel[dyn] = v0 + h * (1.5 * k1v + 0.5 * k2v)
         place_jaw(pos, vel, target, rate, *self._jargs)
         return State(pos, vel, m_force, m_rate, target, state.time + self.frame_duration)
-
-
-def _volume_gradients(p: np.ndarray) -> np.ndarray:
-    """Gradients (prisms, 6, 3) of the volumes of prisms (prisms, 6, 3) at their nodes."""
-    from ..physics.volume import PRISM_TRIANGLES, PRISM_TRIANGLES_ALT
-
-    c = p.mean(axis=1, keepdims=True)
-    q = p - c
-    g = np.zeros_like(p)
-    for tris in (PRISM_TRIANGLES, PRISM_TRIANGLES_ALT):
-        for a, b, t in tris:
-            g[:, a] += np.cross(q[:, b], q[:, t])
-            g[:, b] += np.cross(q[:, t], q[:, a])
-            g[:, t] += np.cross(q[:, a], q[:, b])
-    return g / 12.0
 
 
 def _graph_matrix(i: np.ndarray, j: np.ndarray, w: np.ndarray, nd: int) -> sp.csc_matrix:
