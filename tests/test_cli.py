@@ -164,14 +164,14 @@ def test_render_and_plot(tmp_path, monkeypatch, capsys, face):
         w.writeframes(tone.tobytes())
     movie = tmp_path / "m.mp4"
     code, out, err = cli(monkeypatch, capsys, "render", res, "-o", movie, "--audio",
-                         tmp_path / "a.wav")
+                         tmp_path / "a.wav", "--size", "640x360")
     assert code == 0, err
     frames, _ = imageio_ffmpeg.count_frames_and_secs(str(movie))
     assert frames == 6
     probe = subprocess.run([imageio_ffmpeg.get_ffmpeg_exe(), "-i", str(movie)],
                            capture_output=True, text=True)
     assert "Audio: aac" in probe.stderr and "h264" in probe.stderr
-    assert "720x480" in probe.stderr and "60 fps" in probe.stderr
+    assert "640x360" in probe.stderr and "60 fps" in probe.stderr
     code, out, err = cli(monkeypatch, capsys, "plot", res, "-o", tmp_path / "k.png")
     assert code == 0 and (tmp_path / "k.png").stat().st_size > 10000
     code, _, err = cli(monkeypatch, capsys, "plot", res, "-o", tmp_path / "k2.png", "--markers",

@@ -36,6 +36,14 @@ PresetOpt = Annotated[str, typer.Option(help="parameter preset: anatomical (the 
 FaceOpt = Annotated[str, typer.Option(help="face file (.npz), or a built-in face: default, "
                                            "default-coarse or default-fine")]
 
+ViewOpt = Annotated[str, typer.Option(help="view: frontal, profile, three-quarter, mouth or "
+                                           "frontal+profile")]
+SizeOpt = Annotated[str, typer.Option(help="frame size WIDTHxHEIGHT, pixels (up to 3840x2160)")]
+BackgroundOpt = Annotated[str, typer.Option(help="background '#rrggbb', 'r,g,b', or "
+                                                 "'transparent' (PNG frames and stills)")]
+AAOpt = Annotated[int, typer.Option("--aa", help="anti-aliasing: samples per pixel along each "
+                                                 "axis, 1 (off) to 4")]
+
 err = Console(stderr=True)
 out = Console(soft_wrap=True)
 
@@ -60,6 +68,14 @@ def _staged_progress():
         yield report
 
 
+def _render_options(view: str, size: str, background: str, aa: int):
+    from .viz.camera import parse_size
+    from .viz.video import RenderOptions
+
+    return RenderOptions(view=view, size=parse_size(size), background=background,
+                         supersample=aa)
+
+
 def _interval(text: str | None, field: str) -> tuple[float, float] | None:
     if text is None:
         return None
@@ -81,13 +97,19 @@ def demo(
         help="euler, implicit or rosenbrock (default: the preset's)")] = None,
     video: Annotated[bool, typer.Option(help="render the MP4")] = True,
     preset: PresetOpt = "anatomical",
+    view: ViewOpt = "frontal+profile",
+    size: SizeOpt = "1280x720",
+    background: BackgroundOpt = "#2a2c33",
+    aa: AAOpt = 2,
 ):
     """Simulate a synthetic utterance on the built-in face; write results, plots and a movie."""
     from .demo import run_demo
 
+    opts = _render_options(view, size, background, aa)
     with _staged_progress() as report:
         err.print(f"facemech demo: building the face and simulating ({preset} preset) ...")
-        s = run_demo(output, integrator=integrator, video=video, preset=preset, progress=report)
+        s = run_demo(output, integrator=integrator, video=video, preset=preset, progress=report,
+                     render=opts)
     out.print(f"[bold]facemech demo[/bold] -> {output}/")
     out.print(f"  frames: {s.frames} ({s.simulated_seconds:.2f} s at 60 Hz)")
     out.print(f"  simulation: {s.simulation_seconds:.1f} s wall, real-time factor "
@@ -405,8 +427,13 @@ def simulate(
                                                   "preset's; implicit integrators: --substeps)")]
     = None,
     jaw_drive: Annotated[str, typer.Option(help="ramp or hold")] = "ramp",
-    video: Annotated[Path | None, typer.Option(help="also render an MP4")] = None,
+    video: Annotated[Path | None, typer.Option(help="also render an MP4, or PNG frames into "
+                                                    "a folder")] = None,
     audio: Annotated[Path | None, typer.Option(help="WAV to mux into the MP4")] = None,
+    view: ViewOpt = "frontal+profile",
+    size: SizeOpt = "1280x720",
+    background: BackgroundOpt = "#2a2c33",
+    aa: AAOpt = 2,
 ):
     """Simulate the face driven by muscle activity or EMG and a jaw trajectory."""
     from . import params as P
@@ -422,6 +449,7 @@ def simulate(
     if jaw_chin is not None and jaw_angle is not None:
         raise InputError("give at most one of --jaw-chin and --jaw-angle", field="jaw")
     prm = P.preset(preset)
+    opts = _render_options(view, size, background, aa) if video is not None else None
     model = load_face(face, tissue=prm.tissue)
     inputs = {}
     if activity is not None:
@@ -460,31 +488,61 @@ def simulate(
     out.print(f"{len(times)} frames, {sim.wall_seconds:.1f} s wall "
               f"(real-time factor {sim.real_time_factor:.2f}) -> {output}")
     if video is not None:
-        _render(sim.positions, model.faces, video, audio, sim.params.frame_rate)
+        from .io.results import to_dataset
+
+        _render(to_dataset(sim), video, audio, opts)
 
 
-def _render(positions, faces, path, audio, fps):
-    from .viz.movie import write_movie
+def _render(ds, path, audio, opts):
+    from .viz.video import render_results
 
     with _progress() as prog:
-        task = prog.add_task("render", total=len(positions))
-        write_movie(path, positions, faces, fps=fps, audio=audio,
-                    progress=lambda d, n: prog.update(task, completed=d))
-    out.print(f"movie -> {path}")
+        task = prog.add_task("render", total=ds.sizes["time"])
+        render_results(ds, path, options=opts, audio=audio,
+                       progress=lambda d, n: prog.update(task, completed=d))
+    out.print(f"{'movie' if path.suffix else 'frames'} -> {path}")
 
 
 @app.command()
 def render(
     result: Annotated[Path, typer.Argument(help="results file (.nc)")],
-    output: Annotated[Path, typer.Option("-o", "--output", help="movie (.mp4)")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="movie (.mp4), or a folder for "
+                                                               "PNG frames")],
     audio: Annotated[Path | None, typer.Option(help="WAV to mux in")] = None,
+    view: ViewOpt = "frontal+profile",
+    size: SizeOpt = "1280x720",
+    background: BackgroundOpt = "#2a2c33",
+    aa: AAOpt = 2,
 ):
-    """Render a results file to an H.264 MP4 (frontal and profile), optionally with audio."""
+    """Render a results file to an H.264 MP4 or PNG frames, with eyes, teeth and tongue."""
     from .io.results import read_results
 
-    ds = read_results(result)
-    fps = float(ds.attrs.get("frame_rate_hz", 60.0))
-    _render(ds["positions"].values, ds["triangles"].values, output, audio, fps)
+    opts = _render_options(view, size, background, aa)
+    _render(read_results(result), output, audio, opts)
+
+
+@app.command()
+def still(
+    result: Annotated[Path, typer.Argument(help="results file (.nc)")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="figure (.png or .pdf)")],
+    time: Annotated[float | None, typer.Option(help="time of the frame, s")] = None,
+    peak: Annotated[str | None, typer.Option(help="the frame of a peak: a muscle group "
+                                                  "(e.g. OOS), jaw, or motion")] = None,
+    markers: Annotated[bool, typer.Option(help="draw the model's markers as dots")] = False,
+    labels: Annotated[bool, typer.Option(help="name the markers")] = False,
+    view: ViewOpt = "frontal",
+    size: SizeOpt = "1280x1280",
+    background: BackgroundOpt = "#ffffff",
+    aa: AAOpt = 3,
+):
+    """A still figure for a paper: one frame at a time or at a gesture's peak (PNG or PDF)."""
+    from .io.results import read_results
+    from .viz.video import still as draw
+
+    opts = _render_options(view, size, background, aa)
+    r = draw(read_results(result), output, time=time, peak=peak, options=opts,
+             markers=markers or labels, labels=labels)
+    out.print(f"frame {r['frame']} (t = {r['time']:.3f} s) -> {output}")
 
 
 @app.command()

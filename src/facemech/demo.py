@@ -88,13 +88,15 @@ class DemoSummary:
 
 def run_demo(out_dir: str | Path, *, integrator: str | None = None, video: bool = True,
              preset: str = "anatomical",
-             progress: Callable[[str, int, int], None] | None = None) -> DemoSummary:
+             progress: Callable[[str, int, int], None] | None = None,
+             render=None) -> DemoSummary:
     """Build the generic face, simulate the synthetic utterance and write results and pictures.
 
     Writes ``result.nc``, ``activity.csv``, ``kinematics.png``, ``activity.png``,
     ``snapshot.png``, ``summary.json`` and (with ``video``) ``movie.mp4`` into ``out_dir``.
     ``preset`` names the parameter preset (:func:`facemech.params.preset`); ``integrator``
-    defaults to the preset's.
+    defaults to the preset's. ``render`` is a :class:`facemech.viz.video.RenderOptions`
+    (default: frontal and profile, 1280x720).
     """
     from .geometry.builder import default_face
     from .io.activity import write_activity
@@ -103,6 +105,8 @@ def run_demo(out_dir: str | Path, *, integrator: str | None = None, video: bool 
     from .solvers.forward import simulate
     from .viz.movie import write_movie, write_snapshot
     from .viz.plots import activity_figure, kinematics_figure
+    from .viz.scene import build_scene, look_from_model
+    from .viz.video import RenderOptions
 
     t0 = time.perf_counter()
     params = get_preset(preset)
@@ -129,10 +133,16 @@ def run_demo(out_dir: str | Path, *, integrator: str | None = None, video: bool 
     activity_figure(out / "activity.png", t, act, MUSCLE_GROUPS, jaw)
     files["activity_plot"] = "activity.png"
     peak = int(np.argmax(jaw))
-    write_snapshot(out / "snapshot.png", sim.positions[peak], face.faces)
+    scene = build_scene(look_from_model(face))
+    opt = render or RenderOptions()
+    write_snapshot(out / "snapshot.png", scene, sim.positions[peak], sim.jaw_angle[peak],
+                   view=opt.view, background=opt.background if not opt.transparent
+                   else "#ffffff")
     files["snapshot"] = "snapshot.png"
     if video:
-        write_movie(out / "movie.mp4", sim.positions, face.faces, fps=sim.params.frame_rate,
+        write_movie(out / "movie.mp4", scene, sim.positions, sim.jaw_angle,
+                    fps=sim.params.frame_rate, view=opt.view, size=opt.size,
+                    background=opt.background, supersample=opt.supersample,
                     progress=step("render"))
         files["movie"] = "movie.mp4"
     lips = [face.landmarks[k] for k in ("upper_lip_center", "lower_lip_center",

@@ -174,6 +174,7 @@ def dense_animation(path, face, site_nodes: dict[str, int], displacements: np.nd
     from scipy.interpolate import RBFInterpolator
 
     from ..viz.movie import write_movie
+    from ..viz.scene import build_scene, look_from_model
 
     names = list(site_nodes)
     rest = face.rest_positions[: face.n_surface]
@@ -182,7 +183,8 @@ def dense_animation(path, face, site_nodes: dict[str, int], displacements: np.nd
     for d in displacements:
         rbf = RBFInterpolator(src, d, kernel="thin_plate_spline", smoothing=0.0)
         frames.append(rest + rbf(rest))
-    return write_movie(path, np.array(frames), face.faces, progress=progress)
+    return write_movie(path, build_scene(look_from_model(face)), np.array(frames),
+                       progress=progress)
 
 
 def run_lucero2008(out_dir: str | Path, *, n_utterances: int = 40, frames: int = 60,

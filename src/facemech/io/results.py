@@ -36,6 +36,21 @@ def array_hash(*arrays: np.ndarray) -> str:
     return h.hexdigest()[:16]
 
 
+TEETH_DEPTH_DEFAULT = 0.012  #: m, lip surface to the incisors where a file does not say
+
+
+def render_attrs(model) -> dict:
+    """Attributes that let a results file render without its face model: the jaw hinge (point,
+    m, and axis) and the depth of the incisors behind the upper lip's surface (m)."""
+    n = model.n_surface
+    ul = model.landmarks.get("upper_lip_center")
+    depth = (TEETH_DEPTH_DEFAULT if ul is None else float(
+        np.linalg.norm(model.rest_positions[ul] - model.rest_positions[ul + 2 * n])))
+    return {"hinge_point_m": json.dumps([float(v) for v in model.hinge_point]),
+            "hinge_axis": json.dumps([float(v) for v in model.hinge_axis]),
+            "teeth_depth_m": depth}
+
+
 def to_dataset(sim, inputs: dict[str, str] | None = None, extra: dict | None = None):
     """An :class:`xarray.Dataset` of a :class:`~facemech.solvers.forward.Simulation`."""
     import xarray as xr
@@ -76,6 +91,7 @@ def to_dataset(sim, inputs: dict[str, str] | None = None, extra: dict | None = N
             "wall_seconds": float(sim.wall_seconds),
             "axes": "+x subject's left, +y up, +z forward",
             "marker_nodes": json.dumps({**model.landmarks, **model.markers}),
+            **render_attrs(model),
             "inputs": json.dumps(inputs or {}),
             **{k: (v if isinstance(v, (int, float, str)) else str(v))
                for k, v in sim.attrs.items()},

@@ -1,12 +1,16 @@
-"""Movies of the shaded skin (frontal and profile side by side), H.264 MP4 at the frame rate.
+"""Movies and frame sequences of the rendered face: H.264 MP4 at the frame rate, or PNG frames.
 
 Encoding uses the ffmpeg that ships with imageio-ffmpeg (``pip install 'facemech[video]'``);
-an optional WAV is muxed in as AAC. Files are written atomically.
+an optional WAV is muxed in as AAC. PNG frames keep an alpha channel, so a transparent
+background (``background="transparent"``) gives frames ready to composite. Files are written
+atomically; a frame folder is filled in a temporary folder and renamed into place.
 """
 
 from __future__ import annotations
 
+import shutil
 import subprocess
+import tempfile
 from collections.abc import Callable
 from pathlib import Path
 
@@ -14,9 +18,11 @@ import numpy as np
 
 from ..errors import InputError
 from ..io.atomic import atomic_path
-from .raster import render, view_rotation
+from .render import BACKGROUND, Renderer
+from .scene import Scene
 
-VIEWS = ((0.0, 0.0), (90.0, 0.0))  #: (azimuth, elevation) degrees: frontal, right profile
+DEFAULT_SIZE = (720, 1280)  #: (height, width) of movies
+DEFAULT_VIEW = "frontal+profile"
 
 
 def _ffmpeg() -> str:
@@ -28,83 +34,137 @@ def _ffmpeg() -> str:
     return imageio_ffmpeg.get_ffmpeg_exe()
 
 
-def frame_image(vertices: np.ndarray, faces: np.ndarray, *, centre: np.ndarray, extent: float,
-                size: tuple[int, int] = (480, 360)) -> np.ndarray:
-    """One movie frame: frontal and profile views side by side, (h, 2w, 3) uint8."""
-    panels = [render(vertices, faces, rotation=view_rotation(az, el), size=size, extent=extent,
-                     centre=centre) for az, el in VIEWS]
-    return np.concatenate(panels, axis=1)
+def _check(positions: np.ndarray, jaw: np.ndarray | None, scene: Scene) -> np.ndarray:
+    n = len(scene.look.rest)
+    if positions.ndim != 3 or positions.shape[1:] != (n, 3):
+        raise InputError(f"positions of shape {positions.shape} do not fit a face of {n} nodes",
+                         field="positions")
+    if jaw is None:
+        return np.zeros(len(positions))
+    jaw = np.asarray(jaw, float)
+    if jaw.shape != (len(positions),):
+        raise InputError("jaw angles and positions have different lengths", field="jaw_angle")
+    return jaw
 
 
 def write_movie(
     path: str | Path,
+    scene: Scene,
     positions: np.ndarray,
-    faces: np.ndarray,
+    jaw_angle: np.ndarray | None = None,
     *,
     fps: float = 60.0,
     audio: str | Path | None = None,
-    size: tuple[int, int] = (480, 360),
+    view: str = DEFAULT_VIEW,
+    size: tuple[int, int] = DEFAULT_SIZE,
+    background: str = BACKGROUND,
+    supersample: int = 2,
     progress: Callable[[int, int], None] | None = None,
 ) -> Path:
-    """Render node trajectories (frames, nodes, 3) to an H.264 MP4.
+    """Render skin trajectories to an H.264 MP4.
 
     Parameters
     ----------
     path : output .mp4
-    positions : (frames, nodes, 3) array, any length unit
-    faces : (f, 3) int array
-    fps : frame rate of the movie (the simulation's 60 Hz)
-    audio : optional WAV file muxed in (AAC); the movie is cut to the shorter of the two
-    size : (height, width) of each of the two panels, even numbers
+    scene : :func:`facemech.viz.scene.build_scene` of the face
+    positions : (frames, nodes, 3) skin node positions, m
+    jaw_angle : (frames,) rad, turns the lower teeth and tongue (None: closed)
+    fps : frame rate of the movie (the simulation's)
+    audio : optional WAV muxed in (AAC); the movie is cut to the shorter of the two
+    view, size, background, supersample : see :class:`facemech.viz.render.Renderer`
     """
     import imageio_ffmpeg
 
     exe = _ffmpeg()
+    if background.strip().lower() in ("transparent", "none"):
+        raise InputError("an MP4 has no transparency: write PNG frames (--frames DIR) for a "
+                         "transparent background", field="background")
     if audio is not None and not Path(audio).is_file():
         raise InputError("audio file not found", source=str(audio))
-    rest = positions[0]
-    centre = 0.5 * (rest.min(axis=0) + rest.max(axis=0))
-    extent = 0.55 * np.ptp(rest[:, 1])
+    jaw = _check(positions, jaw_angle, scene)
+    render = Renderer(scene, view, size, background=background, supersample=supersample)
     h, w = size
     path = Path(path)
     with atomic_path(path, suffix=".mp4") as video:
         writer = imageio_ffmpeg.write_frames(
-            str(video), (2 * w, h), fps=fps, codec="libx264", pix_fmt_out="yuv420p",
-            output_params=["-crf", "20"], macro_block_size=8, ffmpeg_log_level="error",
+            str(video), (w, h), fps=fps, codec="libx264", pix_fmt_out="yuv420p",
+            output_params=["-crf", "18"], macro_block_size=2, ffmpeg_log_level="error",
         )
         writer.send(None)
         try:
             for k in range(len(positions)):
-                img = frame_image(positions[k], faces, centre=centre, extent=extent, size=size)
-                writer.send(np.ascontiguousarray(img))
+                img = render(positions[k], jaw[k])
+                writer.send(np.ascontiguousarray(img[..., :3]))
                 if progress is not None:
                     progress(k + 1, len(positions))
         finally:
             writer.close()
         if audio is not None:
-            muxed = video.with_name(video.stem + ".mux.mp4")
-            try:
-                cmd = [exe, "-y", "-loglevel", "error", "-i", str(video), "-i", str(audio),
-                       "-c:v", "copy", "-c:a", "aac", "-shortest", str(muxed)]
-                run = subprocess.run(cmd, capture_output=True, text=True)
-                if run.returncode != 0:
-                    last = (run.stderr.strip().splitlines() or ["unknown error"])[-1]
-                    raise InputError(f"ffmpeg could not mux the audio: {last}",
-                                     source=str(audio))
-                muxed.replace(video)
-            finally:
-                muxed.unlink(missing_ok=True)
+            _mux(exe, video, audio)
     return path
 
 
-def write_snapshot(path: str | Path, vertices: np.ndarray, faces: np.ndarray,
-                   size: tuple[int, int] = (480, 360)) -> Path:
-    """A PNG of one configuration (frontal and profile)."""
+def _mux(exe: str, video: Path, audio) -> None:
+    muxed = video.with_name(video.stem + ".mux.mp4")
+    try:
+        cmd = [exe, "-y", "-loglevel", "error", "-i", str(video), "-i", str(audio),
+               "-c:v", "copy", "-c:a", "aac", "-shortest", str(muxed)]
+        run = subprocess.run(cmd, capture_output=True, text=True)
+        if run.returncode != 0:
+            last = (run.stderr.strip().splitlines() or ["unknown error"])[-1]
+            raise InputError(f"ffmpeg could not mux the audio: {last}", source=str(audio))
+        muxed.replace(video)
+    finally:
+        muxed.unlink(missing_ok=True)
+
+
+def write_frames(
+    folder: str | Path,
+    scene: Scene,
+    positions: np.ndarray,
+    jaw_angle: np.ndarray | None = None,
+    *,
+    view: str = DEFAULT_VIEW,
+    size: tuple[int, int] = DEFAULT_SIZE,
+    background: str = BACKGROUND,
+    supersample: int = 2,
+    progress: Callable[[int, int], None] | None = None,
+) -> Path:
+    """Render every frame to ``folder/frame_00000.png`` ... (RGBA PNG).
+
+    The folder must not exist or be empty; it appears complete or not at all.
+    """
     import matplotlib.image as mpimg
 
-    centre = 0.5 * (vertices.min(axis=0) + vertices.max(axis=0))
-    img = frame_image(vertices, faces, centre=centre, extent=0.55 * np.ptp(vertices[:, 1]),
-                      size=size)
+    folder = Path(folder)
+    if folder.exists() and (not folder.is_dir() or any(folder.iterdir())):
+        raise InputError("the frame folder exists and is not empty", source=str(folder),
+                         field="frames")
+    jaw = _check(positions, jaw_angle, scene)
+    render = Renderer(scene, view, size, background=background, supersample=supersample)
+    folder.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", dir=folder.parent))
+    try:
+        for k in range(len(positions)):
+            mpimg.imsave(tmp / f"frame_{k:05d}.png", render(positions[k], jaw[k]))
+            if progress is not None:
+                progress(k + 1, len(positions))
+        if folder.exists():
+            folder.rmdir()
+        tmp.rename(folder)
+    finally:
+        if tmp.exists():
+            shutil.rmtree(tmp, ignore_errors=True)
+    return folder
+
+
+def write_snapshot(path: str | Path, scene: Scene, skin: np.ndarray, jaw_angle: float = 0.0, *,
+                   view: str = DEFAULT_VIEW, size: tuple[int, int] = (540, 960),
+                   background: str = BACKGROUND) -> Path:
+    """A PNG of one configuration."""
+    import matplotlib.image as mpimg
+
+    img = Renderer(scene, view, size, background=background)(skin, jaw_angle)
     with atomic_path(path, suffix=".png") as tmp:
         mpimg.imsave(tmp, img)
     return Path(path)

@@ -1,7 +1,15 @@
-"""Headless software rendering of a shaded triangle mesh (no display, no GPU).
+"""Headless software rasteriser (numba, one core, no display, no GPU).
 
-A z-buffered scan-converter written in numba with Gouraud-interpolated Lambert + Blinn-Phong
-shading. Orthographic views are enough for face movies and need no camera set-up.
+A visibility-buffer renderer: a first pass scan-converts the triangles into a supersampled
+z-buffer that keeps, per sample, the nearest triangle and two barycentric weights; a second pass
+shades every covered sample (Phong-interpolated normals, per-vertex or texture albedo, wrapped
+diffuse key, fill and rim lights under a sky/ground ambient, Blinn-Phong highlights) in linear
+light; a third pass box-filters the samples to pixels (anti-aliasing), blends them over the
+background and converts to sRGB.  Texture lookups are bilinear in a single RGBA atlas; a texel
+with alpha below one half discards the sample (the eye fissures are cut this way).
+
+The projection (:class:`facemech.viz.camera.Camera`) has already taken the vertices to image
+sample coordinates: ``x`` right, ``y`` down, ``z`` towards the viewer (larger is nearer).
 """
 
 from __future__ import annotations
@@ -9,112 +17,219 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
-from ..geometry.builder import vertex_normals
+#: light directions in camera space (x right, y up, z towards the viewer) and intensities
+LIGHTS = np.array([
+    [-0.45, 0.55, 0.70, 0.80],   # key: above, to the viewer's left
+    [0.65, 0.05, 0.75, 0.32],    # fill: the other side, lower and softer
+    [0.00, 0.60, -0.80, 0.22],   # rim: from behind and above
+])  # fmt: skip
+SKY, GROUND = 0.26, 0.14  #: hemisphere ambient (linear) from above and from below
+WRAP = 0.35  #: diffuse wrap: light bleeds past the terminator as in translucent skin
+INSIDE = (0.012, 0.004, 0.004)  #: linear colour of the skin's inner side (inside the mouth)
 
-SKIN_RGB = np.array([0.87, 0.68, 0.58])
-BACKGROUND_RGB = np.array([0.16, 0.17, 0.20])
+
+def srgb_to_linear(c):
+    """sRGB in [0, 1] to linear light (IEC 61966-2-1)."""
+    c = np.asarray(c, np.float32)
+    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4).astype(np.float32)
 
 
-def view_rotation(azimuth_deg: float, elevation_deg: float = 0.0) -> np.ndarray:
-    """Rotation taking model coordinates to camera coordinates (camera looks along -z).
-
-    ``azimuth_deg = 0`` is the frontal view; ``90`` looks at the subject's right profile.
-    """
-    a, e = np.radians(azimuth_deg), np.radians(elevation_deg)
-    ry = np.array([[np.cos(a), 0, -np.sin(a)], [0, 1, 0], [np.sin(a), 0, np.cos(a)]])
-    rx = np.array([[1, 0, 0], [0, np.cos(e), -np.sin(e)], [0, np.sin(e), np.cos(e)]])
-    return rx @ ry
+_LUT = np.clip(
+    np.where((g := np.linspace(0.0, 1.0, 4096)) <= 0.0031308, 12.92 * g,
+             1.055 * g ** (1 / 2.4) - 0.055), 0.0, 1.0) * 255.0
+LINEAR_TO_SRGB_LUT = (_LUT + 0.5).astype(np.uint8)
 
 
 @nb.njit(cache=True)
-def _rasterise(px, py, pz, shade, faces, zbuf, img, colour):
+def _atlas_alpha(atlas, u, v):
+    h, w = atlas.shape[0], atlas.shape[1]
+    iu = min(max(int(u), 0), w - 1)
+    iv = min(max(int(v), 0), h - 1)
+    return atlas[iv, iu, 3]
+
+
+@nb.njit(cache=True)
+def rasterise(px, py, pz, tris, uv, tex, alpha_test, two_sided, atlas, zbuf, tid, bary):
+    """Scan-convert triangles into a visibility buffer (in place).
+
+    Back faces are skipped, except those of ``two_sided`` triangles, which are recorded as
+    triangle ``f + len(tris)`` (the inside of the skin, seen through the lips or the lids).
+
+    Parameters
+    ----------
+    px, py, pz : (n,) float32 sample-space coordinates (x right, y down, z nearer is larger)
+    tris : (f, 3) int32 vertex indices, counter-clockwise seen from the front
+    uv : (f, 3, 2) float32 atlas texel coordinates per corner
+    tex : (f,) int8, 1 where the triangle is textured
+    alpha_test : (f,) bool, texels with alpha < 0.5 discard the sample
+    two_sided : (f,) bool, draw the back face too
+    atlas : (H, W, 4) float32 linear RGBA
+    zbuf : (h, w) float32, -inf where empty
+    tid : (h, w) int32 triangle index, -1 where empty
+    bary : (h, w, 2) float32 weights of the first two corners
+    """
     h, w = zbuf.shape
-    for f in range(faces.shape[0]):
-        i0, i1, i2 = faces[f, 0], faces[f, 1], faces[f, 2]
+    nt = tris.shape[0]
+    for f in range(nt):
+        i0, i1, i2 = tris[f, 0], tris[f, 1], tris[f, 2]
         x0, y0, x1, y1, x2, y2 = px[i0], py[i0], px[i1], py[i1], px[i2], py[i2]
         area = (x1 - x0) * (y2 - y0) - (x2 - x0) * (y1 - y0)
-        if abs(area) < 1e-12:
+        # y points down: front faces have negative area
+        if abs(area) < 1e-9 or (area > 0 and not two_sided[f]):
             continue
+        label = f if area < 0 else f + nt
         xmin = max(int(np.floor(min(x0, min(x1, x2)))), 0)
         xmax = min(int(np.ceil(max(x0, max(x1, x2)))), w - 1)
         ymin = max(int(np.floor(min(y0, min(y1, y2)))), 0)
         ymax = min(int(np.ceil(max(y0, max(y1, y2)))), h - 1)
+        if xmin > xmax or ymin > ymax:
+            continue
         inv = 1.0 / area
+        z0, z1, z2 = pz[i0], pz[i1], pz[i2]
+        test = alpha_test[f]
+        # barycentric weights are affine in x: step them along each row
+        a0 = (y1 - y2) * inv
+        a1 = (y2 - y0) * inv
         for yy in range(ymin, ymax + 1):
             fy = yy + 0.5
+            fx = xmin + 0.5
+            w0 = ((x1 - fx) * (y2 - fy) - (x2 - fx) * (y1 - fy)) * inv
+            w1 = ((x2 - fx) * (y0 - fy) - (x0 - fx) * (y2 - fy)) * inv
             for xx in range(xmin, xmax + 1):
-                fx = xx + 0.5
-                w0 = ((x1 - fx) * (y2 - fy) - (x2 - fx) * (y1 - fy)) * inv
-                w1 = ((x2 - fx) * (y0 - fy) - (x0 - fx) * (y2 - fy)) * inv
                 w2 = 1.0 - w0 - w1
-                if w0 < 0 or w1 < 0 or w2 < 0:
-                    continue
-                z = w0 * pz[i0] + w1 * pz[i1] + w2 * pz[i2]
-                if z <= zbuf[yy, xx]:
-                    continue
-                zbuf[yy, xx] = z
-                s = w0 * shade[i0] + w1 * shade[i1] + w2 * shade[i2]
-                for ch in range(3):
-                    c = (w0 * colour[i0, ch] + w1 * colour[i1, ch] + w2 * colour[i2, ch])
-                    v = c * s[0] + s[1]
-                    img[yy, xx, ch] = min(max(v, 0.0), 1.0)
+                if w0 >= 0 and w1 >= 0 and w2 >= 0:
+                    z = w0 * z0 + w1 * z1 + w2 * z2
+                    if z > zbuf[yy, xx]:
+                        keep = True
+                        if test:
+                            u = w0 * uv[f, 0, 0] + w1 * uv[f, 1, 0] + w2 * uv[f, 2, 0]
+                            v = w0 * uv[f, 0, 1] + w1 * uv[f, 1, 1] + w2 * uv[f, 2, 1]
+                            keep = _atlas_alpha(atlas, u, v) >= 0.5
+                        if keep:
+                            zbuf[yy, xx] = z
+                            tid[yy, xx] = label
+                            bary[yy, xx, 0] = w0
+                            bary[yy, xx, 1] = w1
+                w0 += a0
+                w1 += a1
 
 
-def render(
-    vertices: np.ndarray,
-    faces: np.ndarray,
-    *,
-    rotation: np.ndarray,
-    size: tuple[int, int] = (480, 360),
-    extent: float | None = None,
-    centre: np.ndarray | None = None,
-    colour: np.ndarray = SKIN_RGB,
-) -> np.ndarray:
-    """Render a mesh to an RGB image.
+@nb.njit(cache=True)
+def _bilinear(atlas, u, v, out):
+    h, w = atlas.shape[0], atlas.shape[1]
+    u = min(max(u - 0.5, 0.0), w - 1.001)
+    v = min(max(v - 0.5, 0.0), h - 1.001)
+    iu, iv = int(u), int(v)
+    fu, fv = u - iu, v - iv
+    for c in range(3):
+        out[c] = ((1 - fu) * (1 - fv) * atlas[iv, iu, c] + fu * (1 - fv) * atlas[iv, iu + 1, c]
+                  + (1 - fu) * fv * atlas[iv + 1, iu, c] + fu * fv * atlas[iv + 1, iu + 1, c])
 
-    Parameters
-    ----------
-    vertices : (n, 3) array
-        Positions in any length unit (the view is scaled to ``extent``).
-    faces : (f, 3) int array
-    rotation : (3, 3) array
-        Model-to-camera rotation (see :func:`view_rotation`).
-    size : (height, width)
-    extent : float, optional
-        Half-height of the view in the vertices' unit; defaults to fit the mesh.
-    centre : (3,) array, optional
-        Model point at the image centre; defaults to the bounding-box centre.
-    colour : (3,) RGB in [0, 1] for the whole surface, or (n, 3) per vertex
 
-    Returns
-    -------
-    (height, width, 3) uint8 array
+@nb.njit(cache=True, inline="always")
+def _shade_sample(f, w0, w1, tris, normals, albedo, gloss, uv, tex, atlas, lights, sky, ground,
+                  wrap, col):
+    """Linear RGB of one sample of triangle ``f`` at barycentric weights (w0, w1), into col."""
+    if f >= tris.shape[0]:  # the inside of a two-sided surface: unlit, dark
+        for c in range(3):
+            col[c] = INSIDE[c]
+        return
+    w2 = 1.0 - w0 - w1
+    i0, i1, i2 = tris[f, 0], tris[f, 1], tris[f, 2]
+    nx = w0 * normals[i0, 0] + w1 * normals[i1, 0] + w2 * normals[i2, 0]
+    ny = w0 * normals[i0, 1] + w1 * normals[i1, 1] + w2 * normals[i2, 1]
+    nz = w0 * normals[i0, 2] + w1 * normals[i1, 2] + w2 * normals[i2, 2]
+    nn = np.sqrt(nx * nx + ny * ny + nz * nz) + 1e-12
+    nx, ny, nz = nx / nn, ny / nn, nz / nn
+    if tex[f]:
+        u = w0 * uv[f, 0, 0] + w1 * uv[f, 1, 0] + w2 * uv[f, 2, 0]
+        v = w0 * uv[f, 0, 1] + w1 * uv[f, 1, 1] + w2 * uv[f, 2, 1]
+        _bilinear(atlas, u, v, col)
+    else:
+        for c in range(3):
+            col[c] = w0 * albedo[i0, c] + w1 * albedo[i1, c] + w2 * albedo[i2, c]
+    ks = w0 * gloss[i0, 0] + w1 * gloss[i1, 0] + w2 * gloss[i2, 0]
+    t = 0.5 * (ny + 1.0)
+    diff = sky * t + ground * (1.0 - t)
+    spec = 0.0
+    for k in range(lights.shape[0]):
+        d = nx * lights[k, 0] + ny * lights[k, 1] + nz * lights[k, 2]
+        wd = (d + wrap) / (1.0 + wrap)
+        if wd > 0:
+            diff += lights[k, 3] * wd
+    if ks > 0:  # highlights of the key light only
+        d = nx * lights[0, 0] + ny * lights[0, 1] + nz * lights[0, 2]
+        if d > 0:
+            hx, hy, hz = lights[0, 0], lights[0, 1], lights[0, 2] + 1.0
+            c = (nx * hx + ny * hy + nz * hz) / np.sqrt(hx * hx + hy * hy + hz * hz)
+            if c > 0:
+                ex = w0 * gloss[i0, 1] + w1 * gloss[i1, 1] + w2 * gloss[i2, 1]
+                spec = lights[0, 3] * ks * np.exp(ex * np.log(c))
+    for c in range(3):
+        col[c] = col[c] * diff + spec
+
+
+@nb.njit(cache=True)
+def shade_resolve(tid, bary, s, tris, normals, albedo, gloss, uv, tex, atlas, lights, sky,
+                  ground, wrap, background, lut, rgba):
+    """Shade the samples and box-filter s x s of them per pixel into sRGB uint8 RGBA.
+
+    A pixel whose samples all show one triangle is shaded once, at the mean of their weights
+    (as multisampling does); edge pixels are shaded per sample. ``normals`` (n, 3) are unit
+    camera-space vertex normals, ``albedo`` (n, 3) linear RGB, ``gloss`` (n, 2) specular
+    strength and Blinn-Phong exponent. ``background`` is (4,) linear RGB and alpha; alpha 0
+    gives a transparent background with the coverage in the alpha channel.
     """
-    h, w = size
-    v = np.asarray(vertices, float)
-    if centre is None:
-        centre = 0.5 * (v.min(axis=0) + v.max(axis=0))
-    cam = (v - centre) @ rotation.T
-    if extent is None:
-        extent = 0.55 * max(np.ptp(cam[:, 1]), np.ptp(cam[:, 0]) * h / w)
-    scale = 0.5 * h / extent
-    px = w / 2 + cam[:, 0] * scale
-    py = h / 2 - cam[:, 1] * scale
-    pz = cam[:, 2]
-    normals = vertex_normals(v, faces) @ rotation.T
-    light = np.array([0.35, 0.45, 0.82])
-    light /= np.linalg.norm(light)
-    half = light + np.array([0.0, 0.0, 1.0])
-    half /= np.linalg.norm(half)
-    diffuse = np.clip(normals @ light, 0.0, 1.0)
-    spec = np.clip(normals @ half, 0.0, 1.0) ** 40
-    shade = np.stack([0.25 + 0.75 * diffuse, 0.18 * spec], axis=1)
-    zbuf = np.full((h, w), -np.inf)
-    img = np.empty((h, w, 3))
-    img[:] = BACKGROUND_RGB
-    colours = np.asarray(colour, float)
-    if colours.ndim == 1:
-        colours = np.broadcast_to(colours, (len(v), 3))
-    _rasterise(px, py, pz, shade, np.ascontiguousarray(faces, dtype=np.int64), zbuf, img,
-               np.ascontiguousarray(colours))
-    return (img * 255 + 0.5).astype(np.uint8)
+    h, w = rgba.shape[0], rgba.shape[1]
+    col = np.empty(3, np.float32)
+    ns = s * s
+    m = lut.shape[0] - 1
+    for yy in range(h):
+        for xx in range(w):
+            t0 = tid[yy * s, xx * s]
+            same = True
+            for j in range(s):
+                for i in range(s):
+                    if tid[yy * s + j, xx * s + i] != t0:
+                        same = False
+            r = g = b = 0.0
+            cov = 0.0
+            if same and t0 >= 0:
+                a0 = a1 = 0.0
+                for j in range(s):
+                    for i in range(s):
+                        a0 += bary[yy * s + j, xx * s + i, 0]
+                        a1 += bary[yy * s + j, xx * s + i, 1]
+                _shade_sample(t0, a0 / ns, a1 / ns, tris, normals, albedo, gloss, uv, tex,
+                              atlas, lights, sky, ground, wrap, col)
+                r, g, b, cov = col[0] * ns, col[1] * ns, col[2] * ns, float(ns)
+            elif not same:
+                for j in range(s):
+                    for i in range(s):
+                        f = tid[yy * s + j, xx * s + i]
+                        if f >= 0:
+                            _shade_sample(f, bary[yy * s + j, xx * s + i, 0],
+                                          bary[yy * s + j, xx * s + i, 1], tris, normals,
+                                          albedo, gloss, uv, tex, atlas, lights, sky, ground,
+                                          wrap, col)
+                            r += col[0]
+                            g += col[1]
+                            b += col[2]
+                            cov += 1.0
+            a_bg = background[3]
+            if cov > 0:
+                if a_bg > 0:
+                    rem = ns - cov
+                    r = (r + rem * background[0]) / ns
+                    g = (g + rem * background[1]) / ns
+                    b = (b + rem * background[2]) / ns
+                    alpha = 1.0
+                else:
+                    r, g, b = r / cov, g / cov, b / cov
+                    alpha = cov / ns
+            else:
+                r, g, b, alpha = background[0], background[1], background[2], a_bg
+            rgba[yy, xx, 0] = lut[min(int(min(max(r, 0.0), 1.0) * m + 0.5), m)]
+            rgba[yy, xx, 1] = lut[min(int(min(max(g, 0.0), 1.0) * m + 0.5), m)]
+            rgba[yy, xx, 2] = lut[min(int(min(max(b, 0.0), 1.0) * m + 0.5), m)]
+            rgba[yy, xx, 3] = int(alpha * 255 + 0.5)

@@ -1,0 +1,125 @@
+"""Frames of a face: a scene at one time step, through one or several cameras.
+
+``Renderer(scene, view, size)`` keeps the cameras and buffers of a movie; ``renderer(skin,
+jaw_angle)`` returns an (h, w, 4) sRGB uint8 frame. Work is confined to the face's bounding box
+in each panel; the rest of the frame is background.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import InputError
+from .camera import Camera, panels, view_camera
+from .raster import (
+    GROUND,
+    LIGHTS,
+    LINEAR_TO_SRGB_LUT,
+    SKY,
+    WRAP,
+    rasterise,
+    shade_resolve,
+    srgb_to_linear,
+)
+from .scene import Scene
+
+BACKGROUND = "#2a2c33"  #: default background (dark slate), sRGB
+_LIGHTS = np.concatenate([LIGHTS[:, :3] / np.linalg.norm(LIGHTS[:, :3], axis=1, keepdims=True),
+                          LIGHTS[:, 3:]], axis=1).astype(np.float32)
+
+
+def parse_background(text: str) -> np.ndarray:
+    """``'#rrggbb'``, ``'r,g,b'`` (0-255) or ``'transparent'`` to linear RGBA (4,) float32."""
+    t = text.strip().lower()
+    if t in ("transparent", "none"):
+        return np.zeros(4, np.float32)
+    try:
+        if t.startswith("#") and len(t) == 7:
+            rgb = [int(t[i:i + 2], 16) for i in (1, 3, 5)]
+        else:
+            rgb = [int(v) for v in t.split(",")]
+            if len(rgb) != 3 or not all(0 <= v <= 255 for v in rgb):
+                raise ValueError
+    except ValueError:
+        raise InputError(f"background {text!r} is not '#rrggbb', 'r,g,b' or 'transparent'",
+                         field="background") from None
+    lin = srgb_to_linear(np.array(rgb) / 255.0)
+    return np.array([*lin, 1.0], np.float32)
+
+
+def render_panel(scene: Scene, verts: np.ndarray, norms: np.ndarray, camera: Camera, *,
+                 background: np.ndarray, supersample: int = 2) -> np.ndarray:
+    """One camera's view of placed scene vertices: (h, w, 4) uint8 sRGB + alpha."""
+    h, w = camera.size
+    s = int(supersample)
+    p = camera.project(verts, s)
+    img = np.empty((h, w, 4), np.uint8)
+    bg = resolve_background(background)
+    img[:] = bg
+    x0 = max(int(np.floor(p[:, 0].min() / s)) - 1, 0)
+    x1 = min(int(np.ceil(p[:, 0].max() / s)) + 1, w)
+    y0 = max(int(np.floor(p[:, 1].min() / s)) - 1, 0)
+    y1 = min(int(np.ceil(p[:, 1].max() / s)) + 1, h)
+    if x1 <= x0 or y1 <= y0:
+        return img
+    bh, bw = (y1 - y0) * s, (x1 - x0) * s
+    px = p[:, 0] - x0 * s
+    py = p[:, 1] - y0 * s
+    zbuf = np.full((bh, bw), -np.inf, np.float32)
+    tid = np.full((bh, bw), -1, np.int32)
+    bary = np.empty((bh, bw, 2), np.float32)
+    rasterise(px, py, p[:, 2], scene.tris, scene.uv, scene.tex, scene.alpha_test,
+              scene.two_sided, scene.atlas, zbuf, tid, bary)
+    ncam = (norms @ camera.rotation.T).astype(np.float32)
+    sub = np.empty((y1 - y0, x1 - x0, 4), np.uint8)
+    shade_resolve(tid, bary, s, scene.tris, ncam, scene.albedo, scene.gloss, scene.uv,
+                  scene.tex, scene.atlas, _LIGHTS, np.float32(SKY), np.float32(GROUND),
+                  np.float32(WRAP), background.astype(np.float32), LINEAR_TO_SRGB_LUT, sub)
+    img[y0:y1, x0:x1] = sub
+    return img
+
+
+def resolve_background(background: np.ndarray) -> np.ndarray:
+    """The uint8 RGBA pixel of an empty background."""
+    m = len(LINEAR_TO_SRGB_LUT) - 1
+    rgb = [LINEAR_TO_SRGB_LUT[int(np.clip(c, 0, 1) * m + 0.5)] for c in background[:3]]
+    return np.array([*rgb, int(background[3] * 255 + 0.5)], np.uint8)
+
+
+class Renderer:
+    """The frames of one scene through a named (possibly composite) view.
+
+    Parameters
+    ----------
+    scene : :class:`facemech.viz.scene.Scene`
+    view : a name of :func:`facemech.viz.camera.all_views`
+    size : (height, width) of the whole frame, pixels; composite views split the width
+    background : linear RGBA from :func:`parse_background`
+    supersample : samples per pixel along each axis (anti-aliasing; 1 turns it off)
+    distance : camera distance, m (None: orthographic)
+    """
+
+    def __init__(self, scene: Scene, view: str = "frontal", size: tuple[int, int] = (720, 1280),
+                 *, background: np.ndarray | str = BACKGROUND, supersample: int = 2,
+                 distance: float | None = 1.2):
+        names = panels(view)
+        h, w = size
+        k = len(names)
+        widths = [w // k + (1 if i < w % k else 0) for i in range(k)]
+        self.scene = scene
+        self.size = size
+        self.cameras = [view_camera(n, scene.framing, (h, wi), distance)
+                        for n, wi in zip(names, widths, strict=True)]
+        self.background = (parse_background(background) if isinstance(background, str)
+                           else np.asarray(background, np.float32))
+        if supersample < 1 or supersample > 4:
+            raise InputError("supersample must be 1 to 4", field="supersample")
+        self.supersample = supersample
+
+    def __call__(self, skin: np.ndarray, jaw_angle: float = 0.0) -> np.ndarray:
+        """(h, w, 4) uint8 frame of skin node positions (n, 3) m and a jaw angle (rad)."""
+        verts, norms = self.scene.frame(skin, jaw_angle)
+        return np.concatenate([render_panel(self.scene, verts, norms, cam,
+                                            background=self.background,
+                                            supersample=self.supersample)
+                               for cam in self.cameras], axis=1)

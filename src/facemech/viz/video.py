@@ -1,0 +1,226 @@
+"""Library entry points for pictures of results: movies, PNG frame sequences and still figures.
+
+:class:`RenderOptions` gathers what a user chooses (view, size, background, anti-aliasing,
+camera distance) and validates it once; :func:`render_results` turns a results file (or a
+simulation) into a movie or frames; :func:`still` draws one frame, at a time or at the peak of a
+gesture, optionally with the markers as dots and their names, as PNG or PDF.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError
+from ..io.atomic import atomic_path
+from .camera import MAX_SIZE, all_views, panels
+from .render import BACKGROUND, Renderer, parse_background
+from .scene import Scene, build_scene, look_from_dataset, look_from_model
+
+
+@dataclass(frozen=True)
+class RenderOptions:
+    """How frames are drawn.
+
+    Attributes
+    ----------
+    view : frontal, profile, three-quarter, mouth or frontal+profile
+    size : (height, width) pixels of a whole frame (composite views split the width)
+    background : '#rrggbb', 'r,g,b' or 'transparent' (PNG frames and stills only)
+    supersample : anti-aliasing samples per pixel along each axis (1-4)
+    distance : camera distance, m; None for an orthographic view
+    """
+
+    view: str = "frontal+profile"
+    size: tuple[int, int] = (720, 1280)
+    background: str = BACKGROUND
+    supersample: int = 2
+    distance: float | None = 1.2
+
+    def __post_init__(self):
+        panels(self.view)  # raises on an unknown view
+        h, w = self.size
+        if not (16 <= h <= MAX_SIZE[0] and 16 <= w <= MAX_SIZE[1]):
+            raise InputError(f"size {w}x{h} is outside 16x16 .. {MAX_SIZE[1]}x{MAX_SIZE[0]}",
+                             field="size")
+        parse_background(self.background)
+        if not 1 <= self.supersample <= 4:
+            raise InputError("anti-aliasing must be 1 to 4 samples per axis", field="aa")
+        if self.distance is not None and not 0.2 <= self.distance <= 20.0:
+            raise InputError("camera distance must be 0.2 to 20 m", field="distance")
+
+    @property
+    def transparent(self) -> bool:
+        return parse_background(self.background)[3] == 0.0
+
+    def renderer(self, scene: Scene) -> Renderer:
+        return Renderer(scene, self.view, self.size, background=self.background,
+                        supersample=self.supersample, distance=self.distance)
+
+
+VIEW_HELP = "view: " + ", ".join(all_views())
+
+
+def scene_of(source) -> Scene:
+    """The scene of a results dataset or a face model."""
+    if hasattr(source, "data_vars"):
+        return build_scene(look_from_dataset(source))
+    return build_scene(look_from_model(source))
+
+
+def render_results(ds, output: str | Path, *, options: RenderOptions | None = None,
+                   audio: str | Path | None = None, fps: float | None = None,
+                   progress: Callable[[int, int], None] | None = None) -> Path:
+    """Render a results dataset to ``output``: an ``.mp4`` movie, or a folder of PNG frames.
+
+    Parameters
+    ----------
+    ds : results (:func:`facemech.io.results.read_results`) or its path
+    output : ``*.mp4`` or a folder path (no suffix) that does not exist or is empty
+    options : :class:`RenderOptions` (default: frontal+profile, 1280x720)
+    audio : WAV muxed into a movie
+    fps : frame rate (default: the results')
+    """
+    from .movie import write_frames, write_movie
+
+    ds = _dataset(ds)
+    opt = options or RenderOptions()
+    scene = scene_of(ds)
+    pos = ds["positions"].values
+    jaw = ds["jaw_angle"].values if "jaw_angle" in ds else None
+    fps = float(fps or ds.attrs.get("frame_rate_hz", 60.0))
+    output = Path(output)
+    kw = dict(view=opt.view, size=opt.size, background=opt.background,
+              supersample=opt.supersample, progress=progress)
+    if output.suffix.lower() == ".mp4":
+        return write_movie(output, scene, pos, jaw, fps=fps, audio=audio, **kw)
+    if output.suffix:
+        raise InputError(f"output {output.name!r}: give a .mp4 file or a folder for PNG frames",
+                         field="output")
+    if audio is not None:
+        raise InputError("audio goes into a movie, not into PNG frames", field="audio")
+    return write_frames(output, scene, pos, jaw, **kw)
+
+
+def _dataset(ds):
+    if isinstance(ds, (str, Path)):
+        from ..io.results import read_results
+
+        return read_results(ds)
+    return ds
+
+
+def peak_frame(ds, peak: str) -> int:
+    """The frame of a gesture's peak: a muscle group's activity, ``jaw`` or ``motion``.
+
+    ``motion`` is the frame where the lip landmarks are farthest from their first position.
+    """
+    import json
+
+    key = peak.strip()
+    if key.lower() == "jaw":
+        return int(np.argmax(ds["jaw_angle"].values))
+    if key.lower() == "motion":
+        nodes = json.loads(ds.attrs.get("marker_nodes", "{}"))
+        lips = [nodes[k] for k in ("upper_lip_center", "lower_lip_center",
+                                   "mouth_corner_left", "mouth_corner_right") if k in nodes]
+        p = ds["positions"].values
+        sel = p[:, lips] if lips else p
+        return int(np.argmax(np.linalg.norm(sel - sel[0], axis=2).max(axis=1)))
+    muscles = [str(m) for m in ds["muscle"].values]
+    if key.upper() not in muscles:
+        raise InputError(f"--peak {peak!r}: give jaw, motion or a muscle group "
+                         f"({', '.join(muscles)})", field="peak")
+    return int(np.argmax(ds["activity"].values[:, muscles.index(key.upper())]))
+
+
+def still(ds, output: str | Path, *, time: float | None = None, peak: str | None = None,
+          options: RenderOptions | None = None, markers: bool = False,
+          labels: bool = False, title: str | None = None) -> dict:
+    """A still figure of one frame as PNG or PDF, optionally with marker dots and names.
+
+    Parameters
+    ----------
+    ds : results dataset or its path
+    output : ``.png`` or ``.pdf``
+    time : s, the frame nearest this time; or
+    peak : the frame of a gesture's peak (:func:`peak_frame`); neither: the first frame
+    options : :class:`RenderOptions` (default here: frontal, 1280x1280)
+    markers, labels : draw the model's markers as dots, and their names beside them
+
+    Returns
+    -------
+    dict with ``frame``, ``time`` (s) and ``output``
+    """
+    import matplotlib.figure as mfig
+
+    ds = _dataset(ds)
+    output = Path(output)
+    if output.suffix.lower() not in (".png", ".pdf"):
+        raise InputError(f"output {output.name!r}: a still is .png or .pdf", field="output")
+    if time is not None and peak is not None:
+        raise InputError("give --time or --peak, not both", field="time")
+    t = ds["time"].values
+    if time is not None:
+        if not t[0] - 1e-9 <= time <= t[-1] + 1e-9:
+            raise InputError(f"time {time} s is outside the results ({t[0]:.3f} to "
+                             f"{t[-1]:.3f} s)", field="time")
+        k = int(np.argmin(np.abs(t - time)))
+    elif peak is not None:
+        k = peak_frame(ds, peak)
+    else:
+        k = 0
+    opt = options or RenderOptions(view="frontal", size=(1280, 1280))
+    scene = scene_of(ds)
+    rend = opt.renderer(scene)
+    jaw = float(ds["jaw_angle"].values[k]) if "jaw_angle" in ds else 0.0
+    skin = ds["positions"].values[k]
+    img = rend(skin, jaw)
+    h, w = opt.size
+    fig = mfig.Figure(figsize=(w / 200, h / 200), dpi=200)
+    ax = fig.add_axes((0, 0, 1, 1))
+    ax.imshow(img, interpolation="lanczos")
+    ax.set_axis_off()
+    if markers or labels:
+        _draw_markers(ax, ds, k, rend, labels)
+    if title:
+        ax.text(0.02, 0.98, title, transform=ax.transAxes, va="top", color="white",
+                fontsize=9)
+    with atomic_path(output, suffix=output.suffix) as tmp:
+        fig.savefig(tmp, dpi=200, transparent=opt.transparent,
+                    format=output.suffix[1:].lower())
+    return {"frame": k, "time": float(t[k]), "output": str(output)}
+
+
+def _draw_markers(ax, ds, k: int, rend: Renderer, labels: bool) -> None:
+    """Marker dots (and names) on the panels where they face the camera."""
+    from ..geometry.builder import vertex_normals
+
+    pos = ds["positions"].values[k]
+    names = [str(n) for n in ds["marker"].values]
+    mk = ds["markers"].values[k]
+    import json
+
+    nodes = json.loads(ds.attrs.get("marker_nodes", "{}"))
+    normals = vertex_normals(pos, ds["triangles"].values)
+    x_off = 0
+    for cam in rend.cameras:
+        p = cam.project(mk)
+        facing = np.ones(len(names), bool)
+        for i, n in enumerate(names):
+            if n in nodes:
+                nrm = normals[int(nodes[n])] @ cam.rotation.T
+                facing[i] = nrm[2] > 0.05
+        inside = ((p[:, 0] >= 0) & (p[:, 0] < cam.size[1]) & (p[:, 1] >= 0)
+                  & (p[:, 1] < cam.size[0]) & facing)
+        ax.scatter(p[inside, 0] + x_off, p[inside, 1], s=9, c="#ffd400", edgecolors="black",
+                   linewidths=0.4, zorder=3)
+        if labels:
+            for i in np.flatnonzero(inside):
+                ax.annotate(names[i], (p[i, 0] + x_off, p[i, 1]), xytext=(3, 3),
+                            textcoords="offset points", fontsize=4.5, color="white",
+                            zorder=4)
+        x_off += cam.size[1]
