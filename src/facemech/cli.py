@@ -254,13 +254,14 @@ def markers_info(
 
 @markers_app.command("convert")
 def markers_convert(
-    source: Annotated[Path, typer.Argument(help="input marker file")],
+    source: Annotated[Path, typer.Argument(help="input marker file (or a results .nc file: "
+                                                "its model markers)")],
     target: Annotated[Path, typer.Argument(help="output: .c3d, .trc or .csv")],
     units: UnitsOpt = None,
     out_units: Annotated[str | None, typer.Option(help="unit of the output (default: input's)")]
     = None,
 ):
-    """Convert between C3D, TRC, CSV (and read Qualisys TSV)."""
+    """Convert between C3D, TRC, CSV (and read Qualisys TSV or a results file's markers)."""
     from .io.markers import read_markers, write_markers
 
     ms = read_markers(source, units=units)
@@ -543,6 +544,22 @@ def still(
     r = draw(read_results(result), output, time=time, peak=peak, options=opts,
              markers=markers or labels, labels=labels)
     out.print(f"frame {r['frame']} (t = {r['time']:.3f} s) -> {output}")
+
+
+@app.command()
+def export(
+    result: Annotated[Path, typer.Argument(help="results file (.nc)")],
+    output: Annotated[Path, typer.Option("-o", "--output", help=".glb (animated glTF), .trc, "
+                                         ".c3d or .csv (markers), or a folder (mesh sequence)")],
+    fmt: Annotated[str | None, typer.Option("--format", help="obj or ply: one mesh per frame in "
+                                            "the folder -o")] = None,
+    units: Annotated[str | None, typer.Option(help="length unit: meshes m (default) or mm, "
+                                              "markers mm (default); glTF is always m")] = None,
+):
+    """Export a result: animated skin as glTF, a mesh per frame (OBJ/PLY), or markers."""
+    from .io.export import export_results
+
+    out.print(export_results(result, output, fmt=fmt, units=units).summary())
 
 
 @app.command()

@@ -1,5 +1,7 @@
 """Marker files: wide CSV (read/write), Qualisys TSV (read), and dispatch over all formats.
 
+A facemech results file (``.nc``) also reads as a marker file: its model markers (read only).
+
 Wide CSV: a comment line ``# units: mm`` (or m, cm), a header ``time, NAME_x, NAME_y, NAME_z,
 ...`` and one row per frame; empty cells are missing samples; an optional ``# filled:`` comment
 lists the samples a gap filler made up. The unit is never guessed: a file without one needs the
@@ -18,7 +20,7 @@ from ..units import length_scale
 from .atomic import atomic_path
 from .tables import read_table, uniform_rate
 
-FORMATS = {".csv": "csv", ".trc": "trc", ".c3d": "c3d", ".tsv": "tsv"}
+FORMATS = {".csv": "csv", ".trc": "trc", ".c3d": "c3d", ".tsv": "tsv", ".nc": "results"}
 
 
 def read_marker_csv(path: str | Path, *, units: str | None = None) -> MarkerSet:
@@ -123,7 +125,11 @@ def read_qualisys_tsv(path: str | Path, *, units: str | None = None) -> MarkerSe
 
 
 def read_markers(path: str | Path, *, units: str | None = None) -> MarkerSet:
-    """Read any supported marker file (CSV, TRC, C3D, Qualisys TSV), positions in metres."""
+    """Read any supported marker file (CSV, TRC, C3D, Qualisys TSV), positions in metres.
+
+    A results file (``.nc``) gives the model's markers at the results' frame rate (``units`` is
+    not needed: results are in metres).
+    """
     path = Path(path)
     fmt = FORMATS.get(path.suffix.lower())
     if fmt is None:
@@ -135,6 +141,10 @@ def read_markers(path: str | Path, *, units: str | None = None) -> MarkerSet:
         return read_marker_csv(path, units=units)
     if fmt == "tsv":
         return read_qualisys_tsv(path, units=units)
+    if fmt == "results":
+        from .results import read_results, results_markers
+
+        return results_markers(read_results(path), source=path)
     if fmt == "trc":
         from .trc import read_trc
 

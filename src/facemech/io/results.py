@@ -135,3 +135,35 @@ def read_results(path: str | Path):
         if need not in ds:
             raise InputError("not a facemech results file", source=str(path), field=need)
     return ds
+
+
+def results_markers(ds, *, source: str | Path | None = None):
+    """The model's markers of a results dataset as a :class:`~facemech.markerset.MarkerSet`.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        As returned by :func:`read_results`: ``markers`` (time, marker, axis; m) with the names
+        in the ``marker`` coordinate, the rate in the ``frame_rate_hz`` attribute (60 Hz if
+        absent).
+    source : the file it came from, for messages and provenance
+
+    Returns
+    -------
+    MarkerSet
+        Positions (frames, markers, 3) in metres, the results' ``time`` (s), ``source_units``
+        ``"m"`` (what the results hold; writers convert on request).
+    """
+    from ..markerset import MarkerSet
+
+    src = None if source is None else str(source)
+    var = ds["markers"]
+    unit = var.attrs.get("units", "m")
+    if unit != "m":
+        raise InputError(f"markers must be in metres, not {unit!r}", source=src,
+                         field="markers")
+    rate = float(ds.attrs.get("frame_rate_hz", 60.0))
+    return MarkerSet(var.transpose("time", "marker", "axis").values,
+                     tuple(str(n) for n in ds["marker"].values), rate,
+                     time=ds["time"].values, source_units="m",
+                     meta={"source": src, "format": "results"})
