@@ -123,7 +123,8 @@ def demo(
 # ---------------------------------------------------------------------------------------------
 @face_app.command("build")
 def face_build(
-    surface: Annotated[Path, typer.Argument(help="OBJ, PLY or STL surface of the face")],
+    surface: Annotated[Path, typer.Argument(help="OBJ (with its MTL and texture image beside "
+                                                 "it), PLY or STL surface of the face")],
     landmarks: Annotated[Path, typer.Argument(help="landmark CSV: name,x,y,z")],
     output: Annotated[Path, typer.Option("-o", "--output", help="face model file (.npz)")],
     units: Annotated[str, typer.Option(help="length unit of both files")] = "mm",
@@ -133,18 +134,23 @@ def face_build(
                                              "rebuilt for a preset that needs the other")]
     = "anatomical",
 ):
-    """Build a three-layer face model from a surface mesh and landmarks."""
+    """Build a three-layer face model from a surface mesh and landmarks.
+
+    A textured OBJ (MTL with map_Kd) or a PLY with vertex colours keeps its look in the model.
+    """
     from .geometry.builder import build_face, tissue_options
-    from .geometry.surface_io import read_landmarks, read_surface
+    from .geometry.surface_io import read_landmarks, read_surface_with_appearance
 
     opts = tissue_options(tissue)
-    v, f = read_surface(surface, units=units)
+    v, f, look = read_surface_with_appearance(surface, units=units)
     lm = read_landmarks(landmarks, units=units)
-    model = build_face(v, f, lm, name=name or surface.stem, source=str(surface), options=opts)
+    model = build_face(v, f, lm, name=name or surface.stem, source=str(surface), options=opts,
+                       appearance=look)
     model.save(output)
     s = model.summary()
     out.print(f"built {s['name']}: {s['nodes_per_layer']['epidermis']} nodes per layer, "
-              f"{s['springs']} springs, {s['prisms']} prisms, {s['muscles']} muscles -> {output}")
+              f"{s['springs']} springs, {s['prisms']} prisms, {s['muscles']} muscles, "
+              f"appearance: {s['appearance']} -> {output}")
 
 
 @face_app.command("info")

@@ -49,6 +49,7 @@ from scipy.spatial import cKDTree
 from ..errors import InputError
 from ..params import MUSCLE_GROUPS
 from . import anatomy, generic, tissue
+from .appearance import Appearance
 from .model import (  # noqa: F401  (re-exported: the model's names live beside its builder)
     EPIDERMIS,
     FASCIA,
@@ -165,7 +166,9 @@ def _lip_line_path(vertices, faces, start, goal, line_y) -> list[int]:
 def _cut_mouth(vertices, faces, corner_r, corner_l, line_y):
     """Duplicate the interior lip-line nodes; faces below the line take the copies.
 
-    Returns the new vertices and faces, and the (upper, lower) node pairs of the cut.
+    Returns the new vertices and faces, and the (upper, lower) node pairs of the cut. The
+    copies are appended after the vertices, in the order of the pairs; every triangle keeps its
+    row and the order of its corners (what carries a texture through the cut).
     """
     path = _lip_line_path(vertices, faces, corner_r, corner_l, line_y)
     interior = path[1:-1]
@@ -239,6 +242,7 @@ def build_face(
     options: BuildOptions | None = None,
     name: str = "face",
     source: str | None = None,
+    appearance: Appearance | None = None,
 ) -> FaceModel:
     """Build the layered face model from an epidermal surface (metres) and its landmarks.
 
@@ -249,6 +253,9 @@ def build_face(
     landmarks : dict name -> (3,) metres; at least :data:`REQUIRED_LANDMARKS`
     options : geometric choices (default: the seeds' uniform tissue, :class:`BuildOptions`)
     source : name of the input, for error messages
+    appearance : the surface's texture (UVs per corner of ``faces``) or vertex colours (per
+        row of ``vertices``), carried onto the model: the nodes the mouth cut adds take their
+        twins' colours, and the triangles keep their corners' texture coordinates
     """
     opt = options or BuildOptions()
     if opt.tissue not in TISSUES:
@@ -263,10 +270,14 @@ def build_face(
         raise InputError(f"surface too coarse ({len(vertices)} vertices)", source=source,
                          field="vertices")
     check_manifold(faces, source=source)
+    if appearance is not None:
+        appearance.check_surface(len(vertices), len(faces), source=source)
     normals = vertex_normals(vertices, faces)
     if normals[:, 2].mean() < 0:  # faces must be wound so normals point out of the face
         faces = faces[:, ::-1].copy()
         normals = -normals
+        if appearance is not None and appearance.uv is not None:
+            appearance = replace(appearance, uv=appearance.uv[:, ::-1])
     surface = {"vertices": vertices.copy(), "faces": faces.copy(),
                "landmarks": {k: np.asarray(v, float).copy() for k, v in landmarks.items()}}
 
@@ -291,6 +302,11 @@ def build_face(
 
     vertices, faces, cut_pairs, path = _cut_mouth(vertices, faces, corner_r, corner_l, line_y)
     n = len(vertices)
+    if appearance is not None:  # the cut rewires triangles in place: same rows, same corners
+        if appearance.vertex_colours is not None:
+            vc = appearance.vertex_colours
+            appearance = replace(appearance, vertex_colours=np.concatenate(
+                [vc, vc[cut_pairs[:, 0]]]))
     normals = vertex_normals(vertices, faces)
     # the two copies of a cut node share one normal (the lip line's)
     avg = 0.5 * (normals[cut_pairs[:, 0]] + normals[cut_pairs[:, 1]])
@@ -508,7 +524,7 @@ def build_face(
         sliding_weights=weight[slides] if anatomical else None,
         sliding_tether=(tissue.tether_weight(gxy[slides, 0], gxy[slides, 1]) if anatomical
                         else None),
-        lip_region=lip_region, surface=surface,
+        lip_region=lip_region, surface=surface, appearance=appearance,
     )
 
 
@@ -672,7 +688,7 @@ def for_tissue(model: FaceModel, tissue: str) -> FaceModel:
                          f"{tissue} tissue", field="face")
     s = model.surface
     rebuilt = build_face(s["vertices"], s["faces"], s["landmarks"], name=model.name,
-                         options=tissue_options(tissue))
+                         options=tissue_options(tissue), appearance=surface_appearance(model))
     _REBUILT[key] = (model, rebuilt)
     while len(_REBUILT) > 8:
         _REBUILT.popitem(last=False)
@@ -698,4 +714,17 @@ def with_options(model: FaceModel, **changes) -> FaceModel:
         raise InputError("the face does not keep its surface", field="face")
     s = model.surface
     opt = replace(tissue_options(model.tissue), **changes)
-    return build_face(s["vertices"], s["faces"], s["landmarks"], name=model.name, options=opt)
+    return build_face(s["vertices"], s["faces"], s["landmarks"], name=model.name, options=opt,
+                      appearance=surface_appearance(model))
+
+
+def surface_appearance(model: FaceModel) -> Appearance | None:
+    """The appearance of the surface ``model`` remembers (before the mouth cut).
+
+    The cut appends the lower-lip twins after the surface's vertices and keeps the triangles'
+    rows and corners, so the surface's appearance is the model's without the twins' colours.
+    """
+    a = model.appearance
+    if a is None or a.vertex_colours is None or model.surface is None:
+        return a
+    return replace(a, vertex_colours=a.vertex_colours[: len(model.surface["vertices"])])

@@ -17,6 +17,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..params import MUSCLE_GROUPS
+from .appearance import Appearance
 
 EPIDERMIS, FASCIA, SKULL = 0, 1, 2
 LAYER_NAMES = ("epidermis", "fascia", "skull")
@@ -129,6 +130,9 @@ class FaceModel:
     lip_region: np.ndarray | None = None
     #: the input the model was built from: vertices (m), faces, landmarks (m), or None
     surface: dict | None = None
+    #: the scan's look: texture coordinates per corner of ``faces`` and the image, or a colour
+    #: per epidermal node (:mod:`facemech.geometry.appearance`); None for an untextured face
+    appearance: Appearance | None = None
 
     # ---- derived views -------------------------------------------------------------------
     @property
@@ -199,6 +203,7 @@ class FaceModel:
             .round(1)
             .tolist(),
             "tissue_thickness_mm": _thickness_summary(self),
+            "appearance": "none" if self.appearance is None else self.appearance.describe(),
         }
 
     # ---- persistence ---------------------------------------------------------------------
@@ -224,12 +229,21 @@ class FaceModel:
             arrays["surface_faces"] = np.asarray(self.surface["faces"], np.int64)
             surface_landmarks = {k: np.asarray(v, float).tolist()
                                  for k, v in self.surface["landmarks"].items()}
+        appearance_source = None
+        if self.appearance is not None:
+            a = self.appearance
+            appearance_source = a.source
+            for key, value in (("uv", a.uv), ("image", a.image),
+                               ("vertex_colours", a.vertex_colours)):
+                if value is not None:
+                    arrays[f"appearance_{key}"] = value
         meta = {"format": "facemech-face", "version": 2, "name": self.name,
                 "tissue": self.tissue, "n_surface": self.n_surface,
                 "muscle_names": list(m.names),
                 "landmarks": {k: int(v) for k, v in self.landmarks.items()},
                 "markers": {k: int(v) for k, v in self.markers.items()},
-                "surface_landmarks": surface_landmarks}
+                "surface_landmarks": surface_landmarks,
+                "appearance_source": appearance_source}
         arrays["meta"] = np.array(json.dumps(meta))
         with atomic_path(path, suffix=".npz") as tmp, open(tmp, "wb") as fh:
             np.savez_compressed(fh, **arrays)
@@ -260,7 +274,20 @@ class FaceModel:
                            "faces": data.pop("surface_faces"),
                            "landmarks": {k: np.asarray(v, float)
                                          for k, v in meta["surface_landmarks"].items()}}
-            return cls(muscles=muscles, n_surface=int(meta["n_surface"]), name=meta["name"],
+            appearance = None
+            if meta.get("appearance_source") is not None:
+                try:
+                    appearance = Appearance(
+                        uv=data.pop("appearance_uv", None),
+                        image=data.pop("appearance_image", None),
+                        vertex_colours=data.pop("appearance_vertex_colours", None),
+                        source=meta["appearance_source"])
+                    appearance.check_surface(int(meta["n_surface"]), len(data["faces"]))
+                except InputError as exc:
+                    raise InputError(exc.message, source=str(path),
+                                     field=f"appearance_{exc.field}") from None
+            return cls(muscles=muscles, appearance=appearance, n_surface=int(meta["n_surface"]),
+                       name=meta["name"],
                        landmarks=meta["landmarks"], markers=meta["markers"],
                        tissue=meta.get("tissue", "uniform"),
                        jaw_weights=data.pop("jaw_weights", None),

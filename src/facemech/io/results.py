@@ -2,7 +2,10 @@
 
 Variables: ``positions`` (time, node, axis; m, epidermal nodes), ``markers`` (time, marker,
 axis; m, landmarks and virtual markers), ``activity`` (time, muscle; 1), ``jaw_angle`` (time;
-rad) and the surface ``triangles`` (triangle, corner) so that the file renders on its own.
+rad) and the surface ``triangles`` (triangle, corner) so that the file renders on its own. A
+face built from a textured or coloured scan adds its look (``texture_uv`` (triangle, corner,
+uv), ``texture_image`` (texel_y, texel_x, rgb), ``vertex_colour`` (node, rgb); read back with
+:func:`facemech.geometry.appearance.appearance_from_dataset`).
 Attributes carry provenance: facemech version, preset, integrator, dt, input hashes.
 """
 
@@ -56,8 +59,10 @@ def to_dataset(sim, inputs: dict[str, str] | None = None, extra: dict | None = N
     import xarray as xr
 
     from .. import __version__
+    from ..geometry.appearance import dataset_variables
 
     model = sim.model
+    look, look_coords, look_attrs = dataset_variables(getattr(model, "appearance", None))
     ds = xr.Dataset(
         {
             "positions": (("time", "node", "axis"), sim.positions,
@@ -72,6 +77,7 @@ def to_dataset(sim, inputs: dict[str, str] | None = None, extra: dict | None = N
                           {"long_name": "epidermal surface triangles (node indices)"}),
             "rest_positions": (("node", "axis"), model.rest_positions[: model.n_surface],
                                {"units": "m"}),
+            **look,
         },
         coords={
             "time": ("time", sim.time, {"units": "s"}),
@@ -79,6 +85,7 @@ def to_dataset(sim, inputs: dict[str, str] | None = None, extra: dict | None = N
             "marker": list(sim.marker_names),
             "muscle": list(MUSCLE_GROUPS),
             "node": np.arange(model.n_surface),
+            **look_coords,
         },
         attrs={
             "title": "facemech simulation",
@@ -93,6 +100,7 @@ def to_dataset(sim, inputs: dict[str, str] | None = None, extra: dict | None = N
             "marker_nodes": json.dumps({**model.landmarks, **model.markers}),
             **render_attrs(model),
             "inputs": json.dumps(inputs or {}),
+            **look_attrs,
             **{k: (v if isinstance(v, (int, float, str)) else str(v))
                for k, v in sim.attrs.items()},
         },
@@ -112,7 +120,8 @@ def write_results(path: str | Path, sim, inputs: dict[str, str] | None = None,
     for name in ("positions", "markers"):
         if not np.all(np.isfinite(ds[name].values)):
             raise InputError("refusing to write non-finite values", source=str(path), field=name)
-    enc = {v: {"zlib": True, "complevel": 4} for v in ("positions", "markers", "activity")}
+    enc = {v: {"zlib": True, "complevel": 4} for v in ("positions", "markers", "activity",
+                                                       "texture_uv", "texture_image") if v in ds}
     with atomic_path(path, suffix=".nc") as tmp:
         ds.to_netcdf(tmp, engine="h5netcdf", encoding=enc)
     return Path(path)
