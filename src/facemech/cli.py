@@ -605,6 +605,23 @@ def plot(
     out.print(f"figure -> {output}")
 
 
+@app.command()
+def view(
+    result: Annotated[Path, typer.Argument(help="results file (.nc)")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="page (.html)")],
+    markers: Annotated[Path | None, typer.Option(
+        help="measured markers (.csv .trc .c3d .tsv) in the model's frame, drawn beside the "
+             "model's markers of the same name")] = None,
+    units: UnitsOpt = None,
+    title: Annotated[str | None, typer.Option(help="page title")] = None,
+):
+    """Write an interactive viewer: one self-contained HTML page (WebGL, works offline)."""
+    from .viz.viewer import view_file
+
+    path = view_file(result, output, markers=markers, units=units, title=title)
+    out.print(f"viewer -> {path} ({path.stat().st_size / 1e6:.1f} MB)")
+
+
 def _ranges(text: str | None, n: int, field: str) -> list[int] | None:
     """'1-30' or '1,3,5-7' (1-based, inclusive) -> 0-based indices."""
     if text is None:

@@ -1,1 +1,2 @@
-"""Pictures: a CPU rasteriser for the shaded skin, movies and kinematic plots (imported lazily)."""
+"""Pictures: a CPU rasteriser for the shaded skin, movies, kinematic plots and an interactive
+HTML viewer (imported lazily)."""

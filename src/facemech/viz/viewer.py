@@ -1,0 +1,279 @@
+"""An interactive viewer: one self-contained HTML page (WebGL, no network) of a results file.
+
+The page holds its template (``viewer_template.html``, shipped with the package) and a data block,
+``<script id="facemech-data" type="application/json">``, that :func:`viewer_data` fills:
+
+==============  ==========================================================================
+key             content
+==============  ==========================================================================
+format          ``"facemech-viewer/1"``
+title           page title
+frameRate       Hz (the results' ``frame_rate_hz``)
+time            (frames,) s, a JSON list
+nNodes          epidermal nodes
+triangles       ``{"dtype": "uint16"|"uint32", "data": base64}``, (triangles, 3) node indices
+rest            base64 float32, (nodes, 3) m, the shape the positions are quantised around
+positions       ``{"dtype": "int16", "scale": q, "data": base64}``: (frames, nodes, 3) integers
+                k with positions = rest + q k (m); |error| <= q / 2
+markers         ``{"names": [...], "data": base64 float32}``, (frames, markers, 3) m
+measured        null, or the same plus ``source``, ``coverage`` ([t0, t1] s on the results'
+                timeline) and ``note``; NaN where no measured sample covers a frame
+activity        ``{"names": [...], "data": base64 float32}``, (frames, muscles) in [0, 1]
+jawDeg          base64 float32, (frames,) degrees
+==============  ==========================================================================
+
+Binary arrays are little-endian and C-ordered. Measured markers are matched to the model's by
+name, linearly interpolated onto the results' times, and left out (NaN) outside their own time
+span and across their gaps: nothing is extrapolated.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import json
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError
+from ..io.atomic import atomic_path
+
+FORMAT = "facemech-viewer/1"
+DATA_ID = "facemech-data"
+_PLACEHOLDER = "/*FACEMECH_DATA*/"
+_TITLE_PLACEHOLDER = "<!--FACEMECH_TITLE-->"
+
+
+def _b64(a: np.ndarray, dtype: str) -> str:
+    return base64.b64encode(np.ascontiguousarray(a, dtype=np.dtype(dtype).newbyteorder("<"))
+                            .tobytes()).decode("ascii")
+
+
+def quantise(positions: np.ndarray, rest: np.ndarray) -> tuple[np.ndarray, float]:
+    """Positions as int16 steps around a rest shape.
+
+    Parameters
+    ----------
+    positions : (frames, nodes, 3) m
+    rest : (nodes, 3) m
+
+    Returns
+    -------
+    steps : (frames, nodes, 3) int16, positions = rest + scale * steps
+    scale : m per step (the largest displacement over 32000, at least 1 nm); the error is at most
+        scale / 2
+    """
+    delta = np.asarray(positions, float) - np.asarray(rest, float)[None]
+    biggest = float(np.max(np.abs(delta))) if delta.size else 0.0
+    scale = max(biggest / 32000.0, 1e-9)
+    return np.round(delta / scale).astype(np.int16), scale
+
+
+def resample_measured(measured, names: list[str], time: np.ndarray) -> tuple[np.ndarray, list]:
+    """Measured trajectories of the named markers on the results' times.
+
+    Linear interpolation between measured samples; NaN outside the measured time span (give or
+    take 1 % of a sample period, for times rounded in the file) and wherever either neighbouring
+    sample is missing (gaps are not bridged, nothing extrapolated).
+
+    Parameters
+    ----------
+    measured : :class:`~facemech.markerset.MarkerSet`
+    names : markers to take, all in ``measured.names``
+    time : (frames,) s, the results' times
+
+    Returns
+    -------
+    positions : (frames, len(names), 3) m
+    coverage : [first, last] s of the results' times that have any measured sample, or [] if none
+    """
+    t = np.asarray(measured.time, float)
+    time = np.asarray(time, float)
+    out = np.full((len(time), len(names), 3), np.nan)
+    tol = 0.01 / measured.rate  # 1 % of a sample: times rounded in the file still count
+    inside = ((time >= t[0] - tol) & (time <= t[-1] + tol) if len(t)
+              else np.zeros(len(time), bool))
+    for j, name in enumerate(names):
+        p = measured.marker(name)
+        ok = np.all(np.isfinite(p), axis=1)
+        if len(t) < 2:
+            continue
+        both = np.interp(time, t, ok.astype(float)) > 1.0 - 1e-9
+        keep = inside & both
+        for a in range(3):
+            out[keep, j, a] = np.interp(time[keep], t, np.where(ok, p[:, a], 0.0))
+    have = np.any(np.isfinite(out[..., 0]), axis=1)
+    coverage = [float(time[have][0]), float(time[have][-1])] if have.any() else []
+    return out, coverage
+
+
+def viewer_data(results, measured=None, title: str | None = None) -> dict:
+    """The JSON-ready data block of the page (see the module docstring for its keys).
+
+    Parameters
+    ----------
+    results : xarray.Dataset from :func:`facemech.io.results.read_results`
+    measured : :class:`~facemech.markerset.MarkerSet` or None; markers whose names the model
+        also has are shown beside the model's
+    title : page title (default: the dataset's ``face`` and ``preset`` attributes)
+    """
+    src = results.encoding.get("source")
+    pos = np.asarray(results["positions"].transpose("time", "node", "axis").values, float)
+    frames, nodes = pos.shape[:2]
+    if frames == 0 or nodes == 0 or not np.all(np.isfinite(pos)):
+        raise InputError("no frames, no nodes or non-finite positions", source=src,
+                         field="positions")
+    tri = np.asarray(results["triangles"].values)
+    if tri.ndim != 2 or tri.shape[1] != 3 or tri.size == 0 or tri.min() < 0 \
+            or tri.max() >= nodes:
+        raise InputError(f"triangles must be (n, 3) indices below {nodes}", source=src,
+                         field="triangles")
+    rest = (np.asarray(results["rest_positions"].values, float)
+            if "rest_positions" in results else pos[0])
+    if rest.shape != (nodes, 3) or not np.all(np.isfinite(rest)):
+        rest = pos[0]
+    time = (np.asarray(results["time"].values, float) if "time" in results.coords
+            else np.arange(frames) / float(results.attrs.get("frame_rate_hz", 60.0)))
+    rate = float(results.attrs.get("frame_rate_hz", 0.0) or 0.0)
+    if not rate > 0:
+        rate = 1.0 / float(np.median(np.diff(time))) if frames > 1 else 60.0
+    steps, scale = quantise(pos, rest)
+
+    mk = np.asarray(results["markers"].transpose("time", "marker", "axis").values, float)
+    mk_names = [str(m) for m in results["marker"].values]
+    if "activity" in results:
+        act = np.asarray(results["activity"].transpose("time", "muscle").values, float)
+        muscles = [str(m) for m in results["muscle"].values]
+    else:
+        act, muscles = np.zeros((frames, 0)), []
+    jaw = (np.degrees(np.asarray(results["jaw_angle"].values, float)) if "jaw_angle" in results
+           else np.zeros(frames))
+
+    meas_block = None
+    if measured is not None:
+        shared = [n for n in mk_names if n in measured.names]
+        if not shared:
+            raise InputError(f"no marker name in common with the model's ({', '.join(mk_names[:8])}"
+                             f"{', ...' if len(mk_names) > 8 else ''})",
+                             source=measured.meta.get("source"), field="markers")
+        mp, coverage = resample_measured(measured, shared, time)
+        t = np.asarray(measured.time, float)
+        note = (f"{len(shared)} of {measured.n_markers} measured markers match the model's by "
+                f"name; measured {t[0]:.3f}-{t[-1]:.3f} s at {measured.rate:.4g} Hz, linearly "
+                f"interpolated onto the results' {frames} frames")
+        if not coverage:
+            note += "; no measured sample falls inside the results' time span"
+        elif coverage[0] > time[0] + 1e-9 or coverage[-1] < time[-1] - 1e-9:
+            note += f"; shown only for {coverage[0]:.3f}-{coverage[1]:.3f} s"
+        meas_block = {"names": shared, "data": _b64(mp, "f4"),
+                      "source": str(measured.meta.get("source", "")), "coverage": coverage,
+                      "note": note}
+
+    if title is None:
+        parts = [str(results.attrs.get(k)) for k in ("face", "preset") if results.attrs.get(k)]
+        title = "facemech: " + (", ".join(parts) if parts else "results")
+    return {
+        "format": FORMAT,
+        "title": str(title),
+        "frameRate": rate,
+        "time": [float(v) for v in time],
+        "nNodes": int(nodes),
+        "triangles": {"dtype": "uint16" if nodes <= 65535 else "uint32",
+                      "data": _b64(tri, "u2" if nodes <= 65535 else "u4")},
+        "rest": _b64(rest, "f4"),
+        "positions": {"dtype": "int16", "scale": scale, "data": _b64(steps, "i2")},
+        "markers": {"names": mk_names, "data": _b64(mk, "f4")},
+        "measured": meas_block,
+        "activity": {"names": muscles, "data": _b64(act, "f4")},
+        "jawDeg": _b64(jaw, "f4"),
+    }
+
+
+def template() -> str:
+    """The page template (HTML, CSS and JavaScript) shipped with the package."""
+    return resources.files("facemech.viz").joinpath("viewer_template.html").read_text("utf-8")
+
+
+def render_html(data: dict) -> str:
+    """The page: the template with ``data`` in its data block (``</`` escaped)."""
+    block = json.dumps(data, separators=(",", ":"), allow_nan=False).replace("</", "<\\/")
+    page = template()
+    if _PLACEHOLDER not in page:
+        raise RuntimeError("viewer template has no data placeholder")
+    page = page.replace(_TITLE_PLACEHOLDER, html.escape(data["title"]))
+    return page.replace(_PLACEHOLDER, block)
+
+
+def read_data_block(page: str) -> dict:
+    """The data block of a page written by :func:`write_viewer` (for tests and tools)."""
+    start_tag = f'<script id="{DATA_ID}" type="application/json">'
+    i = page.index(start_tag) + len(start_tag)
+    j = page.index("</script>", i)
+    return json.loads(page[i:j])
+
+
+def decode(block, dtype: str, shape=None) -> np.ndarray:
+    """A base64 array of the data block as numpy (``block`` a string or ``{"data": ...}``)."""
+    text = block["data"] if isinstance(block, dict) else block
+    a = np.frombuffer(base64.b64decode(text), dtype=np.dtype(dtype).newbyteorder("<"))
+    return a.reshape(shape) if shape is not None else a
+
+
+def write_viewer(results, path: str | Path, measured=None, title: str | None = None) -> Path:
+    """Write the interactive viewer page of a results dataset.
+
+    The page is one HTML file that works offline: WebGL face with orbit, zoom, play/pause and a
+    time slider at the real frame rate, the model's markers (and measured ones) with names on
+    hover, and a plot of muscle activity and jaw angle against time that follows and seeks.
+
+    Parameters
+    ----------
+    results : xarray.Dataset from :func:`facemech.io.results.read_results`
+    path : the page (.html), written atomically
+    measured : :class:`~facemech.markerset.MarkerSet` or None, in the model's frame (metres)
+    title : page title
+
+    Returns
+    -------
+    The path written.
+    """
+    page = render_html(viewer_data(results, measured=measured, title=title))
+    path = Path(path)
+    with atomic_path(path, suffix=".html") as tmp:
+        tmp.write_text(page, encoding="utf-8")
+    return path
+
+
+def view_file(result: str | Path, output: str | Path, markers: str | Path | None = None,
+              units: str | None = None, title: str | None = None) -> Path:
+    """Read a results file (and measured markers) and write its viewer page.
+
+    Parameters
+    ----------
+    result : results file (.nc) written by facemech
+    output : the page (.html or .htm); never one of the inputs
+    markers : measured marker file (.csv, .trc, .c3d, .tsv), optional, in the model's frame
+    units : length unit of the marker file when it names none (e.g. ``mm``)
+    title : page title (default: the results file's name, face and preset)
+    """
+    from ..io.markers import read_markers
+    from ..io.results import read_results
+
+    result, output = Path(result), Path(output)
+    if output.suffix.lower() not in (".html", ".htm"):
+        raise InputError("the page must end in .html", source=str(output), field="output")
+    for inp in (result, markers):
+        if inp is not None and Path(inp).exists() and output.exists() \
+                and output.resolve() == Path(inp).resolve():
+            raise InputError("refusing to overwrite an input", source=str(output),
+                             field="output")
+    if units is not None and markers is None:
+        raise InputError("--units applies to --markers only", field="units")
+    ds = read_results(result)
+    measured = read_markers(markers, units=units) if markers is not None else None
+    if title is None:
+        parts = [str(ds.attrs.get(k)) for k in ("face", "preset") if ds.attrs.get(k)]
+        title = result.name + (f" ({', '.join(parts)})" if parts else "")
+    return write_viewer(ds, output, measured=measured, title=title)
