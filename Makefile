@@ -21,7 +21,7 @@ chromium:
 	  $(SUDO) apt-get update -q && \
 	  $(SUDO) env DEBIAN_FRONTEND=noninteractive apt-get install -y -q chromium; }
 
-demo: $(STAMP) chromium
+demo: $(STAMP)
 	$(BIN)/facemech demo -o demo-output
 	$(BIN)/facemech view demo-output/result.nc -o demo-output/view.html
 

@@ -111,8 +111,9 @@ def view_camera(view: str, framing: dict, size: tuple[int, int],
     Parameters
     ----------
     view : one of :data:`VIEWS`
-    framing : ``{"centre": (3,), "half_height": float, "mouth": (3,), "mouth_half_height":
-        float}`` in metres: what the face views and the mouth close-up frame
+    framing : ``{"points": (n, 3), "mouth": (3,), "mouth_half_height": float}`` in metres:
+        the points every face view fits in its panel (4 % margin), and what the mouth close-up
+        frames
     size : (height, width) pixels of this panel
     distance : camera distance, m (None: orthographic)
     """
@@ -121,5 +122,12 @@ def view_camera(view: str, framing: dict, size: tuple[int, int],
     if view == "mouth":
         return Camera(rot, np.asarray(framing["mouth"], float), framing["mouth_half_height"],
                       size, distance)
-    return Camera(rot, np.asarray(framing["centre"], float), framing["half_height"], size,
-                  distance)
+    pts = np.asarray(framing["points"], float)
+    cam = pts @ rot.T
+    lo, hi = cam.min(axis=0), cam.max(axis=0)
+    centre = 0.5 * (lo + hi)
+    h, w = size
+    half = 1.04 * max(0.5 * (hi[1] - lo[1]), 0.5 * (hi[0] - lo[0]) * h / w)
+    # the camera target: the box centre, at the depth of the box centre (model coordinates)
+    target = centre @ rot
+    return Camera(rot, target, half, size, distance)

@@ -132,6 +132,7 @@ class Part:
     alpha_test: bool = False
     inward: bool = False  # normals point inward (an interior seen from inside)
     tex_mask: np.ndarray | None = None  # (f,) bool: which triangles use the texture
+    two_sided: np.ndarray | None = None  # (f,) bool: also draw the inner side (dark)
 
 
 @dataclass(frozen=True)
@@ -193,10 +194,10 @@ def _skin_part(look: FaceLook) -> Part:
         uv[..., 0] = look.uv[..., 0] * w
         uv[..., 1] = (1.0 - look.uv[..., 1]) * h
         return Part("skin", look.rest, look.triangles, np.tile(T.SKIN, (n, 1)), gloss, "skin",
-                    uv, tex, False)
+                    uv, tex, False, two_sided=_near_mouth(look))
     if look.vertex_colours is not None:
         return Part("skin", look.rest, look.triangles, look.vertex_colours / 255.0, gloss,
-                    "skin")
+                    "skin", two_sided=_near_mouth(look))
     xy = look.rest[:, :2]
     lo, hi = xy.min(axis=0), xy.max(axis=0)
     hair = _hair_on_skin(look)
@@ -205,14 +206,25 @@ def _skin_part(look: FaceLook) -> Part:
     uv = np.empty_like(corner)
     uv[..., 0] = (corner[..., 0] - x0) / T.SKIN_TEXEL
     uv[..., 1] = (y0 - corner[..., 1]) / T.SKIN_TEXEL
-    # only frontal triangles take the texture (the sides would smear it)
-    tn = np.cross(*(look.rest[look.triangles[:, k]] - look.rest[look.triangles[:, 0]]
-                    for k in (1, 2)))
-    front = tn[:, 2] > 0.2 * np.linalg.norm(tn, axis=1)
     h = hair(look.rest[:, 0], look.rest[:, 1])[:, None]
     albedo = h * HAIR + (1 - h) * T.SKIN
     return Part("skin", look.rest, look.triangles, albedo, gloss, "skin", uv, image, True,
-                tex_mask=front)
+                two_sided=_near_mouth(look))
+
+
+def _near_mouth(look: FaceLook) -> np.ndarray | None:
+    """Skin triangles within 40 mm of the stomion or 20 mm of an eye: their inner side shows
+    through the parted lips and, from the side, through the palpebral fissures."""
+    lm = look.landmarks
+    centroid = look.rest[look.triangles].mean(axis=1)
+    near = np.zeros(len(centroid), bool)
+    if "upper_lip_center" in lm and "lower_lip_center" in lm:
+        st = lm.get("stomion", 0.5 * (lm["upper_lip_center"] + lm["lower_lip_center"]))
+        near |= np.linalg.norm(centroid - st, axis=1) < 0.04
+    for eye in ("eye_left", "eye_right"):
+        if eye in lm:
+            near |= np.linalg.norm(centroid - lm[eye], axis=1) < 0.02
+    return near if near.any() else None
 
 
 def _sphere(n_lat: int, n_lon: int):
@@ -285,7 +297,7 @@ def _eye_parts(look: FaceLook) -> list[Part]:
         parts.append(Part(name, v, faces, albedo, (0.7, 90.0), "skull", uvv, iris,
                           tex_mask=front))
         # the socket's lining (conjunctiva), seen past the eyeball from the side
-        lining = centre + unit * radii * np.array([1.25, 1.3, 1.3])
+        lining = centre + np.array([0, 0, 0.003]) + unit * radii * np.array([1.5, 1.35, 1.7])
         parts.append(Part(name + "_socket", lining, faces[:, ::-1],
                           np.tile(SOCKET, (len(v), 1)), (0.1, 20.0), "skull", inward=True))
     return parts
@@ -369,6 +381,55 @@ def _mouth_parts(look: FaceLook) -> list[Part]:
     tongue = Part("tongue", np.array([st[0], st[1] - 0.0085, front_z - 0.021]) + unit * tr,
                   faces, np.tile(TONGUE, (len(unit), 1)), (0.25, 30.0), "jaw")
     return [cavity, _arch(look, True), _arch(look, False), tongue]
+
+
+def _ear_parts(look: FaceLook) -> list[Part]:
+    """Auricles where the skin stops at the sides of the head (a face cut at the ears).
+
+    Each ear is a two-sided flap 62 mm tall and 32 mm wide (adult means, Farkas), attached
+    along its front edge at the skin's side edge, flaring to 18 mm off the head at the rim
+    (helix), with a hollow concha; it spans from the brow to the nose base.
+    """
+    r = look.rest
+    lm = look.landmarks
+    nasion = lm.get("nasion")
+    if nasion is None:
+        return []
+    from ..geometry.builder import _boundary_nodes
+
+    edge = _boundary_nodes(look.triangles)
+    parts = []
+    yc = nasion[1] - 0.024
+    for side, name in ((1, "ear_left"), (-1, "ear_right")):
+        band = np.abs(r[:, 1] - yc) < 0.02
+        xs = side * r[band, 0]
+        if not band.any():
+            continue
+        i_max = np.flatnonzero(band)[np.argmax(xs)]
+        if i_max not in set(edge.tolist()):
+            continue  # the skin goes on round the side: a scan with its own ears
+        a = r[i_max].copy()
+        a[1] = yc
+        out = np.array([side * np.cos(np.radians(20)), 0.0, -np.sin(np.radians(20))])
+        back = np.array([side * np.sin(np.radians(20)), 0.0, np.cos(np.radians(20))]) * -1
+        up = np.array([0.0, np.cos(np.radians(15)), np.sin(np.radians(15)) * -1])
+        ns, nt = 14, 22
+        S, Tt = np.meshgrid(np.linspace(0, 1, ns), np.linspace(-1, 1, nt), indexing="ij")
+        width = 0.032 * np.sqrt(np.clip(1 - Tt**2, 0, 1)) ** 0.7 * (1 - 0.25 * (Tt < 0) * Tt**2)
+        along = S * width
+        flare = 0.004 + 0.014 * S**1.5
+        curl = 0.004 * np.clip((S - 0.8) / 0.2, 0, 1) ** 2  # the helix rolls forward
+        bowl = -0.005 * np.exp(-(((S - 0.35) / 0.18) ** 2) - ((Tt + 0.1) / 0.35) ** 2)
+        pts = (a + along[..., None] * back + (Tt * 0.031)[..., None] * up
+               + (flare + bowl)[..., None] * out + curl[..., None] * (-back))
+        v = pts.reshape(-1, 3)
+        f = _grid_faces(ns, nt)
+        f = f if side < 0 else f[:, ::-1]
+        albedo = np.tile(T.EAR, (len(v), 1))
+        parts.append(Part(name, v, f, albedo, (0.08, 14.0), "skull"))
+        parts.append(Part(name + "_back", v, f[:, ::-1], albedo * 0.9, (0.05, 10.0), "skull",
+                          inward=True))
+    return parts
 
 
 def _head_centre(look: FaceLook) -> tuple[np.ndarray, float, np.ndarray]:
@@ -467,7 +528,7 @@ def _head_shell(look: FaceLook) -> Part | None:
     faces = _grid_faces(n_lat, n_lon, wrap=True)
     faces = faces[:, ::-1]  # columns run towards -x seen from the front at lon = 0
     y = verts[:, 1].reshape(n_lat, n_lon)
-    hair = np.clip((y - hairline(np.degrees(LO), top, nasion[1])) / 0.004 + 0.5, 0, 1)
+    hair = np.clip((y - hairline(np.degrees(LO), top, nasion[1])) / 0.012 + 0.5, 0, 1)
     hair = hair.reshape(-1, 1)
     albedo = hair * HAIR + (1 - hair) * T.SKIN
     return Part("head", verts, faces, albedo, (0.06, 10.0), "skull")
@@ -485,6 +546,7 @@ def build_scene(look: FaceLook, *, eyes: bool = True, mouth: bool = True,
         shell = _head_shell(look)
         if shell is not None:
             parts.append(shell)
+            parts += _ear_parts(look)
     return _pack(parts, look)
 
 
@@ -521,7 +583,7 @@ def _pack(parts: list[Part], look: FaceLook) -> Scene:
             tex.append(np.zeros(len(f), np.int8))
         uv.append(q)
         alpha.append(np.full(len(f), p.alpha_test) & (tex[-1] > 0))
-        two.append(np.full(len(f), p.motion == "skin"))
+        two.append(np.zeros(len(f), bool) if p.two_sided is None else p.two_sided)
         albedo.append(srgb_to_linear(np.clip(p.albedo, 0, 1)))
         gloss.append(np.tile(np.array(p.gloss, np.float32), (len(p.rest), 1)))
         offs.append(base + len(p.rest))
@@ -535,13 +597,12 @@ def _pack(parts: list[Part], look: FaceLook) -> Scene:
 
 
 def _framing(scene: Scene) -> dict:
+    """What the views frame: the head from its top to 35 mm under the menton, and the mouth."""
     look = scene.look
     allv = np.concatenate([p.rest for p in scene.parts if p.name in ("skin", "head")])
     top = allv[:, 1].max()
     lm = look.landmarks
     bottom = (lm["menton"][1] if "menton" in lm else look.rest[:, 1].min()) - 0.035
-    centre = np.array([np.median(look.rest[:, 0]), 0.5 * (top + bottom),
-                       np.percentile(look.rest[:, 2], 50)])
-    st = lm.get("stomion", lm.get("upper_lip_center", centre))
-    return {"centre": centre, "half_height": 0.5 * (top - bottom) * 1.04,
+    st = lm.get("stomion", lm.get("upper_lip_center", np.median(look.rest, axis=0)))
+    return {"points": allv[(allv[:, 1] >= bottom) & (allv[:, 1] <= top)],
             "mouth": np.asarray(st, float), "mouth_half_height": 0.032}

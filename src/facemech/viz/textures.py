@@ -17,6 +17,7 @@ import numpy as np
 
 SKIN = np.array([0.86, 0.66, 0.55])
 CHEEK = np.array([0.85, 0.57, 0.50])
+EAR = np.array([0.85, 0.63, 0.54])
 VERMILION = np.array([0.72, 0.40, 0.40])
 BROW = np.array([0.27, 0.19, 0.14])
 HAIR = np.array([0.20, 0.14, 0.10])
