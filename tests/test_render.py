@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import activity, run_cli
 from scipy import ndimage
 
+from conftest import activity, run_cli
 from facemech.demo import run_demo
 from facemech.geometry.appearance import Appearance
 from facemech.io.results import read_results, to_dataset

@@ -2,11 +2,13 @@
 
 A visibility-buffer renderer: a first pass scan-converts the triangles into a supersampled
 z-buffer that keeps, per sample, the nearest triangle and two barycentric weights; a second pass
-shades every covered sample (Phong-interpolated normals, per-vertex or texture albedo, wrapped
-diffuse key, fill and rim lights under a sky/ground ambient, Blinn-Phong highlights) in linear
-light; a third pass box-filters the samples to pixels (anti-aliasing), blends them over the
-background and converts to sRGB.  Texture lookups are bilinear in a single RGBA atlas; a texel
-with alpha below one half discards the sample (the eye fissures are cut this way).
+shades the samples in linear light and box-filters them to pixels (anti-aliasing), shading a
+pixel once where all its samples see one triangle (as multisampling does), blends them over the
+background and converts to sRGB. Light is computed per vertex (wrapped diffuse key, fill and
+rim lights under a sky/ground ambient, and a Blinn-Phong highlight of the key light) and
+interpolated (Gouraud); the albedo comes per pixel from the texture or per vertex. Texture
+lookups are bilinear in a single RGBA atlas; a texel with alpha below one half discards the
+sample (the eye fissures are cut this way).
 
 The projection (:class:`facemech.viz.camera.Camera`) has already taken the vertices to image
 sample coordinates: ``x`` right, ``y`` down, ``z`` towards the viewer (larger is nearer).
@@ -86,16 +88,31 @@ def rasterise(px, py, pz, tris, uv, tex, alpha_test, two_sided, atlas, zbuf, tid
             continue
         inv = 1.0 / area
         z0, z1, z2 = pz[i0], pz[i1], pz[i2]
-        test = alpha_test[f]
-        # barycentric weights are affine in x: step them along each row
+        test = alpha_test[f] and area < 0  # a cut-out shows the inside of its rim
+        # barycentric weights are affine in x: on each row, solve for the span where all three
+        # are >= 0 and step them along it
         a0 = (y1 - y2) * inv
         a1 = (y2 - y0) * inv
+        a2 = -a0 - a1
         for yy in range(ymin, ymax + 1):
             fy = yy + 0.5
             fx = xmin + 0.5
             w0 = ((x1 - fx) * (y2 - fy) - (x2 - fx) * (y1 - fy)) * inv
             w1 = ((x2 - fx) * (y0 - fy) - (x0 - fx) * (y2 - fy)) * inv
-            for xx in range(xmin, xmax + 1):
+            lo, hi = xmin, xmax
+            empty = False
+            for wk, ak in ((w0, a0), (w1, a1), (1.0 - w0 - w1, a2)):
+                if ak > 1e-12:
+                    lo = max(lo, xmin + int(np.ceil(-wk / ak - 1e-6)))
+                elif ak < -1e-12:
+                    hi = min(hi, xmin + int(np.floor(-wk / ak + 1e-6)))
+                elif wk < 0:
+                    empty = True
+            if empty or lo > hi:
+                continue
+            w0 += a0 * (lo - xmin)
+            w1 += a1 * (lo - xmin)
+            for xx in range(lo, hi + 1):
                 w2 = 1.0 - w0 - w1
                 if w0 >= 0 and w1 >= 0 and w2 >= 0:
                     z = w0 * z0 + w1 * z1 + w2 * z2
@@ -114,7 +131,7 @@ def rasterise(px, py, pz, tris, uv, tex, alpha_test, two_sided, atlas, zbuf, tid
                 w1 += a1
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, fastmath=True)
 def _bilinear(atlas, u, v, out):
     h, w = atlas.shape[0], atlas.shape[1]
     u = min(max(u - 0.5, 0.0), w - 1.001)
@@ -126,9 +143,32 @@ def _bilinear(atlas, u, v, out):
                   + (1 - fu) * fv * atlas[iv + 1, iu, c] + fu * fv * atlas[iv + 1, iu + 1, c])
 
 
-@nb.njit(cache=True, inline="always")
-def _shade_sample(f, w0, w1, tris, normals, albedo, gloss, uv, tex, atlas, lights, sky, ground,
-                  wrap, col):
+def vertex_light(normals: np.ndarray, gloss: np.ndarray, lights: np.ndarray, sky: float,
+                 ground: float, wrap: float) -> np.ndarray:
+    """Diffuse light and specular highlight at each vertex, (n, 2) float32 (Gouraud shading).
+
+    ``normals`` (n, 3) are unit camera-space normals (the viewer along +z), ``gloss`` (n, 2)
+    the specular strength and Blinn-Phong exponent, ``lights`` (k, 4) unit directions and
+    intensities. Diffuse: a sky/ground hemisphere plus each light wrapped by ``wrap``;
+    highlights of the first (key) light only.
+    """
+    n = normals
+    t = 0.5 * (n[:, 1] + 1.0)
+    diff = sky * t + ground * (1.0 - t)
+    for lx, ly, lz, li in lights:
+        d = n[:, 0] * lx + n[:, 1] * ly + n[:, 2] * lz
+        diff = diff + li * np.clip((d + wrap) / (1.0 + wrap), 0.0, None)
+    key = lights[0]
+    half = key[:3] + np.array([0.0, 0.0, 1.0])
+    half = half / np.linalg.norm(half)
+    c = np.clip(n @ half, 0.0, 1.0)
+    facing = (n @ key[:3]) > 0
+    spec = np.where(facing, key[3] * gloss[:, 0] * c ** gloss[:, 1], 0.0)
+    return np.stack([diff, spec], axis=1).astype(np.float32)
+
+
+@nb.njit(cache=True, inline="always", fastmath=True)
+def _shade_sample(f, w0, w1, tris, light, albedo, uv, tex, atlas, col):
     """Linear RGB of one sample of triangle ``f`` at barycentric weights (w0, w1), into col."""
     if f >= tris.shape[0]:  # the inside of a two-sided surface: unlit, dark
         for c in range(3):
@@ -136,49 +176,27 @@ def _shade_sample(f, w0, w1, tris, normals, albedo, gloss, uv, tex, atlas, light
         return
     w2 = 1.0 - w0 - w1
     i0, i1, i2 = tris[f, 0], tris[f, 1], tris[f, 2]
-    nx = w0 * normals[i0, 0] + w1 * normals[i1, 0] + w2 * normals[i2, 0]
-    ny = w0 * normals[i0, 1] + w1 * normals[i1, 1] + w2 * normals[i2, 1]
-    nz = w0 * normals[i0, 2] + w1 * normals[i1, 2] + w2 * normals[i2, 2]
-    nn = np.sqrt(nx * nx + ny * ny + nz * nz) + 1e-12
-    nx, ny, nz = nx / nn, ny / nn, nz / nn
+    diff = w0 * light[i0, 0] + w1 * light[i1, 0] + w2 * light[i2, 0]
+    spec = w0 * light[i0, 1] + w1 * light[i1, 1] + w2 * light[i2, 1]
     if tex[f]:
         u = w0 * uv[f, 0, 0] + w1 * uv[f, 1, 0] + w2 * uv[f, 2, 0]
         v = w0 * uv[f, 0, 1] + w1 * uv[f, 1, 1] + w2 * uv[f, 2, 1]
         _bilinear(atlas, u, v, col)
+        for c in range(3):
+            col[c] = col[c] * diff + spec
     else:
         for c in range(3):
-            col[c] = w0 * albedo[i0, c] + w1 * albedo[i1, c] + w2 * albedo[i2, c]
-    ks = w0 * gloss[i0, 0] + w1 * gloss[i1, 0] + w2 * gloss[i2, 0]
-    t = 0.5 * (ny + 1.0)
-    diff = sky * t + ground * (1.0 - t)
-    spec = 0.0
-    for k in range(lights.shape[0]):
-        d = nx * lights[k, 0] + ny * lights[k, 1] + nz * lights[k, 2]
-        wd = (d + wrap) / (1.0 + wrap)
-        if wd > 0:
-            diff += lights[k, 3] * wd
-    if ks > 0:  # highlights of the key light only
-        d = nx * lights[0, 0] + ny * lights[0, 1] + nz * lights[0, 2]
-        if d > 0:
-            hx, hy, hz = lights[0, 0], lights[0, 1], lights[0, 2] + 1.0
-            c = (nx * hx + ny * hy + nz * hz) / np.sqrt(hx * hx + hy * hy + hz * hz)
-            if c > 0:
-                ex = w0 * gloss[i0, 1] + w1 * gloss[i1, 1] + w2 * gloss[i2, 1]
-                spec = lights[0, 3] * ks * np.exp(ex * np.log(c))
-    for c in range(3):
-        col[c] = col[c] * diff + spec
+            col[c] = (w0 * albedo[i0, c] + w1 * albedo[i1, c] + w2 * albedo[i2, c]) * diff + spec
 
 
-@nb.njit(cache=True)
-def shade_resolve(tid, bary, s, tris, normals, albedo, gloss, uv, tex, atlas, lights, sky,
-                  ground, wrap, background, lut, rgba):
+@nb.njit(cache=True, fastmath=True)
+def shade_resolve(tid, bary, s, tris, light, albedo, uv, tex, atlas, background, lut, rgba):
     """Shade the samples and box-filter s x s of them per pixel into sRGB uint8 RGBA.
 
     A pixel whose samples all show one triangle is shaded once, at the mean of their weights
-    (as multisampling does); edge pixels are shaded per sample. ``normals`` (n, 3) are unit
-    camera-space vertex normals, ``albedo`` (n, 3) linear RGB, ``gloss`` (n, 2) specular
-    strength and Blinn-Phong exponent. ``background`` is (4,) linear RGB and alpha; alpha 0
-    gives a transparent background with the coverage in the alpha channel.
+    (as multisampling does); edge pixels are shaded per sample. ``light`` (n, 2) is
+    :func:`vertex_light`'s, ``albedo`` (n, 3) linear RGB. ``background`` is (4,) linear RGB
+    and alpha; alpha 0 gives a transparent background with the coverage in the alpha channel.
     """
     h, w = rgba.shape[0], rgba.shape[1]
     col = np.empty(3, np.float32)
@@ -200,8 +218,7 @@ def shade_resolve(tid, bary, s, tris, normals, albedo, gloss, uv, tex, atlas, li
                     for i in range(s):
                         a0 += bary[yy * s + j, xx * s + i, 0]
                         a1 += bary[yy * s + j, xx * s + i, 1]
-                _shade_sample(t0, a0 / ns, a1 / ns, tris, normals, albedo, gloss, uv, tex,
-                              atlas, lights, sky, ground, wrap, col)
+                _shade_sample(t0, a0 / ns, a1 / ns, tris, light, albedo, uv, tex, atlas, col)
                 r, g, b, cov = col[0] * ns, col[1] * ns, col[2] * ns, float(ns)
             elif not same:
                 for j in range(s):
@@ -209,9 +226,8 @@ def shade_resolve(tid, bary, s, tris, normals, albedo, gloss, uv, tex, atlas, li
                         f = tid[yy * s + j, xx * s + i]
                         if f >= 0:
                             _shade_sample(f, bary[yy * s + j, xx * s + i, 0],
-                                          bary[yy * s + j, xx * s + i, 1], tris, normals,
-                                          albedo, gloss, uv, tex, atlas, lights, sky, ground,
-                                          wrap, col)
+                                          bary[yy * s + j, xx * s + i, 1], tris, light,
+                                          albedo, uv, tex, atlas, col)
                             r += col[0]
                             g += col[1]
                             b += col[2]

@@ -20,6 +20,7 @@ from .raster import (
     rasterise,
     shade_resolve,
     srgb_to_linear,
+    vertex_light,
 )
 from .scene import Scene
 
@@ -70,11 +71,10 @@ def render_panel(scene: Scene, verts: np.ndarray, norms: np.ndarray, camera: Cam
     bary = np.empty((bh, bw, 2), np.float32)
     rasterise(px, py, p[:, 2], scene.tris, scene.uv, scene.tex, scene.alpha_test,
               scene.two_sided, scene.atlas, zbuf, tid, bary)
-    ncam = (norms @ camera.rotation.T).astype(np.float32)
+    light = vertex_light(norms @ camera.rotation.T, scene.gloss, _LIGHTS, SKY, GROUND, WRAP)
     sub = np.empty((y1 - y0, x1 - x0, 4), np.uint8)
-    shade_resolve(tid, bary, s, scene.tris, ncam, scene.albedo, scene.gloss, scene.uv,
-                  scene.tex, scene.atlas, _LIGHTS, np.float32(SKY), np.float32(GROUND),
-                  np.float32(WRAP), background.astype(np.float32), LINEAR_TO_SRGB_LUT, sub)
+    shade_resolve(tid, bary, s, scene.tris, light, scene.albedo, scene.uv, scene.tex,
+                  scene.atlas, background.astype(np.float32), LINEAR_TO_SRGB_LUT, sub)
     img[y0:y1, x0:x1] = sub
     return img
 

@@ -150,6 +150,7 @@ class Scene:
     albedo: np.ndarray  # (N, 3) float32 linear
     gloss: np.ndarray  # (N, 2) float32
     offsets: np.ndarray  # (parts + 1,) vertex offsets
+    rest_normals: tuple = ()  # per part, (n, 3) unit normals at rest
     framing: dict = field(default_factory=dict)
 
     def frame(self, skin: np.ndarray, jaw_angle: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
@@ -157,29 +158,19 @@ class Scene:
         look = self.look
         rot = rotation_matrix(look.hinge_axis, float(jaw_angle))
         verts, norms = [], []
-        for p in self.parts:
+        for p, n_rest in zip(self.parts, self.rest_normals, strict=True):
             if p.motion == "skin":
                 v = np.asarray(skin, float)
                 n = vertex_normals(v, p.faces)
             else:
                 v = p.rest
-                n = _rest_normals(p)
+                n = n_rest
                 if p.motion == "jaw" and jaw_angle != 0.0:
                     v = (v - look.hinge_point) @ rot.T + look.hinge_point
                     n = n @ rot.T
             verts.append(v)
             norms.append(-n if p.inward else n)
         return np.concatenate(verts), np.concatenate(norms)
-
-
-_NORMAL_CACHE: dict[int, np.ndarray] = {}
-
-
-def _rest_normals(p: Part) -> np.ndarray:
-    key = id(p)
-    if key not in _NORMAL_CACHE:
-        _NORMAL_CACHE[key] = vertex_normals(p.rest, p.faces)
-    return _NORMAL_CACHE[key]
 
 
 # ---- the parts ------------------------------------------------------------------------------
@@ -194,10 +185,10 @@ def _skin_part(look: FaceLook) -> Part:
         uv[..., 0] = look.uv[..., 0] * w
         uv[..., 1] = (1.0 - look.uv[..., 1]) * h
         return Part("skin", look.rest, look.triangles, np.tile(T.SKIN, (n, 1)), gloss, "skin",
-                    uv, tex, False, two_sided=_near_mouth(look))
+                    uv, tex, False, two_sided=_inner_side(look))
     if look.vertex_colours is not None:
         return Part("skin", look.rest, look.triangles, look.vertex_colours / 255.0, gloss,
-                    "skin", two_sided=_near_mouth(look))
+                    "skin", two_sided=_inner_side(look))
     xy = look.rest[:, :2]
     lo, hi = xy.min(axis=0), xy.max(axis=0)
     hair = _hair_on_skin(look)
@@ -209,22 +200,23 @@ def _skin_part(look: FaceLook) -> Part:
     h = hair(look.rest[:, 0], look.rest[:, 1])[:, None]
     albedo = h * HAIR + (1 - h) * T.SKIN
     return Part("skin", look.rest, look.triangles, albedo, gloss, "skin", uv, image, True,
-                two_sided=_near_mouth(look))
+                two_sided=_inner_side(look))
 
 
-def _near_mouth(look: FaceLook) -> np.ndarray | None:
-    """Skin triangles within 40 mm of the stomion or 20 mm of an eye: their inner side shows
-    through the parted lips and, from the side, through the palpebral fissures."""
-    lm = look.landmarks
+def _inner_side(look: FaceLook) -> np.ndarray:
+    """Skin triangles whose inner side is drawn (dark): all but those within 15 mm of the
+    skin's edge. The inner side shows only through the parted lips and the palpebral fissures;
+    near the edges the head shell stands behind the skin instead."""
+    from scipy.spatial import cKDTree
+
+    from ..geometry.builder import _boundary_nodes
+
+    edge = look.rest[_boundary_nodes(look.triangles)]
     centroid = look.rest[look.triangles].mean(axis=1)
-    near = np.zeros(len(centroid), bool)
-    if "upper_lip_center" in lm and "lower_lip_center" in lm:
-        st = lm.get("stomion", 0.5 * (lm["upper_lip_center"] + lm["lower_lip_center"]))
-        near |= np.linalg.norm(centroid - st, axis=1) < 0.04
-    for eye in ("eye_left", "eye_right"):
-        if eye in lm:
-            near |= np.linalg.norm(centroid - lm[eye], axis=1) < 0.02
-    return near if near.any() else None
+    if len(edge) == 0:
+        return np.ones(len(centroid), bool)
+    dist, _ = cKDTree(edge).query(centroid)
+    return dist > 0.015
 
 
 def _sphere(n_lat: int, n_lon: int):
@@ -263,6 +255,22 @@ def _skin_depth(look: FaceLook):
     return LinearNDInterpolator(r[front, :2], r[front, 2])
 
 
+def _fit_inside(centre, unit, radii, depth, margin: float) -> np.ndarray:
+    """An ellipsoid's vertices, shrunk (x and z) until it lies ``margin`` m inside the skin.
+
+    Only the inner far wall of these linings is drawn; a part of it outside the skin would
+    show on the face.
+    """
+    radii = np.asarray(radii, float)
+    for _ in range(40):
+        v = centre + unit * radii
+        zs = depth(v[:, 0], v[:, 1])
+        if not np.any(np.isfinite(zs) & (v[:, 2] > zs - margin)):
+            break
+        radii = radii * np.array([0.95, 0.98, 0.95])
+    return v
+
+
 def _eye_parts(look: FaceLook) -> list[Part]:
     depth = _skin_depth(look)
     parts = []
@@ -274,16 +282,16 @@ def _eye_parts(look: FaceLook) -> list[Part]:
         e = look.landmarks[name]
         unit, faces = _sphere(24, 36)
         radii = np.array([EYE_RADIUS * 1.22, EYE_RADIUS, EYE_RADIUS])
-        # as far forward as the lids allow: behind the skin everywhere outside the fissure
+        # as far forward as the lids allow: behind the skin on a ring round the fissure
         s = np.linspace(-1.3, 1.3, 53)
         hh = np.linspace(-0.012, 0.012, 49)
         S, H = np.meshgrid(s, hh)
         gx = e[0] + side * S * T.FISSURE_HALF_LENGTH
         gy = e[1] + H
-        inside = T.eye_mask(gx, gy, e, side) > -2e-4
+        mask = T.eye_mask(gx, gy, e, side)
         dx, dy = gx - e[0], gy - e[1]
         q = 1.0 - (dx / radii[0]) ** 2 - (dy / radii[1]) ** 2
-        ok = (~inside) & (q > 0)
+        ok = (mask < -2e-4) & (mask > -0.004) & (q > 0)  # a 4-mm ring round the fissure
         z_skin = depth(gx, gy)
         cz = np.nanmin((z_skin - radii[2] * np.sqrt(np.where(q > 0, q, 0.0)))[ok]) - 6e-4
         centre = np.array([e[0], e[1], cz])
@@ -297,7 +305,8 @@ def _eye_parts(look: FaceLook) -> list[Part]:
         parts.append(Part(name, v, faces, albedo, (0.7, 90.0), "skull", uvv, iris,
                           tex_mask=front))
         # the socket's lining (conjunctiva), seen past the eyeball from the side
-        lining = centre + np.array([0, 0, 0.003]) + unit * radii * np.array([1.5, 1.35, 1.7])
+        lining = _fit_inside(centre + np.array([0, 0, 0.003]), unit,
+                             radii * np.array([1.5, 1.35, 1.7]), depth, 0.0005)
         parts.append(Part(name + "_socket", lining, faces[:, ::-1],
                           np.tile(SOCKET, (len(v), 1)), (0.1, 20.0), "skull", inward=True))
     return parts
@@ -367,14 +376,8 @@ def _mouth_parts(look: FaceLook) -> list[Part]:
     unit, faces = _sphere(20, 32)
     # only the inner far wall is drawn (seen through the lips); it holds the teeth and tongue
     centre = np.array([st[0], st[1] - 0.006, front_z - 0.014])
-    radii = np.array([half_w + 0.009, 0.030, 0.030])
-    depth = _skin_depth(look)
-    for _ in range(30):  # shrink until the whole cavity lies 1 mm inside the skin
-        cav = centre + unit * radii
-        zs = depth(cav[:, 0], cav[:, 1])
-        if not np.any(np.isfinite(zs) & (cav[:, 2] > zs - 0.001)):
-            break
-        radii = radii * np.array([0.95, 0.98, 0.95])
+    cav = _fit_inside(centre, unit, np.array([half_w + 0.009, 0.030, 0.030]),
+                      _skin_depth(look), 0.001)
     cavity = Part("cavity", cav, faces[:, ::-1], np.tile(CAVITY, (len(cav), 1)), (0.0, 1.0),
                   "skull", inward=True)
     tr = np.array([0.018, 0.0065, 0.019])
@@ -527,6 +530,10 @@ def _head_shell(look: FaceLook) -> Part | None:
     verts = (c + d * rad[..., None]).reshape(-1, 3)
     faces = _grid_faces(n_lat, n_lon, wrap=True)
     faces = faces[:, ::-1]  # columns run towards -x seen from the front at lon = 0
+    # under the face the shell is never seen (the skin covers it and the cavity, the eye
+    # sockets and the skin's inner side fill the openings): leave those triangles out
+    hidden = (inside_deg > 9.0).ravel()
+    faces = faces[~hidden[faces].all(axis=1)]
     y = verts[:, 1].reshape(n_lat, n_lon)
     hair = np.clip((y - hairline(np.degrees(LO), top, nasion[1])) / 0.012 + 0.5, 0, 1)
     hair = hair.reshape(-1, 1)
@@ -591,7 +598,8 @@ def _pack(parts: list[Part], look: FaceLook) -> Scene:
                   np.concatenate(uv).astype(np.float32), np.concatenate(tex),
                   np.concatenate(alpha), np.concatenate(two), atlas,
                   np.concatenate(albedo).astype(np.float32),
-                  np.concatenate(gloss).astype(np.float32), np.array(offs))
+                  np.concatenate(gloss).astype(np.float32), np.array(offs),
+                  tuple(vertex_normals(p.rest, p.faces) for p in parts))
     object.__setattr__(scene, "framing", _framing(scene))
     return scene
 

@@ -1,0 +1,126 @@
+"""Milliseconds per rendered frame of the built-in face at 720p and 1080p, on one core.
+
+Prints one JSON object. Every view of the demo's open-mouth frame is timed (median of
+``--frames`` renders after a warm-up), with 2x2 anti-aliasing (the default) and without, and
+split into the scene update, the rasterisation and the shading/resolve passes for frontal 720p.
+``--mesa`` also runs ``benchmarks/render_mesa.py`` (moderngl on Mesa's llvmpipe) in the same
+session for the comparison in docs/rendering.md.
+
+    python benchmarks/render.py [--frames 15] [--mesa]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+os.environ.setdefault("NUMBA_NUM_THREADS", "1")
+
+import numpy as np  # noqa: E402
+from threadpoolctl import threadpool_limits  # noqa: E402
+
+
+def _median_ms(fn, n: int) -> float:
+    fn()
+    times = []
+    for _ in range(n):
+        t = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t)
+    return 1e3 * float(np.median(times))
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--frames", type=int, default=15)
+    ap.add_argument("--mesa", action="store_true")
+    args = ap.parse_args()
+
+    from facemech.geometry.builder import default_face
+    from facemech.solvers.forward import simulate
+    from facemech.viz import render as R
+    from facemech.viz.raster import GROUND, LINEAR_TO_SRGB_LUT, SKY, WRAP, rasterise, vertex_light
+    from facemech.viz.raster import shade_resolve as shade
+    from facemech.viz.scene import build_scene, look_from_model
+
+    face = default_face()
+    n = 19
+    act = np.zeros((n, 16))
+    jaw = np.radians(12.0) * np.linspace(0, 1, n)
+    sim = simulate(face, act, jaw)
+    skin, angle = sim.positions[-1], float(jaw[-1])
+    t0 = time.perf_counter()
+    scene = build_scene(look_from_model(face))
+    build_s = time.perf_counter() - t0
+    out = {"machine_cores_used": 1, "frames_timed": args.frames,
+           "scene_build_s": round(build_s, 3), "triangles": int(len(scene.tris)),
+           "ms_per_frame": {}}
+    with threadpool_limits(1):
+        for size_name, size in (("720p", (720, 1280)), ("1080p", (1080, 1920))):
+            for view in ("frontal", "three-quarter", "mouth", "frontal+profile"):
+                for aa in (2, 1):
+                    r = R.Renderer(scene, view, size, supersample=aa)
+                    key = f"{size_name} {view} aa{aa}"
+                    out["ms_per_frame"][key] = round(_median_ms(lambda r=r: r(skin, angle),
+                                                                args.frames), 1)
+        # where the time goes: frontal 720p, 2x2 samples
+        r = R.Renderer(scene, "frontal", (720, 1280))
+        cam = r.cameras[0]
+        verts, norms = scene.frame(skin, angle)
+        s = 2
+        p = cam.project(verts, s)
+        x0, x1 = int(p[:, 0].min() / s), int(p[:, 0].max() / s) + 1
+        y0, y1 = max(int(p[:, 1].min() / s), 0), min(int(p[:, 1].max() / s) + 1, 720)
+        bh, bw = (y1 - y0) * s, (x1 - x0) * s
+        px, py = p[:, 0] - x0 * s, p[:, 1] - y0 * s
+        bufs = {}
+
+        def ras():
+            bufs["z"] = np.full((bh, bw), -np.inf, np.float32)
+            bufs["t"] = np.full((bh, bw), -1, np.int32)
+            bufs["b"] = np.empty((bh, bw, 2), np.float32)
+            rasterise(px, py, p[:, 2], scene.tris, scene.uv, scene.tex, scene.alpha_test,
+                      scene.two_sided, scene.atlas, bufs["z"], bufs["t"], bufs["b"])
+
+        ras()
+        sub = np.empty((y1 - y0, x1 - x0, 4), np.uint8)
+
+        def light():
+            return vertex_light(norms @ cam.rotation.T, scene.gloss, R._LIGHTS, SKY, GROUND,
+                                WRAP)
+
+        lit = light()
+
+        def sh():
+            shade(bufs["t"], bufs["b"], s, scene.tris, lit, scene.albedo, scene.uv, scene.tex,
+                  scene.atlas, r.background, LINEAR_TO_SRGB_LUT, sub)
+
+        out["frontal_720p_split_ms"] = {
+            "scene_update": round(_median_ms(lambda: scene.frame(skin, angle), args.frames), 2),
+            "project": round(_median_ms(lambda: cam.project(verts, s), args.frames), 2),
+            "rasterise": round(_median_ms(ras, args.frames), 2),
+            "vertex_light": round(_median_ms(light, args.frames), 2),
+            "shade_resolve": round(_median_ms(sh, args.frames), 2),
+            "samples_covered": int((bufs["t"] >= 0).sum()),
+        }
+    fps = 60.0
+    ms = out["ms_per_frame"]["720p frontal aa2"]
+    out["seconds_to_render_3s_stimulus_720p_frontal"] = round(3 * fps * ms / 1e3, 2)
+    if args.mesa:
+        script = Path(__file__).with_name("render_mesa.py")
+        run = subprocess.run([sys.executable, str(script), "--quick"], capture_output=True,
+                             text=True)
+        try:
+            out["mesa"] = json.loads(run.stdout)
+        except json.JSONDecodeError:
+            out["mesa"] = {"available": False, "why": run.stderr.strip()[-300:]}
+    print(json.dumps(out, indent=2))
+
+
+if __name__ == "__main__":
+    main()
