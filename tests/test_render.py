@@ -86,7 +86,7 @@ def test_open_mouth_shows_the_mouth_interior_not_the_background(open_mouth):
 def test_no_background_enclosed_by_the_face_in_any_demo_frame(demo_results):
     ds = demo_results
     scene = build_scene(look_from_dataset(ds))
-    rend = Renderer(scene, "frontal+profile", (180, 640), background=GREEN, supersample=1)
+    rend = Renderer(scene, "frontal+profile", (360, 1280), background=GREEN, supersample=1)
     pos, jaw = ds.positions.values, ds.jaw_angle.values
     bg = _bg(rend)
     worst = max(enclosed_background(rend(pos[k], jaw[k]), bg) for k in range(len(pos)))
@@ -261,3 +261,18 @@ def test_still_as_library_call(open_mouth, tmp_path):
     assert r["frame"] == int(np.argmax(open_mouth.activity.values[:, 7]
                                        if list(open_mouth.muscle.values).index("DLI") == 7
                                        else open_mouth.activity.sel(muscle="DLI").values))
+
+
+def test_render_reports_progress_when_piped(open_mouth, tmp_path):
+    import subprocess
+    import sys
+
+    res = tmp_path / "r.nc"
+    open_mouth.to_netcdf(res, engine="h5netcdf")
+    run = subprocess.run([sys.executable, "-m", "facemech.cli", "render", str(res), "-o",
+                          str(tmp_path / "m.mp4"), "--size", "320x180"],
+                         capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    n = len(open_mouth.time)
+    lines = [ln for ln in run.stderr.splitlines() if ln.startswith("facemech: render:")]
+    assert lines and lines[-1].startswith(f"facemech: render: {n}/{n} (")

@@ -48,10 +48,46 @@ err = Console(stderr=True)
 out = Console(soft_wrap=True)
 
 
+class _LogProgress:
+    """Progress as plain lines on stderr (output piped or logged): the stage, items done and
+    the elapsed time, every ``every`` seconds per stage and when a stage completes. A stage
+    that fails within its first ``every`` seconds prints no progress, only its error line."""
+
+    def __init__(self, every: float = 5.0):
+        import time
+
+        self._clock = time.monotonic
+        self.every = every
+        self.tasks: dict[int, list] = {}
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        return False
+
+    def add_task(self, description: str, total: int | None = None) -> int:
+        now = self._clock()
+        self.tasks[len(self.tasks)] = [description, total, now, now, -1]
+        return len(self.tasks) - 1
+
+    def update(self, task: int, completed: int) -> None:
+        desc, total, start, last, done_before = self.tasks[task]
+        now = self._clock()
+        finished = total is not None and completed >= total and done_before < total
+        if finished or now - last >= self.every:
+            of = f"/{total}" if total is not None else ""
+            print(f"facemech: {desc}: {completed}{of} ({now - start:.0f} s)", file=sys.stderr,
+                  flush=True)
+            self.tasks[task][3] = now
+        self.tasks[task][4] = completed
+
+
 def _progress():
+    if not err.is_terminal:
+        return _LogProgress()
     return Progress(TextColumn("{task.description}"), BarColumn(), TextColumn("{task.completed}/"
-                    "{task.total}"), TimeElapsedColumn(), console=err, transient=True,
-                    disable=not err.is_terminal)
+                    "{task.total}"), TimeElapsedColumn(), console=err, transient=True)
 
 
 @contextlib.contextmanager

@@ -27,6 +27,7 @@ LIGHTS = np.array([
 ])  # fmt: skip
 SKY, GROUND = 0.26, 0.14  #: hemisphere ambient (linear) from above and from below
 WRAP = 0.35  #: diffuse wrap: light bleeds past the terminator as in translucent skin
+EDGE_EPS = 1e-6  #: barycentric slack: a sample on an edge shared by two triangles is never lost
 INSIDE = (0.012, 0.004, 0.004)  #: linear colour of the skin's inner side (inside the mouth)
 
 
@@ -103,10 +104,10 @@ def rasterise(px, py, pz, tris, uv, tex, alpha_test, two_sided, atlas, zbuf, tid
             empty = False
             for wk, ak in ((w0, a0), (w1, a1), (1.0 - w0 - w1, a2)):
                 if ak > 1e-12:
-                    lo = max(lo, xmin + int(np.ceil(-wk / ak - 1e-6)))
+                    lo = max(lo, xmin + int(np.ceil((-EDGE_EPS - wk) / ak - 1e-6)))
                 elif ak < -1e-12:
-                    hi = min(hi, xmin + int(np.floor(-wk / ak + 1e-6)))
-                elif wk < 0:
+                    hi = min(hi, xmin + int(np.floor((-EDGE_EPS - wk) / ak + 1e-6)))
+                elif wk < -EDGE_EPS:
                     empty = True
             if empty or lo > hi:
                 continue
@@ -114,7 +115,7 @@ def rasterise(px, py, pz, tris, uv, tex, alpha_test, two_sided, atlas, zbuf, tid
             w1 += a1 * (lo - xmin)
             for xx in range(lo, hi + 1):
                 w2 = 1.0 - w0 - w1
-                if w0 >= 0 and w1 >= 0 and w2 >= 0:
+                if w0 >= -EDGE_EPS and w1 >= -EDGE_EPS and w2 >= -EDGE_EPS:
                     z = w0 * z0 + w1 * z1 + w2 * z2
                     if z > zbuf[yy, xx]:
                         keep = True

@@ -33,6 +33,7 @@ CAVITY = np.array([0.20, 0.07, 0.07])
 SOCKET = np.array([0.55, 0.30, 0.28])
 TONGUE = np.array([0.74, 0.40, 0.40])
 EYE_RADIUS = 0.012  #: m
+SKIRT_DEPTH = 0.008  #: m, how far the skirt runs in from the skin's edge
 
 
 @dataclass(frozen=True)
@@ -133,6 +134,7 @@ class Part:
     inward: bool = False  # normals point inward (an interior seen from inside)
     tex_mask: np.ndarray | None = None  # (f,) bool: which triangles use the texture
     two_sided: np.ndarray | None = None  # (f,) bool: also draw the inner side (dark)
+    skirt_nodes: np.ndarray | None = None  # motion 'skirt': the skin's edge nodes
 
 
 @dataclass(frozen=True)
@@ -151,6 +153,7 @@ class Scene:
     gloss: np.ndarray  # (N, 2) float32
     offsets: np.ndarray  # (parts + 1,) vertex offsets
     rest_normals: tuple = ()  # per part, (n, 3) unit normals at rest
+    centre: np.ndarray = field(default_factory=lambda: np.zeros(3))  # of the head, m
     framing: dict = field(default_factory=dict)
 
     def frame(self, skin: np.ndarray, jaw_angle: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
@@ -158,10 +161,19 @@ class Scene:
         look = self.look
         rot = rotation_matrix(look.hinge_axis, float(jaw_angle))
         verts, norms = [], []
+        skin = np.asarray(skin, float)
+        skin_normals = None
         for p, n_rest in zip(self.parts, self.rest_normals, strict=True):
             if p.motion == "skin":
-                v = np.asarray(skin, float)
-                n = vertex_normals(v, p.faces)
+                v = skin
+                n = skin_normals = vertex_normals(v, p.faces)
+            elif p.motion == "skirt":  # from the skin's edge nodes in towards the head's centre
+                nodes = p.skirt_nodes
+                edge = skin[nodes]
+                inward = self.centre - edge
+                inward /= np.linalg.norm(inward, axis=1, keepdims=True)
+                v = np.concatenate([edge, edge + SKIRT_DEPTH * inward])
+                n = np.concatenate([skin_normals[nodes]] * 2)
             else:
                 v = p.rest
                 n = n_rest
@@ -386,6 +398,43 @@ def _mouth_parts(look: FaceLook) -> list[Part]:
     return [cavity, _arch(look, True), _arch(look, False), tongue]
 
 
+def _skirt(look: FaceLook) -> Part | None:
+    """A strip from the skin's outer edge 8 mm in towards the head's centre, both sides drawn.
+
+    It closes the crack that would open between the moving skin's edge and the fixed head
+    shell behind it. Edges within 40 mm of the stomion (the mouth slit) get none.
+    """
+    f = look.triangles
+    e = np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1)
+    u, counts = np.unique(e, axis=0, return_counts=True)
+    edges = u[counts == 1]
+    lm = look.landmarks
+    if "stomion" in lm:
+        far = np.linalg.norm(look.rest[edges].mean(axis=1) - lm["stomion"], axis=1) > 0.04
+        edges = edges[far]
+    if len(edges) == 0:
+        return None
+    nodes, local = np.unique(edges, return_inverse=True)
+    local = local.reshape(-1, 2)
+    m = len(nodes)
+    a, b = local[:, 0], local[:, 1]
+    quads = np.concatenate([np.column_stack([a, b, b + m]), np.column_stack([a, b + m, a + m])])
+    faces = np.concatenate([quads, quads[:, ::-1]])
+    c = _head_centre(look)[0]
+    inward = c - look.rest[nodes]
+    inward /= np.linalg.norm(inward, axis=1, keepdims=True)
+    rest = np.concatenate([look.rest[nodes], look.rest[nodes] + SKIRT_DEPTH * inward])
+    if look.vertex_colours is not None:
+        colour = look.vertex_colours[nodes] / 255.0
+    elif look.image is not None:
+        colour = np.tile(T.SKIN, (m, 1))
+    else:
+        h = _hair_on_skin(look)(look.rest[nodes, 0], look.rest[nodes, 1])[:, None]
+        colour = h * HAIR + (1 - h) * T.SKIN
+    return Part("skirt", rest, faces, np.concatenate([colour, colour]), (0.05, 10.0), "skirt",
+                skirt_nodes=nodes)
+
+
 def _ear_parts(look: FaceLook) -> list[Part]:
     """Auricles where the skin stops at the sides of the head (a face cut at the ears).
 
@@ -420,7 +469,7 @@ def _ear_parts(look: FaceLook) -> list[Part]:
         S, Tt = np.meshgrid(np.linspace(0, 1, ns), np.linspace(-1, 1, nt), indexing="ij")
         width = 0.032 * np.sqrt(np.clip(1 - Tt**2, 0, 1)) ** 0.7 * (1 - 0.25 * (Tt < 0) * Tt**2)
         along = S * width
-        flare = 0.004 + 0.014 * S**1.5
+        flare = -0.002 + 0.020 * S**1.5  # the root sunk 2 mm into the head
         curl = 0.004 * np.clip((S - 0.8) / 0.2, 0, 1) ** 2  # the helix rolls forward
         bowl = -0.005 * np.exp(-(((S - 0.35) / 0.18) ** 2) - ((Tt + 0.1) / 0.35) ** 2)
         pts = (a + along[..., None] * back + (Tt * 0.031)[..., None] * up
@@ -553,6 +602,9 @@ def build_scene(look: FaceLook, *, eyes: bool = True, mouth: bool = True,
         shell = _head_shell(look)
         if shell is not None:
             parts.append(shell)
+            skirt = _skirt(look)
+            if skirt is not None:
+                parts.append(skirt)
             parts += _ear_parts(look)
     return _pack(parts, look)
 
@@ -599,7 +651,8 @@ def _pack(parts: list[Part], look: FaceLook) -> Scene:
                   np.concatenate(alpha), np.concatenate(two), atlas,
                   np.concatenate(albedo).astype(np.float32),
                   np.concatenate(gloss).astype(np.float32), np.array(offs),
-                  tuple(vertex_normals(p.rest, p.faces) for p in parts))
+                  tuple(vertex_normals(p.rest, p.faces) for p in parts),
+                  _head_centre(look)[0])
     object.__setattr__(scene, "framing", _framing(scene))
     return scene
 
