@@ -256,6 +256,9 @@ def test_movie_of_results(open_mouth, tmp_path):
 
 
 def test_still_as_library_call(open_mouth, tmp_path):
+    import facemech as fm
+
+    assert fm.still is still and fm.render_results is render_results
     r = still(open_mouth, tmp_path / "a.png", peak="DLI",
               options=RenderOptions(view="frontal", size=(200, 200)))
     assert r["frame"] == int(np.argmax(open_mouth.activity.values[:, 7]

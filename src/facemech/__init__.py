@@ -44,8 +44,25 @@ from .solvers.jaw import angles_from_chin, jaw_angles_from_marker
 from .solvers.state import State
 from .solvers.step import INTEGRATORS, Stepper
 
+#: pictures and exports, imported on first use (they load the renderer's kernels)
+_LAZY = {
+    "RenderOptions": "facemech.viz.video", "render_results": "facemech.viz.video",
+    "still": "facemech.viz.video", "write_viewer": "facemech.viz.viewer",
+    "export_results": "facemech.io.export",
+}
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        import importlib
+
+        return getattr(importlib.import_module(_LAZY[name]), name)
+    raise AttributeError(f"module 'facemech' has no attribute {name!r}")
+
+
 __all__ = [
-    "__version__", "BuildOptions", "EMGActivity", "EMG_CHANNELS", "FaceModel", "FacemechError",
+    "__version__", "RenderOptions", "render_results", "still", "write_viewer", "export_results",
+    "BuildOptions", "EMGActivity", "EMG_CHANNELS", "FaceModel", "FacemechError",
     "INTEGRATORS", "InputError", "MUSCLE_GROUPS", "MarkerSet", "PRESETS", "Parameters", "Physics",
     "Simulation", "SimulationBlowUp", "State", "Stepper", "align_to_model", "angles_from_chin",
     "build_face", "closest_nodes", "default_face", "default_parameters", "derivative", "fill_gaps",

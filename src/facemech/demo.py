@@ -105,8 +105,8 @@ def run_demo(out_dir: str | Path, *, integrator: str | None = None, video: bool 
     from .solvers.forward import simulate
     from .viz.movie import write_movie, write_snapshot
     from .viz.plots import activity_figure, kinematics_figure
+    from .viz.render import RenderOptions
     from .viz.scene import build_scene, look_from_model
-    from .viz.video import RenderOptions
 
     t0 = time.perf_counter()
     params = get_preset(preset)
@@ -135,15 +135,14 @@ def run_demo(out_dir: str | Path, *, integrator: str | None = None, video: bool 
     peak = int(np.argmax(jaw))
     scene = build_scene(look_from_model(face))
     opt = render or RenderOptions()
+    still = RenderOptions(view=opt.view, size=(540, 960), background=(
+        "#ffffff" if opt.transparent else opt.background))
     write_snapshot(out / "snapshot.png", scene, sim.positions[peak], sim.jaw_angle[peak],
-                   view=opt.view, background=opt.background if not opt.transparent
-                   else "#ffffff")
+                   options=still)
     files["snapshot"] = "snapshot.png"
     if video:
         write_movie(out / "movie.mp4", scene, sim.positions, sim.jaw_angle,
-                    fps=sim.params.frame_rate, view=opt.view, size=opt.size,
-                    background=opt.background, supersample=opt.supersample,
-                    progress=step("render"))
+                    fps=sim.params.frame_rate, options=opt, progress=step("render"))
         files["movie"] = "movie.mp4"
     lips = [face.landmarks[k] for k in ("upper_lip_center", "lower_lip_center",
                                         "mouth_corner_left", "mouth_corner_right")]

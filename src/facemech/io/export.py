@@ -110,28 +110,13 @@ def _frames(ds, source: Path | None) -> tuple[np.ndarray, np.ndarray, np.ndarray
 
 
 def vertex_normals(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
-    """Unit vertex normals, the area-weighted mean of the adjacent triangles' normals.
+    """Unit vertex normals (n, 3) as :func:`facemech.geometry.builder.vertex_normals`, with
+    +z for a vertex without area (glTF wants unit normals everywhere)."""
+    from ..geometry.builder import vertex_normals as area_weighted
 
-    Parameters
-    ----------
-    vertices : (n, 3) float, any length unit
-    triangles : (t, 3) int, counter-clockwise seen from outside
-
-    Returns
-    -------
-    (n, 3) float, unit length (+z for a vertex without area)
-    """
-    v = np.asarray(vertices, float)
-    t = np.asarray(triangles)
-    face = np.cross(v[t[:, 1]] - v[t[:, 0]], v[t[:, 2]] - v[t[:, 0]])  # twice the area
-    n = np.zeros_like(v)
-    for corner in range(3):
-        np.add.at(n, t[:, corner], face)
-    length = np.linalg.norm(n, axis=1)
-    bad = length == 0
-    n[bad] = (0.0, 0.0, 1.0)
-    length[bad] = 1.0
-    return n / length[:, None]
+    n = area_weighted(np.asarray(vertices, float), np.asarray(triangles))
+    n[np.linalg.norm(n, axis=1) == 0] = (0.0, 0.0, 1.0)
+    return n
 
 
 # ---- glTF -----------------------------------------------------------------------------------

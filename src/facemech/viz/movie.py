@@ -18,11 +18,8 @@ import numpy as np
 
 from ..errors import InputError
 from ..io.atomic import atomic_path
-from .render import BACKGROUND, Renderer
+from .render import RenderOptions
 from .scene import Scene
-
-DEFAULT_SIZE = (720, 1280)  #: (height, width) of movies
-DEFAULT_VIEW = "frontal+profile"
 
 
 def _ffmpeg() -> str:
@@ -55,10 +52,7 @@ def write_movie(
     *,
     fps: float = 60.0,
     audio: str | Path | None = None,
-    view: str = DEFAULT_VIEW,
-    size: tuple[int, int] = DEFAULT_SIZE,
-    background: str = BACKGROUND,
-    supersample: int = 2,
+    options: RenderOptions | None = None,
     progress: Callable[[int, int], None] | None = None,
 ) -> Path:
     """Render skin trajectories to an H.264 MP4.
@@ -71,19 +65,20 @@ def write_movie(
     jaw_angle : (frames,) rad, turns the lower teeth and tongue (None: closed)
     fps : frame rate of the movie (the simulation's)
     audio : optional WAV muxed in (AAC); the movie is cut to the shorter of the two
-    view, size, background, supersample : see :class:`facemech.viz.render.Renderer`
+    options : view, size, background and anti-aliasing (default: frontal+profile, 1280x720)
     """
     import imageio_ffmpeg
 
     exe = _ffmpeg()
-    if background.strip().lower() in ("transparent", "none"):
+    opt = options or RenderOptions()
+    if opt.transparent:
         raise InputError("an MP4 has no transparency: write PNG frames (--frames DIR) for a "
                          "transparent background", field="background")
     if audio is not None and not Path(audio).is_file():
         raise InputError("audio file not found", source=str(audio))
     jaw = _check(positions, jaw_angle, scene)
-    render = Renderer(scene, view, size, background=background, supersample=supersample)
-    h, w = size
+    render = opt.renderer(scene)
+    h, w = opt.size
     path = Path(path)
     with atomic_path(path, suffix=".mp4") as video:
         writer = imageio_ffmpeg.write_frames(
@@ -124,10 +119,7 @@ def write_frames(
     positions: np.ndarray,
     jaw_angle: np.ndarray | None = None,
     *,
-    view: str = DEFAULT_VIEW,
-    size: tuple[int, int] = DEFAULT_SIZE,
-    background: str = BACKGROUND,
-    supersample: int = 2,
+    options: RenderOptions | None = None,
     progress: Callable[[int, int], None] | None = None,
 ) -> Path:
     """Render every frame to ``folder/frame_00000.png`` ... (RGBA PNG).
@@ -141,7 +133,7 @@ def write_frames(
         raise InputError("the frame folder exists and is not empty", source=str(folder),
                          field="frames")
     jaw = _check(positions, jaw_angle, scene)
-    render = Renderer(scene, view, size, background=background, supersample=supersample)
+    render = (options or RenderOptions()).renderer(scene)
     folder.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", dir=folder.parent))
     try:
@@ -159,12 +151,11 @@ def write_frames(
 
 
 def write_snapshot(path: str | Path, scene: Scene, skin: np.ndarray, jaw_angle: float = 0.0, *,
-                   view: str = DEFAULT_VIEW, size: tuple[int, int] = (540, 960),
-                   background: str = BACKGROUND) -> Path:
-    """A PNG of one configuration."""
+                   options: RenderOptions | None = None) -> Path:
+    """A PNG of one configuration (default: frontal+profile, 960x540)."""
     import matplotlib.image as mpimg
 
-    img = Renderer(scene, view, size, background=background)(skin, jaw_angle)
+    img = (options or RenderOptions(size=(540, 960))).renderer(scene)(skin, jaw_angle)
     with atomic_path(path, suffix=".png") as tmp:
         mpimg.imsave(tmp, img)
     return Path(path)

@@ -7,10 +7,12 @@ in each panel; the rest of the frame is background.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from ..errors import InputError
-from .camera import Camera, panels, view_camera
+from .camera import MAX_SIZE, Camera, panels, view_camera
 from .raster import (
     GROUND,
     LIGHTS,
@@ -123,3 +125,43 @@ class Renderer:
                                             background=self.background,
                                             supersample=self.supersample)
                                for cam in self.cameras], axis=1)
+
+
+@dataclass(frozen=True)
+class RenderOptions:
+    """How frames are drawn.
+
+    Attributes
+    ----------
+    view : frontal, profile, three-quarter, mouth or frontal+profile
+    size : (height, width) pixels of a whole frame (composite views split the width)
+    background : '#rrggbb', 'r,g,b' or 'transparent' (PNG frames and stills only)
+    supersample : anti-aliasing samples per pixel along each axis (1-4)
+    distance : camera distance, m; None for an orthographic view
+    """
+
+    view: str = "frontal+profile"
+    size: tuple[int, int] = (720, 1280)
+    background: str = BACKGROUND
+    supersample: int = 2
+    distance: float | None = 1.2
+
+    def __post_init__(self):
+        panels(self.view)  # raises on an unknown view
+        h, w = self.size
+        if not (16 <= h <= MAX_SIZE[0] and 16 <= w <= MAX_SIZE[1]):
+            raise InputError(f"size {w}x{h} is outside 16x16 .. {MAX_SIZE[1]}x{MAX_SIZE[0]}",
+                             field="size")
+        parse_background(self.background)
+        if not 1 <= self.supersample <= 4:
+            raise InputError("anti-aliasing must be 1 to 4 samples per axis", field="aa")
+        if self.distance is not None and not 0.2 <= self.distance <= 20.0:
+            raise InputError("camera distance must be 0.2 to 20 m", field="distance")
+
+    @property
+    def transparent(self) -> bool:
+        return parse_background(self.background)[3] == 0.0
+
+    def renderer(self, scene: Scene) -> Renderer:
+        return Renderer(scene, self.view, self.size, background=self.background,
+                        supersample=self.supersample, distance=self.distance)

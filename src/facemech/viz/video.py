@@ -9,59 +9,18 @@ gesture, optionally with the markers as dots and their names, as PNG or PDF.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import InputError
 from ..io.atomic import atomic_path
-from .camera import MAX_SIZE, all_views, panels
-from .render import BACKGROUND, Renderer, parse_background
+from .render import Renderer, RenderOptions
 from .scene import Scene, build_scene, look_from_dataset, look_from_model
 
-
-@dataclass(frozen=True)
-class RenderOptions:
-    """How frames are drawn.
-
-    Attributes
-    ----------
-    view : frontal, profile, three-quarter, mouth or frontal+profile
-    size : (height, width) pixels of a whole frame (composite views split the width)
-    background : '#rrggbb', 'r,g,b' or 'transparent' (PNG frames and stills only)
-    supersample : anti-aliasing samples per pixel along each axis (1-4)
-    distance : camera distance, m; None for an orthographic view
-    """
-
-    view: str = "frontal+profile"
-    size: tuple[int, int] = (720, 1280)
-    background: str = BACKGROUND
-    supersample: int = 2
-    distance: float | None = 1.2
-
-    def __post_init__(self):
-        panels(self.view)  # raises on an unknown view
-        h, w = self.size
-        if not (16 <= h <= MAX_SIZE[0] and 16 <= w <= MAX_SIZE[1]):
-            raise InputError(f"size {w}x{h} is outside 16x16 .. {MAX_SIZE[1]}x{MAX_SIZE[0]}",
-                             field="size")
-        parse_background(self.background)
-        if not 1 <= self.supersample <= 4:
-            raise InputError("anti-aliasing must be 1 to 4 samples per axis", field="aa")
-        if self.distance is not None and not 0.2 <= self.distance <= 20.0:
-            raise InputError("camera distance must be 0.2 to 20 m", field="distance")
-
-    @property
-    def transparent(self) -> bool:
-        return parse_background(self.background)[3] == 0.0
-
-    def renderer(self, scene: Scene) -> Renderer:
-        return Renderer(scene, self.view, self.size, background=self.background,
-                        supersample=self.supersample, distance=self.distance)
+__all__ = ["RenderOptions", "peak_frame", "render_results", "scene_of", "still"]
 
 
-VIEW_HELP = "view: " + ", ".join(all_views())
 
 
 def scene_of(source) -> Scene:
@@ -93,16 +52,15 @@ def render_results(ds, output: str | Path, *, options: RenderOptions | None = No
     jaw = ds["jaw_angle"].values if "jaw_angle" in ds else None
     fps = float(fps or ds.attrs.get("frame_rate_hz", 60.0))
     output = Path(output)
-    kw = dict(view=opt.view, size=opt.size, background=opt.background,
-              supersample=opt.supersample, progress=progress)
     if output.suffix.lower() == ".mp4":
-        return write_movie(output, scene, pos, jaw, fps=fps, audio=audio, **kw)
+        return write_movie(output, scene, pos, jaw, fps=fps, audio=audio, options=opt,
+                           progress=progress)
     if output.suffix:
         raise InputError(f"output {output.name!r}: give a .mp4 file or a folder for PNG frames",
                          field="output")
     if audio is not None:
         raise InputError("audio goes into a movie, not into PNG frames", field="audio")
-    return write_frames(output, scene, pos, jaw, **kw)
+    return write_frames(output, scene, pos, jaw, options=opt, progress=progress)
 
 
 def _dataset(ds):
