@@ -495,25 +495,22 @@ def _head_centre(look: FaceLook) -> tuple[np.ndarray, float, np.ndarray]:
 
 def hairline(lon_deg: np.ndarray, top: float, nasion_y: float) -> np.ndarray:
     """Height (m) of the hairline at longitude ``lon_deg`` about the head centre (0: front)."""
-    return np.interp(np.abs(lon_deg), [0, 35, 60, 95, 120, 150, 180],
-                     [top - 0.009, top - 0.013, top - 0.025, top - 0.028,
-                      nasion_y - 0.025, nasion_y - 0.065, nasion_y - 0.085])
+    return np.interp(np.abs(lon_deg), [0, 35, 60, 88, 112, 135, 180],
+                     [top - 0.009, top - 0.013, top - 0.024, top - 0.036,
+                      top - 0.042, nasion_y - 0.020, nasion_y - 0.070])
 
 
 def _hair_on_skin(look: FaceLook):
-    """Hair coverage (0..1) at frontal (x, y) of the skin (its texture and its side nodes).
-
-    The hairline runs 9 mm under the skin's top edge on the midline and 25 mm under it at the
-    edge's ends, where the head shell's hairline takes over.
-    """
-    r = look.rest
-    top = r[:, 1].max()
-    x_mid = float(np.median(r[:, 0]))
-    half = max(float(np.abs(r[r[:, 1] > top - 0.01, 0] - x_mid).max()), 1e-3)
+    """Hair coverage (0..1) at frontal (x, y) of the skin: above :func:`hairline` at the
+    point's longitude about the head's centre (its depth from the skin's frontal surface)."""
+    c, top, nasion = _head_centre(look)
+    depth = _skin_depth(look)
 
     def cover(x, y):
-        line = top - 0.009 - 0.016 * np.clip(np.abs(x - x_mid) / half, 0, 1) ** 2
-        return np.clip((y - line) / 0.003 + 0.5, 0.0, 1.0)
+        z = depth(x, y)
+        z = np.where(np.isfinite(z), z, c[2])
+        lon = np.degrees(np.arctan2(x - c[0], z - c[2]))
+        return np.clip((y - hairline(lon, top, nasion[1])) / 0.003 + 0.5, 0.0, 1.0)
     return cover
 
 
@@ -576,18 +573,44 @@ def _head_shell(look: FaceLook) -> Part | None:
     # hair above a hairline that runs from the forehead's top to the nape (the skin's texture
     # carries the same hair over its top edge, which hides that edge)
     rad = np.where(covered, np.minimum(rad, r_skin - 0.0015), rad)
+    # the grid closes on itself at lon = 180 through a repeated column, so that the texture
+    # coordinates need not wrap
+    rad = np.concatenate([rad, rad[:, :1]], axis=1)
+    d = np.concatenate([d, d[:, :1]], axis=1)
+    hidden = np.concatenate([inside_deg, inside_deg[:, :1]], axis=1) > 9.0
     verts = (c + d * rad[..., None]).reshape(-1, 3)
-    faces = _grid_faces(n_lat, n_lon, wrap=True)
-    faces = faces[:, ::-1]  # columns run towards -x seen from the front at lon = 0
+    faces = _grid_faces(n_lat, n_lon + 1)[:, ::-1]  # columns run towards -x at lon = 0
     # under the face the shell is never seen (the skin covers it and the cavity, the eye
     # sockets and the skin's inner side fill the openings): leave those triangles out
-    hidden = (inside_deg > 9.0).ravel()
-    faces = faces[~hidden[faces].all(axis=1)]
-    y = verts[:, 1].reshape(n_lat, n_lon)
-    hair = np.clip((y - hairline(np.degrees(LO), top, nasion[1])) / 0.012 + 0.5, 0, 1)
-    hair = hair.reshape(-1, 1)
-    albedo = hair * HAIR + (1 - hair) * T.SKIN
-    return Part("head", verts, faces, albedo, (0.06, 10.0), "skull")
+    faces = faces[~hidden.ravel()[faces].all(axis=1)]
+    # hair as a texture over (lon, lat): a smooth hairline whatever the grid
+    tex, (tw, th) = _hair_texture(c, rad, d, top, nasion[1])
+    u = np.tile(np.linspace(0, tw, n_lon + 1), n_lat)
+    v = np.repeat(np.linspace(th, 0, n_lat), n_lon + 1)
+    uv = np.stack([u, v], -1)[faces]
+    albedo = np.tile(T.SKIN, (len(verts), 1))
+    return Part("head", verts, faces, albedo, (0.06, 10.0), "skull", uv, tex)
+
+
+def _hair_texture(c, rad, d, top: float, nasion_y: float, per_degree: int = 2):
+    """RGBA texture over the shell's (lon, lat) grid: hair above :func:`hairline`, skin below.
+
+    Returns the image, row 0 at lat +90, and its (width, height) in texels.
+    """
+    from scipy.ndimage import map_coordinates
+
+    n_lat, n_cols = rad.shape
+    th, tw = 180 * per_degree, 360 * per_degree
+    la = np.linspace(n_lat - 1, 0, th)  # grid rows from the top
+    lo = np.linspace(0, n_cols - 1, tw)
+    LA, LO = np.meshgrid(la, lo, indexing="ij")
+    y = c[1] + map_coordinates(rad * d[..., 1], [LA, LO], order=1)
+    lon = np.linspace(-180.0, 180.0, tw)[None, :]
+    rng = np.random.default_rng(11)
+    strands = 0.85 + 0.3 * rng.random((th, tw))
+    m = np.clip((y - hairline(lon, top, nasion_y)) / 0.003 + 0.5, 0.0, 1.0)[..., None]
+    rgb = (1 - m) * T.SKIN + m * HAIR * strands[..., None]
+    return np.concatenate([np.clip(rgb, 0, 1), np.ones((th, tw, 1))], axis=-1), (tw, th)
 
 
 def build_scene(look: FaceLook, *, eyes: bool = True, mouth: bool = True,

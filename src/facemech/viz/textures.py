@@ -111,7 +111,9 @@ def skin_texture(landmarks: dict, bounds: tuple[float, float, float, float], hai
     rgb = np.broadcast_to(SKIN, (h, w, 3)).copy()
     alpha = np.ones((h, w))
     rng = np.random.default_rng(7)
-    rgb *= 1.0 + 0.018 * rng.standard_normal((h, w, 1))  # pores and mottling
+    # pores and mottling, fading out towards the sides, where the frontal mapping stretches
+    fade = np.clip(1.0 - (np.abs(x - 0.5 * (x0 + x1)) - 0.04) / 0.015, 0.0, 1.0)
+    rgb *= 1.0 + 0.018 * (fade * rng.standard_normal((h, w)))[..., None]
     for name in ("cheek_left", "cheek_right"):
         if name in landmarks:
             c = landmarks[name]
