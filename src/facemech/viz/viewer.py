@@ -20,6 +20,32 @@ measured        null, or the same plus ``source``, ``coverage`` ([t0, t1] s on t
                 timeline) and ``note``; NaN where no measured sample covers a frame
 activity        ``{"names": [...], "data": base64 float32}``, (frames, muscles) in [0, 1]
 jawDeg          base64 float32, (frames,) degrees
+scene           the whole head the movie renderer draws (:func:`scene_block`)
+==============  ==========================================================================
+
+``scene`` is :func:`facemech.viz.scene.build_scene` of the results, packed:
+
+==============  ==========================================================================
+key             content
+==============  ==========================================================================
+nVertices       N, the vertices of all parts (the skin's first)
+rest            base64 float32, (N, 3) m, every part at rest
+triangles       ``{"dtype", "data"}``, (F, 3) vertex indices, counter-clockwise from the front
+flags           base64 uint8, (F,): bit 0 textured, bit 1 alpha-tested, bit 2 two-sided
+uv              base64 uint16, (textured triangles, 3, 2): atlas coordinates of their corners
+                (u right, v down from the top-left corner) times 65535
+albedo          base64 uint8, (N, 3) sRGB colour of the untextured triangles' vertices
+atlas           ``{"width", "height", "color", "alpha"}``: the texture atlas as data URIs, an
+                sRGB PNG (a JPEG when the PNG's URI would pass 2 MB) and a grey PNG of its alpha
+                (null when all opaque), at most 4096 texels a side
+parts           ``[{"name", "motion": "skin"|"skull"|"jaw", "inward", "start", "count",
+                "faceStart", "faceCount", "gloss": [strength, exponent], "framed"}]``: each
+                part's vertex and triangle ranges
+hinge           ``{"point": [x, y, z] m, "axis": [x, y, z]}``: 'jaw' parts turn about it by
+                the frame's jaw angle (positive opens the mouth)
+frameY          [bottom, top] m: the views fit the ``framed`` parts between these heights
+light           the renderer's lights (:mod:`facemech.viz.raster`): ``dirs`` (3, 3) unit
+                camera-space directions, ``intensity``, ``sky``, ``ground``, ``wrap``, ``inside``
 ==============  ==========================================================================
 
 Binary arrays are little-endian and C-ordered. Measured markers are matched to the model's by
@@ -31,6 +57,7 @@ from __future__ import annotations
 
 import base64
 import html
+import io
 import json
 from importlib import resources
 from pathlib import Path
@@ -44,6 +71,9 @@ FORMAT = "facemech-viewer/1"
 DATA_ID = "facemech-data"
 _PLACEHOLDER = "/*FACEMECH_DATA*/"
 _TITLE_PLACEHOLDER = "<!--FACEMECH_TITLE-->"
+ATLAS_MAX_SIDE = 4096  #: texels; larger atlases are scaled down (WebGL's common limit)
+PNG_BUDGET = 2_000_000  #: bytes; a larger colour atlas goes as JPEG
+_UV_ONE = 65535
 
 
 def _b64(a: np.ndarray, dtype: str) -> str:
@@ -109,6 +139,130 @@ def resample_measured(measured, names: list[str], time: np.ndarray) -> tuple[np.
     return out, coverage
 
 
+def linear_to_srgb8(c: np.ndarray) -> np.ndarray:
+    """Linear light in [0, 1] to 8-bit sRGB (the inverse of :func:`~.raster.srgb_to_linear`)."""
+    c = np.clip(np.asarray(c, float), 0.0, 1.0)
+    s = np.where(c <= 0.0031308, 12.92 * c, 1.055 * c ** (1 / 2.4) - 0.055)
+    return np.round(s * 255.0).astype(np.uint8)
+
+
+def _image_uri(pixels: np.ndarray, mode: str, fmt: str) -> str:
+    from PIL import Image
+
+    buf = io.BytesIO()
+    im = Image.fromarray(pixels, mode)
+    if fmt == "JPEG":
+        im.save(buf, "JPEG", quality=92)
+    else:
+        im.save(buf, "PNG", optimize=True)
+    return f"data:image/{fmt.lower()};base64," + base64.b64encode(buf.getvalue()).decode("ascii")
+
+
+def atlas_block(atlas: np.ndarray) -> dict:
+    """The texture atlas (H, W, 4) linear RGBA as data URIs: the ``scene.atlas`` of the data
+    block (see the module docstring)."""
+    from PIL import Image
+
+    rgb = linear_to_srgb8(atlas[..., :3])
+    alpha = np.round(np.clip(atlas[..., 3], 0, 1) * 255).astype(np.uint8)
+    h, w = rgb.shape[:2]
+    k = min(1.0, ATLAS_MAX_SIDE / max(h, w))
+    if k < 1.0:  # normalised coordinates: the triangles' uv need no change
+        size = (max(1, round(w * k)), max(1, round(h * k)))
+        rgb = np.asarray(Image.fromarray(rgb, "RGB").resize(size, Image.LANCZOS))
+        alpha = np.asarray(Image.fromarray(alpha, "L").resize(size, Image.BILINEAR))
+        h, w = rgb.shape[:2]
+    color = _image_uri(rgb, "RGB", "PNG")
+    if len(color) > PNG_BUDGET:
+        color = _image_uri(rgb, "RGB", "JPEG")
+    return {"width": int(w), "height": int(h), "color": color,
+            "alpha": _image_uri(alpha, "L", "PNG") if alpha.min() < 255 else None}
+
+
+def scene_block(scene) -> dict:
+    """The data block's ``scene`` (see the module docstring) of a
+    :class:`~facemech.viz.scene.Scene`."""
+    from .raster import GROUND, INSIDE, LIGHTS, SKY, WRAP
+
+    n = len(scene.albedo)
+    tris = np.asarray(scene.tris)
+    idx = "uint16" if n <= 65535 else "uint32"
+    tex = np.asarray(scene.tex) > 0
+    flags = (tex.astype(np.uint8) | (np.asarray(scene.alpha_test, bool) << 1)
+             | (np.asarray(scene.two_sided, bool) << 2)).astype(np.uint8)
+    h, w = scene.atlas.shape[:2]
+    uv = np.asarray(scene.uv, float)[tex] / np.array([w, h])
+    uv = np.round(np.clip(uv, 0.0, 1.0) * _UV_ONE)
+    parts, face = [], 0
+    for i, p in enumerate(scene.parts):
+        parts.append({"name": p.name, "motion": p.motion, "inward": bool(p.inward),
+                      "start": int(scene.offsets[i]), "count": len(p.rest),
+                      "faceStart": face, "faceCount": len(p.faces),
+                      "gloss": [float(g) for g in p.gloss],
+                      "framed": p.name in ("skin", "head")})
+        face += len(p.faces)
+    rest = np.concatenate([p.rest for p in scene.parts])
+    pts = scene.framing["points"]
+    dirs = LIGHTS[:, :3] / np.linalg.norm(LIGHTS[:, :3], axis=1, keepdims=True)
+    return {
+        "nVertices": int(n),
+        "rest": _b64(rest, "f4"),
+        "triangles": {"dtype": idx, "data": _b64(tris, "u2" if idx == "uint16" else "u4")},
+        "flags": _b64(flags, "u1"),
+        "uv": _b64(uv, "u2"),
+        "albedo": _b64(linear_to_srgb8(scene.albedo), "u1"),
+        "atlas": atlas_block(scene.atlas),
+        "parts": parts,
+        "hinge": {"point": [float(v) for v in scene.look.hinge_point],
+                  "axis": [float(v) for v in scene.look.hinge_axis]},
+        "frameY": [float(pts[:, 1].min()), float(pts[:, 1].max())],
+        "light": {"dirs": dirs.round(6).tolist(), "intensity": LIGHTS[:, 3].tolist(),
+                  "sky": SKY, "ground": GROUND, "wrap": WRAP, "inside": list(INSIDE)},
+    }
+
+
+def decode_atlas(block: dict) -> np.ndarray:
+    """The atlas of :func:`atlas_block` back as (H, W, 4) float32 linear RGBA."""
+    from PIL import Image
+
+    from .raster import srgb_to_linear
+
+    def image(uri):
+        return np.asarray(Image.open(io.BytesIO(base64.b64decode(uri.split(",", 1)[1]))))
+
+    rgb = srgb_to_linear(image(block["color"])[..., :3] / 255.0)
+    alpha = (image(block["alpha"]) / 255.0 if block["alpha"] is not None
+             else np.ones(rgb.shape[:2]))
+    return np.dstack([rgb, alpha]).astype(np.float32)
+
+
+def decode_scene(block: dict) -> dict:
+    """The arrays of a data block's ``scene``, as :class:`~facemech.viz.scene.Scene` has them.
+
+    Returns
+    -------
+    dict with ``rest`` (N, 3) m, ``tris`` (F, 3), ``tex``, ``alpha_test``, ``two_sided`` (F,)
+    bool, ``uv`` (F, 3, 2) atlas texels (zero where untextured), ``albedo`` (N, 3) linear,
+    ``atlas`` (H, W, 4) linear RGBA, ``offsets`` (parts + 1,), ``gloss`` (N, 2)
+    """
+    from .raster import srgb_to_linear
+
+    n = block["nVertices"]
+    tris = decode(block["triangles"], block["triangles"]["dtype"], (-1, 3))
+    flags = decode(block["flags"], "u1")
+    tex = (flags & 1) > 0
+    h, w = block["atlas"]["height"], block["atlas"]["width"]
+    uv = np.zeros((len(tris), 3, 2))
+    uv[tex] = decode(block["uv"], "u2", (-1, 3, 2)) / _UV_ONE * np.array([w, h])
+    parts = block["parts"]
+    gloss = np.concatenate([np.tile(np.float32(p["gloss"]), (p["count"], 1)) for p in parts])
+    return {"rest": decode(block["rest"], "f4", (n, 3)), "tris": tris, "tex": tex,
+            "alpha_test": (flags & 2) > 0, "two_sided": (flags & 4) > 0, "uv": uv,
+            "albedo": srgb_to_linear(decode(block["albedo"], "u1", (n, 3)) / 255.0),
+            "atlas": decode_atlas(block["atlas"]),
+            "offsets": np.array([p["start"] for p in parts] + [n]), "gloss": gloss}
+
+
 def viewer_data(results, measured=None, title: str | None = None) -> dict:
     """The JSON-ready data block of the page (see the module docstring for its keys).
 
@@ -171,6 +325,13 @@ def viewer_data(results, measured=None, title: str | None = None) -> dict:
                       "source": str(measured.meta.get("source", "")), "coverage": coverage,
                       "note": note}
 
+    from .scene import build_scene, look_from_dataset
+
+    scene = build_scene(look_from_dataset(results))
+    if scene.parts[0].motion != "skin" or len(scene.parts[0].rest) != nodes:
+        raise InputError("the scene's skin does not match the positions", source=src,
+                         field="positions")
+
     if title is None:
         parts = [str(results.attrs.get(k)) for k in ("face", "preset") if results.attrs.get(k)]
         title = "facemech: " + (", ".join(parts) if parts else "results")
@@ -188,6 +349,7 @@ def viewer_data(results, measured=None, title: str | None = None) -> dict:
         "measured": meas_block,
         "activity": {"names": muscles, "data": _b64(act, "f4")},
         "jawDeg": _b64(jaw, "f4"),
+        "scene": scene_block(scene),
     }
 
 
@@ -224,7 +386,8 @@ def decode(block, dtype: str, shape=None) -> np.ndarray:
 def write_viewer(results, path: str | Path, measured=None, title: str | None = None) -> Path:
     """Write the interactive viewer page of a results dataset.
 
-    The page is one HTML file that works offline: WebGL face with orbit, zoom, play/pause and a
+    The page is one HTML file that works offline: the movie renderer's head (skin, eyes, teeth,
+    tongue, oral cavity, head shell with hair, ears) in WebGL with orbit, zoom, play/pause and a
     time slider at the real frame rate, the model's markers (and measured ones) with names on
     hover, and a plot of muscle activity and jaw angle against time that follows and seeks.
 
