@@ -38,7 +38,7 @@ albedo          base64 uint8, (N, 3) sRGB colour of the untextured triangles' ve
 atlas           ``{"width", "height", "color", "alpha"}``: the texture atlas as data URIs, an
                 sRGB PNG (a JPEG when the PNG's URI would pass 2 MB) and a grey PNG of its alpha
                 (null when all opaque), at most 4096 texels a side
-parts           ``[{"name", "motion": "skin"|"skull"|"jaw", "inward", "start", "count",
+parts           ``[{"name", "motion": "skin"|"skull"|"jaw"|"skirt", "inward", "start", "count",
                 "faceStart", "faceCount", "gloss": [strength, exponent], "framed"}]``: each
                 part's vertex and triangle ranges
 hinge           ``{"point": [x, y, z] m, "axis": [x, y, z]}``: 'jaw' parts turn about it by
@@ -183,6 +183,7 @@ def scene_block(scene) -> dict:
     """The data block's ``scene`` (see the module docstring) of a
     :class:`~facemech.viz.scene.Scene`."""
     from .raster import GROUND, INSIDE, LIGHTS, SKY, WRAP
+    from .scene import SKIRT_DEPTH
 
     n = len(scene.albedo)
     tris = np.asarray(scene.tris)
@@ -195,11 +196,15 @@ def scene_block(scene) -> dict:
     uv = np.round(np.clip(uv, 0.0, 1.0) * _UV_ONE)
     parts, face = [], 0
     for i, p in enumerate(scene.parts):
-        parts.append({"name": p.name, "motion": p.motion, "inward": bool(p.inward),
-                      "start": int(scene.offsets[i]), "count": len(p.rest),
-                      "faceStart": face, "faceCount": len(p.faces),
-                      "gloss": [float(g) for g in p.gloss],
-                      "framed": p.name in ("skin", "head")})
+        part = {"name": p.name, "motion": p.motion, "inward": bool(p.inward),
+                "start": int(scene.offsets[i]), "count": len(p.rest),
+                "faceStart": face, "faceCount": len(p.faces),
+                "gloss": [float(g) for g in p.gloss],
+                "framed": p.name in ("skin", "head")}
+        if p.motion == "skirt":  # from the skin's edge nodes in towards the head's centre
+            part.update(nodes=_b64(p.skirt_nodes, "u4"),
+                        centre=[float(v) for v in scene.centre], depth=SKIRT_DEPTH)
+        parts.append(part)
         face += len(p.faces)
     rest = np.concatenate([p.rest for p in scene.parts])
     pts = scene.framing["points"]
