@@ -664,7 +664,10 @@ def _pack(parts: list[Part], look: FaceLook) -> Scene:
             q = np.zeros((len(f), 3, 2), np.float32)
             tex.append(np.zeros(len(f), np.int8))
         uv.append(q)
-        alpha.append(np.full(len(f), p.alpha_test) & (tex[-1] > 0))
+        cut = (tex[-1] > 0) & p.alpha_test
+        if cut.any():  # test alpha only where the triangle's texels hold a cut-out
+            cut &= _touches_cutout(q, atlas)
+        alpha.append(cut)
         two.append(np.zeros(len(f), bool) if p.two_sided is None else p.two_sided)
         albedo.append(srgb_to_linear(np.clip(p.albedo, 0, 1)))
         gloss.append(np.tile(np.array(p.gloss, np.float32), (len(p.rest), 1)))
@@ -678,6 +681,19 @@ def _pack(parts: list[Part], look: FaceLook) -> Scene:
                   _head_centre(look)[0])
     object.__setattr__(scene, "framing", _framing(scene))
     return scene
+
+
+def _touches_cutout(uv: np.ndarray, atlas: np.ndarray) -> np.ndarray:
+    """(f,) bool: whether a texel of alpha < 0.5 lies in each triangle's texel bounding box."""
+    holes = (atlas[..., 3] < 0.5).astype(np.int64)
+    sat = np.zeros((holes.shape[0] + 1, holes.shape[1] + 1), np.int64)
+    sat[1:, 1:] = holes.cumsum(0).cumsum(1)
+    h, w = holes.shape
+    u0 = np.clip(np.floor(uv[..., 0].min(axis=1)).astype(int) - 1, 0, w)
+    u1 = np.clip(np.ceil(uv[..., 0].max(axis=1)).astype(int) + 1, 0, w)
+    v0 = np.clip(np.floor(uv[..., 1].min(axis=1)).astype(int) - 1, 0, h)
+    v1 = np.clip(np.ceil(uv[..., 1].max(axis=1)).astype(int) + 1, 0, h)
+    return (sat[v1, u1] - sat[v0, u1] - sat[v1, u0] + sat[v0, u0]) > 0
 
 
 def _framing(scene: Scene) -> dict:
