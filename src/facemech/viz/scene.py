@@ -548,6 +548,8 @@ def _head_shell(look: FaceLook) -> Part | None:
     px = ((vlon + 180.0) / 360.0 * n_lon).astype(np.float32)
     py = ((vlat + 90.0) / 180.0 * n_lat).astype(np.float32)
     tris = look.triangles.astype(np.int32)
+    # a triangle behind the head may straddle lon = +-180: it would smear across the map
+    tris = tris[np.ptp(px[tris], axis=1) < 0.5 * n_lon]
     both = np.concatenate([tris, tris[:, ::-1]]).astype(np.int32)
     z = np.full((n_lat, n_lon), -np.inf, np.float32)
     tid = np.full((n_lat, n_lon), -1, np.int32)
