@@ -153,6 +153,14 @@ def test_textured_face_renders_its_texture(face):
         (a, s_), res, *_ = np.linalg.lstsq(A, lin, rcond=None)
         assert a > 0.5 and -0.01 <= s_ < 0.12, (colour, mean, a, s_)
         assert np.abs(A @ [a, s_] - lin).max() < 0.02, (colour, mean)
+    # a large scan texture is reduced for the atlas, and still maps the same colours
+    from facemech.viz.scene import MAX_TEXTURE
+
+    big = np.kron(img, np.ones((80, 80, 1), np.uint8))  # 5120 texels a side
+    scene_big = build_scene(replace(look, uv=app.uv, image=big))
+    assert max(scene_big.atlas.shape[:2]) < 1.3 * MAX_TEXTURE
+    out_big = Renderer(scene_big, "frontal", (600, 600))(textured.rest).astype(float)[..., :3]
+    assert np.abs(out_big - out).mean() < 2.0
     # vertex colours too
     vc = np.zeros((len(look.rest), 3), np.uint8)
     vc[:] = (30, 90, 210)

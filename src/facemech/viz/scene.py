@@ -190,7 +190,7 @@ def _skin_part(look: FaceLook) -> Part:
     n = len(look.rest)
     gloss = (0.10, 16.0)
     if look.image is not None and look.uv is not None:
-        img = look.image.astype(float) / 255.0
+        img = _fit_texture(look.image).astype(float) / 255.0
         h, w = img.shape[:2]
         tex = np.concatenate([img, np.ones((h, w, 1))], axis=-1)
         uv = np.empty((len(look.triangles), 3, 2))
@@ -213,6 +213,25 @@ def _skin_part(look: FaceLook) -> Part:
     albedo = h * HAIR + (1 - h) * T.SKIN
     return Part("skin", look.rest, look.triangles, albedo, gloss, "skin", uv, image, True,
                 two_sided=_inner_side(look))
+
+
+MAX_TEXTURE = 2048  #: texels along a scan texture's longer side in the renderer's atlas
+
+
+def _fit_texture(image: np.ndarray) -> np.ndarray:
+    """A scan's texture, reduced (area filter) to at most :data:`MAX_TEXTURE` texels a side.
+
+    A face fills at most a few hundred texels per centimetre of a 1080p frame; a larger image
+    only costs memory (the atlas holds float32 RGBA) and cache.
+    """
+    h, w = image.shape[:2]
+    k = max(h, w) / MAX_TEXTURE
+    if k <= 1:
+        return image
+    from PIL import Image
+
+    size = (max(int(round(w / k)), 1), max(int(round(h / k)), 1))
+    return np.asarray(Image.fromarray(np.ascontiguousarray(image)).resize(size, Image.BOX))
 
 
 def _inner_side(look: FaceLook) -> np.ndarray:
