@@ -249,6 +249,15 @@ def test_render_command_frames_and_stills(open_mouth, tmp_path, monkeypatch, cap
                            "--peak", "XYZ")
     assert code == 2 and "peak" in err
     assert not (tmp_path / "x.mp4").exists() and not (tmp_path / "y.png").exists()
+    # a results file holding NaN (written by another tool) is refused, not drawn
+    broken = open_mouth.copy(deep=True)
+    broken["positions"].values[3, 5, 1] = np.nan
+    bad = tmp_path / "nan.nc"
+    broken.to_netcdf(bad, engine="h5netcdf")
+    code, _, err = run_cli(monkeypatch, capsys, "render", bad, "-o", tmp_path / "z.mp4",
+                           "--size", "160x90")
+    assert code == 2 and "positions" in err and "frame 3" in err, err
+    assert not (tmp_path / "z.mp4").exists()
 
 
 def test_movie_of_results(open_mouth, tmp_path):

@@ -536,12 +536,12 @@ def simulate(
         _render(to_dataset(sim), video, audio, opts)
 
 
-def _render(ds, path, audio, opts):
+def _render(ds, path, audio, opts, source=None):
     from .viz.video import render_results
 
     with _progress() as prog:
         task = prog.add_task("render", total=ds.sizes["time"])
-        render_results(ds, path, options=opts, audio=audio,
+        render_results(ds, path, options=opts, audio=audio, source=source,
                        progress=lambda d, n: prog.update(task, completed=d))
     out.print(f"{'movie' if path.suffix else 'frames'} -> {path}")
 
@@ -561,7 +561,7 @@ def render(
     from .io.results import read_results
 
     opts = _render_options(view, size, background, aa)
-    _render(read_results(result), output, audio, opts)
+    _render(read_results(result), output, audio, opts, source=str(result))
 
 
 @app.command()
@@ -584,7 +584,7 @@ def still(
 
     opts = _render_options(view, size, background, aa)
     r = draw(read_results(result), output, time=time, peak=peak, options=opts,
-             markers=markers or labels, labels=labels)
+             markers=markers or labels, labels=labels, source=str(result))
     out.print(f"frame {r['frame']} (t = {r['time']:.3f} s) -> {output}")
 
 

@@ -31,16 +31,24 @@ def _ffmpeg() -> str:
     return imageio_ffmpeg.get_ffmpeg_exe()
 
 
-def _check(positions: np.ndarray, jaw: np.ndarray | None, scene: Scene) -> np.ndarray:
+def _check(positions: np.ndarray, jaw: np.ndarray | None, scene: Scene,
+           source: str | None = None) -> np.ndarray:
     n = len(scene.look.rest)
     if positions.ndim != 3 or positions.shape[1:] != (n, 3):
         raise InputError(f"positions of shape {positions.shape} do not fit a face of {n} nodes",
+                         source=source, field="positions")
+    if not np.all(np.isfinite(positions)):
+        bad = int(np.flatnonzero(~np.isfinite(positions).all(axis=(1, 2)))[0])
+        raise InputError(f"positions are not finite (first at frame {bad})", source=source,
                          field="positions")
     if jaw is None:
         return np.zeros(len(positions))
     jaw = np.asarray(jaw, float)
     if jaw.shape != (len(positions),):
-        raise InputError("jaw angles and positions have different lengths", field="jaw_angle")
+        raise InputError("jaw angles and positions have different lengths", source=source,
+                         field="jaw_angle")
+    if not np.all(np.isfinite(jaw)):
+        raise InputError("jaw angles are not finite", source=source, field="jaw_angle")
     return jaw
 
 
@@ -54,6 +62,7 @@ def write_movie(
     audio: str | Path | None = None,
     options: RenderOptions | None = None,
     progress: Callable[[int, int], None] | None = None,
+    source: str | None = None,
 ) -> Path:
     """Render skin trajectories to an H.264 MP4.
 
@@ -66,6 +75,7 @@ def write_movie(
     fps : frame rate of the movie (the simulation's)
     audio : optional WAV muxed in (AAC); the movie is cut to the shorter of the two
     options : view, size, background and anti-aliasing (default: frontal+profile, 1280x720)
+    source : name of the input, for error messages
     """
     import imageio_ffmpeg
 
@@ -76,7 +86,7 @@ def write_movie(
                          "transparent background", field="background")
     if audio is not None and not Path(audio).is_file():
         raise InputError("audio file not found", source=str(audio))
-    jaw = _check(positions, jaw_angle, scene)
+    jaw = _check(positions, jaw_angle, scene, source)
     render = opt.renderer(scene)
     h, w = opt.size
     path = Path(path)
@@ -121,6 +131,7 @@ def write_frames(
     *,
     options: RenderOptions | None = None,
     progress: Callable[[int, int], None] | None = None,
+    source: str | None = None,
 ) -> Path:
     """Render every frame to ``folder/frame_00000.png`` ... (RGBA PNG).
 
@@ -132,7 +143,7 @@ def write_frames(
     if folder.exists() and (not folder.is_dir() or any(folder.iterdir())):
         raise InputError("the frame folder exists and is not empty", source=str(folder),
                          field="frames")
-    jaw = _check(positions, jaw_angle, scene)
+    jaw = _check(positions, jaw_angle, scene, source)
     render = (options or RenderOptions()).renderer(scene)
     folder.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", dir=folder.parent))

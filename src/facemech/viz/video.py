@@ -32,7 +32,8 @@ def scene_of(source) -> Scene:
 
 def render_results(ds, output: str | Path, *, options: RenderOptions | None = None,
                    audio: str | Path | None = None, fps: float | None = None,
-                   progress: Callable[[int, int], None] | None = None) -> Path:
+                   progress: Callable[[int, int], None] | None = None,
+                   source: str | None = None) -> Path:
     """Render a results dataset to ``output``: an ``.mp4`` movie, or a folder of PNG frames.
 
     Parameters
@@ -42,9 +43,11 @@ def render_results(ds, output: str | Path, *, options: RenderOptions | None = No
     options : :class:`RenderOptions` (default: frontal+profile, 1280x720)
     audio : WAV muxed into a movie
     fps : frame rate (default: the results')
+    source : name of the results, for error messages (default: the path, when given one)
     """
     from .movie import write_frames, write_movie
 
+    source = source or (str(ds) if isinstance(ds, (str, Path)) else None)
     ds = _dataset(ds)
     opt = options or RenderOptions()
     scene = scene_of(ds)
@@ -54,13 +57,14 @@ def render_results(ds, output: str | Path, *, options: RenderOptions | None = No
     output = Path(output)
     if output.suffix.lower() == ".mp4":
         return write_movie(output, scene, pos, jaw, fps=fps, audio=audio, options=opt,
-                           progress=progress)
+                           progress=progress, source=source)
     if output.suffix:
         raise InputError(f"output {output.name!r}: give a .mp4 file or a folder for PNG frames",
                          field="output")
     if audio is not None:
         raise InputError("audio goes into a movie, not into PNG frames", field="audio")
-    return write_frames(output, scene, pos, jaw, options=opt, progress=progress)
+    return write_frames(output, scene, pos, jaw, options=opt, progress=progress,
+                        source=source)
 
 
 def _dataset(ds):
@@ -71,7 +75,7 @@ def _dataset(ds):
     return ds
 
 
-def peak_frame(ds, peak: str) -> int:
+def peak_frame(ds, peak: str, source: str | None = None) -> int:
     """The frame of a gesture's peak: a muscle group's activity, ``jaw`` or ``motion``.
 
     ``motion`` is the frame where the lip landmarks are farthest from their first position.
@@ -91,13 +95,13 @@ def peak_frame(ds, peak: str) -> int:
     muscles = [str(m) for m in ds["muscle"].values]
     if key.upper() not in muscles:
         raise InputError(f"--peak {peak!r}: give jaw, motion or a muscle group "
-                         f"({', '.join(muscles)})", field="peak")
+                         f"({', '.join(muscles)})", source=source, field="peak")
     return int(np.argmax(ds["activity"].values[:, muscles.index(key.upper())]))
 
 
 def still(ds, output: str | Path, *, time: float | None = None, peak: str | None = None,
           options: RenderOptions | None = None, markers: bool = False,
-          labels: bool = False, title: str | None = None) -> dict:
+          labels: bool = False, title: str | None = None, source: str | None = None) -> dict:
     """A still figure of one frame as PNG or PDF, optionally with marker dots and names.
 
     Parameters
@@ -108,6 +112,7 @@ def still(ds, output: str | Path, *, time: float | None = None, peak: str | None
     peak : the frame of a gesture's peak (:func:`peak_frame`); neither: the first frame
     options : :class:`RenderOptions` (default here: frontal, 1280x1280)
     markers, labels : draw the model's markers as dots, and their names beside them
+    source : name of the results, for error messages (default: the path, when given one)
 
     Returns
     -------
@@ -115,6 +120,7 @@ def still(ds, output: str | Path, *, time: float | None = None, peak: str | None
     """
     import matplotlib.figure as mfig
 
+    source = source or (str(ds) if isinstance(ds, (str, Path)) else None)
     ds = _dataset(ds)
     output = Path(output)
     if output.suffix.lower() not in (".png", ".pdf"):
@@ -125,10 +131,10 @@ def still(ds, output: str | Path, *, time: float | None = None, peak: str | None
     if time is not None:
         if not t[0] - 1e-9 <= time <= t[-1] + 1e-9:
             raise InputError(f"time {time} s is outside the results ({t[0]:.3f} to "
-                             f"{t[-1]:.3f} s)", field="time")
+                             f"{t[-1]:.3f} s)", source=source, field="time")
         k = int(np.argmin(np.abs(t - time)))
     elif peak is not None:
-        k = peak_frame(ds, peak)
+        k = peak_frame(ds, peak, source=source)
     else:
         k = 0
     opt = options or RenderOptions(view="frontal", size=(1280, 1280))
@@ -136,6 +142,9 @@ def still(ds, output: str | Path, *, time: float | None = None, peak: str | None
     rend = opt.renderer(scene)
     jaw = float(ds["jaw_angle"].values[k]) if "jaw_angle" in ds else 0.0
     skin = ds["positions"].values[k]
+    if not np.all(np.isfinite(skin)) or not np.isfinite(jaw):
+        raise InputError(f"frame {k} holds non-finite positions or jaw angle", source=source,
+                         field="positions")
     img = rend(skin, jaw)
     h, w = opt.size
     fig = mfig.Figure(figsize=(w / 200, h / 200), dpi=200)
