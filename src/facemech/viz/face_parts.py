@@ -1,0 +1,195 @@
+"""The face's parts: the skin (its texture, cut-out fissures and inner side), the eyes, and the
+mouth (oral cavity, dental arches, tongue)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import textures as T
+from .head import HAIR, hair_on_skin
+from .look import FaceLook
+from .mesh import Part, fit_inside, grid_faces, skin_depth, sphere
+
+CAVITY = np.array([0.20, 0.07, 0.07])
+SOCKET = np.array([0.55, 0.30, 0.28])
+TONGUE = np.array([0.74, 0.40, 0.40])
+EYE_RADIUS = 0.012  #: m
+
+
+def skin_part(look: FaceLook) -> Part:
+    n = len(look.rest)
+    gloss = (0.10, 16.0)
+    if look.image is not None and look.uv is not None:
+        img = _fit_texture(look.image).astype(float) / 255.0
+        h, w = img.shape[:2]
+        tex = np.concatenate([img, np.ones((h, w, 1))], axis=-1)
+        uv = np.empty((len(look.triangles), 3, 2))
+        uv[..., 0] = look.uv[..., 0] * w
+        uv[..., 1] = (1.0 - look.uv[..., 1]) * h
+        return Part("skin", look.rest, look.triangles, np.tile(T.SKIN, (n, 1)), gloss, "skin",
+                    uv, tex, False, two_sided=_inner_side(look))
+    if look.vertex_colours is not None:
+        return Part("skin", look.rest, look.triangles, look.vertex_colours / 255.0, gloss,
+                    "skin", two_sided=_inner_side(look))
+    xy = look.rest[:, :2]
+    lo, hi = xy.min(axis=0), xy.max(axis=0)
+    hair = hair_on_skin(look)
+    image, (x0, y0) = T.skin_texture(look.landmarks, (lo[0], hi[0], lo[1], hi[1]), hair=hair)
+    corner = xy[look.triangles]  # (f, 3, 2)
+    uv = np.empty_like(corner)
+    uv[..., 0] = (corner[..., 0] - x0) / T.SKIN_TEXEL
+    uv[..., 1] = (y0 - corner[..., 1]) / T.SKIN_TEXEL
+    h = hair(look.rest[:, 0], look.rest[:, 1])[:, None]
+    albedo = h * HAIR + (1 - h) * T.SKIN
+    return Part("skin", look.rest, look.triangles, albedo, gloss, "skin", uv, image, True,
+                two_sided=_inner_side(look))
+
+
+MAX_TEXTURE = 2048  #: texels along a scan texture's longer side in the renderer's atlas
+
+
+def _fit_texture(image: np.ndarray) -> np.ndarray:
+    """A scan's texture, reduced (area filter) to at most :data:`MAX_TEXTURE` texels a side.
+
+    A face fills at most a few hundred texels per centimetre of a 1080p frame; a larger image
+    only costs memory (the atlas holds float32 RGBA) and cache.
+    """
+    h, w = image.shape[:2]
+    k = max(h, w) / MAX_TEXTURE
+    if k <= 1:
+        return image
+    from PIL import Image
+
+    size = (max(int(round(w / k)), 1), max(int(round(h / k)), 1))
+    return np.asarray(Image.fromarray(np.ascontiguousarray(image)).resize(size, Image.BOX))
+
+
+def _inner_side(look: FaceLook) -> np.ndarray:
+    """Skin triangles whose inner side is drawn (dark): all but those within 15 mm of the
+    skin's edge. The inner side shows only through the parted lips and the palpebral fissures;
+    near the edges the head shell stands behind the skin instead."""
+    from scipy.spatial import cKDTree
+
+    from ..geometry.builder import _boundary_nodes
+
+    edge = look.rest[_boundary_nodes(look.triangles)]
+    centroid = look.rest[look.triangles].mean(axis=1)
+    if len(edge) == 0:
+        return np.ones(len(centroid), bool)
+    dist, _ = cKDTree(edge).query(centroid)
+    return dist > 0.015
+
+
+def eye_parts(look: FaceLook) -> list[Part]:
+    depth = skin_depth(look)
+    parts = []
+    iris = T.iris_texture()
+    ni = iris.shape[0]
+    for side, name in ((1, "eye_left"), (-1, "eye_right")):
+        if name not in look.landmarks:
+            continue
+        e = look.landmarks[name]
+        unit, faces = sphere(24, 36)
+        radii = np.array([EYE_RADIUS * 1.22, EYE_RADIUS, EYE_RADIUS])
+        # as far forward as the lids allow: behind the skin on a ring round the fissure
+        s = np.linspace(-1.3, 1.3, 53)
+        hh = np.linspace(-0.012, 0.012, 49)
+        S, H = np.meshgrid(s, hh)
+        gx = e[0] + side * S * T.FISSURE_HALF_LENGTH
+        gy = e[1] + H
+        mask = T.eye_mask(gx, gy, e, side)
+        dx, dy = gx - e[0], gy - e[1]
+        q = 1.0 - (dx / radii[0]) ** 2 - (dy / radii[1]) ** 2
+        ok = (mask < -2e-4) & (mask > -0.004) & (q > 0)  # a 4-mm ring round the fissure
+        z_skin = depth(gx, gy)
+        cz = np.nanmin((z_skin - radii[2] * np.sqrt(np.where(q > 0, q, 0.0)))[ok]) - 6e-4
+        centre = np.array([e[0], e[1], cz])
+        v = centre + unit * radii
+        uvv = np.empty((len(faces), 3, 2))
+        loc = unit[faces]  # planar projection of the front onto the iris image
+        uvv[..., 0] = (loc[..., 0] * 0.5 + 0.5) * ni
+        uvv[..., 1] = (0.5 - loc[..., 1] * 0.5) * ni
+        front = unit[faces][..., 2].min(axis=1) > 0
+        albedo = np.tile(T.SCLERA, (len(v), 1))
+        parts.append(Part(name, v, faces, albedo, (0.7, 90.0), "skull", uvv, iris,
+                          tex_mask=front))
+        # the socket's lining (conjunctiva), seen past the eyeball from the side
+        lining = fit_inside(centre + np.array([0, 0, 0.003]), unit,
+                             radii * np.array([1.5, 1.35, 1.7]), depth, 0.0005)
+        parts.append(Part(name + "_socket", lining, faces[:, ::-1],
+                          np.tile(SOCKET, (len(v), 1)), (0.1, 20.0), "skull", inward=True))
+    return parts
+
+
+def _arch(look: FaceLook, upper: bool):
+    """A dental arch (incisal edge, crowns, gum) as a textured ribbon with a lingual side."""
+    lm = look.landmarks
+    st = lm.get("stomion", 0.5 * (lm["upper_lip_center"] + lm["lower_lip_center"]))
+    ul = lm["upper_lip_center"]
+    front_z = ul[2] - look.teeth_depth
+    widths = T.UPPER_TEETH_MM if upper else T.LOWER_TEETH_MM
+    crown, gum = (0.0105, 0.006) if upper else (0.009, 0.006)
+    tex, half = T.arch_texture(widths, crown, gum)
+    a_x, a_z = 0.0235, 0.030  # half-width and depth of the arch ellipse (m)
+    if not upper:
+        a_x, a_z, front_z = 0.021, 0.027, front_z - 0.0025
+    edge_y = st[1] - 0.0015 if upper else st[1] + 0.0005
+    sign = 1.0 if upper else -1.0
+    # arc-length parametrisation of the ellipse x = a sin p, z = -a_z (1 - cos p)
+    p = np.linspace(-1.45, 1.45, 400)
+    xs, zs = a_x * np.sin(p), -a_z * (1 - np.cos(p))
+    arc = np.concatenate([[0], np.cumsum(np.hypot(np.diff(xs), np.diff(zs)))])
+    arc -= np.interp(0.0, p, arc)
+    s = np.linspace(-min(half, arc[-1]), min(half, arc[-1]), 41)
+    pp = np.interp(s, arc, p)
+    x, z = a_x * np.sin(pp), front_z - a_z * (1 - np.cos(pp))
+    nx, nz = np.sin(pp) / a_x, np.cos(pp) / a_z  # outward normal direction in xz
+    nn = np.hypot(nx, nz)
+    nx, nz = nx / nn, nz / nn
+    heights = np.array([0.0, 0.0015, crown, crown + gum])
+    rows = []
+    for hgt in heights:  # labial face
+        bulge = 0.0008 * np.sin(np.pi * min(hgt / crown, 1.0))
+        rows.append(np.stack([x + nx * bulge, np.full_like(x, edge_y + sign * hgt),
+                              z + nz * bulge], -1))
+    thick = 0.006
+    for hgt in (0.0, crown + gum):  # lingual face, from the edge back up
+        rows.append(np.stack([x - nx * thick, np.full_like(x, edge_y + sign * hgt),
+                              z - nz * thick], -1))
+    order = [3, 2, 1, 0, 4, 5] if upper else [0, 1, 2, 3, 5, 4]
+    grid = np.stack([rows[k] for k in order])  # rows stacked so that faces point outward
+    nr, nc = grid.shape[:2]
+    verts = grid.reshape(-1, 3)
+    faces = grid_faces(nr, nc)
+    faces = faces if upper else faces[:, ::-1]
+    hrow = np.array([heights[k] if k < 4 else 0.0 for k in order])
+    u = (np.tile(s, nr) + half) / (2 * half) * tex.shape[1]
+    v = (1.0 - np.repeat(hrow, nc) / (crown + gum)) * tex.shape[0]
+    uv = np.stack([u, v], -1)[faces]
+    labial = np.repeat(np.arange(nr - 1) < 3, 2 * (nc - 1))
+    if upper:
+        labial = np.repeat(np.arange(nr - 1) < 3, 2 * (nc - 1))
+    albedo = np.tile(T.TOOTH * 0.9, (len(verts), 1))
+    return Part("upper_teeth" if upper else "lower_teeth", verts, faces, albedo, (0.35, 40.0),
+                "skull" if upper else "jaw", uv, tex, tex_mask=labial)
+
+
+def mouth_parts(look: FaceLook) -> list[Part]:
+    lm = look.landmarks
+    need = ("upper_lip_center", "lower_lip_center", "mouth_corner_left", "mouth_corner_right")
+    if not all(k in lm for k in need):
+        return []
+    st = lm.get("stomion", 0.5 * (lm["upper_lip_center"] + lm["lower_lip_center"]))
+    front_z = lm["upper_lip_center"][2] - look.teeth_depth
+    half_w = 0.5 * np.linalg.norm(lm["mouth_corner_left"] - lm["mouth_corner_right"])
+    unit, faces = sphere(20, 32)
+    # only the inner far wall is drawn (seen through the lips); it holds the teeth and tongue
+    centre = np.array([st[0], st[1] - 0.006, front_z - 0.014])
+    cav = fit_inside(centre, unit, np.array([half_w + 0.009, 0.030, 0.030]),
+                      skin_depth(look), 0.001)
+    cavity = Part("cavity", cav, faces[:, ::-1], np.tile(CAVITY, (len(cav), 1)), (0.0, 1.0),
+                  "skull", inward=True)
+    tr = np.array([0.018, 0.0065, 0.019])
+    tongue = Part("tongue", np.array([st[0], st[1] - 0.0085, front_z - 0.021]) + unit * tr,
+                  faces, np.tile(TONGUE, (len(unit), 1)), (0.25, 30.0), "jaw")
+    return [cavity, _arch(look, True), _arch(look, False), tongue]

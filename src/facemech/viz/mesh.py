@@ -1,0 +1,81 @@
+"""Meshes of the rendered scene: the :class:`Part` type and the small geometric helpers the
+parts are built with (spheres, grids, the skin's depth map, ellipsoids fitted inside the skin)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .look import FaceLook
+
+
+@dataclass(frozen=True)
+class Part:
+    """A mesh of the scene. ``motion``: 'skin' (the results' nodes), 'skull' or 'jaw'."""
+
+    name: str
+    rest: np.ndarray  # (n, 3) m
+    faces: np.ndarray  # (f, 3)
+    albedo: np.ndarray  # (n, 3) sRGB
+    gloss: tuple[float, float]  # specular strength, Blinn-Phong exponent
+    motion: str = "skull"
+    uv: np.ndarray | None = None  # (f, 3, 2) texel coordinates in ``texture``
+    texture: np.ndarray | None = None  # (h, w, 4) sRGB + alpha
+    alpha_test: bool = False
+    inward: bool = False  # normals point inward (an interior seen from inside)
+    tex_mask: np.ndarray | None = None  # (f,) bool: which triangles use the texture
+    two_sided: np.ndarray | None = None  # (f,) bool: also draw the inner side (dark)
+    skirt_nodes: np.ndarray | None = None  # motion 'skirt': the skin's edge nodes
+
+
+def sphere(n_lat: int, n_lon: int):
+    """Unit UV sphere: vertices (n, 3) and outward triangles."""
+    lat = np.linspace(-np.pi / 2, np.pi / 2, n_lat)
+    lon = np.linspace(-np.pi, np.pi, n_lon, endpoint=False)
+    la, lo = np.meshgrid(lat, lon, indexing="ij")
+    v = np.stack([np.cos(la) * np.sin(lo), np.sin(la), np.cos(la) * np.cos(lo)], -1)
+    return v.reshape(-1, 3), grid_faces(n_lat, n_lon, wrap=True)
+
+
+def grid_faces(rows: int, cols: int, wrap: bool = False) -> np.ndarray:
+    """Triangles of a (rows, cols) vertex grid, counter-clockwise seen from outside.
+
+    Rows go up (increasing latitude), columns go round (increasing longitude = towards +x from
+    the front), which makes (a, b, c) with a=(r,c), b=(r,c+1), c=(r+1,c) outward.
+    """
+    faces = []
+    cmax = cols if wrap else cols - 1
+    for r in range(rows - 1):
+        for c in range(cmax):
+            a = r * cols + c
+            b = r * cols + (c + 1) % cols
+            d = (r + 1) * cols + c
+            e = (r + 1) * cols + (c + 1) % cols
+            faces += [(a, b, e), (a, e, d)]
+    return np.asarray(faces, np.int64)
+
+
+def skin_depth(look: FaceLook):
+    """z of the rest skin at frontal (x, y) (the frontal sheet only), m; NaN off the face."""
+    from scipy.interpolate import LinearNDInterpolator
+
+    r = look.rest
+    front = r[:, 2] > np.percentile(r[:, 2], 30)
+    return LinearNDInterpolator(r[front, :2], r[front, 2])
+
+
+def fit_inside(centre, unit, radii, depth, margin: float) -> np.ndarray:
+    """An ellipsoid's vertices, shrunk (x and z) until it lies ``margin`` m inside the skin.
+
+    Only the inner far wall of these linings is drawn; a part of it outside the skin would
+    show on the face.
+    """
+    radii = np.asarray(radii, float)
+    for _ in range(40):
+        v = centre + unit * radii
+        zs = depth(v[:, 0], v[:, 1])
+        if not np.any(np.isfinite(zs) & (v[:, 2] > zs - margin)):
+            break
+        radii = radii * np.array([0.95, 0.98, 0.95])
+    return v
