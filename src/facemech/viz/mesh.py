@@ -57,12 +57,21 @@ def grid_faces(rows: int, cols: int, wrap: bool = False) -> np.ndarray:
 
 
 def skin_depth(look: FaceLook):
-    """z of the rest skin at frontal (x, y) (the frontal sheet only), m; NaN off the face."""
+    """z of the rest skin at frontal (x, y) (the frontal sheet only), m; NaN off the face.
+
+    The interpolator (a Delaunay triangulation of the skin's nodes) is built once per look:
+    the skin, eyes, mouth and skirt all ask for it.
+    """
+    cached = look.__dict__.get("_skin_depth")
+    if cached is not None:
+        return cached
     from scipy.interpolate import LinearNDInterpolator
 
     r = look.rest
     front = r[:, 2] > np.percentile(r[:, 2], 30)
-    return LinearNDInterpolator(r[front, :2], r[front, 2])
+    depth = LinearNDInterpolator(r[front, :2], r[front, 2])
+    object.__setattr__(look, "_skin_depth", depth)  # a cache on a frozen look
+    return depth
 
 
 def fit_inside(centre, unit, radii, depth, margin: float) -> np.ndarray:
