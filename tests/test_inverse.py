@@ -9,13 +9,21 @@ import pytest
 from facemech import InputError, MarkerSet, read_results, simulate, write_markers
 from facemech.inverse import stats
 from facemech.inverse.experiments import synthetic_data, triangle_sequence
-from facemech.inverse.invert import _FrameProblem, control_matrix, invert
+from facemech.inverse.frame import FrameProblem
+from facemech.inverse.invert import control_matrix, invert
+from facemech.inverse.methods import LeastSquares
 from facemech.params import Parameters
 from facemech.physics.assembly import Physics
 from facemech.solvers.state import State
 from facemech.solvers.step import Stepper
 
 SEEDS = Parameters()  # lucero1999: most of these are the seeds' inversion's tests
+
+
+def held(ms, **kw):
+    """The jaw held at rest (these twins keep it closed) and the receding horizon these tests
+    were measured with (window 3, no smoothing, 1-um stopping rule)."""
+    return {"jaw_angle": np.zeros(ms.n_frames), "window": 3, "smooth": 0.0, "tol": 1e-3, **kw}
 
 
 def test_3d_statistics_as_published_and_unbiased():
@@ -76,7 +84,7 @@ def twin(face, frames=10):
 def test_twin_experiment_recovers_known_activity(seeds_face):
     face = seeds_face
     ms, mapping, truth = twin(face)
-    res = invert(face, ms, mapping, controls=["DLI", "OOS", "LLS"], params=SEEDS)
+    res = invert(face, ms, mapping, controls=["DLI", "OOS", "LLS"], params=SEEDS, **held(ms))
     # the activity of the last two frames shows mostly after the recording ends
     np.testing.assert_allclose(res.controls[:-3], truth[:-3], atol=0.05)
     np.testing.assert_allclose(res.controls[-3:-1], truth[-3:-1], atol=0.1)
@@ -99,16 +107,16 @@ def frame_problem(face, frames, horizon, settle=None):
         s0 = st.advance(s0, g @ settle, 0.0)
     nodes = np.array(list(mapping.values()))
     data = ms.select(list(mapping)).positions
-    return _FrameProblem(st, s0, g, nodes, data, np.zeros(frames), 0, horizon)
+    return FrameProblem(st, s0, g, nodes, data, np.zeros(frames), 0, horizon)
 
 
 def test_jacobian_matches_central_differences(seeds_face):
     face = seeds_face
     fp = frame_problem(face, 3, 1)
     c = np.array([0.4, 0.3, 0.2])
-    x = fp.lsq(c, None, 0.0, 1.0, 40)[3]  # the one-frame solution
+    x = fp.lsq(c, None, LeastSquares(window=1, max_evaluations=40, smooth=0.0)).x
     pos0 = fp.roll(x)[0]
-    fwd = fp.jacobian(fp.lag_responses(x, pos0, 1.0))
+    fwd = fp.jacobian(fp.lag_responses(x, pos0))
     cen = np.empty_like(fwd)
     for j in range(3):
         e = np.zeros(3)
@@ -126,7 +134,7 @@ def test_window_jacobian_from_lag_responses(seeds_face):
     fp = frame_problem(face, 5, 3, settle=np.array([0.4, 0.3, 0.2]))
     x = np.array([[0.42, 0.31, 0.2], [0.44, 0.32, 0.2], [0.46, 0.33, 0.2]])
     r0 = fp.marker_residual(x)
-    jm = fp.jacobian(fp.lag_responses(x, fp.roll(x)[0], 1.0))
+    jm = fp.jacobian(fp.lag_responses(x, fp.roll(x)[0]))
     assert jm.shape == (3 * 33, 9)
     assert np.all(jm[:33, 3:] == 0)  # a frame does not see later activity
     full = np.empty_like(jm)
@@ -137,7 +145,8 @@ def test_window_jacobian_from_lag_responses(seeds_face):
     rel = np.linalg.norm(jm - full) / np.linalg.norm(full)
     assert rel < 0.05, rel
     # the regularisation rows: second differences vanish for activity at a steady rate
-    a_reg, b_reg = fp.regularisation(np.zeros(3), 0.0, 0.0, None, 0.0, 1.0)
+    a_reg, b_reg = fp.regularisation(np.zeros(3), LeastSquares(bend=1.0, smooth=0.0), None,
+                                     None)
     assert a_reg.shape == (3, 9)
     np.testing.assert_allclose(a_reg @ x.reshape(-1) + b_reg, 0.0, atol=1e-12)
     bent = x.copy()
@@ -149,7 +158,7 @@ def test_powell_baseline_with_the_positive_constraint(seeds_face):
     face = seeds_face
     ms, mapping, truth = twin(face, frames=4)
     res = invert(face, ms, mapping, method="powell", controls=["DLI", "OOS", "LLS"],
-                 max_evaluations=150, params=SEEDS)
+                 max_evaluations=150, params=SEEDS, jaw_angle=np.zeros(ms.n_frames))
     assert np.all(res.controls >= 0)
     assert np.median(res.rms_error[1:]) < 0.02e-3
     assert res.evaluations[1:].min() > 10
@@ -167,19 +176,19 @@ def test_inversion_bad_input(seeds_face):
     ms, mapping, _ = twin(face, frames=4)
     with pytest.raises(InputError, match="resample first"):
         invert(face, MarkerSet(ms.positions, ms.names, 120.0), mapping, params=SEEDS)
-    with pytest.raises(InputError, match="coordinates for 16 muscles"):
+    with pytest.raises(InputError, match="coordinates for 17 controls"):
         invert(face, ms, {"R03": mapping["R03"], "R05": mapping["R05"]}, controls="all",
                params=SEEDS)
     gap = ms.positions.copy()
     gap[2, ms.index("R05")] = np.nan
     res = invert(face, ms.with_positions(gap), mapping, controls=["DLI", "OOS", "LLS"],
-                 params=SEEDS)
+                 params=SEEDS, **held(ms))
     assert res.markers_used[2] == 10 and any("missing" in n for n in res.notes)
     few = ms.positions.copy()
     few[2, [ms.index(n) for n in mapping][1:]] = np.nan
-    with pytest.raises(InputError, match="frame 2: 1 usable markers"):
+    with pytest.raises(InputError, match="frame 2: 1 usable markers for 4 controls"):
         invert(face, ms.with_positions(few), mapping, controls=["DLI", "OOS", "LLS", "MEN"],
-               params=SEEDS)
+               params=SEEDS, **held(ms))
 
 
 def test_invert_and_compare_commands(seeds_face, tmp_path, monkeypatch, capsys):
@@ -191,7 +200,8 @@ def test_invert_and_compare_commands(seeds_face, tmp_path, monkeypatch, capsys):
     monkeypatch.setattr(sys, "argv", ["facemech", "invert", "--markers", str(tmp_path / "m.csv"),
                                       "--controls", "DLI,OOS,LLS", "-o", str(tmp_path / "r.nc"),
                                       "--figure", str(tmp_path / "act.png"),
-                                      "--preset", "lucero1999"])
+                                      "--preset", "lucero1999", "--window", "3",
+                                      "--smooth", "0", "--tol", "0.001"])
     with pytest.raises(SystemExit) as info:
         main()
     assert info.value.code in (0, None), capsys.readouterr().err
@@ -273,8 +283,8 @@ def test_tolerance_stops_early_without_losing_the_fit(seeds_face):
     face = seeds_face
     ms, mapping, truth = twin(face, frames=8)
     kw = dict(controls=["DLI", "OOS", "LLS"])
-    tight = invert(face, ms, mapping, tol=0.0, **kw, params=SEEDS)
-    loose = invert(face, ms, mapping, tol=1e-3, **kw, params=SEEDS)
+    tight = invert(face, ms, mapping, **held(ms, tol=0.0), **kw, params=SEEDS)
+    loose = invert(face, ms, mapping, **held(ms), **kw, params=SEEDS)
     assert loose.evaluations.sum() < tight.evaluations.sum()
     # 1 um of RMS improvement is the stopping rule: the fit stays within a few micrometres
     assert np.median(loose.rms_error[1:]) < 3e-6
@@ -303,6 +313,7 @@ def test_regularisation_pulls_activity_as_documented(seeds_face):
     face = seeds_face
     ms, mapping, truth = twin(face, frames=6)
     kw = dict(controls=["DLI", "OOS", "LLS"])
+    kw.update(held(ms))
     free = invert(face, ms, mapping, **kw, params=SEEDS)
     # a strong prior (e.g. processed EMG) wins over the markers
     prior = np.clip(truth + 0.2, 0, 1)
@@ -313,7 +324,7 @@ def test_regularisation_pulls_activity_as_documented(seeds_face):
     assert np.abs(lazy.controls[:-1]).max() < 0.02 < np.abs(free.controls[:-1]).max()
     assert np.median(lazy.rms_error[1:]) > 10 * np.median(free.rms_error[1:])
     # a strong smoothness term holds activity near the previous frame's (zero at the start)
-    still = invert(face, ms, mapping, smooth=100.0, **kw, params=SEEDS)
+    still = invert(face, ms, mapping, **{**kw, "smooth": 100.0}, params=SEEDS)
     assert np.abs(np.diff(still.controls[:-1], axis=0)).max() < 0.02
     with pytest.raises(InputError, match="bend"):
         invert(face, ms, mapping, bend=-1.0, **kw, params=SEEDS)
@@ -330,6 +341,7 @@ def test_anatomical_twin_experiment_recovers_known_activity(face):
     sim = simulate(face, c @ g.T)
     mk = [n for n in face.markers if n.startswith("R")]
     ms = MarkerSet(sim.positions[:, [face.markers[n] for n in mk]], tuple(mk), 60.0)
-    res = invert(face, ms, {n: face.markers[n] for n in mk}, controls=["DLI", "OOS", "LLS"])
+    res = invert(face, ms, {n: face.markers[n] for n in mk}, controls=["DLI", "OOS", "LLS"],
+                 **held(ms))
     np.testing.assert_allclose(res.controls[:-3], c[:-3], atol=0.05)
     assert np.median(res.rms_error[1:]) < 1e-5

@@ -71,7 +71,9 @@ class _LogProgress:
         self.tasks[len(self.tasks)] = [description, total, now, now, -1]
         return len(self.tasks) - 1
 
-    def update(self, task: int, completed: int) -> None:
+    def update(self, task: int, completed: int, total: int | None = None) -> None:
+        if total is not None:
+            self.tasks[task][1] = total
         desc, total, start, last, done_before = self.tasks[task]
         now = self._clock()
         finished = total is not None and completed >= total and done_before < total
@@ -785,91 +787,72 @@ def invert(
                                                                 "closest nodes)")] = None,
     method: Annotated[str, typer.Option(help="lsq (fast) or powell (the seeds')")] = "lsq",
     positive: Annotated[bool, typer.Option(help="keep activity >= 0")] = True,
-    controls: Annotated[str, typer.Option(help="emg7, all, or comma-separated groups")] = "emg7",
-    chin_marker: Annotated[str | None, typer.Option(help="drive the jaw from this marker")]
+    controls: Annotated[str, typer.Option(help="speech, emg7, all, or comma-separated groups")]
+    = "speech",
+    chin_marker: Annotated[str | None, typer.Option(
+        help="a jaw recording: this marker's drop gives the jaw angle (33-ms lead)")] = None,
+    jaw_fixed: Annotated[bool, typer.Option(
+        help="hold the recorded jaw as given (default: estimate the jaw, starting from it)")]
+    = False,
+    jaw_lead: Annotated[int, typer.Option(help="frames the recorded jaw leads the skin")] = 2,
+    noise: Annotated[float | None, typer.Option(
+        help="marker noise for the standard errors, mm (default: from the residuals)")] = None,
+    window: Annotated[int | None, typer.Option(
+        help="frames fitted per frame, first kept (lsq; default 2)")] = None,
+    tol: Annotated[float | None, typer.Option(
+        help="stop a frame's fit when the RMS error improves by less than this, mm (lsq; "
+             "default 0.01)")] = None,
+    bend: Annotated[float | None, typer.Option(
+        help="weight of second differences across the window, mm per unit (lsq)")] = None,
+    smooth: Annotated[float | None, typer.Option(
+        help="weight of frame-to-frame changes, mm per unit (lsq; default 0.3)")] = None,
+    effort: Annotated[float | None, typer.Option(help="effort weight, mm per unit (lsq)")]
     = None,
-    window: Annotated[int, typer.Option(help="frames fitted per frame, first kept (lsq)")] = 3,
-    tol: Annotated[float, typer.Option(help="stop a frame's fit when the RMS error improves by "
-                                            "less than this, mm (lsq)")] = 1e-3,
-    bend: Annotated[float, typer.Option(help="weight of second differences of activity across "
-                                             "the window, mm per unit (lsq)")] = 0.03,
-    smooth: Annotated[float, typer.Option(help="smoothness weight, mm per unit activity")]
-    = 0.0,
-    effort: Annotated[float, typer.Option(help="effort weight, mm per unit activity")] = 0.0,
+    max_evaluations: Annotated[int | None, typer.Option(
+        help="model frame steps per frame, at most (default 400)")] = None,
     scale_pair: Annotated[str | None, typer.Option(help="A,B: adapt the markers by per-axis "
                                                         "scaling from two markers far apart")]
     = None,
     preset: PresetOpt = "anatomical",
     dt: Annotated[float | None, typer.Option(help="explicit Euler step of every evaluation, s "
-                                                  "(default: the preset's fast step; the "
-                                                  "anatomical preset steps implicitly, 4.2 ms)")]
-    = None,
+                                                  "(default: the preset's fast step)")] = None,
     units: UnitsOpt = None,
-    figure: Annotated[Path | None, typer.Option(help="PNG of the inverted activity and the "
-                                                     "per-frame error")] = None,
+    figure: Annotated[Path | None, typer.Option(help="PNG of the inverted controls with +-2 SE "
+                                                     "bands and the per-frame error")] = None,
 ):
-    """Recover muscle activity frame by frame from markers, and re-animate the face."""
-    from . import params as P
-    from .geometry.builder import load_face
-    from .inverse.invert import invert as run
-    from .io.markers import read_markers
-    from .io.results import file_hash, write_results
-    from .kinematics.mapping import closest_nodes, read_mapping, scale_adapt
-    from .solvers.forward import Simulation, marker_nodes
-    from .solvers.jaw import jaw_angles_from_marker
+    """Recover muscle activity and the jaw frame by frame from markers; re-animate the face."""
+    from .inverse.workflow import invert_markers
+    from .io.results import file_hash
 
-    prm = P.preset(preset)
-    model = load_face(face, tissue=prm.tissue)
-    ms = read_markers(markers, units=units)
-    mapping = (read_mapping(map_file, ms, model) if map_file is not None
-               else closest_nodes(ms, model))
-    if scale_pair is not None:
-        a, _, b = scale_pair.partition(",")
-        ms = scale_adapt(ms, model, mapping, (a.strip(), b.strip())).markers
-    jaw = None
-    if chin_marker is not None:
-        node = mapping.get(chin_marker)
-        if node is None:
-            raise InputError("chin marker has no node", source=str(markers), field=chin_marker)
-        jaw = jaw_angles_from_marker(model, prm, node, ms.marker(chin_marker)[:, 1],
-                                     source=str(markers))
-    ctrl = controls if controls in ("emg7", "all") else [c.strip().upper()
-                                                         for c in controls.split(",")]
     with _progress() as prog:
-        task = prog.add_task(f"invert ({method})", total=ms.n_frames - 1)
-        res = run(model, ms, mapping, method=method, positive=positive, controls=ctrl,
-                  jaw_angle=jaw, params=prm, dt=dt, smooth=smooth, effort=effort, window=window,
-                  tol=tol, bend=bend, progress=lambda d, n: prog.update(task, completed=d))
-    act = np.clip(res.activity, -1.0, 1.0)
-    names, nodes = marker_nodes(model)
-    sim = Simulation(model=model, params=prm, time=np.arange(ms.n_frames) / prm.frame_rate,
-                     positions=res.positions, markers=res.positions[:, nodes],
-                     marker_names=names, activity=act, jaw_angle=res.jaw_angle,
-                     final_state=None, integrator=f"{prm.integrator} (inversion, {method})",
-                     dt=prm.fast_dt if dt is None else dt,
-                     wall_seconds=res.wall_seconds,
-                     attrs={"inversion_method": method, "positive": int(positive),
-                            "window": window, "tol_mm": tol, "bend": bend,
-                            "controls": ",".join(res.control_names),
-                            "rms_error_mm_median": float(np.median(res.rms_error[1:]) * 1e3),
-                            "condition_median": float(np.nanmedian(res.condition))
-                            if np.isfinite(res.condition).any() else -1.0,
-                            "notes": " | ".join(res.notes)})
-    write_results(output, sim, inputs={"markers": file_hash(markers)},
-                  extra={"rms_error": (("time",), res.rms_error, {"units": "m"}),
-                         "condition": (("time",), res.condition, {"units": "1"}),
-                         "markers_used": (("time",), res.markers_used, {"units": "1"})})
-    out.print(f"{ms.n_frames} frames inverted ({method}) in {res.wall_seconds:.1f} s; median "
-              f"per-frame error {np.median(res.rms_error[1:]) * 1e3:.3f} mm -> {output}")
+        task = prog.add_task(f"invert ({method})", total=None)
+        res = invert_markers(
+            markers, face=face, map_file=map_file, units=units, scale_pair=scale_pair,
+            preset=preset, method=method, positive=positive, controls=controls,
+            chin_marker=chin_marker, jaw_fixed=jaw_fixed, jaw_lead=jaw_lead, noise=noise,
+            dt=dt, options=dict(window=window, tol=tol, bend=bend, smooth=smooth,
+                                effort=effort, max_evaluations=max_evaluations),
+            progress=lambda d, n: prog.update(task, completed=d, total=n))
+    res.write(output, inputs={"markers": file_hash(markers)})
+    s = res.error_summary()
+    out.print(f"{len(res.time)} frames inverted ({res.method.name}) in {res.wall_seconds:.1f} s;"
+              f" per-frame error (RMS over {len(res.marker_names)} markers): median "
+              f"{s['median_mm']:.3f} mm, max {s['max_mm']:.3f} mm -> {output}")
+    seen = [n for n, ok in zip(res.control_names, res.identifiable, strict=True) if ok]
+    out.print(f"  determined by the markers (noise {res.noise_mm:.3f} mm, {res.noise_how}): "
+              f"{', '.join(seen) or 'none'}")
     if figure is not None:
         from .viz.plots import inversion_figure
 
-        inversion_figure(figure, np.arange(ms.n_frames) / prm.frame_rate, res.controls,
-                         res.control_names, rms_error=res.rms_error,
-                         title=f"{markers.name}: inverted activity ({method})")
+        inversion_figure(figure, res.time, res.controls, res.control_names,
+                         rms_error=res.rms_error, se=res.control_se,
+                         identifiable=res.identifiable,
+                         title=f"{markers.name}: inverted controls ({res.method.name})")
         out.print(f"figure -> {figure}")
     for note in res.notes:
         err.print(f"facemech: note: {note}")
+    for warning in s["warnings"]:
+        err.print(f"facemech: warning: {warning}")
 
 
 @app.command()

@@ -1,29 +1,20 @@
-"""Frame-by-frame dynamic inversion: muscle activity from marker trajectories.
+"""Frame-by-frame dynamic inversion: muscle activity and the jaw from marker trajectories.
 
 Pitermann & Munhall (2001, II.C): for each 60-Hz frame, starting from the current state
-(positions, velocities, muscle filter), find the activity that, held for one frame through the
-full dynamics, brings the model's marker nodes closest to the next frame's markers; the answer
+(positions, velocities, muscle filter), find the controls that, held for one frame through the
+full dynamics, bring the model's marker nodes closest to the next frame's markers; the answer
 seeds the next frame, zero seeds the first. Every cost evaluation is one call of the same step
 function as the forward simulation, so the accepted states form the re-animation.
 
-Methods:
+The jaw is never silently left at rest. Without a jaw recording it is estimated with the muscle
+activity, as one more control (the angle reached at the end of each frame; the condyle's glide
+follows the preset's jaw kinematics). A recorded jaw angle (e.g. from a chin marker) is either
+held as given or, with ``estimate_jaw=True``, is the estimate's starting point and a weak prior.
 
-``powell`` (the seeds')
-    Powell's direction-set minimisation of E = sum_i |m_i - n_i|^2 (mm^2); with the positive
-    constraint, E' = E if every activity is >= 0, else 1e6 (1 + |sum of the negative ones|).
-``lsq`` (default)
-    a receding horizon: the activity of each of the next ``window`` frames is fitted to the
-    markers of those frames and only the first frame's is kept. Bounded Gauss-Newton on the
-    marker residuals, activity in [0, 1] (or [-1, 1] without the positive constraint): the
-    Jacobian is built from forward differences of the markers with respect to the first frame's
-    activity (one roll of the window per control, from the frame's state), taken as
-    time-invariant within the window, carried from frame to frame and renewed only when a step
-    fails; each linearised step is solved exactly within the bounds. Regularisation rows,
-    weights in mm per unit of activity: ``bend`` (second differences of activity across the
-    window; on by default, 0.03), ``smooth`` (first differences, from the previous frame's),
-    ``effort`` (a), ``prior`` (a - EMG). Per frame it reports the residual, the controls on a
-    bound and the condition number of the frame's own Jacobian columns, and warns when the
-    muscles are barely identifiable.
+Methods (:mod:`facemech.inverse.methods`): :class:`LeastSquares` (default; a receding horizon,
+bounded Gauss-Newton, :class:`~facemech.inverse.frame.FrameProblem`) and :class:`Powell` (the
+seeds'). Each frame also gives the standard errors and identifiability of its controls
+(:mod:`facemech.inverse.uncertainty`).
 """
 
 from __future__ import annotations
@@ -31,32 +22,43 @@ from __future__ import annotations
 import time
 import warnings
 from collections.abc import Callable
-from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.optimize import minimize
 
-from ..errors import InputError, SimulationBlowUp
+from ..errors import InputError
 from ..markerset import MarkerSet
 from ..params import EMG_CHANNELS, MUSCLE_GROUPS, Parameters, default_parameters
 from ..physics.assembly import Physics
+from ..solvers.forward import single_threaded_blas
+from ..solvers.jaw import MAX_JAW_ANGLE
 from ..solvers.state import State
 from ..solvers.step import Stepper
+from . import uncertainty as U
+from .frame import JAW_UNIT, FrameProblem
+from .methods import LeastSquares, Powell, method_from_options
+from .result import Inversion
 
-PENALTY = 1e6  #: the positive constraint of Pitermann & Munhall (2001)
 ILL_POSED_CONDITION = 1e4  #: Jacobian condition number above which a frame is flagged
+#: rad: the estimated jaw stays within [JAW_CLOSE, MAX_JAW_ANGLE] (closing a little past the
+#: first frame's pose, which is taken as rest)
+JAW_CLOSE = -np.radians(3.0)
+#: the default muscle controls: the seeds' seven EMG channels plus the other muscles that
+#: move the lips in speech (zygomaticus major apart from LAO, risorius)
+SPEECH_CONTROLS = ("LLS", "ZYG", "LAO", "RIS", "DAO", "DLI", "MEN", "OOS", "OOI")
 
 
 def control_matrix(controls) -> tuple[tuple[str, ...], np.ndarray]:
-    """Names of the inverted controls and the (16, controls) map to group activity.
+    """Names of the inverted muscle controls and the (16, controls) map to group activity.
 
-    ``"emg7"``: the seeds' seven EMG channels (ZYG follows LAO); ``"all"``: the 16 groups; or
-    a list of group names.
+    ``"speech"`` (default): :data:`SPEECH_CONTROLS`; ``"emg7"``: the seeds' seven EMG
+    channels (ZYG follows LAO); ``"all"``: the 16 groups; or a list of group names.
     """
     if controls == "emg7":
         names = EMG_CHANNELS
     elif controls == "all":
         names = MUSCLE_GROUPS
+    elif controls == "speech":
+        names = SPEECH_CONTROLS
     else:
         names = tuple(controls)
     g = np.zeros((len(MUSCLE_GROUPS), len(names)))
@@ -70,405 +72,278 @@ def control_matrix(controls) -> tuple[tuple[str, ...], np.ndarray]:
     return tuple(names), g
 
 
-@dataclass(frozen=True, eq=False)
-class InversionResult:
-    """Activity recovered from markers, the re-animation, and per-frame diagnostics.
-
-    ``activity`` (frames, 16) is the group activity of each frame's interval (the last row repeats
-    the one before); ``controls`` (frames, c) are the inverted controls; ``positions`` (frames,
-    n_surface, 3) m and ``model_markers`` (frames, markers, 3) m are the re-animation.
-    """
-
-    names: tuple[str, ...]
-    control_names: tuple[str, ...]
-    controls: np.ndarray
-    activity: np.ndarray
-    positions: np.ndarray
-    model_markers: np.ndarray
-    data_markers: np.ndarray
-    jaw_angle: np.ndarray
-    rms_error: np.ndarray  # (frames,) m, sqrt(E/N) after each frame's fit (0 for frame 0)
-    markers_used: np.ndarray  # (frames,)
-    on_bound: np.ndarray  # (frames, c) bool
-    condition: np.ndarray  # (frames,) Jacobian condition number (lsq; NaN for powell)
-    evaluations: np.ndarray  # (frames,) step-function calls
-    method: str
-    positive: bool
-    wall_seconds: float
-    notes: list = field(default_factory=list)
-
-
 def invert(
     face,
     markers: MarkerSet,
     mapping: dict[str, int],
     *,
-    method: str = "lsq",
+    method: str | LeastSquares | Powell = "lsq",
     positive: bool = True,
-    controls="emg7",
+    controls="speech",
     jaw_angle: np.ndarray | None = None,
+    estimate_jaw: bool | None = None,
+    jaw_source: str | None = None,
     params: Parameters | None = None,
     dt: float | None = None,
-    smooth: float = 0.0,
-    effort: float = 0.0,
     prior: np.ndarray | None = None,
-    prior_weight: float = 0.0,
-    max_evaluations: int = 400,
-    window: int = 3,
-    tol: float = 1e-3,
-    bend: float = 0.03,
+    noise_mm: float | None = None,
     progress: Callable[[int, int], None] | None = None,
-) -> InversionResult:
-    """Recover muscle activity frame by frame (see the module doc).
+    **options,
+) -> Inversion:
+    """Recover muscle activity and the jaw frame by frame (see the module doc).
 
     Parameters
     ----------
     face : FaceModel
-    markers : MarkerSet in the model's frame (metres) at the model's frame rate (60 Hz)
+    markers : MarkerSet in the model's frame (metres) at the model's frame rate (60 Hz); the
+        first frame is taken as the face at rest
     mapping : marker name -> epidermal node (see :func:`facemech.closest_nodes`)
-    method : "lsq" or "powell"
+    method : a :class:`LeastSquares` or :class:`Powell`, or "lsq"/"powell" with the method's
+        options as keywords (``window``, ``tol``, ``bend``, ``smooth``, ``effort``,
+        ``prior_weight``, ``jaw_prior_weight``, ``max_evaluations``; ``xtol``, ``ftol`` for
+        Powell); an option of the other method is an error
     positive : activity kept >= 0 (bounds for lsq, the published penalty for powell)
-    controls : "emg7", "all" or a list of groups
-    jaw_angle : (frames,) rad, optional (default: jaw closed)
+    controls : "speech" (default), "emg7", "all" or a list of groups
+    jaw_angle : (frames,) rad, a recorded jaw (e.g. :func:`jaw_angles_from_marker`), or
+        (frames, 3) poses (angle, condyle shift y, z in m) from two jaw markers; None: no
+        recording
+    estimate_jaw : estimate the jaw angle as one more control (default: True without a
+        recording, False with one; with both, the recording is the starting point and a weak
+        prior, ``jaw_prior_weight``). A pose series is always held as given.
+    jaw_source : what the recording is, for the notes (e.g. "chin marker R01")
     params : Parameters (default: the default preset, ``anatomical``)
-    dt : explicit Euler step used by every evaluation (s; default ``params.fast_dt``: 1 ms for
-        ``lucero1999``, the paper's 0.33 ms for ``pitermann2001`` and ``calibrated``); the
-        anatomical preset steps with its implicit integrator (4.2 ms), and another ``dt`` is an
-        error there
-    smooth, effort, prior_weight : regularisation weights (mm per unit activity), lsq only
-    prior : (frames, c) prior activity (e.g. processed EMG) for ``prior_weight``
-    window : frames in each frame's fit (lsq): the activity of each of them is fitted to
-        their markers and only the first frame's is kept (a receding horizon; 1 is the seeds'
-        one-frame inversion, which on this model swings between the bounds from frame to frame:
-        the activation filter makes one frame's activity show mostly in the frames after it)
-    bend : weight (mm per unit activity) of the second differences of activity across the
-        window (lsq); it settles the last frames of the window, which their markers barely see,
-        and does not bias activity that changes at a steady rate
-    tol : mm (lsq). A frame's iterations stop once a step lowers the RMS marker residual by
-        less than ``tol``. The default, 1 um, lies far below any motion-capture precision; a
-        smaller one costs more steps without a better answer (the extra steps only move activity
-        along directions the markers barely see; see docs/inversion.md)
+    dt : explicit Euler step used by every evaluation (s; default ``params.fast_dt``); the
+        implicit presets step at their own frame substeps and another ``dt`` is an error there
+    prior : (frames, muscle controls) prior activity (e.g. processed EMG) for ``prior_weight``
+    noise_mm : marker noise (mm, per coordinate) for the standard errors (default: estimated
+        from the fit's residuals)
+
+    Returns
+    -------
+    Inversion
     """
-    if method not in ("lsq", "powell"):
-        raise InputError(f"unknown method {method!r} (lsq or powell)", field="method")
-    if window < 1:
-        raise InputError(f"window must be at least 1 frame (got {window})", field="window")
-    if not tol >= 0:
-        raise InputError(f"tol must be >= 0 mm (got {tol})", field="tol")
-    for name, value in (("smooth", smooth), ("effort", effort), ("prior_weight", prior_weight),
-                        ("bend", bend)):
-        if not value >= 0:
-            raise InputError(f"{name} must be >= 0 (got {value})", field=name)
+    if isinstance(method, str):
+        method = method_from_options(method, **options)
+    elif options:
+        raise InputError(f"give the options of a method object when making it (got "
+                         f"{', '.join(options)})", field=next(iter(options)))
+    if not isinstance(method, (LeastSquares, Powell)):
+        raise InputError(f"method must be lsq, powell, LeastSquares or Powell (got "
+                         f"{method!r})", field="method")
+    if noise_mm is not None and not (np.isfinite(noise_mm) and noise_mm > 0):
+        raise InputError(f"noise must be > 0 mm (got {noise_mm})", field="noise")
     params = params or default_parameters()
     dt = params.fast_dt if dt is None else dt
+    src = markers.meta.get("source")
     if abs(markers.rate - params.frame_rate) > 1e-3 * params.frame_rate:
         raise InputError(f"markers at {markers.rate:g} Hz, the model runs at "
                          f"{params.frame_rate:g} Hz: resample first (facemech markers resample)",
-                         source=markers.meta.get("source"), field="rate")
+                         source=src, field="rate")
     names = [n for n in markers.names if n in mapping]
     if not names:
-        raise InputError("no marker has a node", field="mapping")
+        raise InputError("no marker has a node", source=src, field="mapping")
     cnames, gmat = control_matrix(controls)
-    nc = len(cnames)
+    data = markers.select(names).positions
+    frames = len(data)
+    jaw, estimate_jaw, jaw_note = _jaw_plan(jaw_angle, estimate_jaw, jaw_source, frames)
+    nc = len(cnames) + (1 if estimate_jaw else 0)
     if 3 * len(names) < nc:
         raise InputError(f"{len(names)} markers give {3 * len(names)} coordinates for {nc} "
-                         "muscles: use more markers or fewer controls", field="markers")
-    data = markers.select(names).positions
+                         "controls: use more markers or fewer controls", source=src,
+                         field="markers")
+    if prior is not None and np.shape(prior) != (frames, len(cnames)):
+        raise InputError(f"prior must be (frames, {len(cnames)})", field="prior")
     nodes = np.array([mapping[n] for n in names])
-    frames = len(data)
-    jaw = np.zeros(frames) if jaw_angle is None else np.asarray(jaw_angle, float)
-    if jaw.shape != (frames,):
-        raise InputError("jaw angle series and markers differ in length", field="jaw_angle")
-    if prior is not None and np.shape(prior) != (frames, nc):
-        raise InputError(f"prior must be (frames, {nc})", field="prior")
     physics = Physics.build(face, params)
     face = physics.model  # with the preset's tissue geometry (same epidermal nodes)
     stepper = Stepper(physics, dt=dt)
-    lo, hi = (0.0, 1.0) if positive else (-1.0, 1.0)
-    state = State.at_rest(face.rest_positions, stepper.physics.n_muscles, float(jaw[0]))
+    lo = np.full(nc, 0.0 if positive else -1.0)
+    hi = np.ones(nc)
+    if estimate_jaw:
+        lo[-1], hi[-1] = JAW_CLOSE / JAW_UNIT, MAX_JAW_ANGLE / JAW_UNIT
+    jaw0 = jaw[0] if jaw is not None else 0.0
+    state = State.at_rest(face.rest_positions, physics.n_muscles, float(np.ravel(jaw0)[0]))
+    distance = U.identifiability(U.step_responses(
+        _control_stepper(stepper, gmat, estimate_jaw, float(np.ravel(jaw0)[0]) if jaw is not None
+                         else 0.0, jaw), State.at_rest(face.rest_positions, physics.n_muscles,
+                                                       float(np.ravel(jaw0)[0])), nodes, nc))
+    run = _Run(frames, nc, face.n_surface)
+    run.positions[0] = state.positions[: face.n_surface]
+    run.record_error(0, state.positions[nodes], data[0])
     c_prev = np.zeros(nc)
-    out_c = np.zeros((frames, nc))
-    rms = np.zeros(frames)
-    used = np.zeros(frames, int)
-    bound = np.zeros((frames, nc), bool)
-    cond = np.full(frames, np.nan)
-    nfev = np.zeros(frames, int)
-    positions = np.empty((frames, face.n_surface, 3))
-    positions[0] = state.positions[: face.n_surface]
-    notes: list[str] = []
-    gaps = 0
-    # carried from frame to frame (lsq): lag responses, window solution, its states
-    lags_prev = x_prev = None
+    if estimate_jaw and jaw is not None:
+        c_prev[-1] = jaw[0] / JAW_UNIT
+    fit_prev = None
+    x_prev = None
     states_prev: list = []
     t0 = time.perf_counter()
-    for k in range(frames - 1):
-        ok = np.all(np.isfinite(data[k + 1]), axis=1)
-        if 3 * ok.sum() < nc:
-            raise InputError(f"frame {k + 1}: {int(ok.sum())} usable markers for {nc} muscles",
-                             field="markers")
-        gaps += int((~ok).sum())
-        frame = _FrameProblem(stepper, state, gmat, nodes, data, jaw, k,
-                              window if method == "lsq" else 1)
-        if method == "powell":
-            c = frame.powell(c_prev, positive, lo, hi, max_evaluations)
-            state = frame.state_after(c)
-        elif frame.horizon < window and x_prev is not None and len(x_prev) > 1:
-            # the data end inside the window: the last full window already fitted every frame
-            # left, so its activity is kept rather than refitted on ever fewer frames
-            c = x_prev[1].copy()
-            x_prev = x_prev[1:]
-            state = states_prev[1]  # simulated in that window's accepted roll
-            states_prev = states_prev[1:]
-            cond[k + 1] = cond[k]
-        else:
-            c, state, cond[k + 1], x_prev, lags_prev, states_prev = frame.lsq(
-                c_prev, x_prev, lo, hi, max_evaluations, smooth=smooth, effort=effort,
-                prior=prior, prior_weight=prior_weight, bend=bend, lags_prev=lags_prev, tol=tol,
-                known=states_prev[1:])
-        out_c[k] = c
-        c_prev = c
-        bound[k + 1] = (c <= lo + 1e-6) | (c >= hi - 1e-6)
-        model_now = state.positions[nodes]
-        d = model_now[ok] - data[k + 1][ok]
-        rms[k + 1] = np.sqrt(np.sum(d * d) / ok.sum())
-        used[k + 1] = int(ok.sum())
-        nfev[k + 1] = frame.counter[0]
-        positions[k + 1] = state.positions[: face.n_surface]
-        if progress is not None:
-            progress(k + 1, frames - 1)
-    out_c[-1] = out_c[-2] if frames > 1 else out_c[-1]
-    if gaps:
-        notes.append(f"{gaps} missing marker samples were left out of their frames' costs")
-    bad = np.nonzero(cond > ILL_POSED_CONDITION)[0]
-    if len(bad):
-        msg = (f"ill-posed: the Jacobian condition number exceeds {ILL_POSED_CONDITION:.0e} in "
-               f"{len(bad)} of {frames - 1} frames (median {np.nanmedian(cond):.3g}); some "
-               "muscles are barely identifiable from these markers (try regularisation)")
-        notes.append(msg)
-        warnings.warn(msg, stacklevel=2)
-    return InversionResult(
-        names=tuple(names), control_names=cnames, controls=out_c, activity=out_c @ gmat.T,
-        positions=positions, model_markers=positions[:, nodes], data_markers=data,
-        jaw_angle=jaw, rms_error=rms, markers_used=used, on_bound=bound, condition=cond,
-        evaluations=nfev, method=method, positive=positive,
-        wall_seconds=time.perf_counter() - t0, notes=notes,
-    )
-
-
-class _FrameProblem:
-    """One frame's fit over a window of ``horizon`` frames, markers compared in mm.
-
-    The unknowns are the activity of each frame of the window, ``x`` of shape (horizon, c);
-    the residual stacks the markers of frames ``k + 1 ... k + horizon`` (missing ones left out
-    frame by frame). Only the first frame's activity is kept (a receding horizon).
-    """
-
-    def __init__(self, stepper, state, gmat, nodes, data, jaw, k, horizon):
-        self.stepper, self.state, self.gmat, self.nodes = stepper, state, gmat, nodes
-        self.data, self.jaw, self.k = data, jaw, k
-        self.horizon = min(horizon, len(data) - 1 - k)
-        self.targets = data[k + 1:k + 1 + self.horizon] * 1e3  # (w, markers, 3) mm
-        self.oks = np.all(np.isfinite(self.targets), axis=2)  # (w, markers)
-        self.counter = [0]  # step-function calls (one per frame simulated)
-        self.nc = gmat.shape[1]
-        self._last = None  # (x, state after the first frame) of the latest roll
-        self.states: list = []  # states of the latest roll, one per frame of the window
-
-    def _window(self, x) -> np.ndarray:
-        x = np.asarray(x, float)
-        return x.reshape(-1, self.nc)[: self.horizon]
-
-    def roll(self, x, known=()):
-        """Simulate the window under x: marker nodes (w, markers, 3) mm and the first state.
-
-        ``known`` are states already simulated for the first frames of the window under the
-        same activity (the previous frame's accepted roll); they are used as they are.
-        """
-        x = self._window(x)
-        s, states, pos = self.state, [], []
-        for a in range(len(x)):
-            if a < len(known):
-                s = known[a]
+    with single_threaded_blas():
+        for k in range(frames - 1):
+            ok = np.all(np.isfinite(data[k + 1]), axis=1)
+            if 3 * ok.sum() < nc:
+                raise InputError(f"frame {k + 1}: {int(ok.sum())} usable markers for {nc} "
+                                 "controls", source=src, field="markers")
+            run.gaps += int((~ok).sum())
+            w = method.window if isinstance(method, LeastSquares) else 1
+            frame = FrameProblem(stepper, state, gmat, nodes, data, jaw, k, w,
+                                 estimate_jaw=estimate_jaw, lo=lo, hi=hi)
+            if isinstance(method, Powell):
+                c = frame.powell(c_prev, positive, method)
+                state = frame.state_after(c)
+                lags = frame.lag_responses(c[None], frame.roll(c[None])[0])
+                jm = frame.jacobian(lags)
+                run.record_fit(k, jm, np.zeros((0, nc)), nc, float("nan"), 0)
+            elif frame.horizon < w and x_prev is not None and len(x_prev) > 1:
+                # the data end inside the window: the last full window already fitted every
+                # frame left, so its controls are kept rather than refitted on ever fewer frames
+                c = x_prev[1].copy()
+                x_prev = x_prev[1:]
+                state = states_prev[1]  # simulated in that window's accepted roll
+                states_prev = states_prev[1:]
+                run.repeat_fit(k)
             else:
-                s = self.stepper.advance(s, self.gmat @ x[a], self.jaw[self.k + 1 + a])
-                self.counter[0] += 1
-            states.append(s)
-            pos.append(s.positions[self.nodes] * 1e3)
-        self._last = (x.copy(), states[0])
-        self.states = states
-        return np.array(pos), states[0]
+                fit = frame.lsq(c_prev, x_prev, method, prior=prior,
+                                jaw_prior=jaw if estimate_jaw else None,
+                                lags_prev=None if fit_prev is None else fit_prev.lags,
+                                known=states_prev[1:], expected_rms=run.rms[k] * 1e3)
+                c, state, x_prev, states_prev = fit.x[0].copy(), fit.state, fit.x, fit.states
+                fit_prev = fit
+                run.record_fit(k, fit.jm, fit.a_reg, nc, fit.rss,
+                               fit.rows - fit.x.size)
+            run.controls[k] = c
+            c_prev = c
+            run.on_bound[k + 1] = (c <= lo + 1e-6) | (c >= hi - 1e-6)
+            run.record_error(k + 1, state.positions[nodes], data[k + 1])
+            run.evaluations[k + 1] = frame.counter[0]
+            run.positions[k + 1] = state.positions[: face.n_surface]
+            if progress is not None:
+                progress(k + 1, frames - 1)
+    wall = time.perf_counter() - t0
+    if frames > 1:
+        run.controls[-1] = run.controls[-2]
+    return _finish(run, distance, face, params, stepper, names, nodes, data, cnames, gmat, jaw,
+                   estimate_jaw, jaw_note, method, positive, noise_mm, wall, src)
 
-    def residual_of(self, pos) -> np.ndarray:
-        return np.concatenate([(pos[a][ok] - self.targets[a][ok]).reshape(-1)
-                               for a, ok in enumerate(self.oks[: len(pos)])])
 
-    def marker_residual(self, x) -> np.ndarray:
-        """Marker residuals (mm) of the window under x (flattened or (w, c); for a one-frame
-        window, x may be the c activities of the frame)."""
-        return self.residual_of(self.roll(x)[0])
+def _control_stepper(stepper, gmat, estimate_jaw, jaw_rest, jaw):
+    """advance(state, controls) over one frame, the jaw as a control or held at its start."""
+    nm = gmat.shape[1]
+    held = jaw[0] if jaw is not None else jaw_rest
 
-    def state_after(self, c) -> State:
-        """The state one frame on when the frame's activity is c (reuses the latest roll)."""
-        c = np.asarray(c, float)
-        if self._last is not None and np.array_equal(self._last[0][0], c):
-            return self._last[1]
-        self.counter[0] += 1
-        return self.stepper.advance(self.state, self.gmat @ c, self.jaw[self.k + 1])
+    def advance(state, c):
+        target = c[nm] * JAW_UNIT + jaw_rest if estimate_jaw else held
+        return stepper.advance(state, gmat @ c[:nm], target)
 
-    def powell(self, c_prev, positive, lo, hi, max_evaluations):
-        def cost(c):
-            neg = c[c < 0]
-            if positive and neg.size:  # E' of the paper: no simulation needed
-                return PENALTY * (1.0 + abs(neg.sum()))
-            try:
-                return float(np.sum(self.marker_residual(c) ** 2))
-            except (ZeroDivisionError, FloatingPointError, SimulationBlowUp):
-                return PENALTY * 10.0
+    return advance
 
-        # activity is normalised to at most 1 (and at least -1 without the positive
-        # constraint), so that a wild trial step cannot collapse the mesh; negative values with
-        # the constraint meet the published penalty instead of a bound
-        res = minimize(cost, c_prev, method="Powell",
-                       bounds=[(None if positive else lo, hi)] * self.nc,
-                       options={"xtol": 1e-3, "ftol": 1e-9, "maxfev": max_evaluations})
-        return res.x
 
-    def lag_responses(self, x, pos0, hi) -> np.ndarray:
-        """Forward differences of all marker nodes with respect to the first frame's activity.
+def _jaw_plan(jaw_angle, estimate_jaw, jaw_source, frames):
+    """(the recorded jaw or None, whether the jaw is estimated, the note saying so)."""
+    if jaw_angle is None:
+        if estimate_jaw is False:
+            raise InputError("estimate_jaw=False needs a jaw recording (jaw_angle)",
+                             field="jaw_angle")
+        return None, True, ("jaw: estimated with the muscle activity (no jaw recording); "
+                            "the first frame is taken as the jaw at rest")
+    jaw = np.asarray(jaw_angle, float)
+    if jaw.shape not in ((frames,), (frames, 3)):
+        raise InputError(f"jaw series must have shape ({frames},) or ({frames}, 3), got "
+                         f"{jaw.shape}", field="jaw_angle")
+    if not np.all(np.isfinite(jaw)):
+        raise InputError("jaw series has non-finite values", field="jaw_angle")
+    what = jaw_source or "a recorded jaw angle"
+    if jaw.ndim == 2:
+        if estimate_jaw:
+            raise InputError("a jaw pose series (three degrees of freedom) is held as given: "
+                             "it cannot also be estimated", field="estimate_jaw")
+        return jaw, False, f"jaw: driven by {what} (rotation and condyle glide, as given)"
+    if estimate_jaw:
+        return jaw, True, (f"jaw: estimated with the muscle activity, starting from and weakly "
+                           f"drawn towards {what}")
+    return jaw, False, f"jaw: driven by {what}, held as given"
 
-        Returns H of shape (w, 3 markers, c): ``H[a]`` is the response of frame ``k + 1 + a`` to
-        the activity of frame ``k`` (one roll of the window per control, from the frame's state).
-        """
-        x = self._window(x)
-        h_all = np.empty((len(x), pos0[0].size, self.nc))
-        for j in range(self.nc):
-            h = 1e-3 if x[0, j] + 1e-3 <= hi else -1e-3
-            xj = x.copy()
-            xj[0, j] += h
-            h_all[:, :, j] = (self.roll(xj)[0] - pos0).reshape(len(x), -1) / h
-        return h_all
 
-    def jacobian(self, lags) -> np.ndarray:
-        """Window Jacobian (residuals x w c) from lag responses, taken as time-invariant
-        within the window: the block of frame a and activity b is ``lags[a - b]``."""
-        w, nc = self.horizon, self.nc
-        rows = [np.repeat(ok, 3) for ok in self.oks]
-        jm = np.zeros((sum(int(r.sum()) for r in rows), w * nc))
-        r0 = 0
-        for a in range(w):
-            n = int(rows[a].sum())
-            for b in range(a + 1):
-                jm[r0:r0 + n, b * nc:(b + 1) * nc] = lags[a - b][rows[a]]
-            r0 += n
-        return jm
+class _Run:
+    """Per-frame arrays filled by the frame loop."""
 
-    def regularisation(self, c_prev, smooth, effort, prior, prior_weight, bend):
-        """Rows (A, b) of the regularisation residual A x + b (mm) over the window."""
-        w, nc = self.horizon, self.nc
-        eye = np.eye(nc)
-        blocks, offsets = [], []
+    def __init__(self, frames, nc, n_surface):
+        self.controls = np.zeros((frames, nc))
+        self.rms = np.zeros(frames)
+        self.used = np.zeros(frames, int)
+        self.on_bound = np.zeros((frames, nc), bool)
+        self.condition = np.full(frames, np.nan)
+        self.evaluations = np.zeros(frames, int)
+        self.se_unit = np.full((frames, nc), np.nan)  # at 1 mm of noise; row k: frame k
+        self.rss = np.full(frames, np.nan)
+        self.dof = np.zeros(frames)
+        self.positions = np.empty((frames, n_surface, 3))
+        self.gaps = 0
 
-        def row(terms, offset, weight):
-            a = np.zeros((nc, w * nc))
-            for idx, coef in terms:
-                a[:, idx * nc:(idx + 1) * nc] += coef * eye
-            blocks.append(weight * a)
-            offsets.append(weight * offset)
+    def record_error(self, f, model_markers, data_markers):
+        ok = np.all(np.isfinite(data_markers), axis=1)
+        d = model_markers[ok] - data_markers[ok]
+        self.rms[f] = np.sqrt(np.sum(d * d) / max(ok.sum(), 1))
+        self.used[f] = int(ok.sum())
 
-        c_prev = np.asarray(c_prev, float)
-        if bend > 0:  # second differences within the window (x_0 itself stays free)
-            for a in range(1, w - 1):
-                row([(a - 1, 1.0), (a, -2.0), (a + 1, 1.0)], np.zeros(nc), bend)
-        if smooth > 0:  # first differences, x_{-1} = c_prev
-            for a in range(w):
-                row([(a, 1.0)] + ([(a - 1, -1.0)] if a > 0 else []),
-                    -c_prev if a == 0 else np.zeros(nc), smooth)
-        if effort > 0:
-            for a in range(w):
-                row([(a, 1.0)], np.zeros(nc), effort)
-        if prior is not None and prior_weight > 0:
-            for a in range(min(w, len(prior) - self.k)):
-                row([(a, 1.0)], -np.asarray(prior[self.k + a], float), prior_weight)
-        if not blocks:
-            return np.zeros((0, w * nc)), np.zeros(0)
-        return np.vstack(blocks), np.concatenate(offsets)
-
-    def lsq(self, c_prev, x_prev, lo, hi, max_evaluations, *, smooth=0.0, effort=0.0,
-            prior=None, prior_weight=0.0, bend=0.0, lags_prev=None, tol=1e-3, known=()):
-        """Bounded Gauss-Newton over the window with a chord Jacobian.
-
-        The lag responses are the previous frame's (``lags_prev``) or are taken at the warm
-        start; each iteration solves the linearised problem with bounds exactly (bounded-variable
-        least squares) and is accepted if the full cost falls. New lag responses are taken only
-        when a step fails; the iterations stop when an accepted step lowers the residual (the
-        markers' and the regularisation rows', as an RMS per marker) by less than ``tol`` mm,
-        and after at most ``max_evaluations`` frame steps.
-
-        ``known``: states of the warm start's first frames already simulated (the previous
-        frame's accepted roll, shifted), reused in the first roll.
-
-        Returns the frame's activity, the state one frame on, the condition number of the
-        frame's own Jacobian columns, the window solution (to warm-start the next frame), the
-        lag responses (to seed its chord) and the states of the accepted roll.
-        """
-        from scipy.optimize import lsq_linear
-
-        w, nc = self.horizon, self.nc
-        if x_prev is not None and len(x_prev):
-            x = np.vstack([x_prev[1:], x_prev[-1:]])
-            x = np.vstack([x, np.repeat(x[-1:], max(0, w - len(x)), axis=0)])[:w]
-        else:
-            x = np.tile(np.asarray(c_prev, float), (w, 1))
-        x = np.clip(x, lo, hi)
-        a_reg, b_reg = self.regularisation(c_prev, smooth, effort, prior, prior_weight, bend)
-
-        def total(xv, r):
-            q = a_reg @ xv.reshape(-1) + b_reg
-            return float(r @ r + q @ q)
-
-        pos, first = self.roll(x, known if x_prev is not None else ())
-        states = self.states
-        r = self.residual_of(pos)
-        n_markers = max(len(r) / 3.0, 1.0)
-        if lags_prev is not None and lags_prev.shape[0] >= w and lags_prev.shape[1] == pos[0].size:
-            lags, fresh = lags_prev[:w], False
-        else:
-            lags, fresh = self.lag_responses(x, pos, hi), True
-        jm = self.jacobian(lags)
-        cost = total(x, r)
-        for _ in range(12):
-            if self.counter[0] >= max_evaluations:
-                break
-            a = np.vstack([jm, a_reg])
-            b = -np.concatenate([r, a_reg @ x.reshape(-1) + b_reg])
-            flat = x.reshape(-1)
-            step = lsq_linear(a, b, bounds=(lo - flat, hi - flat), method="bvls").x
-            if np.max(np.abs(step)) < 1e-6:
-                break
-            trial = np.clip(flat + step, lo, hi).reshape(w, nc)
-            try:
-                pos_t, first_t = self.roll(trial)
-            except SimulationBlowUp:  # a wild trial collapsed the mesh: a failed step
-                pos_t = None
-            if pos_t is None:
-                cost_trial = np.inf
-            else:
-                r_trial = self.residual_of(pos_t)
-                cost_trial = total(trial, r_trial)
-            if cost_trial < cost:
-                gain = (np.sqrt(cost) - np.sqrt(cost_trial)) / np.sqrt(n_markers)
-                x, r, cost, pos, first = trial, r_trial, cost_trial, pos_t, first_t
-                states = self.states
-                fresh = False
-                if gain < tol:
-                    break
-            elif fresh:
-                break  # even fresh responses give no better step: done
-            else:
-                lags, fresh = self.lag_responses(x, pos, hi), True  # the chord went stale
-                jm = self.jacobian(lags)
+    def record_fit(self, k, jm, a_reg, nc, rss, dof):
         own = jm[:, :nc]
         sv = np.linalg.svd(own, compute_uv=False) if own.size else np.zeros(1)
-        cond = sv[0] / sv[-1] if sv[-1] > 0 else np.inf
-        self._last = (x.copy(), first)
-        return x[0].copy(), first, cond, x, lags, states
+        self.condition[k + 1] = sv[0] / sv[-1] if sv[-1] > 0 else np.inf
+        self.se_unit[k] = U.unit_standard_errors(jm, a_reg, nc)
+        self.rss[k], self.dof[k] = rss, dof
+
+    def repeat_fit(self, k):
+        self.condition[k + 1] = self.condition[k]
+        self.se_unit[k] = self.se_unit[k - 1]
+
+
+def _finish(run, distance, face, params, stepper, names, nodes, data, cnames, gmat, jaw,
+            estimate_jaw, jaw_note, method, positive, noise_mm, wall, src) -> Inversion:
+    frames, nc = run.controls.shape
+    nm = len(cnames)
+    if frames > 1:
+        run.se_unit[-1] = run.se_unit[-2]
+    notes = [jaw_note]
+    if noise_mm is None:
+        sigma = U.noise_from_residuals(run.rss, run.dof)
+        noise_how = "estimated from the residuals"
+    else:
+        sigma, noise_how = float(noise_mm), "given"
+    se = run.se_unit * (sigma if np.isfinite(sigma) else np.nan)
+    seen = U.identifiable(distance, sigma)
+    if estimate_jaw:
+        jaw_series = np.empty(frames)
+        jaw_series[0] = 0.0 if jaw is None else jaw[0]
+        jaw_series[1:] = run.controls[:-1, -1] * JAW_UNIT
+        jaw_pose = None
+        control_names = (*cnames, "jaw")
+    else:
+        jaw_series = jaw[:, 0] if jaw.ndim == 2 else jaw
+        jaw_pose = jaw if jaw.ndim == 2 else None
+        control_names = tuple(cnames)
+    if run.gaps:
+        notes.append(f"{run.gaps} missing marker samples were left out of their frames' costs")
+    hidden = [control_names[j] for j in range(nc) if not seen[j]]
+    if hidden:
+        notes.append(f"not determined by these markers: {', '.join(hidden)} (the markers see "
+                     "their effect only together with other controls; their values follow the "
+                     "regularisation, not the data)")
+    bad = np.nonzero(run.condition > ILL_POSED_CONDITION)[0]
+    if len(bad):
+        msg = (f"ill-posed: the Jacobian condition number exceeds {ILL_POSED_CONDITION:.0e} in "
+               f"{len(bad)} of {frames - 1} frames (median {np.nanmedian(run.condition):.3g}); "
+               "some controls are barely identifiable from these markers")
+        notes.append(msg)
+        warnings.warn(msg, stacklevel=3)
+    muscles = run.controls[:, :nm]
+    return Inversion(
+        model=face, params=params, time=np.arange(frames) / params.frame_rate,
+        positions=run.positions, marker_names=tuple(names), marker_nodes=nodes,
+        data_markers=data, activity=muscles @ gmat.T, jaw_angle=jaw_series, jaw_pose=jaw_pose,
+        control_names=control_names, controls=run.controls, control_se=se,
+        identifiability=distance, identifiable=seen, noise_mm=sigma, noise_how=noise_how,
+        rms_error=run.rms, markers_used=run.used, on_bound=run.on_bound,
+        condition=run.condition, evaluations=run.evaluations, method=method,
+        positive=positive, integrator=f"{stepper.integrator} (inversion, {method.name})",
+        dt=stepper.dt, wall_seconds=wall, notes=notes, source=src,
+    )

@@ -116,7 +116,11 @@ def write_results(path: str | Path, sim, inputs: dict[str, str] | None = None,
 
     ``extra`` adds variables, name -> (dims, values, attrs), e.g. an inversion's diagnostics.
     """
-    ds = to_dataset(sim, inputs, extra)
+    return write_dataset(path, to_dataset(sim, inputs, extra))
+
+
+def write_dataset(path: str | Path, ds) -> Path:
+    """Write a results dataset (as made by :func:`to_dataset`) to NetCDF atomically."""
     for name in ("positions", "markers"):
         if not np.all(np.isfinite(ds[name].values)):
             raise InputError("refusing to write non-finite values", source=str(path), field=name)

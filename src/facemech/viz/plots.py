@@ -94,16 +94,21 @@ def activity_figure(path: str | Path, time: np.ndarray, activity: np.ndarray,
 
 def inversion_figure(path: str | Path, time: np.ndarray, controls: np.ndarray,
                      names: tuple[str, ...], *, truth: np.ndarray | None = None,
-                     rms_error: np.ndarray | None = None, title: str = "") -> Path:
-    """Write a PNG of inverted muscle activity, one panel per control, and the fit's error.
+                     rms_error: np.ndarray | None = None, se: np.ndarray | None = None,
+                     identifiable: np.ndarray | None = None, title: str = "") -> Path:
+    """Write a PNG of inverted controls, one panel per control, and the fit's error.
 
     Parameters
     ----------
     time : (frames,) s
-    controls : (frames, c) recovered activity (the last frame repeats the one before)
+    controls : (frames, c) recovered controls (the last frame repeats the one before); a
+        control named ``jaw`` is drawn in degrees (its values are in units of 0.1 rad)
     names : the c control names
-    truth : (frames, c) known activity (dashed), for synthetic data
+    truth : (frames, c) known controls (dashed), for synthetic data
     rms_error : (frames,) per-frame RMS marker error in metres (bottom panel)
+    se : (frames, c) standard errors: a band of +-2 SE (about 95 %)
+    identifiable : (c,) bool: controls the markers do not determine are drawn grey and
+        labelled so
     """
     import matplotlib
 
@@ -113,21 +118,38 @@ def inversion_figure(path: str | Path, time: np.ndarray, controls: np.ndarray,
     n = len(names) + (rms_error is not None)
     fig, axes = plt.subplots(n, 1, figsize=(7, 0.85 * n + 1.0), sharex=True, squeeze=False)
     lo = min(0.0, float(np.min(controls)))
+    t = time[:-1]
     for r, name in enumerate(names):
         ax = axes[r, 0]
-        ax.plot(time[:-1], controls[:-1, r], "k-", lw=1.3, label="inverted")
+        scale = np.degrees(0.1) if name == "jaw" else 1.0
+        seen = identifiable is None or bool(identifiable[r])
+        colour = "k" if seen else "0.6"
+        y = controls[:-1, r] * scale
+        if se is not None:
+            band = 2.0 * np.nan_to_num(se[:-1, r], nan=0.0, posinf=10.0) * scale
+            ax.fill_between(t, y - band, y + band, color="tab:blue" if seen else "0.85",
+                            alpha=0.35, lw=0, label="+-2 SE")
+        ax.plot(t, y, "-", color=colour, lw=1.3, label="inverted")
         if truth is not None:
-            ax.plot(time[:-1], truth[:-1, r], "k--", lw=1.0, label="true")
+            ax.plot(t, truth[:-1, r] * scale, "k--", lw=1.0, label="true")
             ax.set_title(f"r = {cross_correlation(controls[:-1, r], truth[:-1, r]):.2f}",
                          fontsize=7, loc="right", pad=1)
-        ax.set_ylim(lo - 0.05, 1.05)
-        ax.set_ylabel(name, rotation=0, ha="right", fontsize=8)
+        if not seen:
+            ax.text(0.01, 0.85, "not determined by the markers", transform=ax.transAxes,
+                    fontsize=7, color="0.4", va="top")
+        if name == "jaw":
+            top = float(np.max(controls[:-1, r] * scale)) if len(t) else 1.0
+            ax.set_ylim(min(-1.0, float(np.min(y))) - 0.5, max(top, 2.0) * 1.15)
+            ax.set_ylabel("jaw\n(deg)", rotation=0, ha="right", fontsize=8)
+        else:
+            ax.set_ylim(lo - 0.05, 1.05)
+            ax.set_ylabel(name, rotation=0, ha="right", fontsize=8)
         ax.tick_params(labelsize=7)
-    if truth is not None:
-        axes[0, 0].legend(fontsize=7, loc="upper left", frameon=False, ncol=2)
+    if truth is not None or se is not None:
+        axes[0, 0].legend(fontsize=7, loc="upper left", frameon=False, ncol=3)
     if rms_error is not None:
         ax = axes[-1, 0]
-        ax.plot(time[1:], rms_error[1:] * 1e3, "k.-", lw=0.8, ms=3)
+        ax.plot(time, rms_error * 1e3, "k.-", lw=0.8, ms=3)
         ax.set_ylabel("error\n(mm)", rotation=0, ha="right", fontsize=8)
         ax.tick_params(labelsize=7)
     axes[-1, 0].set_xlabel("time (s)")
