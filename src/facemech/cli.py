@@ -855,6 +855,17 @@ def invert(
         err.print(f"facemech: warning: {warning}")
 
 
+def _json_safe(obj):
+    """A copy of nested dicts and lists with NaN and infinities as null (strict JSON)."""
+    if isinstance(obj, dict):
+        return {k: _json_safe(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_json_safe(v) for v in obj]
+    if isinstance(obj, float) and not np.isfinite(obj):
+        return None
+    return obj
+
+
 @app.command()
 def compare(
     a: Annotated[Path, typer.Argument(help="results (.nc) or marker file: the model")],
@@ -864,7 +875,11 @@ def compare(
     as_json: Annotated[bool, typer.Option("--json", help="print JSON")] = False,
     units: UnitsOpt = None,
 ):
-    """3-D statistics, per-axis correlations and per-frame errors of A against B."""
+    """3-D statistics, per-axis correlations and per-frame errors of A against B.
+
+    The per-frame error is the RMS over the markers present in both (mm); its median and
+    maximum are reported, with a warning when the maximum exceeds 1 mm or 5 x the median.
+    """
     from .inverse.stats import compare as run
 
     def load(p: Path):
@@ -893,16 +908,18 @@ def compare(
         raise InputError("no marker names shared by the inputs", field="markers")
     res = run(pa[:, [na.index(n) for n in names]], pb[:, [nb.index(n) for n in names]], names,
               ra)
+    for w in res["error"]["warnings"]:
+        err.print(f"facemech: warning: {w}", markup=False, highlight=False)
     if as_json:
-        print(json.dumps(res, indent=2))
+        print(json.dumps(_json_safe(res), indent=2))
         return
-    e = res["frame_error_mm"]
-    out.print(f"{res['frames']} frames, {len(names)} markers; per-frame error (mm) min "
-              f"{e['min']:.3f} q1 {e['q1']:.3f} median {e['median']:.3f} q3 {e['q3']:.3f} max "
-              f"{e['max']:.3f}; movement {res['movement_mm']:.3f} mm")
+    e, s = res["error"], res["frame_error_mm"]
+    out.print(f"{res['frames']} frames, {len(names)} markers; per-frame error (RMS over the "
+              f"markers, mm): median {e['median_mm']:.3f}, max {e['max_mm']:.3f} at "
+              f"{e['max_time_s']:.2f} s (min {s['min']:.3f} q1 {s['q1']:.3f} q3 {s['q3']:.3f}); "
+              f"movement {res['movement_mm']:.3f} mm")
     for n, v in res["markers"].items():
-        out.print(f"  {n}: 3-D r {v['corr3d_published']:.3f} (unbiased "
-                  f"{v['corr3d_unbiased']:.3f})")
+        out.print(f"  {n}: 3-D r {v['corr3d_published']:.3f}")
 
 
 @experiment_app.command("pitermann2001-synthetic")

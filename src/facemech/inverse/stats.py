@@ -21,18 +21,61 @@ def std3d(v: np.ndarray) -> np.ndarray:
     return np.sqrt(np.sum(d * d, axis=(0, -1)) / (len(v) - 1))
 
 
-def corr3d(v: np.ndarray, w: np.ndarray, *, published: bool = True) -> np.ndarray:
-    """3-D correlation of two trajectories.
+#: a trajectory whose 3-D spread is below this share of its coordinates has no motion
+_STILL = 64 * np.finfo(float).eps
 
-    ``published=True`` is eq. 7 as printed: ``(1/n sum v_i . w_i - mu_v . mu_w) / (sigma_v
-    sigma_w)`` with the (n - 1) sigmas of eq. 6, so a trajectory correlates with itself at
-    (n - 1) / n; ``published=False`` uses 1/(n - 1) in the numerator too (exactly 1 for v = w).
+
+def corr3d(v: np.ndarray, w: np.ndarray, *, published: bool = True) -> np.ndarray:
+    """3-D correlation of two trajectories (Pitermann & Munhall 2001, eq. 7), in [-1, 1].
+
+    ``r = sum_i (v_i - mu_v) . (w_i - mu_w) / sqrt(sum_i |v_i - mu_v|^2 sum_i |w_i - mu_w|^2)``:
+    the covariance of eq. 7 over the product of the sigmas of eq. 6, with one normalisation
+    throughout. ``published=True`` takes 1/n in the numerator and population sigmas (1/n),
+    ``published=False`` takes 1/(n - 1) in both; the normalisations cancel, so both forms give
+    the same number and a trajectory correlates with itself at exactly 1.
+
+    Eq. 7 as printed divides a 1/n numerator by the (n - 1) sigmas of eq. 6; that mixture caps a
+    self-correlation at (n - 1) / n (0.983 at 60 frames, 0.9936 at 156) and lowers every
+    correlation by the same factor. It is not reproduced here.
+
+    The sums are taken about the centroids (eq. 5), not as ``mean(v . w) - mu_v . mu_w``: that
+    difference of raw moments loses all its digits for a marker that moves little next to its
+    distance from the origin (a marker still to 0.1 um at 10 cm, or lab coordinates) and gave
+    self-correlations such as 1.0025.
+
+    Parameters
+    ----------
+    v, w : (frames, 3) or (frames, markers, 3) arrays, same units
+        Frames where either is not finite are left out (per marker).
+    published : bool
+        The form (1/n or 1/(n - 1) throughout); both give the same number.
+
+    Returns
+    -------
+    float array, one per marker: NaN for a trajectory with no motion (all frames equal to within
+    rounding) or fewer than 2 usable frames.
     """
-    n = len(v)
-    num = np.sum(v * w, axis=(0, -1)) / n - np.sum(centroid(v) * centroid(w), axis=-1)
-    if not published:
-        num = num * n / (n - 1)
-    return num / (std3d(v) * std3d(w))
+    v = np.asarray(v, float)
+    w = np.asarray(w, float)
+    ok = np.all(np.isfinite(v) & np.isfinite(w), axis=-1)  # (frames[, markers])
+    okx = ok[..., None]
+    count = ok.sum(axis=0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mu_v = np.where(okx, v, 0.0).sum(axis=0) / count[..., None]
+        mu_w = np.where(okx, w, 0.0).sum(axis=0) / count[..., None]
+        dv = np.where(okx, v - mu_v, 0.0)
+        dw = np.where(okx, w - mu_w, 0.0)
+        sv = np.sum(dv * dv, axis=(0, -1))
+        sw = np.sum(dw * dw, axis=(0, -1))
+        # the covariance over the sigmas, each with the form's normalisation (1/n published,
+        # 1/(n - 1) unbiased), which cancels: both forms are this one number
+        r = np.sum(dv * dw, axis=(0, -1)) / np.sqrt(sv * sw)
+    # no motion: spread within the rounding of the positions themselves
+    scale_v = np.max(np.where(okx, np.abs(v), 0.0), axis=(0, -1))
+    scale_w = np.max(np.where(okx, np.abs(w), 0.0), axis=(0, -1))
+    still = ((np.sqrt(sv / np.maximum(count, 1)) <= _STILL * scale_v)
+             | (np.sqrt(sw / np.maximum(count, 1)) <= _STILL * scale_w) | (count < 2))
+    return np.where(still, np.nan, np.clip(r, -1.0, 1.0))
 
 
 def acceleration(x: np.ndarray, rate: float, window_s: float = 0.1, order: int = 3) -> np.ndarray:
@@ -55,7 +98,7 @@ def cross_correlation(a: np.ndarray, b: np.ndarray) -> float:
     a = a - a.mean()
     b = b - b.mean()
     den = np.sqrt(np.sum(a * a) * np.sum(b * b))
-    return float(np.sum(a * b) / den) if den > 0 else float("nan")
+    return float(np.clip(np.sum(a * b) / den, -1.0, 1.0)) if den > 0 else float("nan")
 
 
 def axis_correlations(a: np.ndarray, b: np.ndarray, rate: float = 60.0) -> dict:
@@ -73,11 +116,76 @@ def axis_correlations(a: np.ndarray, b: np.ndarray, rate: float = 60.0) -> dict:
 
 
 def frame_errors(model: np.ndarray, data: np.ndarray) -> np.ndarray:
-    """Per-frame error sqrt(E / N), E = sum_i |m_i - n_i|^2 over the N markers (frames,)."""
-    d = model - data
+    """Per-frame error: the RMS over the markers used, sqrt(E / N) (frames,), metres.
+
+    E = sum_i |m_i - n_i|^2 over the N markers present in both (finite in both) at that frame.
+    This is the one per-frame error of facemech: ``compare``, ``invert`` and the results files
+    report it (:func:`error_summary` for the median and maximum). A frame with no marker in
+    both gives NaN.
+
+    Parameters
+    ----------
+    model, data : (frames, markers, 3) arrays, metres, the same markers in the same order
+    """
+    d = np.asarray(model, float) - np.asarray(data, float)
     ok = np.all(np.isfinite(d), axis=-1)
     e = np.where(ok, np.sum(np.where(ok[..., None], d, 0.0) ** 2, axis=-1), 0.0)
-    return np.sqrt(e.sum(axis=1) / np.maximum(ok.sum(axis=1), 1))
+    used = ok.sum(axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(used > 0, np.sqrt(e.sum(axis=1) / used), np.nan)
+
+
+#: the summary warns when the largest per-frame error exceeds this (mm) ...
+ERROR_WARN_MM = 1.0
+#: ... or this many times the median
+ERROR_WARN_RATIO = 5.0
+
+
+def error_summary(per_frame_m: np.ndarray, rate_hz: float = 60.0, *,
+                  time_s: np.ndarray | None = None, warn_mm: float = ERROR_WARN_MM,
+                  warn_ratio: float = ERROR_WARN_RATIO) -> dict:
+    """Median and maximum of a per-frame error, with the warnings a summary must show.
+
+    Parameters
+    ----------
+    per_frame_m : (frames,) array, metres
+        The per-frame error of :func:`frame_errors` (RMS over the markers used); NaN frames
+        (no marker) are left out of the statistics. Pass every frame that the result claims
+        to fit (frame 0 included), so that every report of one result gives the same numbers.
+    rate_hz : frame rate (Hz): frame k is at k / rate_hz seconds
+    time_s : (frames,) array, s, optional: the frames' times, in place of k / rate_hz
+    warn_mm : warn when the maximum exceeds this (mm)
+    warn_ratio : warn when the maximum exceeds this many times the median
+
+    Returns
+    -------
+    dict
+        ``median_mm``, ``max_mm`` (float, NaN without any frame), ``max_frame`` (int, -1
+        without any frame), ``max_time_s``, ``frames`` (frames with an error),
+        ``summary_mm`` (:func:`summary5`: min, q1, median, q3, max) and ``warnings`` (list of
+        str, e.g. "maximum per-frame error 8.6 mm at 1.23 s is more than 1 mm").
+    """
+    e = np.asarray(per_frame_m, float).reshape(-1) * 1e3
+    t = (np.arange(len(e)) / float(rate_hz) if time_s is None
+         else np.asarray(time_s, float).reshape(-1))
+    ok = np.isfinite(e)
+    warnings: list[str] = []
+    if not ok.any():
+        return {"median_mm": float("nan"), "max_mm": float("nan"), "max_frame": -1,
+                "max_time_s": float("nan"), "frames": 0,
+                "summary_mm": dict.fromkeys(("min", "q1", "median", "q3", "max"), float("nan")),
+                "warnings": ["no frame has a marker in both the model and the data"]}
+    k = int(np.nanargmax(e))
+    med, big = float(np.median(e[ok])), float(e[k])
+    where = f"maximum per-frame error {big:.3g} mm at {t[k]:.2f} s"
+    if big > warn_mm:
+        warnings.append(f"{where} is more than {warn_mm:g} mm")
+    if big > warn_ratio * med:
+        warnings.append(f"{where} is more than {warn_ratio:g} x the median ({med:.3g} mm)")
+    if not ok.all():
+        warnings.append(f"{int((~ok).sum())} frames have no marker in both and are left out")
+    return {"median_mm": med, "max_mm": big, "max_frame": k, "max_time_s": float(t[k]),
+            "frames": int(ok.sum()), "summary_mm": summary5(e[ok]), "warnings": warnings}
 
 
 def summary5(x: np.ndarray) -> dict:
@@ -93,7 +201,13 @@ def movement(data: np.ndarray) -> float:
 
 
 def compare(a: np.ndarray, b: np.ndarray, names, rate: float = 60.0) -> dict:
-    """All statistics of model ``a`` against data ``b`` (frames, markers, 3), metres -> mm."""
+    """All statistics of model ``a`` against data ``b`` (frames, markers, 3), metres -> mm.
+
+    Returns per-marker 3-D correlations (:func:`corr3d`, NaN written as None by the CLI's
+    JSON) and per-axis correlations, ``frame_error_mm`` (the five-number summary of
+    :func:`frame_errors`), ``error`` (:func:`error_summary`: median, maximum, warnings),
+    ``movement_mm`` and ``frames``.
+    """
     per_marker = {}
     for m, name in enumerate(names):
         per_marker[name] = {
@@ -101,8 +215,9 @@ def compare(a: np.ndarray, b: np.ndarray, names, rate: float = 60.0) -> dict:
             "corr3d_unbiased": float(corr3d(a[:, m], b[:, m], published=False)),
             **axis_correlations(a[:, m], b[:, m], rate),
         }
-    err = frame_errors(a, b) * 1e3
-    return {"markers": per_marker, "frame_error_mm": summary5(err),
+    err = frame_errors(a, b)
+    summary = error_summary(err, rate)
+    return {"markers": per_marker, "frame_error_mm": summary["summary_mm"], "error": summary,
             "movement_mm": movement(b) * 1e3, "frames": int(len(a))}
 
 

@@ -6,6 +6,12 @@ rad) and the surface ``triangles`` (triangle, corner) so that the file renders o
 face built from a textured or coloured scan adds its look (``texture_uv`` (triangle, corner,
 uv), ``texture_image`` (texel_y, texel_x, rgb), ``vertex_colour`` (node, rgb); read back with
 :func:`facemech.geometry.appearance.appearance_from_dataset`).
+Muscle outputs, per muscle instance (coordinate ``muscle_instance``: ``"ZYG_R"``, ``"OOS_L"``,
+...): ``muscle_force`` (time, muscle_instance; N, tension of eqs. 5-7), ``muscle_length`` (m),
+``muscle_velocity`` (m/s, lengthening positive), ``muscle_activation`` (N, the activation
+state M of eq. 4), ``muscle_group`` and ``muscle_max_force`` (N, k_f S) (see
+:mod:`facemech.physics.muscle_outputs`; read back with :func:`results_muscles`). Files written
+before these existed have none of them and still read.
 Attributes carry provenance: facemech version, preset, integrator, dt, input hashes.
 """
 
@@ -105,6 +111,12 @@ def to_dataset(sim, inputs: dict[str, str] | None = None, extra: dict | None = N
                for k, v in sim.attrs.items()},
         },
     )
+    muscles = getattr(sim, "muscles", None)
+    if muscles is not None:
+        from ..physics.muscle_outputs import series_variables
+
+        for name, var in series_variables(muscles).items():
+            ds[name] = var
     for name, var in (extra or {}).items():
         ds[name] = var
     return ds
@@ -114,7 +126,10 @@ def write_results(path: str | Path, sim, inputs: dict[str, str] | None = None,
                   extra: dict | None = None) -> Path:
     """Write a simulation to NetCDF atomically (nothing is left behind on failure).
 
-    ``extra`` adds variables, name -> (dims, values, attrs), e.g. an inversion's diagnostics.
+    ``extra`` adds variables, name -> (dims, values, attrs) or a DataArray, e.g. an inversion's
+    diagnostics, or the muscle outputs of its accepted states
+    (:func:`facemech.physics.muscle_outputs.muscle_output_variables`). A simulation with
+    ``muscles`` (:func:`~facemech.solvers.forward.simulate` fills them) writes them itself.
     """
     return write_dataset(path, to_dataset(sim, inputs, extra))
 
@@ -124,8 +139,10 @@ def write_dataset(path: str | Path, ds) -> Path:
     for name in ("positions", "markers"):
         if not np.all(np.isfinite(ds[name].values)):
             raise InputError("refusing to write non-finite values", source=str(path), field=name)
-    enc = {v: {"zlib": True, "complevel": 4} for v in ("positions", "markers", "activity",
-                                                       "texture_uv", "texture_image") if v in ds}
+    enc = {v: {"zlib": True, "complevel": 4}
+           for v in ("positions", "markers", "activity", "texture_uv", "texture_image",
+                     "muscle_force", "muscle_length", "muscle_velocity", "muscle_activation")
+           if v in ds}
     with atomic_path(path, suffix=".nc") as tmp:
         ds.to_netcdf(tmp, engine="h5netcdf", encoding=enc)
     return Path(path)
@@ -148,6 +165,35 @@ def read_results(path: str | Path):
         if need not in ds:
             raise InputError("not a facemech results file", source=str(path), field=need)
     return ds
+
+
+def results_muscles(ds):
+    """The muscle outputs of a results dataset, or None for a file without them.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset, as returned by :func:`read_results`
+
+    Returns
+    -------
+    MuscleSeries or None
+        (frames, muscle instances) arrays in SI units (N, m, m/s, N), the instance names and
+        groups.
+    """
+    from ..physics.muscle_outputs import OUTPUT_VARIABLES, MuscleSeries
+
+    if not all(var in ds for _, var, _, _ in OUTPUT_VARIABLES):
+        return None
+    arrays = {attr: ds[var].transpose("time", "muscle_instance").values
+              for attr, var, _, _ in OUTPUT_VARIABLES}
+    n = arrays["force"].shape[1]
+    return MuscleSeries(
+        names=tuple(str(v) for v in ds["muscle_instance"].values),
+        groups=tuple(str(v) for v in ds["muscle_group"].values) if "muscle_group" in ds
+        else ("",) * n,
+        max_force=(ds["muscle_max_force"].values if "muscle_max_force" in ds
+                   else np.full(n, np.nan)),
+        **arrays)
 
 
 def results_markers(ds, *, source: str | Path | None = None):

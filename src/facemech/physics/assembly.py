@@ -186,6 +186,93 @@ def bead_positions(pos, vel, nodes, weights, bead, n_beads):
     return bp, bv
 
 
+@nb.njit(cache=True, inline="always")
+def segment_length_rate(p, v, i, j):
+    """Length (m) of the segment from point i to point j of ``p`` and its rate of change (m/s)
+    from the velocities ``v``."""
+    dx = p[j, 0] - p[i, 0]
+    dy = p[j, 1] - p[i, 1]
+    dz = p[j, 2] - p[i, 2]
+    seg = np.sqrt(dx * dx + dy * dy + dz * dz)
+    rate = (dx * (v[j, 0] - v[i, 0]) + dy * (v[j, 1] - v[i, 1])
+            + dz * (v[j, 2] - v[i, 2])) / seg
+    return seg, rate
+
+
+@nb.njit(cache=True, inline="always")
+def muscle_length_rate(m, pos, vel, bp, bv, pull, kind, origin, offset, ptr, nodes, weights,
+                       bead_start):
+    """Length l (m) and lengthening rate dl/dt (m/s) of muscle instance ``m``, as the force
+    kernels measure them (the one definition they and the muscle outputs share).
+
+    ``pull`` 1 (the continuum's beads): a sphincter is the chain of its beads ``bp`` (velocities
+    ``bv``, from :func:`bead_positions`), a linear muscle runs from its origin point (origin node
+    plus ``offset``) to its bead. ``pull`` 0 (the seeds'): a sphincter is the chain of its path
+    nodes, a linear muscle runs from its origin node to the weighted mean of its insertion nodes
+    (``bp`` and ``bv`` unused).
+    """
+    length = 0.0
+    rate = 0.0
+    if pull == 1:
+        b0 = bead_start[m]
+        if kind[m] == 1:
+            for b in range(b0, bead_start[m + 1] - 1):
+                seg, r = segment_length_rate(bp, bv, b, b + 1)
+                length += seg
+                rate += r
+        else:
+            o = origin[m]
+            dx = bp[b0, 0] - pos[o, 0] - offset[m, 0]
+            dy = bp[b0, 1] - pos[o, 1] - offset[m, 1]
+            dz = bp[b0, 2] - pos[o, 2] - offset[m, 2]
+            length = np.sqrt(dx * dx + dy * dy + dz * dz)
+            rate = (dx * (bv[b0, 0] - vel[o, 0]) + dy * (bv[b0, 1] - vel[o, 1])
+                    + dz * (bv[b0, 2] - vel[o, 2])) / length
+    else:
+        a0 = ptr[m]
+        a1 = ptr[m + 1]
+        if kind[m] == 1:
+            for k in range(a0, a1 - 1):
+                seg, r = segment_length_rate(pos, vel, nodes[k], nodes[k + 1])
+                length += seg
+                rate += r
+        else:
+            o = origin[m]
+            cx = cy = cz = 0.0
+            vx = vy = vz = 0.0
+            for k in range(a0, a1):
+                w = weights[k]
+                u = nodes[k]
+                cx += w * pos[u, 0]
+                cy += w * pos[u, 1]
+                cz += w * pos[u, 2]
+                vx += w * vel[u, 0]
+                vy += w * vel[u, 1]
+                vz += w * vel[u, 2]
+            dx = cx - pos[o, 0]
+            dy = cy - pos[o, 1]
+            dz = cz - pos[o, 2]
+            length = np.sqrt(dx * dx + dy * dy + dz * dz)
+            rate = (dx * (vx - vel[o, 0]) + dy * (vy - vel[o, 1]) + dz * (vz - vel[o, 2])) / length
+    return length, rate
+
+
+@nb.njit(cache=True)
+def muscle_lengths(pos, vel, pull, kind, origin, offset, ptr, nodes, weights, bead, bead_start,
+                   length, rate):
+    """Length (m) and lengthening rate (m/s) of every muscle instance into ``length`` and
+    ``rate`` (muscles,), exactly as :func:`accumulate_forces` measures them."""
+    nb_ = bead_start[bead_start.shape[0] - 1]
+    if pull == 1:
+        bp, bv = bead_positions(pos, vel, nodes, weights, bead, nb_)
+    else:
+        bp = np.zeros((0, 3))
+        bv = np.zeros((0, 3))
+    for m in range(kind.shape[0]):
+        length[m], rate[m] = muscle_length_rate(m, pos, vel, bp, bv, pull, kind, origin, offset,
+                                                ptr, nodes, weights, bead_start)
+
+
 @nb.njit(cache=True)
 def bead_muscle_forces(pos, vel, out, muscle_force, kind, origin, offset, ptr, nodes, weights,
                        bead, bead_start, rest_length, k_passive, f1, f2, f3, f4):
@@ -202,17 +289,9 @@ def bead_muscle_forces(pos, vel, out, muscle_force, kind, origin, offset, ptr, n
     for m in range(kind.shape[0]):
         b0 = bead_start[m]
         b1 = bead_start[m + 1]
+        length, rate = muscle_length_rate(m, pos, vel, bp, bv, 1, kind, origin, offset, ptr,
+                                          nodes, weights, bead_start)
         if kind[m] == 1:
-            length = 0.0
-            rate = 0.0
-            for b in range(b0, b1 - 1):
-                dx = bp[b + 1, 0] - bp[b, 0]
-                dy = bp[b + 1, 1] - bp[b, 1]
-                dz = bp[b + 1, 2] - bp[b, 2]
-                seg = np.sqrt(dx * dx + dy * dy + dz * dz)
-                length += seg
-                rate += (dx * (bv[b + 1, 0] - bv[b, 0]) + dy * (bv[b + 1, 1] - bv[b, 1])
-                         + dz * (bv[b + 1, 2] - bv[b, 2])) / seg
             tf = hill_force(muscle_force[m], length, rest_length[m], rate, k_passive[m],
                             f1, f2, f3, f4)
             for b in range(b0, b1 - 1):
@@ -231,9 +310,6 @@ def bead_muscle_forces(pos, vel, out, muscle_force, kind, origin, offset, ptr, n
             dx = bp[b0, 0] - pos[o, 0] - offset[m, 0]
             dy = bp[b0, 1] - pos[o, 1] - offset[m, 1]
             dz = bp[b0, 2] - pos[o, 2] - offset[m, 2]
-            length = np.sqrt(dx * dx + dy * dy + dz * dz)
-            rate = (dx * (bv[b0, 0] - vel[o, 0]) + dy * (bv[b0, 1] - vel[o, 1])
-                    + dz * (bv[b0, 2] - vel[o, 2])) / length
             tf = hill_force(muscle_force[m], length, rest_length[m], rate, k_passive[m],
                             f1, f2, f3, f4)
             s = tf / length
@@ -321,19 +397,10 @@ def accumulate_forces(
     for m in range(muscle_kind.shape[0] if muscle_pull == 0 else 0):
         a0 = muscle_ptr[m]
         a1 = muscle_ptr[m + 1]
+        length, rate = muscle_length_rate(m, pos, vel, pos, vel, 0, muscle_kind, muscle_origin,
+                                          muscle_offset, muscle_ptr, muscle_nodes,
+                                          muscle_weights, bead_start)
         if muscle_kind[m] == 1:  # sphincter path: tension along the chain of nodes
-            length = 0.0
-            rate = 0.0
-            for k in range(a0, a1 - 1):
-                u = muscle_nodes[k]
-                w = muscle_nodes[k + 1]
-                dx = pos[w, 0] - pos[u, 0]
-                dy = pos[w, 1] - pos[u, 1]
-                dz = pos[w, 2] - pos[u, 2]
-                seg = np.sqrt(dx * dx + dy * dy + dz * dz)
-                length += seg
-                rate += (dx * (vel[w, 0] - vel[u, 0]) + dy * (vel[w, 1] - vel[u, 1])
-                         + dz * (vel[w, 2] - vel[u, 2])) / seg
             tf = hill_force(muscle_force[m], length, muscle_rest[m], rate, muscle_k_passive[m],
                             f1, f2, f3, f4)
             for k in range(a0, a1 - 1):
@@ -351,22 +418,6 @@ def accumulate_forces(
                 out[w, 2] -= s * dz
         else:  # linear muscle: insertion nodes pulled towards the origin on the skull
             o = muscle_origin[m]
-            cx = cy = cz = 0.0
-            vx = vy = vz = 0.0
-            for k in range(a0, a1):
-                w = muscle_weights[k]
-                u = muscle_nodes[k]
-                cx += w * pos[u, 0]
-                cy += w * pos[u, 1]
-                cz += w * pos[u, 2]
-                vx += w * vel[u, 0]
-                vy += w * vel[u, 1]
-                vz += w * vel[u, 2]
-            dx = cx - pos[o, 0]
-            dy = cy - pos[o, 1]
-            dz = cz - pos[o, 2]
-            length = np.sqrt(dx * dx + dy * dy + dz * dz)
-            rate = (dx * (vx - vel[o, 0]) + dy * (vy - vel[o, 1]) + dz * (vz - vel[o, 2])) / length
             tf = hill_force(muscle_force[m], length, muscle_rest[m], rate, muscle_k_passive[m],
                             f1, f2, f3, f4)
             for k in range(a0, a1):
@@ -435,4 +486,4 @@ def force_arguments(ph: Physics, muscle_force: np.ndarray, tied_rest: np.ndarray
     )
 
 
-__all__ = ["Physics", "accumulate_forces", "force_arguments", "SPHINCTER"]
+__all__ = ["Physics", "accumulate_forces", "force_arguments", "muscle_lengths", "SPHINCTER"]

@@ -17,6 +17,7 @@ from ..errors import InputError, SimulationBlowUp
 from ..geometry.builder import FaceModel
 from ..params import MUSCLE_GROUPS, Parameters, default_parameters
 from ..physics.assembly import Physics
+from ..physics.muscle_outputs import MuscleRecorder, MuscleSeries
 from .state import State
 from .step import Stepper
 
@@ -39,6 +40,9 @@ class Simulation:
     jaw_angle : (frames,) rad
     final_state : State
     wall_seconds : float
+    muscles : MuscleSeries or None
+        Per frame and muscle instance: tension (N), length (m), lengthening velocity (m/s) and
+        activation state (N) (:mod:`facemech.physics.muscle_outputs`); None where not computed
     """
 
     model: FaceModel
@@ -54,6 +58,7 @@ class Simulation:
     dt: float
     wall_seconds: float
     attrs: dict = field(default_factory=dict)
+    muscles: MuscleSeries | None = None
 
     @property
     def real_time_factor(self) -> float:
@@ -162,9 +167,11 @@ def simulate(
     rest = model.rest_positions
     state = initial_state or State.at_rest(rest, physics.n_muscles, float(jaw_angle[0]))
     positions = np.empty((frames, n, 3))
+    recorder = MuscleRecorder(physics, frames)
     t0 = _time.perf_counter()
     with single_threaded_blas():
-        state = _run(stepper, state, activity, jaw_angle, jaw_drive, positions, rest, progress)
+        state = _run(stepper, state, activity, jaw_angle, jaw_drive, positions, rest, progress,
+                     recorder)
     wall = _time.perf_counter() - t0
     return Simulation(
         model=model, params=params, time=np.arange(frames) / params.frame_rate,
@@ -173,15 +180,20 @@ def simulate(
         integrator=stepper.integrator,
         dt=stepper.dt, wall_seconds=wall,
         attrs={"steps_per_frame": stepper.n_steps, "jaw_drive": jaw_drive},
+        muscles=recorder.series(),
     )
 
 
-def _run(stepper, state, activity, jaw_angle, jaw_drive, positions, rest, progress):
-    """The frame loop of :func:`simulate`: fills ``positions``, returns the last state."""
+def _run(stepper, state, activity, jaw_angle, jaw_drive, positions, rest, progress,
+         recorder=None):
+    """The frame loop of :func:`simulate`: fills ``positions`` (and the muscle outputs of
+    ``recorder``), returns the last state."""
     frames = len(activity)
     n = positions.shape[1]
     for k in range(frames):
         positions[k] = state.positions[:n]
+        if recorder is not None:
+            recorder.record(k, state)
         if k == frames - 1:
             break
         target = jaw_angle[k] if jaw_drive == "hold" else jaw_angle[k + 1]
