@@ -29,6 +29,7 @@ from ..errors import InputError
 from ..markerset import MarkerSet
 from ..params import EMG_CHANNELS, MUSCLE_GROUPS, Parameters, default_parameters
 from ..physics.assembly import Physics
+from ..physics.muscle_outputs import MuscleRecorder
 from ..solvers.forward import single_threaded_blas
 from ..solvers.jaw import MAX_JAW_ANGLE
 from ..solvers.state import State
@@ -168,6 +169,8 @@ def invert(
                          else 0.0, jaw), State.at_rest(face.rest_positions, physics.n_muscles,
                                                        float(np.ravel(jaw0)[0])), nodes, nc))
     run = _Run(frames, nc, face.n_surface)
+    muscles = MuscleRecorder(physics, frames)
+    muscles.record(0, state)
     run.positions[0] = state.positions[: face.n_surface]
     run.record_error(0, state.positions[nodes], data[0])
     c_prev = np.zeros(nc)
@@ -216,13 +219,15 @@ def invert(
             run.record_error(k + 1, state.positions[nodes], data[k + 1])
             run.evaluations[k + 1] = frame.counter[0]
             run.positions[k + 1] = state.positions[: face.n_surface]
+            muscles.record(k + 1, state)
             if progress is not None:
                 progress(k + 1, frames - 1)
     wall = time.perf_counter() - t0
     if frames > 1:
         run.controls[-1] = run.controls[-2]
     return _finish(run, distance, face, params, stepper, names, nodes, data, cnames, gmat, jaw,
-                   estimate_jaw, jaw_note, method, positive, noise_mm, wall, src)
+                   estimate_jaw, jaw_note, method, positive, noise_mm, wall, src,
+                   muscles.series())
 
 
 def _control_stepper(stepper, gmat, estimate_jaw, jaw_rest, jaw):
@@ -298,7 +303,8 @@ class _Run:
 
 
 def _finish(run, distance, face, params, stepper, names, nodes, data, cnames, gmat, jaw,
-            estimate_jaw, jaw_note, method, positive, noise_mm, wall, src) -> Inversion:
+            estimate_jaw, jaw_note, method, positive, noise_mm, wall, src,
+            muscles) -> Inversion:
     frames, nc = run.controls.shape
     nm = len(cnames)
     if frames > 1:
@@ -335,15 +341,15 @@ def _finish(run, distance, face, params, stepper, names, nodes, data, cnames, gm
                "some controls are barely identifiable from these markers")
         notes.append(msg)
         warnings.warn(msg, stacklevel=3)
-    muscles = run.controls[:, :nm]
     return Inversion(
         model=face, params=params, time=np.arange(frames) / params.frame_rate,
         positions=run.positions, marker_names=tuple(names), marker_nodes=nodes,
-        data_markers=data, activity=muscles @ gmat.T, jaw_angle=jaw_series, jaw_pose=jaw_pose,
+        data_markers=data, activity=run.controls[:, :nm] @ gmat.T, jaw_angle=jaw_series,
+        jaw_pose=jaw_pose,
         control_names=control_names, controls=run.controls, control_se=se,
         identifiability=distance, identifiable=seen, noise_mm=sigma, noise_how=noise_how,
         rms_error=run.rms, markers_used=run.used, on_bound=run.on_bound,
         condition=run.condition, evaluations=run.evaluations, method=method,
         positive=positive, integrator=f"{stepper.integrator} (inversion, {method.name})",
-        dt=stepper.dt, wall_seconds=wall, notes=notes, source=src,
+        dt=stepper.dt, wall_seconds=wall, notes=notes, source=src, muscles=muscles,
     )

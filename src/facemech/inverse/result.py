@@ -36,6 +36,9 @@ class Inversion:
     rms_error : (frames,) m, the per-frame error: RMS over the markers used of the distance
         between model and data (frame 0: the model at rest against the first frame)
     markers_used, on_bound, condition, evaluations : per-frame diagnostics
+    muscles : :class:`~facemech.physics.muscle_outputs.MuscleSeries` of the re-animation:
+        tension (N), length (m), lengthening velocity (m/s), activation state (N) per muscle
+        instance and frame
     """
 
     model: object
@@ -67,6 +70,7 @@ class Inversion:
     wall_seconds: float
     notes: list = field(default_factory=list)
     source: str | None = None
+    muscles: object = None  # MuscleSeries: force, length, velocity, activation per instance
 
     @property
     def markers(self) -> np.ndarray:
@@ -80,7 +84,7 @@ class Inversion:
         :func:`facemech.inverse.stats.error_summary`)."""
         from .stats import error_summary
 
-        return error_summary(self.rms_error, rate=float(self.params.frame_rate))
+        return error_summary(self.rms_error, float(self.params.frame_rate), time_s=self.time)
 
     @property
     def attrs(self) -> dict:
@@ -122,6 +126,10 @@ class Inversion:
             "identifiable": (("control",), self.identifiable.astype(np.int8), {"units": "1"}),
             "on_bound": (("time", "control"), self.on_bound.astype(np.int8), {"units": "1"}),
         }
+        if self.jaw_pose is not None:
+            out["jaw_pose"] = (("time", "jaw_dof"), self.jaw_pose,
+                               {"units": "rad, m, m", "long_name": "jaw angle and condyle "
+                                "shift (y, z) that drove the jaw"})
         return out
 
     def to_dataset(self, inputs: dict | None = None):

@@ -220,11 +220,3 @@ def compare(a: np.ndarray, b: np.ndarray, names, rate: float = 60.0) -> dict:
     return {"markers": per_marker, "frame_error_mm": summary["summary_mm"], "error": summary,
             "movement_mm": movement(b) * 1e3, "frames": int(len(a))}
 
-
-def error_summary(per_frame_m, rate: float = 60.0) -> dict:  # TEMPORARY until merge
-    e = np.asarray(per_frame_m, float) * 1e3
-    med, mx = float(np.nanmedian(e)), float(np.nanmax(e))
-    w = []
-    if mx > 1.0 or mx > 5 * med:
-        w.append(f"maximum per-frame error {mx:.2f} mm at {np.nanargmax(e) / rate:.2f} s")
-    return {"median_mm": med, "max_mm": mx, "warnings": w}

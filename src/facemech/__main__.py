@@ -1,0 +1,5 @@
+"""``python -m facemech``: the command line."""
+
+from .cli import main
+
+main()
