@@ -53,7 +53,8 @@ def run_euler(pos, vel, fargs, n_dynamic, mass, dt, steps):
              np.zeros((0, 3)))
     inv_mass = np.full(len(pos), 1.0 / mass)
     _euler_frame(pos, vel, empty, empty, empty, steps, dt, inv_mass,
-                 np.arange(n_dynamic, dtype=np.int64), 0.015, out, fargs, 0.0, 0.0, jargs)
+                 np.arange(n_dynamic, dtype=np.int64), 0.015, out, fargs, np.zeros(3), np.zeros(3),
+                 jargs)
 
 
 def single_oscillator(dt, duration, mass, k, r, x0=1e-4):

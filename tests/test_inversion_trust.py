@@ -12,11 +12,10 @@ import warnings
 import numpy as np
 import pytest
 
+from conftest import run_cli
 from facemech import InputError, MarkerSet, read_markers, read_results
 from facemech.inverse import uncertainty as U
 from facemech.inverse.methods import LeastSquares, Powell, method_from_options
-
-from conftest import run_cli
 
 
 def _facemech(*args):

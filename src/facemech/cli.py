@@ -425,6 +425,28 @@ def _jaw_from_chin(path: Path, marker: str, model, times: np.ndarray, bite_block
                                   source=str(path))
 
 
+def _jaw_from_two_markers(path: Path, first: str, second: str, model, times: np.ndarray,
+                          bite_block: bool, units: str | None) -> np.ndarray:
+    """Jaw poses (frames, 3) from two mandible markers of a marker file (model axes): the
+    recording is moved so that the first marker's first sample sits on the face's node of that
+    name (the chin landmark if the face has none), and the poses are taken about the face's
+    hinge (:func:`facemech.solvers.jaw.jaw_poses_from_points`)."""
+    from .io.markers import read_markers
+    from .solvers.jaw import jaw_poses_from_points
+
+    table = read_markers(path, units=units)
+    if times[0] < table.time[0] - 1e-6 or times[-1] > table.time[-1] + 1e-6:
+        raise InputError("the jaw markers do not cover the activity's time span",
+                         source=str(path), field="time")
+    pts = [np.stack([np.interp(times, table.time, table.marker(m)[:, a]) for a in range(3)],
+                    axis=1) for m in (first, second)]
+    node = model.markers.get(first, model.landmarks["chin"])
+    offset = model.rest_positions[node] - pts[0][0]
+    return jaw_poses_from_points(pts[0] + offset, pts[1] + offset,
+                                 hinge_point=model.hinge_point, bite_block=bite_block,
+                                 names=(first, second), source=str(path))
+
+
 def _jaw_from_csv(path: Path, times: np.ndarray) -> np.ndarray:
     from .io.tables import read_table
 
@@ -458,11 +480,17 @@ def simulate(
     jaw_chin: Annotated[Path | None, typer.Option(help="marker file with the chin marker")]
     = None,
     chin_marker: Annotated[str, typer.Option(help="name of the chin marker")] = "R01",
+    jaw_second_marker: Annotated[str | None, typer.Option(
+        help="a second mandible marker in the --jaw-chin file (e.g. a molar): the two drive "
+             "the jaw's rotation and condyle shift")] = None,
     marker_units: Annotated[str | None, typer.Option(
         help="length unit of the marker file if it does not say")] = None,
     jaw_angle: Annotated[Path | None, typer.Option(help="CSV: time, jaw_angle (rad) or "
                                                         "jaw_angle_deg")] = None,
     bite_block: Annotated[bool, typer.Option(help="hold the jaw at its initial angle")] = False,
+    jaw_kinematics: Annotated[str | None, typer.Option(
+        help="hinge or glide: how a jaw angle moves the mandible (default: the preset's)")]
+    = None,
     preset: PresetOpt = "anatomical",
     integrator: Annotated[str | None, typer.Option(
         help="euler, implicit or rosenbrock (default: the preset's)")] = None,
@@ -493,7 +521,12 @@ def simulate(
         raise InputError("give exactly one of --activity and --emg", field="activity")
     if jaw_chin is not None and jaw_angle is not None:
         raise InputError("give at most one of --jaw-chin and --jaw-angle", field="jaw")
+    if jaw_second_marker is not None and jaw_chin is None:
+        raise InputError("--jaw-second-marker names a marker of the --jaw-chin file: give "
+                         "--jaw-chin too", field="jaw-second-marker")
     prm = P.preset(preset)
+    if jaw_kinematics is not None:
+        prm = prm.with_(jaw_kinematics=jaw_kinematics)
     opts = _render_options(view, size, background, aa) if video is not None else None
     model = load_face(face, tissue=prm.tissue)
     inputs = {}
@@ -514,7 +547,11 @@ def simulate(
         act = seven_channel_control(dict(zip(res.channels, res.activity.T, strict=True)))
         inputs["emg"] = file_hash(emg)
         src = str(emg)
-    if jaw_chin is not None:
+    if jaw_chin is not None and jaw_second_marker is not None:
+        jaw = _jaw_from_two_markers(jaw_chin, chin_marker, jaw_second_marker, model, times,
+                                    bite_block, marker_units)
+        inputs["jaw_chin"] = file_hash(jaw_chin)
+    elif jaw_chin is not None:
         jaw = _jaw_from_chin(jaw_chin, chin_marker, model, times, bite_block, marker_units, prm)
         inputs["jaw_chin"] = file_hash(jaw_chin)
     elif jaw_angle is not None:

@@ -137,11 +137,11 @@ def run_demo(out_dir: str | Path, *, integrator: str | None = None, video: bool 
     opt = render or RenderOptions()
     still = RenderOptions(view=opt.view, size=(540, 960), background=(
         "#ffffff" if opt.transparent else opt.background))
-    write_snapshot(out / "snapshot.png", scene, sim.positions[peak], sim.jaw_angle[peak],
+    write_snapshot(out / "snapshot.png", scene, sim.positions[peak], sim.jaw_pose[peak],
                    options=still)
     files["snapshot"] = "snapshot.png"
     if video:
-        write_movie(out / "movie.mp4", scene, sim.positions, sim.jaw_angle,
+        write_movie(out / "movie.mp4", scene, sim.positions, sim.jaw_pose,
                     fps=sim.params.frame_rate, options=opt, progress=step("render"))
         files["movie"] = "movie.mp4"
     lips = [face.landmarks[k] for k in ("upper_lip_center", "lower_lip_center",

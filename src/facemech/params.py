@@ -50,6 +50,19 @@ AREA_CM2 = MappingProxyType({
 #: absent). Table II's 0.10 cm^2 for zygomatic major is about half its measured size.
 ANATOMICAL_AREA_CM2 = MappingProxyType({**AREA_CM2, "ZYG": 0.19, "RIS": 0.15})
 
+#: How a jaw angle alone moves the mandible: ``"hinge"`` (the seeds: a rotation about the
+#: condyles) or ``"glide"`` (the rotation plus the condyle's coupled glide forward and down along
+#: the articular eminence, :func:`facemech.solvers.jaw.condyle_glide`).
+JAW_KINEMATICS = ("hinge", "glide")
+#: m of condyle travel per radian of jaw opening, calibrated on the default face so that its
+#: lower incisor moves 3.6 mm back at a 22-mm drop, as in a real recording of speech (X-ray
+#: microbeam, repeated "sa": 22 mm down, 3.6 mm front to back; issue 15; docs/model.md): the
+#: fit is 28.4 mm/rad, rounded to 28 (3.7 mm)
+GLIDE_RATE = 0.028
+#: rad below the horizontal of the condyle's path: 35 degrees, a typical inclination of the
+#: articular eminence
+GLIDE_SLOPE = float(np.radians(35.0))
+
 
 @dataclass(frozen=True)
 class Parameters:
@@ -114,6 +127,15 @@ class Parameters:
     tether: float = 0.0  # N/m^3, stiffness per area holding the sliding deep surface (continuum)
     incisive_area_cm2: float = 0.10  # cm^2, each incisive bundle of orbicularis oris (estimate)
     k_bone_contact: float = 0.0  # N/m^3, one-sided contact of the sliding surface with the bone
+    # how a jaw angle alone moves the mandible (JAW_KINEMATICS): the seeds' hinge, or the hinge
+    # with the condyle's coupled glide of glide_rate (m/rad) along glide_slope (rad below the
+    # horizontal)
+    jaw_kinematics: str = "hinge"
+    glide_rate: float = GLIDE_RATE
+    glide_slope: float = GLIDE_SLOPE
+
+    def __post_init__(self):
+        check_jaw_kinematics(self.jaw_kinematics, self.glide_rate, self.glide_slope)
 
     @property
     def is_continuum(self) -> bool:
@@ -145,6 +167,30 @@ class Parameters:
     def with_(self, **changes) -> Parameters:
         """A copy with some fields changed."""
         return replace(self, **changes)
+
+
+def _is_number(v) -> bool:
+    """A finite real scalar (not a bool or a string)."""
+    if isinstance(v, (bool, str)) or np.ndim(v) != 0:
+        return False
+    try:
+        return bool(np.isreal(v) and np.isfinite(v))
+    except TypeError:
+        return False
+
+
+def check_jaw_kinematics(kinematics, rate, slope, *, source: str | None = None) -> None:
+    """Validate a preset's jaw kinematics: InputError naming the field."""
+    if kinematics not in JAW_KINEMATICS:
+        raise InputError(f"unknown jaw kinematics {kinematics!r} (expected "
+                         f"{' or '.join(JAW_KINEMATICS)})", source=source,
+                         field="jaw_kinematics")
+    if not (_is_number(rate) and 0 <= rate <= 0.1):
+        raise InputError(f"glide rate must be between 0 and 100 mm/rad (got {rate!r} m/rad)",
+                         source=source, field="glide_rate")
+    if not (_is_number(slope) and -np.pi / 2 <= slope <= np.pi / 2):
+        raise InputError(f"glide slope must be between -90 and 90 degrees (got {slope!r} rad)",
+                         source=source, field="glide_slope")
 
 
 def preset(name: str) -> Parameters:
@@ -245,7 +291,8 @@ def anatomical(scales: dict | None = None) -> Parameters:
         k_dermal_low=0.0, k_dermal_high=0.0, sigma=0.0, k_volume=0.0, k_shape=0.0,
         k_restore=0.0, k_lip_contact=1e5, fixed_skull_contact=False,
         areas_cm2=ANATOMICAL_AREA_CM2, incisive_area_cm2=0.25, tether=0.0,
-        k_bone_contact=1e7,
+        k_bone_contact=1e7, jaw_kinematics="glide", glide_rate=GLIDE_RATE,
+        glide_slope=GLIDE_SLOPE,
     )
 
 
@@ -272,19 +319,63 @@ def read_preset(path) -> Parameters:
         raise InputError("missing scales", source=str(path), field="scales")
     try:
         p = anatomical({k: float(v) for k, v in scales.items()})
+    except (InputError, TypeError, ValueError) as exc:
+        msg = exc.message if isinstance(exc, InputError) else "scales must be numbers"
+        raise InputError(msg, source=str(path), field=getattr(exc, "field", "scales")) from None
+    return p.with_(name=str(data.get("name", path.stem)),
+                   **_read_jaw(data.get("jaw"), p, str(path)))
+
+
+def _read_jaw(jaw, base: Parameters, source: str) -> dict:
+    """The jaw kinematics of a preset file's ``jaw`` block (absent: the base preset's)."""
+    if jaw is None:
+        return {}
+    if not isinstance(jaw, dict):
+        raise InputError("jaw must be an object", source=source, field="jaw")
+    unknown = set(jaw) - {"kinematics", "glide_rate_mm_per_rad", "glide_slope_deg"}
+    if unknown:
+        raise InputError(f"unknown jaw entry {sorted(unknown)[0]!r}", source=source,
+                         field="jaw." + sorted(unknown)[0])
+    kin = jaw.get("kinematics", base.jaw_kinematics)
+    out = {"jaw_kinematics": kin, "glide_rate": base.glide_rate,
+           "glide_slope": base.glide_slope}
+    for key, field_name, scale in (("glide_rate_mm_per_rad", "glide_rate", 1e-3),
+                                   ("glide_slope_deg", "glide_slope", np.pi / 180)):
+        if key in jaw:
+            v = jaw[key]
+            if isinstance(v, bool) or not isinstance(v, (int, float)):
+                raise InputError(f"{key} must be a number (got {v!r})", source=source,
+                                 field="jaw." + key)
+            out[field_name] = float(v) * scale
+    try:
+        check_jaw_kinematics(out["jaw_kinematics"], out["glide_rate"], out["glide_slope"])
     except InputError as exc:
-        raise InputError(exc.message, source=str(path), field=exc.field) from None
-    return p.with_(name=str(data.get("name", path.stem)))
+        key = {"jaw_kinematics": "kinematics", "glide_rate": "glide_rate_mm_per_rad",
+               "glide_slope": "glide_slope_deg"}[exc.field]
+        raise InputError(exc.message, source=source, field="jaw." + key) from None
+    return out
 
 
-def write_preset(path, name: str, scales: dict, extra: dict | None = None) -> None:
-    """Save a calibrated anatomical preset (JSON, written atomically)."""
+def write_preset(path, name: str, scales: dict, extra: dict | None = None, *,
+                 jaw_kinematics: str = "glide", glide_rate: float = GLIDE_RATE,
+                 glide_slope: float = GLIDE_SLOPE) -> None:
+    """Save a calibrated anatomical preset (JSON, written atomically).
+
+    The file holds the base preset, its ``scales`` and a ``jaw`` block: the kinematics
+    (``"glide"``, the anatomical preset's, or ``"hinge"``), the glide's rate (mm/rad) and slope
+    (degrees below the horizontal); all are checked before anything is written.
+    """
     import json
 
     from .io.atomic import atomic_path
 
+    check_jaw_kinematics(jaw_kinematics, glide_rate, glide_slope)
     data = {"format": "facemech-preset", "version": 1, "name": name, "base": "anatomical",
-            "scales": {k: float(v) for k, v in scales.items()}, **(extra or {})}
+            "scales": {k: float(v) for k, v in scales.items()},
+            "jaw": {"kinematics": jaw_kinematics,
+                    "glide_rate_mm_per_rad": float(glide_rate) * 1e3,
+                    "glide_slope_deg": float(np.degrees(glide_slope))},
+            **(extra or {})}
     with atomic_path(path, suffix=".json") as tmp:
         tmp.write_text(json.dumps(data, indent=2))
 

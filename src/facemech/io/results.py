@@ -1,8 +1,10 @@
 """Simulation results as NetCDF (xarray, h5netcdf engine), written atomically.
 
 Variables: ``positions`` (time, node, axis; m, epidermal nodes), ``markers`` (time, marker,
-axis; m, landmarks and virtual markers), ``activity`` (time, muscle; 1), ``jaw_angle`` (time;
-rad) and the surface ``triangles`` (triangle, corner) so that the file renders on its own. A
+axis; m, landmarks and virtual markers), ``activity`` (time, muscle; 1), the jaw's pose:
+``jaw_angle`` (time; rad) and ``jaw_shift`` (time, shift_axis; m, the condyles' shift along y
+and z; files written before it existed read as zeros) and the surface ``triangles`` (triangle,
+corner) so that the file renders on its own. A
 face built from a textured or coloured scan adds its look (``texture_uv`` (triangle, corner,
 uv), ``texture_image`` (texel_y, texel_x, rgb), ``vertex_colour`` (node, rgb); read back with
 :func:`facemech.geometry.appearance.appearance_from_dataset`).
@@ -69,6 +71,11 @@ def to_dataset(sim, inputs: dict[str, str] | None = None, extra: dict | None = N
 
     model = sim.model
     look, look_coords, look_attrs = dataset_variables(getattr(model, "appearance", None))
+    shift = getattr(sim, "jaw_shift", None)
+    if shift is None:  # angles alone: the shift the stepper gave them (the preset's kinematics)
+        from ..solvers.jaw import jaw_poses
+
+        shift = jaw_poses(sim.jaw_angle, sim.params)[:, 1:]
     ds = xr.Dataset(
         {
             "positions": (("time", "node", "axis"), sim.positions,
@@ -79,6 +86,8 @@ def to_dataset(sim, inputs: dict[str, str] | None = None, extra: dict | None = N
                          {"units": "1", "long_name": "normalised muscle activity E"}),
             "jaw_angle": (("time",), sim.jaw_angle, {"units": "rad",
                                                      "long_name": "jaw hinge angle"}),
+            "jaw_shift": (("time", "shift_axis"), np.asarray(shift, float),
+                          {"units": "m", "long_name": "shift of the jaw hinge (condyles)"}),
             "triangles": (("triangle", "corner"), model.faces.astype(np.int32),
                           {"long_name": "epidermal surface triangles (node indices)"}),
             "rest_positions": (("node", "axis"), model.rest_positions[: model.n_surface],
@@ -88,6 +97,7 @@ def to_dataset(sim, inputs: dict[str, str] | None = None, extra: dict | None = N
         coords={
             "time": ("time", sim.time, {"units": "s"}),
             "axis": ["x", "y", "z"],
+            "shift_axis": ["y", "z"],
             "marker": list(sim.marker_names),
             "muscle": list(MUSCLE_GROUPS),
             "node": np.arange(model.n_surface),
@@ -164,7 +174,17 @@ def read_results(path: str | Path):
     for need in ("positions", "markers", "triangles"):
         if need not in ds:
             raise InputError("not a facemech results file", source=str(path), field=need)
-    return ds
+    return with_jaw_shift(ds)
+
+
+def with_jaw_shift(ds):
+    """``ds`` with a ``jaw_shift`` (time, shift_axis; m): zeros for files written before the
+    jaw's glide (a hinge) or without a jaw."""
+    if "jaw_shift" in ds:
+        return ds
+    ds["jaw_shift"] = (("time", "shift_axis"), np.zeros((ds.sizes["time"], 2)),
+                       {"units": "m", "long_name": "shift of the jaw hinge (condyles)"})
+    return ds.assign_coords(shift_axis=["y", "z"])
 
 
 def results_muscles(ds):

@@ -38,6 +38,7 @@ class Simulation:
     markers : (frames, markers, 3) m -- landmarks and virtual markers, named by ``marker_names``
     activity : (frames, 16) in [0, 1], columns :data:`~facemech.params.MUSCLE_GROUPS`
     jaw_angle : (frames,) rad
+    jaw_shift : (frames, 2) m -- the condyles' shift (y, z); None: zeros (a hinge)
     final_state : State
     wall_seconds : float
     muscles : MuscleSeries or None
@@ -59,6 +60,14 @@ class Simulation:
     wall_seconds: float
     attrs: dict = field(default_factory=dict)
     muscles: MuscleSeries | None = None
+    jaw_shift: np.ndarray | None = None
+
+    @property
+    def jaw_pose(self) -> np.ndarray:
+        """(frames, 3) the jaw's pose per frame: angle (rad), shift_y, shift_z (m)."""
+        shift = (np.zeros((len(self.jaw_angle), 2)) if self.jaw_shift is None
+                 else self.jaw_shift)
+        return np.column_stack([self.jaw_angle, shift])
 
     @property
     def real_time_factor(self) -> float:
@@ -131,14 +140,17 @@ def simulate(
     ----------
     model : FaceModel
     activity : (frames, 16) array in [0, 1], columns :data:`~facemech.params.MUSCLE_GROUPS`
-    jaw_angle : (frames,) array, rad, optional (default: jaw closed)
+    jaw_angle : (frames,) rad or (frames, 3) poses, optional (default: jaw closed)
+        The jaw's angle per frame, its condyles' shift then following the preset's
+        ``jaw_kinematics`` (the coupled glide of the anatomical preset, none for the seeds'
+        hinge), or its whole pose per frame: angle (rad), shift_y (m), shift_z (m).
     params : Parameters (default: the default preset, ``anatomical``)
     integrator : {"euler", "implicit", "rosenbrock"}, optional (default: the preset's)
     substeps : steps per frame of the implicit integrators (default: the preset's)
     dt : step of the explicit integrator (default: the preset's, 0.33 ms for the seeds')
     jaw_drive : {"ramp", "hold"}
-        ``ramp`` turns the jaw steadily from each frame's angle to the next; ``hold`` sets each
-        frame's angle at the frame's start and holds it (the paper).
+        ``ramp`` moves the jaw steadily from each frame's pose to the next; ``hold`` sets each
+        frame's pose at the frame's start and holds it (the paper).
     initial_state : State to start from (default: rest)
     progress : callable(done_frames, total_frames), optional
 
@@ -152,12 +164,18 @@ def simulate(
     if jaw_angle is None:
         jaw_angle = np.zeros(frames)
     jaw_angle = np.asarray(jaw_angle, float)
-    if jaw_angle.shape != (frames,):
-        raise InputError(f"jaw angle series has {jaw_angle.shape[0] if jaw_angle.ndim else 0} "
-                         f"frames, activity has {frames}", source=source, field="jaw_angle")
+    if jaw_angle.ndim not in (1, 2) or (jaw_angle.ndim == 2 and jaw_angle.shape[1] != 3):
+        raise InputError(f"jaw series must be (frames,) angles or (frames, 3) poses, got shape "
+                         f"{jaw_angle.shape}", source=source, field="jaw_angle")
+    if len(jaw_angle) != frames:
+        raise InputError(f"jaw series has {len(jaw_angle)} frames, activity has {frames}",
+                         source=source, field="jaw_angle")
     if not np.all(np.isfinite(jaw_angle)):
-        raise InputError("jaw angle series has non-finite values", source=source,
+        raise InputError("jaw series has non-finite values", source=source,
                          field="jaw_angle")
+    from .jaw import jaw_poses
+
+    poses = jaw_poses(jaw_angle, params) if jaw_angle.ndim == 1 else jaw_angle.copy()
     physics = Physics.build(model, params)
     model = physics.model  # with the preset's tissue geometry
     stepper = Stepper(physics, integrator=integrator, substeps=substeps, dt=dt,
@@ -165,26 +183,29 @@ def simulate(
     names, nodes = marker_nodes(model)
     n = model.n_surface
     rest = model.rest_positions
-    state = initial_state or State.at_rest(rest, physics.n_muscles, float(jaw_angle[0]))
+    state = initial_state or State.at_rest(rest, physics.n_muscles, float(poses[0, 0]),
+                                           jaw_shift=poses[0, 1:])
     positions = np.empty((frames, n, 3))
     recorder = MuscleRecorder(physics, frames)
     t0 = _time.perf_counter()
     with single_threaded_blas():
-        state = _run(stepper, state, activity, jaw_angle, jaw_drive, positions, rest, progress,
+        state = _run(stepper, state, activity, poses, jaw_drive, positions, rest, progress,
                      recorder)
     wall = _time.perf_counter() - t0
     return Simulation(
         model=model, params=params, time=np.arange(frames) / params.frame_rate,
         positions=positions, markers=positions[:, nodes], marker_names=names,
-        activity=activity, jaw_angle=jaw_angle, final_state=state,
+        activity=activity, jaw_angle=poses[:, 0].copy(), final_state=state,
         integrator=stepper.integrator,
         dt=stepper.dt, wall_seconds=wall,
-        attrs={"steps_per_frame": stepper.n_steps, "jaw_drive": jaw_drive},
+        attrs={"steps_per_frame": stepper.n_steps, "jaw_drive": jaw_drive,
+               "jaw_kinematics": (params.jaw_kinematics if jaw_angle.ndim == 1 else "pose")},
+        jaw_shift=poses[:, 1:].copy(),
         muscles=recorder.series(),
     )
 
 
-def _run(stepper, state, activity, jaw_angle, jaw_drive, positions, rest, progress,
+def _run(stepper, state, activity, poses, jaw_drive, positions, rest, progress,
          recorder=None):
     """The frame loop of :func:`simulate`: fills ``positions`` (and the muscle outputs of
     ``recorder``), returns the last state."""
@@ -196,9 +217,9 @@ def _run(stepper, state, activity, jaw_angle, jaw_drive, positions, rest, progre
             recorder.record(k, state)
         if k == frames - 1:
             break
-        target = jaw_angle[k] if jaw_drive == "hold" else jaw_angle[k + 1]
+        target = poses[k] if jaw_drive == "hold" else poses[k + 1]
         state = stepper.advance(state, activity[k], target)
-        _check_state(state, rest, k + 1, activity[k], jaw_angle[k])
+        _check_state(state, rest, k + 1, activity[k], poses[k, 0])
         if progress is not None:
             progress(k + 1, frames - 1)
     return state

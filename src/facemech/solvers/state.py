@@ -29,6 +29,8 @@ class State:
     muscle_force_rate : (muscles,) array, N/s -- dM/dt
     jaw_angle : float, radians (positive opens the mouth)
     time : float, seconds
+    jaw_shift : (2,) array, m -- the condyles' shift (y, z) from rest; with ``jaw_angle`` the
+        jaw's pose (:mod:`facemech.solvers.mandible`)
     """
 
     positions: np.ndarray
@@ -37,14 +39,25 @@ class State:
     muscle_force_rate: np.ndarray
     jaw_angle: float = 0.0
     time: float = 0.0
+    jaw_shift: np.ndarray | None = None
 
     def __post_init__(self):
         for name in ("positions", "velocities", "muscle_force", "muscle_force_rate"):
             object.__setattr__(self, name, _frozen(getattr(self, name)))
+        shift = np.zeros(2) if self.jaw_shift is None else self.jaw_shift
+        shift = _frozen(shift)
+        if shift.shape != (2,):
+            raise ValueError(f"jaw_shift must have shape (2,), got {shift.shape}")
+        object.__setattr__(self, "jaw_shift", shift)
+
+    @property
+    def jaw_pose(self) -> np.ndarray:
+        """(3,) the jaw's pose: angle (rad), shift_y (m), shift_z (m)."""
+        return np.array([self.jaw_angle, *self.jaw_shift])
 
     @classmethod
     def at_rest(cls, rest_positions: np.ndarray, n_muscles: int, jaw_angle: float = 0.0,
-                time: float = 0.0) -> State:
+                time: float = 0.0, jaw_shift: np.ndarray | None = None) -> State:
         """The rest state: rest positions, no motion, no muscle force."""
         return cls(rest_positions, np.zeros_like(rest_positions), np.zeros(n_muscles),
-                   np.zeros(n_muscles), jaw_angle, time)
+                   np.zeros(n_muscles), jaw_angle, time, jaw_shift)

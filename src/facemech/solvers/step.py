@@ -33,10 +33,11 @@ nodes; both are taken into the implicit solve exactly, through the muscles' bead
 Sherman-Morrison-Woodbury identity on the constant factorisation
 (:class:`~facemech.solvers.muscle_implicit.MuscleJacobian`).
 
-The jaw (``jaw_drive``): ``"ramp"`` (default) turns the mandible at a constant rate from the
-state's angle to the frame's angle over the frame; ``"hold"`` sets the frame's angle at the start
-of the frame and holds it, as the paper does. Each jaw node turns by its jaw weight times the
-angle (1 on the mandible; the anatomical tissue blends from 1 to 0 lateral to the mouth).
+The jaw (``jaw_drive``): ``"ramp"`` (default) moves the mandible's pose (angle, condyle shift)
+linearly from the state's pose to the frame's over the frame; ``"hold"`` sets the frame's pose at
+the start of the frame and holds it, as the paper does. Each jaw node turns by its jaw weight
+times the angle and moves by its weight times the shift (1 on the mandible; the anatomical
+tissue blends from 1 to 0 lateral to the mouth; :mod:`.mandible`).
 The skull nodes that slide (lips, vestibule, chin pad) rest on the teeth and bone through a
 one-sided penalty against the bone's tangent plane under each (turned with the jaw), part of the
 force evaluation: contacts stay out of the constant matrix, whose isotropic entries would act as
@@ -54,6 +55,8 @@ from ..errors import InputError, SimulationBlowUp
 from ..physics.assembly import Physics, accumulate_forces, force_arguments
 from ..physics.muscle import activation_euler, activation_exact
 from ..physics.volume import volume_gradients
+from .jaw import jaw_poses
+from .mandible import place_jaw
 from .muscle_implicit import MuscleJacobian
 from .state import State
 
@@ -67,83 +70,17 @@ IMPLICIT_STIFFNESS_SHARE = 0.3
 
 
 @nb.njit(cache=True)
-def _rotation(angle, ax, ay, az, r):
-    c = np.cos(angle)
-    s = np.sin(angle)
-    t = 1.0 - c
-    r[0, 0] = c + ax * ax * t
-    r[0, 1] = ax * ay * t - az * s
-    r[0, 2] = ax * az * t + ay * s
-    r[1, 0] = ay * ax * t + az * s
-    r[1, 1] = c + ay * ay * t
-    r[1, 2] = ay * az * t - ax * s
-    r[2, 0] = az * ax * t - ay * s
-    r[2, 1] = az * ay * t + ax * s
-    r[2, 2] = c + az * az * t
-
-
-@nb.njit(cache=True)
-def _turn_anchors(angle, hinge_point, hinge_axis, weight, rest0, normal0, rest, normal):
-    """Rest points and normals (k, 3) turned about the hinge by weight x angle, in place."""
-    r = np.empty((3, 3))
-    last = np.nan
-    for k in range(rest0.shape[0]):
-        w = weight[k]
-        if w == 0.0:
-            for a in range(3):
-                rest[k, a] = rest0[k, a]
-                normal[k, a] = normal0[k, a]
-            continue
-        if w != last:
-            _rotation(w * angle, hinge_axis[0], hinge_axis[1], hinge_axis[2], r)
-            last = w
-        for a in range(3):
-            rest[k, a] = hinge_point[a]
-            normal[k, a] = 0.0
-            for b in range(3):
-                rest[k, a] += r[a, b] * (rest0[k, b] - hinge_point[b])
-                normal[k, a] += r[a, b] * normal0[k, b]
-
-
-@nb.njit(cache=True)
-def place_jaw(pos, vel, angle, rate, hinge_point, hinge_axis, jaw_nodes, jaw_weights, jaw_rest,
-              tied_weight, tied_rest0, tied_normal0, tied_rest, tied_normal):
-    """Turn the mandible to ``angle`` (rad) turning at ``rate`` (rad/s), in place.
-
-    Each jaw node turns by its weight times the angle. Sets the positions and velocities of the
-    jaw's skull nodes, and the turned anchors and normals of the tied nodes (``tied_*``: the
-    rest positions and skull normals under the seeds' tied fascia, the bone under the
-    continuum's sliding nodes), each turned by its own jaw weight.
-    """
-    ax, ay, az = hinge_axis[0], hinge_axis[1], hinge_axis[2]
-    r = np.empty((3, 3))
-    last = np.nan
-    for k in range(jaw_nodes.shape[0]):
-        i = jaw_nodes[k]
-        w = jaw_weights[k]
-        if w != last:
-            _rotation(w * angle, ax, ay, az, r)
-            last = w
-        for a in range(3):
-            pos[i, a] = hinge_point[a] + (r[a, 0] * jaw_rest[k, 0] + r[a, 1] * jaw_rest[k, 1]
-                                          + r[a, 2] * jaw_rest[k, 2])
-        dx = pos[i, 0] - hinge_point[0]
-        dy = pos[i, 1] - hinge_point[1]
-        dz = pos[i, 2] - hinge_point[2]
-        wr = w * rate
-        vel[i, 0] = wr * (ay * dz - az * dy)
-        vel[i, 1] = wr * (az * dx - ax * dz)
-        vel[i, 2] = wr * (ax * dy - ay * dx)
-    _turn_anchors(angle, hinge_point, hinge_axis, tied_weight, tied_rest0, tied_normal0,
-                  tied_rest, tied_normal)
-
-
-@nb.njit(cache=True)
 def _euler_frame(pos, vel, m_force, m_rate, m_steady, n_steps, dt, inv_mass, dynamic, tau,
                  out, fargs, jaw_start, jaw_rate, jargs):
+    """One frame of explicit Euler steps; the jaw's pose (3,) goes from ``jaw_start`` at its
+    ``jaw_rate`` (3,) (rad/s, m/s, m/s)."""
+    moving = jaw_rate[0] != 0.0 or jaw_rate[1] != 0.0 or jaw_rate[2] != 0.0
     for step in range(n_steps):
-        if jaw_rate != 0.0:
-            place_jaw(pos, vel, jaw_start + jaw_rate * step * dt, jaw_rate, *jargs)
+        if moving:
+            t = step * dt
+            place_jaw(pos, vel, jaw_start[0] + jaw_rate[0] * t, jaw_start[1] + jaw_rate[1] * t,
+                      jaw_start[2] + jaw_rate[2] * t, jaw_rate[0], jaw_rate[1], jaw_rate[2],
+                      *jargs)
         accumulate_forces(pos, vel, out, *fargs)
         for q in range(dynamic.shape[0]):
             i = dynamic[q]
@@ -239,11 +176,12 @@ class Stepper:
         pos = ph.model.rest_positions.copy()
         vel = np.zeros_like(pos)
         m = np.zeros(ph.n_muscles)
-        place_jaw(pos, vel, 0.0, 0.0, *self._jargs)
+        self._place(pos, vel, np.zeros(3), np.zeros(3), 0.0)
         fargs = force_arguments(ph, m, self._tied_rest, self._tied_normal, ph.model.lip_normals)
         if self.integrator == "euler":
             _euler_frame(pos, vel, m, m.copy(), m.copy(), 0, self.dt, ph.inv_mass, ph.dynamic,
-                         ph.params.tau_activation, self._out, fargs, 0.0, 0.0, self._jargs)
+                         ph.params.tau_activation, self._out, fargs, np.zeros(3), np.zeros(3),
+                         self._jargs)
         else:
             accumulate_forces(pos, vel, self._out, *fargs)
             _filter_exact(m, m.copy(), m.copy(), ph.params.tau_activation, self.dt)
@@ -344,12 +282,33 @@ class Stepper:
         k_v = self._solve(m * r_v - g * self._stiffness(r_x, jac), jac, g)
         return r_x + g * k_v, k_v
 
+    def _place(self, pos, vel, start, rate, t):
+        """Put the jaw in its pose at ``t`` s into the frame: ``start`` (3,) + ``rate`` (3,) t."""
+        place_jaw(pos, vel, start[0] + rate[0] * t, start[1] + rate[1] * t,
+                  start[2] + rate[2] * t, rate[0], rate[1], rate[2], *self._jargs)
+
+    def jaw_pose(self, jaw) -> np.ndarray:
+        """The jaw pose (3,) (angle rad, shift_y m, shift_z m) of a frame's jaw target: a (3,)
+        pose as given, or an angle completed by the preset's ``jaw_kinematics`` (the coupled
+        condyle glide, or no shift for the hinge; :func:`~facemech.solvers.jaw.jaw_poses`)."""
+        pose = np.asarray(jaw, float)
+        if pose.ndim == 0:
+            return jaw_poses(float(pose), self.physics.params)
+        if pose.shape != (3,):
+            raise InputError(f"a jaw target is an angle or a (3,) pose, got shape {pose.shape}",
+                             field="jaw")
+        return pose.copy()
+
     # -- one frame ------------------------------------------------------------------------
-    def advance(self, state: State, activity: np.ndarray, jaw_angle: float) -> State:
+    def advance(self, state: State, activity: np.ndarray, jaw) -> State:
         """Advance ``state`` by one frame with ``activity`` (16 groups, [0, 1]).
 
-        The jaw goes from ``state.jaw_angle`` to ``jaw_angle`` (rad) as ``jaw_drive`` says.
-        Returns a new :class:`State`; ``state`` is not modified.
+        The jaw goes from the state's pose (``jaw_angle``, ``jaw_shift``) to ``jaw``, as
+        ``jaw_drive`` says: ``ramp`` moves the pose linearly over the frame, ``hold`` sets it
+        at the frame's start. ``jaw`` is an angle (rad; the condyles' shift then follows the
+        preset's ``jaw_kinematics``: the coupled glide, or none for the hinge) or a (3,) pose
+        (angle rad, shift_y m, shift_z m). Returns a new :class:`State`; ``state`` is not
+        modified.
         """
         ph = self.physics
         p = ph.params
@@ -358,13 +317,13 @@ class Stepper:
         m_force = np.array(state.muscle_force)
         m_rate = np.array(state.muscle_force_rate)
         m_steady = ph.steady_force(activity)
-        target = float(jaw_angle)
+        target = self.jaw_pose(jaw)
         if self.jaw_drive == "hold":
-            start, rate = target, 0.0
+            start, rate = target, np.zeros(3)
         else:
-            start = float(state.jaw_angle)
+            start = state.jaw_pose
             rate = (target - start) / self.frame_duration
-        place_jaw(pos, vel, start, rate, *self._jargs)
+        self._place(pos, vel, start, rate, 0.0)
         fargs = force_arguments(ph, m_force, self._tied_rest, self._tied_normal,
                                 ph.model.lip_normals)
         dyn = ph.dynamic
@@ -384,7 +343,7 @@ class Stepper:
             jac = self._linearise(pos, vel, self._frame_force_bound(m_force, m_rate, m_steady),
                                   m_steady)
             for step in range(self.n_steps):
-                place_jaw(pos, vel, start + rate * step * h, rate, *self._jargs)
+                self._place(pos, vel, start, rate, step * h)
                 accumulate_forces(pos, vel, self._out, *fargs)
                 v0 = vel[dyn]
                 rhs = h * (self._out[dyn] - h * self._stiffness(v0, jac))
@@ -396,20 +355,21 @@ class Stepper:
                                   m_steady)
             for step in range(self.n_steps):
                 x0, v0 = pos[dyn].copy(), vel[dyn].copy()
-                place_jaw(pos, vel, start + rate * step * h, rate, *self._jargs)
+                self._place(pos, vel, start, rate, step * h)
                 accumulate_forces(pos, vel, self._out, *fargs)
                 k1x, k1v = self._ros2_stage(v0, self._out[dyn] * inv_m, jac)
                 pos[dyn] = x0 + h * k1x
                 vel[dyn] = v0 + h * k1v
                 _filter_exact(m_force, m_rate, m_steady, p.tau_activation, h)
-                place_jaw(pos, vel, start + rate * (step + 1) * h, rate, *self._jargs)
+                self._place(pos, vel, start, rate, (step + 1) * h)
                 accumulate_forces(pos, vel, self._out, *fargs)
                 k2x, k2v = self._ros2_stage(vel[dyn] - 2.0 * k1x,
                                             self._out[dyn] * inv_m - 2.0 * k1v, jac)
                 pos[dyn] = x0 + h * (1.5 * k1x + 0.5 * k2x)
                 vel[dyn] = v0 + h * (1.5 * k1v + 0.5 * k2v)
-        place_jaw(pos, vel, target, rate, *self._jargs)
-        return State(pos, vel, m_force, m_rate, target, state.time + self.frame_duration)
+        self._place(pos, vel, target, rate, 0.0)
+        return State(pos, vel, m_force, m_rate, float(target[0]), state.time + self.frame_duration,
+                     target[1:])
 
 
 def _graph_matrix(i: np.ndarray, j: np.ndarray, w: np.ndarray, nd: int) -> sp.csc_matrix:

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..solvers.jaw import LOWER_ARCH_SETBACK, LOWER_EDGE_ABOVE_STOMION
 from . import textures as T
 from .head import HAIR, hair_on_skin
 from .look import FaceLook
@@ -132,8 +133,9 @@ def _arch(look: FaceLook, upper: bool):
     tex, half = T.arch_texture(widths, crown, gum)
     a_x, a_z = 0.0235, 0.030  # half-width and depth of the arch ellipse (m)
     if not upper:
-        a_x, a_z, front_z = 0.021, 0.027, front_z - 0.0025
-    edge_y = st[1] - 0.0015 if upper else st[1] + 0.0005
+        # the lower incisors' edge as solvers.jaw.lower_incisor_point places it
+        a_x, a_z, front_z = 0.021, 0.027, front_z - LOWER_ARCH_SETBACK
+    edge_y = st[1] - 0.0015 if upper else st[1] + LOWER_EDGE_ABOVE_STOMION
     sign = 1.0 if upper else -1.0
     # arc-length parametrisation of the ellipse x = a sin p, z = -a_z (1 - cos p)
     p = np.linspace(-1.45, 1.45, 400)

@@ -44,8 +44,9 @@ def _check(positions: np.ndarray, jaw: np.ndarray | None, scene: Scene,
     if jaw is None:
         return np.zeros(len(positions))
     jaw = np.asarray(jaw, float)
-    if jaw.shape != (len(positions),):
-        raise InputError("jaw angles and positions have different lengths", source=source,
+    if jaw.shape not in ((len(positions),), (len(positions), 3)):
+        raise InputError(f"jaw series of shape {jaw.shape} does not fit {len(positions)} frames "
+                         "(angles (frames,) or poses (frames, 3))", source=source,
                          field="jaw_angle")
     if not np.all(np.isfinite(jaw)):
         raise InputError("jaw angles are not finite", source=source, field="jaw_angle")
@@ -71,7 +72,8 @@ def write_movie(
     path : output .mp4
     scene : :func:`facemech.viz.scene.build_scene` of the face
     positions : (frames, nodes, 3) skin node positions, m
-    jaw_angle : (frames,) rad, turns the lower teeth and tongue (None: closed)
+    jaw_angle : (frames,) rad or (frames, 3) poses (angle rad, shift_y m, shift_z m): moves the
+        lower teeth and tongue (None: closed)
     fps : frame rate of the movie (the simulation's)
     audio : optional WAV muxed in (AAC); the movie is cut to the shorter of the two
     options : view, size, background and anti-aliasing (default: frontal+profile, 1280x720)
@@ -161,9 +163,10 @@ def write_frames(
     return folder
 
 
-def write_snapshot(path: str | Path, scene: Scene, skin: np.ndarray, jaw_angle: float = 0.0, *,
+def write_snapshot(path: str | Path, scene: Scene, skin: np.ndarray, jaw_angle=0.0, *,
                    options: RenderOptions | None = None) -> Path:
-    """A PNG of one configuration (default: frontal+profile, 960x540)."""
+    """A PNG of one configuration (default: frontal+profile, 960x540); ``jaw_angle`` (rad) or
+    a (3,) jaw pose."""
     import matplotlib.image as mpimg
 
     img = (options or RenderOptions(size=(540, 960))).renderer(scene)(skin, jaw_angle)

@@ -118,8 +118,9 @@ class Renderer:
             raise InputError("supersample must be 1 to 4", field="supersample")
         self.supersample = supersample
 
-    def __call__(self, skin: np.ndarray, jaw_angle: float = 0.0) -> np.ndarray:
-        """(h, w, 4) uint8 frame of skin node positions (n, 3) m and a jaw angle (rad)."""
+    def __call__(self, skin: np.ndarray, jaw_angle=0.0) -> np.ndarray:
+        """(h, w, 4) uint8 frame of skin node positions (n, 3) m and a jaw angle (rad) or pose
+        (3,) (angle rad, shift_y m, shift_z m)."""
         verts, norms = self.scene.frame(skin, jaw_angle)
         return np.concatenate([render_panel(self.scene, verts, norms, cam,
                                             background=self.background,

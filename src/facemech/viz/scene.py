@@ -7,7 +7,8 @@
 * **eyes**: eyeballs (sclera, iris, pupil) set behind the fissures, as far forward as the lids
   allow, in socket linings (:mod:`.face_parts`);
 * **mouth**: a dark oral cavity, the upper dental arch fixed to the skull, the lower arch and
-  the tongue turning with the mandible (the results' jaw angle about the model's hinge)
+  the tongue moving with the mandible (the results' jaw angle about the model's hinge, plus the
+  hinge's shift)
   (:mod:`.face_parts`);
 * **head**: a closed head shell with hair and neck, ears, and a skirt from the skin's edge into
   the shell, for a face surface that stops at the hairline, the ears or the throat
@@ -54,10 +55,16 @@ class Scene:
     centre: np.ndarray = field(default_factory=lambda: np.zeros(3))  # of the head, m
     framing: dict = field(default_factory=dict)
 
-    def frame(self, skin: np.ndarray, jaw_angle: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
-        """Vertices (N, 3) and unit normals (N, 3) of every part for one frame (model axes)."""
+    def frame(self, skin: np.ndarray, jaw_angle=0.0) -> tuple[np.ndarray, np.ndarray]:
+        """Vertices (N, 3) and unit normals (N, 3) of every part for one frame (model axes).
+
+        ``jaw_angle``: the jaw's angle (rad), or its pose (3,) (angle rad, shift_y m, shift_z
+        m): the mandible's parts turn about the hinge and move with its shift.
+        """
         look = self.look
-        rot = rotation_matrix(look.hinge_axis, float(jaw_angle))
+        angle, shift = jaw_pose_of(jaw_angle)
+        moved = angle != 0.0 or shift[1] != 0.0 or shift[2] != 0.0
+        rot = rotation_matrix(look.hinge_axis, angle)
         verts, norms = [], []
         skin = np.asarray(skin, float)
         skin_normals = None
@@ -75,12 +82,22 @@ class Scene:
             else:
                 v = p.rest
                 n = n_rest
-                if p.motion == "jaw" and jaw_angle != 0.0:
-                    v = (v - look.hinge_point) @ rot.T + look.hinge_point
+                if p.motion == "jaw" and moved:
+                    v = (v - look.hinge_point) @ rot.T + look.hinge_point + shift
                     n = n @ rot.T
             verts.append(v)
             norms.append(-n if p.inward else n)
         return np.concatenate(verts), np.concatenate(norms)
+
+
+def jaw_pose_of(jaw) -> tuple[float, np.ndarray]:
+    """(angle rad, shift (3,) m) of a jaw angle or a (3,) pose (angle, shift_y, shift_z)."""
+    pose = np.asarray(jaw, float)
+    if pose.ndim == 0:
+        return float(pose), np.zeros(3)
+    if pose.shape != (3,):
+        raise ValueError(f"a jaw angle or a (3,) pose, not an array of shape {pose.shape}")
+    return float(pose[0]), np.array([0.0, pose[1], pose[2]])
 
 
 def build_scene(look: FaceLook, *, eyes: bool = True, mouth: bool = True,

@@ -52,7 +52,7 @@ def render_results(ds, output: str | Path, *, options: RenderOptions | None = No
     opt = options or RenderOptions()
     scene = scene_of(ds)
     pos = ds["positions"].values
-    jaw = ds["jaw_angle"].values if "jaw_angle" in ds else None
+    jaw = jaw_poses_of(ds)
     fps = float(fps or ds.attrs.get("frame_rate_hz", 60.0))
     output = Path(output)
     if output.suffix.lower() == ".mp4":
@@ -65,6 +65,19 @@ def render_results(ds, output: str | Path, *, options: RenderOptions | None = No
         raise InputError("audio goes into a movie, not into PNG frames", field="audio")
     return write_frames(output, scene, pos, jaw, options=opt, progress=progress,
                         source=source)
+
+
+def jaw_poses_of(ds) -> np.ndarray | None:
+    """The jaw poses (frames, 3) (angle rad, shift_y m, shift_z m) of a results dataset: its
+    ``jaw_angle`` and ``jaw_shift`` (zeros where the file has none); None without a jaw."""
+    if "jaw_angle" not in ds:
+        return None
+    angle = np.asarray(ds["jaw_angle"].values, float)
+    if "jaw_shift" in ds:
+        shift = np.asarray(ds["jaw_shift"].transpose("time", "shift_axis").values, float)
+    else:
+        shift = np.zeros((len(angle), 2))
+    return np.column_stack([angle, shift])
 
 
 def _dataset(ds):
@@ -140,9 +153,10 @@ def still(ds, output: str | Path, *, time: float | None = None, peak: str | None
     opt = options or RenderOptions(view="frontal", size=(1280, 1280))
     scene = scene_of(ds)
     rend = opt.renderer(scene)
-    jaw = float(ds["jaw_angle"].values[k]) if "jaw_angle" in ds else 0.0
+    poses = jaw_poses_of(ds)
+    jaw = np.zeros(3) if poses is None else poses[k]
     skin = ds["positions"].values[k]
-    if not np.all(np.isfinite(skin)) or not np.isfinite(jaw):
+    if not np.all(np.isfinite(skin)) or not np.all(np.isfinite(jaw)):
         raise InputError(f"frame {k} holds non-finite positions or jaw angle", source=source,
                          field="positions")
     img = rend(skin, jaw)

@@ -20,6 +20,7 @@ measured        null, or the same plus ``source``, ``coverage`` ([t0, t1] s on t
                 timeline) and ``note``; NaN where no measured sample covers a frame
 activity        ``{"names": [...], "data": base64 float32}``, (frames, muscles) in [0, 1]
 jawDeg          base64 float32, (frames,) degrees
+jawShift        base64 float32, (frames, 2) m: the hinge's shift along y and z (zeros for a hinge)
 scene           the whole head the movie renderer draws (:func:`scene_block`)
 ==============  ==========================================================================
 
@@ -42,7 +43,7 @@ parts           ``[{"name", "motion": "skin"|"skull"|"jaw"|"skirt", "inward", "s
                 "faceStart", "faceCount", "gloss": [strength, exponent], "framed"}]``: each
                 part's vertex and triangle ranges
 hinge           ``{"point": [x, y, z] m, "axis": [x, y, z]}``: 'jaw' parts turn about it by
-                the frame's jaw angle (positive opens the mouth)
+                the frame's jaw angle (positive opens the mouth), then move by its shift
 frameY          [bottom, top] m: the views fit the ``framed`` parts between these heights
 light           the renderer's lights (:mod:`facemech.viz.raster`): ``dirs`` (3, 3) unit
                 camera-space directions, ``intensity``, ``sky``, ``ground``, ``wrap``, ``inside``
@@ -309,6 +310,8 @@ def viewer_data(results, measured=None, title: str | None = None) -> dict:
         act, muscles = np.zeros((frames, 0)), []
     jaw = (np.degrees(np.asarray(results["jaw_angle"].values, float)) if "jaw_angle" in results
            else np.zeros(frames))
+    jaw_shift = (np.asarray(results["jaw_shift"].transpose("time", "shift_axis").values, float)
+                 if "jaw_shift" in results else np.zeros((frames, 2)))
 
     meas_block = None
     if measured is not None:
@@ -354,6 +357,7 @@ def viewer_data(results, measured=None, title: str | None = None) -> dict:
         "measured": meas_block,
         "activity": {"names": muscles, "data": _b64(act, "f4")},
         "jawDeg": _b64(jaw, "f4"),
+        "jawShift": _b64(jaw_shift, "f4"),
         "scene": scene_block(scene),
     }
 
