@@ -123,9 +123,10 @@ def test_uncertainty_kernels_analytic():
     se = U.unit_standard_errors(j, reg, 3)
     assert se[2] == pytest.approx(0.5 / (0.25 + 1.0))
     # identifiability: the part of a column the others cannot reproduce
-    cols = np.array([[1.0, 1.0, 0.0], [0.0, 0.0, 3.0], [0.0, 0.0, 0.0]]).T
-    d = U.identifiability(cols)
-    np.testing.assert_allclose(d, [0.0, 0.0, 3.0], atol=1e-12)
+    cols = np.array([[1.0, 1.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 3.0]])  # columns 0, 1 equal
+    np.testing.assert_allclose(U.identifiability(cols), [0.0, 0.0, 3.0], atol=1e-12)
+    np.testing.assert_allclose(U.identifiability(np.array([[1.0, 0.0], [1.0, 0.0]])),
+                               [np.sqrt(2.0), 0.0])  # a column that moves nothing
     tilted = np.array([[1.0, 0.0], [1.0, 1.0]]).T  # 45 degrees apart
     np.testing.assert_allclose(U.identifiability(tilted), [np.sqrt(0.5), 1.0])
     np.testing.assert_array_equal(U.identifiable(np.array([0.5, 2.0]), 0.05), [False, True])

@@ -828,6 +828,9 @@ def invert(
     = "speech",
     chin_marker: Annotated[str | None, typer.Option(
         help="a jaw recording: this marker's drop gives the jaw angle (33-ms lead)")] = None,
+    jaw_second_marker: Annotated[str | None, typer.Option(
+        help="a second mandible marker: with --chin-marker, drives rotation and condyle glide")]
+    = None,
     jaw_fixed: Annotated[bool, typer.Option(
         help="hold the recorded jaw as given (default: estimate the jaw, starting from it)")]
     = False,
@@ -866,7 +869,8 @@ def invert(
         res = invert_markers(
             markers, face=face, map_file=map_file, units=units, scale_pair=scale_pair,
             preset=preset, method=method, positive=positive, controls=controls,
-            chin_marker=chin_marker, jaw_fixed=jaw_fixed, jaw_lead=jaw_lead, noise=noise,
+            chin_marker=chin_marker, jaw_second_marker=jaw_second_marker, jaw_fixed=jaw_fixed,
+            jaw_lead=jaw_lead, noise=noise,
             dt=dt, options=dict(window=window, tol=tol, bend=bend, smooth=smooth,
                                 effort=effort, max_evaluations=max_evaluations),
             progress=lambda d, n: prog.update(task, completed=d, total=n))

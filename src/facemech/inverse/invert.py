@@ -31,7 +31,7 @@ from ..params import EMG_CHANNELS, MUSCLE_GROUPS, Parameters, default_parameters
 from ..physics.assembly import Physics
 from ..physics.muscle_outputs import MuscleRecorder
 from ..solvers.forward import single_threaded_blas
-from ..solvers.jaw import MAX_JAW_ANGLE
+from ..solvers.jaw import MAX_JAW_ANGLE, jaw_poses
 from ..solvers.state import State
 from ..solvers.step import Stepper
 from . import uncertainty as U
@@ -162,12 +162,12 @@ def invert(
     hi = np.ones(nc)
     if estimate_jaw:
         lo[-1], hi[-1] = JAW_CLOSE / JAW_UNIT, MAX_JAW_ANGLE / JAW_UNIT
-    jaw0 = jaw[0] if jaw is not None else 0.0
-    state = State.at_rest(face.rest_positions, physics.n_muscles, float(np.ravel(jaw0)[0]))
+    pose0 = (jaw_poses(np.atleast_1d(jaw[0] if jaw is not None else 0.0)[:1], params)[0]
+             if jaw is None or jaw.ndim == 1 else jaw[0])
+    state = State.at_rest(face.rest_positions, physics.n_muscles, float(pose0[0]),
+                          jaw_shift=pose0[1:])
     distance = U.identifiability(U.step_responses(
-        _control_stepper(stepper, gmat, estimate_jaw, float(np.ravel(jaw0)[0]) if jaw is not None
-                         else 0.0, jaw), State.at_rest(face.rest_positions, physics.n_muscles,
-                                                       float(np.ravel(jaw0)[0])), nodes, nc))
+        _control_stepper(stepper, gmat, estimate_jaw, float(pose0[0]), jaw), state, nodes, nc))
     run = _Run(frames, nc, face.n_surface)
     muscles = MuscleRecorder(physics, frames)
     muscles.record(0, state)

@@ -79,6 +79,12 @@ class Inversion:
 
     model_markers = markers
 
+    @property
+    def jaw_shift(self) -> np.ndarray | None:
+        """(frames, 2) m, the condyles' shift (y, z) where a pose series drove the jaw; None:
+        it follows the preset's jaw kinematics from the angle."""
+        return None if self.jaw_pose is None else self.jaw_pose[:, 1:]
+
     def error_summary(self) -> dict:
         """Median and maximum per-frame error (mm), with warnings (see
         :func:`facemech.inverse.stats.error_summary`)."""
@@ -126,10 +132,6 @@ class Inversion:
             "identifiable": (("control",), self.identifiable.astype(np.int8), {"units": "1"}),
             "on_bound": (("time", "control"), self.on_bound.astype(np.int8), {"units": "1"}),
         }
-        if self.jaw_pose is not None:
-            out["jaw_pose"] = (("time", "jaw_dof"), self.jaw_pose,
-                               {"units": "rad, m, m", "long_name": "jaw angle and condyle "
-                                "shift (y, z) that drove the jaw"})
         return out
 
     def to_dataset(self, inputs: dict | None = None):

@@ -22,6 +22,7 @@ def invert_markers(
     positive: bool = True,
     controls: str = "speech",
     chin_marker: str | None = None,
+    jaw_second_marker: str | None = None,
     jaw_fixed: bool = False,
     jaw_lead: int = 2,
     noise: float | None = None,
@@ -33,19 +34,24 @@ def invert_markers(
 
     ``controls`` is "speech", "emg7", "all" or comma-separated groups; ``chin_marker`` names a
     jaw recording (its vertical drop gives the jaw angle, ``jaw_lead`` frames early), estimated
-    further with the muscles unless ``jaw_fixed``; ``options`` are the method's (None: not
+    further with the muscles unless ``jaw_fixed``; with ``jaw_second_marker`` (a second point
+    on the mandible) the two markers' planar rigid motion drives the jaw's three degrees of
+    freedom, held as given; ``options`` are the method's (None: not
     given; an option of the other method is an error).
     """
     from .. import params as P
     from ..geometry.builder import load_face
     from ..io.markers import read_markers
     from ..kinematics.mapping import closest_nodes, read_mapping, scale_adapt
-    from ..solvers.jaw import jaw_angles_from_marker
+    from ..solvers.jaw import jaw_angles_from_marker, jaw_poses_from_points
     from .invert import invert
     from .methods import method_from_options
 
     src = str(markers)
     solver = method_from_options(method, **(options or {}))
+    if jaw_second_marker is not None and chin_marker is None:
+        raise InputError("--jaw-second-marker needs --chin-marker (the first jaw marker)",
+                         field="jaw-second-marker")
     if jaw_fixed and chin_marker is None:
         raise InputError("--jaw-fixed needs a jaw recording (--chin-marker)", field="jaw-fixed")
     if jaw_lead < 0:
@@ -59,7 +65,15 @@ def invert_markers(
         a, _, b = scale_pair.partition(",")
         ms = scale_adapt(ms, model, mapping, (a.strip(), b.strip())).markers
     jaw = None
-    if chin_marker is not None:
+    if jaw_second_marker is not None:
+        for name in (chin_marker, jaw_second_marker):
+            if name not in ms.names:
+                raise InputError("jaw marker not in the file", source=src, field=name)
+        jaw = jaw_poses_from_points(ms.marker(chin_marker), ms.marker(jaw_second_marker),
+                                    hinge_point=model.hinge_point, lead=jaw_lead,
+                                    names=(chin_marker, jaw_second_marker), source=src)
+        jaw_fixed = True
+    elif chin_marker is not None:
         node = mapping.get(chin_marker)
         if node is None:
             raise InputError("chin marker has no node (not in the file or not mapped)",
@@ -71,5 +85,7 @@ def invert_markers(
     return invert(model, ms, mapping, method=solver, positive=positive, controls=ctrl,
                   jaw_angle=jaw, estimate_jaw=None if jaw is None else not jaw_fixed,
                   jaw_source=None if chin_marker is None else
-                  f"chin marker {chin_marker} ({jaw_lead}-frame lead)",
+                  f"{'jaw markers' if jaw_second_marker else 'chin marker'} {chin_marker}"
+                  f"{',' + jaw_second_marker if jaw_second_marker else ''} "
+                  f"({jaw_lead}-frame lead)",
                   params=prm, dt=dt, noise_mm=noise, progress=progress)
