@@ -98,7 +98,7 @@ def test_standard_errors_cover_the_truth_with_noisy_markers(demo_markers):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)  # ill-posed frames are expected here
         res = invert(face, noisy, closest_nodes(noisy, face))
-    assert res.noise_mm == pytest.approx(0.5, rel=0.15)  # estimated from the residuals
+    assert res.noise_mm == pytest.approx(0.5, rel=0.25)  # estimated from the residuals
     covered, pairs = 0, 0
     for j, name in enumerate(res.control_names):
         if not res.identifiable[j]:

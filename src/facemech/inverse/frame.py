@@ -265,15 +265,15 @@ class FrameProblem:
                 gain = (np.sqrt(cost) - np.sqrt(cost_trial)) / np.sqrt(n_markers)
                 x, r, cost, pos, first = trial, r_trial, cost_trial, pos_t, first_t
                 states = self.states
-                fresh, scale = False, 1.0
+                scale = 1.0
                 if gain < method.tol:
                     break
-            elif fresh and scale > 0.2:
+            elif scale > 0.4 or (fresh and scale > 0.2):
                 scale *= 0.5  # the full step overshoots: a shorter one along it
             elif fresh:
-                break  # even a short step along fresh responses is no better: done
+                break  # even a short step along this frame's responses is no better: done
             else:
-                lags, fresh = self.lag_responses(x, pos), True  # the chord went stale
+                lags, fresh, scale = self.lag_responses(x, pos), True, 1.0  # the chord is stale
                 jm = self.jacobian(lags)
         self._last = (x.copy(), first)
         return FrameFit(x=x, state=first, states=states, lags=lags, jm=jm, a_reg=a_reg,
