@@ -193,9 +193,11 @@ def invert(
             if isinstance(method, Powell):
                 c = frame.powell(c_prev, positive, method)
                 state = frame.state_after(c)
-                lags = frame.lag_responses(c[None], frame.roll(c[None])[0])
-                jm = frame.jacobian(lags)
-                run.record_fit(k, jm, np.zeros((0, nc)), nc, float("nan"), 0)
+                pos = frame.roll(c[None])[0]
+                resid = frame.residual_of(pos)
+                jm = frame.jacobian(frame.lag_responses(c[None], pos))
+                run.record_fit(k, jm, np.zeros((0, nc)), nc, float(resid @ resid),
+                               len(resid) - nc)
             elif frame.horizon < w and x_prev is not None and len(x_prev) > 1:
                 # the data end inside the window: the last full window already fitted every
                 # frame left, so its controls are kept rather than refitted on ever fewer frames
