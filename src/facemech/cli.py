@@ -854,6 +854,9 @@ def invert(
                                                         "scaling from two markers far apart")]
     = None,
     preset: PresetOpt = "anatomical",
+    jaw_kinematics: Annotated[str | None, typer.Option(
+        help="hinge or glide (the condyle glides as the jaw opens; default: the preset's)")]
+    = None,
     dt: Annotated[float | None, typer.Option(help="explicit Euler step of every evaluation, s "
                                                   "(default: the preset's fast step)")] = None,
     units: UnitsOpt = None,
@@ -868,7 +871,8 @@ def invert(
         task = prog.add_task(f"invert ({method})", total=None)
         res = invert_markers(
             markers, face=face, map_file=map_file, units=units, scale_pair=scale_pair,
-            preset=preset, method=method, positive=positive, controls=controls,
+            preset=preset, jaw_kinematics=jaw_kinematics, method=method, positive=positive,
+            controls=controls,
             chin_marker=chin_marker, jaw_second_marker=jaw_second_marker, jaw_fixed=jaw_fixed,
             jaw_lead=jaw_lead, noise=noise,
             dt=dt, options=dict(window=window, tol=tol, bend=bend, smooth=smooth,

@@ -18,6 +18,7 @@ def invert_markers(
     units: str | None = None,
     scale_pair: str | None = None,
     preset: str = "anatomical",
+    jaw_kinematics: str | None = None,
     method: str = "lsq",
     positive: bool = True,
     controls: str = "speech",
@@ -37,7 +38,8 @@ def invert_markers(
     further with the muscles unless ``jaw_fixed``; with ``jaw_second_marker`` (a second point
     on the mandible) the two markers' planar rigid motion drives the jaw's three degrees of
     freedom, held as given; ``options`` are the method's (None: not
-    given; an option of the other method is an error).
+    given; an option of the other method is an error); ``jaw_kinematics`` ("hinge" or
+    "glide") overrides the preset's.
     """
     from .. import params as P
     from ..geometry.builder import load_face
@@ -57,6 +59,8 @@ def invert_markers(
     if jaw_lead < 0:
         raise InputError(f"jaw lead must be >= 0 frames (got {jaw_lead})", field="jaw-lead")
     prm = P.preset(preset)
+    if jaw_kinematics is not None:
+        prm = prm.with_(jaw_kinematics=jaw_kinematics)
     model = load_face(face, tissue=prm.tissue)
     ms = read_markers(markers, units=units)
     mapping = (read_mapping(map_file, ms, model) if map_file is not None
