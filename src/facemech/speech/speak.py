@@ -1,0 +1,196 @@
+"""Text, or a recording with its alignment, to a talking face: the ``speak`` workflow.
+
+1. The audio and its phone alignment: eSpeak NG (:func:`facemech.speech.tts.synthesize`), or a
+   recorded WAV with a Praat TextGrid (:func:`facemech.speech.alignment_io.read_textgrid`, e.g.
+   from the Montreal Forced Aligner or by hand).
+2. The muscle activity and jaw angle per 60-Hz frame: visemes blended by dominance functions
+   (:func:`facemech.speech.coarticulation.controls_from_alignment`), leading the acoustics.
+3. The forward simulation on the chosen face (:func:`facemech.simulate`).
+4. The movie with the audio muxed in, and a manifest with the settings, the input hashes and the
+   stimulus parameters (:func:`facemech.analysis.describe.describe`).
+
+Every file is written atomically; the folder's manifest names them all.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError
+
+#: the files ``speak`` writes into its folder
+FILES = {"audio": "speech.wav", "textgrid": "alignment.TextGrid", "alignment": "alignment.csv",
+         "controls": "controls.csv", "results": "result.nc", "movie": "movie.mp4",
+         "manifest": "manifest.json"}
+
+
+@dataclass(frozen=True)
+class Spoken:
+    """What :func:`speak` made: the folder's files (name -> path), the alignment, the
+    simulation, the stimulus parameters and the manifest (a dict, as written)."""
+
+    files: dict
+    alignment: object
+    simulation: object
+    description: dict
+    manifest: dict = field(default_factory=dict)
+
+
+def _write_controls(path: Path, time: np.ndarray, activity: np.ndarray,
+                    jaw: np.ndarray) -> None:
+    from ..io.atomic import atomic_path
+    from ..params import MUSCLE_GROUPS
+
+    with atomic_path(path) as tmp, open(tmp, "w") as fh:
+        fh.write("time," + ",".join(MUSCLE_GROUPS) + ",jaw_angle\n")
+        for k in range(len(time)):
+            fh.write(f"{time[k]:.6f}," + ",".join(f"{a:.6f}" for a in activity[k])
+                     + f",{jaw[k]:.8f}\n")
+
+
+def speak(
+    out_dir: str | Path,
+    text: str | None = None,
+    *,
+    audio: str | Path | None = None,
+    textgrid: str | Path | None = None,
+    voice: str = "en-us",
+    rate_wpm: int = 160,
+    word_tier: str | None = None,
+    phone_tier: str | None = None,
+    face: str | Path = "default",
+    preset: str = "anatomical",
+    strength: float = 1.0,
+    video: bool = True,
+    render_options=None,
+    progress: Callable[[str, int, int], None] | None = None,
+) -> Spoken:
+    """Make the face say ``text`` (eSpeak NG), or speak in sync with a recorded ``audio`` whose
+    ``textgrid`` aligns its phones; write everything into ``out_dir``.
+
+    Parameters
+    ----------
+    out_dir : the folder (created; files in it are replaced, nothing else is touched)
+    text : what to say; or give ``audio`` and ``textgrid`` instead
+    voice, rate_wpm : eSpeak NG voice (e.g. ``en-us``, ``en-gb+f3``) and words per minute
+    word_tier, phone_tier : TextGrid tier names (default: found by name, as MFA writes them)
+    face : a face file or a built-in face name
+    preset : the physical preset (default ``anatomical``)
+    strength : scale of every viseme's departure from rest (1 = the table's)
+    video : render the MP4 (H.264, the audio muxed in as AAC)
+    render_options : :class:`facemech.viz.video.RenderOptions` (default frontal+profile, 720p)
+    progress : callable(stage, done, total)
+
+    Returns
+    -------
+    Spoken
+    """
+    from .. import params as P
+    from ..analysis.describe import describe
+    from ..geometry.builder import load_face
+    from ..io.results import file_hash, to_dataset, write_results
+    from ..solvers.forward import simulate
+    from .alignment_io import read_textgrid, write_alignment_csv, write_textgrid
+    from .coarticulation import controls_from_alignment
+    from .wav import read_wav, write_wav
+
+    if (text is None) == (audio is None):
+        raise InputError("give either text or --audio with --textgrid", field="text")
+    if audio is not None and textgrid is None:
+        raise InputError("--audio needs the recording's alignment (--textgrid)",
+                         field="textgrid")
+    if text is not None and not text.strip():
+        raise InputError("nothing to say: the text is empty", field="text")
+    if not (np.isfinite(strength) and 0.0 <= strength <= 2.0):
+        raise InputError(f"strength must be within [0, 2] (got {strength})", field="strength")
+    out = Path(out_dir)
+    if out.exists() and not out.is_dir():
+        raise InputError("output must be a folder", source=str(out), field="output")
+    for given in (audio, textgrid):
+        if given is not None and Path(given).resolve().parent == out.resolve() and \
+                Path(given).name in FILES.values():
+            raise InputError("an input would be overwritten by an output of the same name",
+                             source=str(given), field="output")
+    prm = P.preset(preset)
+    model = load_face(face, tissue=prm.tissue)
+    files = {k: out / v for k, v in FILES.items()}
+    inputs: dict = {}
+    if text is not None:
+        from .tts import synthesize
+
+        report(progress, "synthesise", 0, 1)
+        speech = synthesize(text, voice=voice, rate_wpm=rate_wpm)
+        samples, rate, alignment = speech.audio, speech.sample_rate, speech.alignment
+        inputs["text"] = text
+    else:
+        samples, rate = read_wav(audio)
+        alignment = read_textgrid(textgrid, word_tier=word_tier, phone_tier=phone_tier)
+        dur = len(samples) / rate
+        if alignment.phones and alignment.phones[-1].end > dur + 0.05:
+            raise InputError(f"the alignment runs to {alignment.phones[-1].end:.2f} s, the "
+                             f"audio lasts {dur:.2f} s: not this recording's TextGrid",
+                             source=str(textgrid), field="time")
+        inputs["audio"] = file_hash(audio)
+        inputs["textgrid"] = file_hash(textgrid)
+    out.mkdir(parents=True, exist_ok=True)
+    write_wav(files["audio"], samples, rate)
+    write_textgrid(files["textgrid"], alignment)
+    write_alignment_csv(files["alignment"], alignment)
+    t, act, jaw = controls_from_alignment(alignment, frame_rate=prm.frame_rate,
+                                          strength=strength)
+    _write_controls(files["controls"], t, act, jaw)
+    sim = simulate(model, act, jaw, params=prm,
+                   progress=None if progress is None else
+                   (lambda d, n: progress("simulate", d, n)))
+    write_results(files["results"], sim, inputs=inputs)
+    ds = to_dataset(sim, inputs)
+    desc = describe(ds).to_dict()
+    if video:
+        from ..viz.video import render_results
+
+        render_results(ds, files["movie"], options=render_options, audio=files["audio"],
+                       progress=None if progress is None else
+                       (lambda d, n: progress("render", d, n)))
+    else:
+        files.pop("movie")
+    manifest = {
+        "kind": "facemech speak",
+        "text": text,
+        "voice": voice if text is not None else None,
+        "rate_wpm": rate_wpm if text is not None else None,
+        "face": str(face), "preset": prm.name, "strength": strength,
+        "inputs": inputs,
+        "alignment": {"notation": alignment.notation, "duration_s": alignment.duration,
+                      "words": [w.label for w in alignment.words],
+                      "phones": len(alignment.phones), "source": alignment.source,
+                      **{k: v for k, v in alignment.meta.items()
+                         if isinstance(v, (str, int, float))}},
+        "frames": int(len(t)), "frame_rate_hz": float(prm.frame_rate),
+        "audio_sample_rate_hz": int(rate),
+        "files": {k: p.name for k, p in files.items()},
+        "stimulus": desc,
+    }
+    from ..io.atomic import atomic_path
+
+    with atomic_path(files["manifest"]) as tmp:
+        tmp.write_text(json.dumps(manifest, indent=2, default=_json_default))
+    return Spoken(files=files, alignment=alignment, simulation=sim, description=desc,
+                  manifest=manifest)
+
+
+def report(progress, stage: str, done: int, total: int) -> None:
+    if progress is not None:
+        progress(stage, done, total)
+
+
+def _json_default(v):
+    if isinstance(v, (np.floating, np.integer)):
+        return v.item()
+    if isinstance(v, np.ndarray):
+        return v.tolist()
+    return str(v)
