@@ -113,8 +113,9 @@ def time_stretch(audio: Audio, factor: float, *, method: str = "stretch",
     if not factor > 0:
         raise InputError("the time scale must be positive", field="time_scale")
     if method == "resample":
-        from scipy.signal import resample_poly
         from fractions import Fraction
+
+        from scipy.signal import resample_poly
 
         fr = Fraction(factor).limit_denominator(1000)
         y = resample_poly(audio.samples.astype(float), fr.numerator, fr.denominator, axis=0)

@@ -31,8 +31,9 @@ condyles' shift follow the ``jaw`` region (they are scaled or frozen when it is 
 
 Every manipulation keeps the skin, the markers and the jaw consistent (markers are re-read from
 the manipulated skin at their nodes), records itself in the ``stimulus`` attribute (a JSON list,
-in order) and drops the muscle outputs (``muscle_force`` ..., every variable on ``muscle_instance``), which the manipulated motion no
-longer matches; ``activity`` is kept as the source's drive (time-scaled with the motion).
+in order) and drops the muscle outputs (``muscle_force`` ..., every variable on
+``muscle_instance``), which the manipulated motion no longer matches; ``activity`` is kept as
+the source's drive (time-scaled with the motion).
 """
 
 from __future__ import annotations
