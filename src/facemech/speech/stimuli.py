@@ -190,8 +190,7 @@ def scale_amplitude(ds, factor: float, region: str = "face"):
         raise InputError(f"amplitude {factor} must be a finite number >= 0", field="amplitude")
     w = region_weights(ds, region)
     pos, rest = _skin(ds)
-    gain = 1.0 + w * (factor - 1.0)
-    new = rest + gain[None, :, None] * (pos - rest)
+    new = pos + (w * (factor - 1.0))[None, :, None] * (pos - rest)  # exact where w = 0
     angle, sh = _jaw(ds)
     if _moves_jaw(region):
         angle = None if angle is None else angle * factor
