@@ -644,6 +644,51 @@ def export(
 
 
 @app.command()
+def describe(
+    result: Annotated[Path, typer.Argument(help="results file (.nc)")],
+    as_json: Annotated[bool, typer.Option("--json", help="print JSON")] = False,
+    series: Annotated[bool, typer.Option(help="with --json: add the per-frame lip aperture "
+                                              "and mouth width")] = False,
+):
+    """Stimulus parameters of a result: displacement and speed of lips, jaw and mouth corners,
+    lip aperture and mouth width, the audio-visual offset, settings and input hashes."""
+    from .analysis.describe import describe as measure
+    from .io.results import read_results
+
+    d = measure(read_results(result), source=str(result))
+    if as_json:
+        print(json.dumps(d.to_dict(series=series), indent=2))
+    else:
+        out.print(d.table(), markup=False, highlight=False)
+
+
+@app.command()
+def stimuli(
+    design: Annotated[Path, typer.Argument(help="design table (.csv or .toml), one row per "
+                                                "stimulus (see docs/stimuli.md)")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="output folder")],
+    video: Annotated[bool, typer.Option(help="render the MP4s")] = True,
+    view: ViewOpt = "frontal",
+    size: SizeOpt = "1280x720",
+    background: BackgroundOpt = "#2a2c33",
+    aa: AAOpt = 2,
+):
+    """Make the stimuli of a design table (amplitude, time scale, AV offset, dubbing, freezing),
+    each as results, WAV and MP4, with a manifest of their measured parameters."""
+    from .speech.design import run_design
+
+    opts = _render_options(view, size, background, aa)
+    with _staged_progress() as report:
+        rep = run_design(design, output, None, options=opts, video=video, progress=report)
+    for e in rep.failed:
+        err.print(f"facemech: error: {e.one_line()}", highlight=False, markup=False,
+                  soft_wrap=True)
+    out.print(rep.summary())
+    if rep.failed:
+        raise typer.Exit(2)
+
+
+@app.command()
 def plot(
     result: Annotated[Path, typer.Argument(help="results file (.nc)")],
     output: Annotated[Path, typer.Option("-o", "--output", help="figure (.png)")],

@@ -1,0 +1,538 @@
+"""Design tables: one row per stimulus, made into results, WAV and MP4 plus a manifest.
+
+A table is CSV (a header row, then one row per stimulus) or TOML (``[[stimulus]]`` tables, and
+an optional ``[defaults]`` table whose keys every stimulus starts from). Columns:
+
+=====================  ==========================================================================
+``id``                 required, unique; names the outputs (letters, digits, ``-``, ``_``, ``.``)
+``results``            the face item's results (.nc), relative to the table's folder ...
+``audio``              ... and its sound (WAV); both, or
+``text``               (and any other column) for ``make_item``, the hook that simulates a face
+``face``               the face to use: passed to ``make_item``; checked against a results
+                       file's ``face`` attribute
+``dub_audio``          a WAV dubbed on the face, or
+``dub_from``           the id of another row whose source sound is dubbed on
+``dub_align``          ``onset`` (default), ``start`` or ``peak``
+``dub_face_anchor_s``  override the anchor's time in the face's own sound, s
+``dub_audio_anchor_s`` override it in the dubbed sound, s
+``time_scale``         new duration / old (default 1)
+``time_scale_audio``   ``stretch`` (default; WSOLA), ``resample`` (varispeed) or ``none``
+``amplitude``          motion about rest times this (default 1)
+``amplitude_region``   ``face`` (default), ``lips``, ``jaw``, ``upper_face``, or several
+                       comma-separated
+``freeze_region``      a region held still (default: none)
+``freeze_at``          ``rest`` (default), a frame number, or a time ``0.25s``
+``av_offset_ms``       the audio moved against the video, ms, positive = audio later (default 0)
+``notes``              free text, copied to the manifest
+=====================  ==========================================================================
+
+The manipulations are applied in this order: dub, time scale, amplitude, freeze, AV offset.
+"""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import json
+import re
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import FacemechError, InputError
+from .audio import Audio, read_wav, write_wav
+
+SOURCE_COLUMNS = ("results", "audio", "text", "face")
+MANIPULATION_COLUMNS = (
+    "dub_audio", "dub_from", "dub_align", "dub_face_anchor_s", "dub_audio_anchor_s",
+    "time_scale", "time_scale_audio", "amplitude", "amplitude_region", "freeze_region",
+    "freeze_at", "av_offset_ms")
+COLUMNS = ("id", *SOURCE_COLUMNS, *MANIPULATION_COLUMNS, "notes")
+_ID = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]*$")
+
+#: make_item(row) -> (results dataset, WAV path or Audio): a face that says the row's text
+MakeItem = Callable[[dict], tuple]
+
+
+class RowError(FacemechError):
+    """A design-table row that cannot be made: its number (1-based, data rows) and column."""
+
+    def __init__(self, message: str, *, row: int, column: str | None = None,
+                 source: str | None = None):
+        self.row = int(row)
+        self.column = column
+        self.detail = message
+        where = f"row {row}" + (f", column '{column}'" if column else "")
+        super().__init__(f"{where}: {message}", source=source)
+
+
+@dataclass(frozen=True)
+class Stimulus:
+    """One parsed row: where its face and sound come from, and its manipulations (canonical
+    values, the defaults filled in)."""
+
+    id: str
+    row: int
+    source: dict
+    settings: dict
+    notes: str = ""
+    extra: dict = field(default_factory=dict)
+
+
+# ---- reading ----------------------------------------------------------------------------------
+def read_design(path: str | Path) -> list[dict]:
+    """The rows of a CSV or TOML design table, as dicts of the non-empty cells (1-based row
+    numbers under ``"_row"``). A table that cannot be read at all raises InputError."""
+    path = Path(path)
+    if not path.is_file():
+        raise InputError("design table not found", source=str(path))
+    suffix = path.suffix.lower()
+    if suffix == ".csv":
+        rows = _read_csv(path)
+    elif suffix == ".toml":
+        rows = _read_toml(path)
+    else:
+        raise InputError("a design table is .csv or .toml", source=str(path))
+    if not rows:
+        raise InputError("the design table has no rows", source=str(path))
+    return rows
+
+
+def _read_csv(path: Path) -> list[dict]:
+    try:
+        with open(path, newline="", encoding="utf-8-sig") as fh:
+            reader = csv.DictReader(fh)
+            header = [h.strip() for h in (reader.fieldnames or [])]
+            if "id" not in header:
+                raise InputError("the header has no 'id' column", source=str(path), field="id")
+            rows = []
+            for k, rec in enumerate(reader, start=1):
+                if None in rec:
+                    raise InputError(f"row {k} has more cells than the header", source=str(path))
+                cells = {h.strip(): (v or "").strip() for h, v in rec.items()}
+                if not any(cells.values()):
+                    continue
+                rows.append({**{h: v for h, v in cells.items() if v != ""}, "_row": k})
+    except UnicodeDecodeError:
+        raise InputError("not a UTF-8 text file", source=str(path)) from None
+    except csv.Error as exc:
+        raise InputError(f"not a readable CSV file ({exc})", source=str(path)) from None
+    return rows
+
+
+def _read_toml(path: Path) -> list[dict]:
+    import tomllib
+
+    try:
+        doc = tomllib.loads(path.read_text(encoding="utf-8"))
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise InputError(f"not a readable TOML file ({exc})", source=str(path)) from None
+    items = doc.get("stimulus")
+    if not isinstance(items, list) or not all(isinstance(i, dict) for i in items):
+        raise InputError("expected [[stimulus]] tables", source=str(path), field="stimulus")
+    defaults = doc.get("defaults", {})
+    if not isinstance(defaults, dict):
+        raise InputError("[defaults] must be a table", source=str(path), field="defaults")
+    return [{**defaults, **item, "_row": k} for k, item in enumerate(items, start=1)]
+
+
+def _number(row: dict, column: str, default: float, *, low: float | None = None,
+            positive: bool = False) -> float:
+    if column not in row:
+        return default
+    try:
+        v = float(row[column])
+    except (TypeError, ValueError):
+        raise RowError(f"{row[column]!r} is not a number", row=row["_row"],
+                       column=column) from None
+    if not np.isfinite(v) or (positive and not v > 0) or (low is not None and v < low):
+        need = "positive" if positive else f">= {low}" if low is not None else "finite"
+        raise RowError(f"{row[column]!r} must be {need}", row=row["_row"], column=column)
+    return v
+
+
+def parse_row(row: dict, *, base: Path, ids: set[str], has_hook: bool) -> Stimulus:
+    """Check one row and fill in the defaults; raises :class:`RowError` naming the column."""
+    from .stimuli import ANCHORS, parse_regions
+
+    k = row["_row"]
+    sid = str(row.get("id", "")).strip()
+    if not sid:
+        raise RowError("every stimulus needs an id", row=k, column="id")
+    if not _ID.match(sid):
+        raise RowError(f"id {sid!r}: use letters, digits, '-', '_' and '.'", row=k, column="id")
+    unknown = [c for c in row if c not in COLUMNS and c != "_row"]
+    source: dict = {}
+    if "results" in row or "audio" in row:
+        for c in ("results", "audio"):
+            if c not in row:
+                raise RowError("a results file needs its audio, and audio its results file",
+                               row=k, column=c)
+            p = Path(str(row[c]))
+            p = p if p.is_absolute() else base / p
+            if not p.is_file():
+                raise RowError(f"file not found: {p}", row=k, column=c)
+            source[c] = str(p)
+        if unknown:
+            raise RowError("unknown column", row=k, column=unknown[0])
+        if "face" in row:
+            source["face"] = str(row["face"])
+    elif "text" in row:
+        if not has_hook:
+            raise RowError("no text-to-speech here: give 'results' and 'audio' files", row=k,
+                           column="text")
+        source = {c: row[c] for c in row if c not in MANIPULATION_COLUMNS
+                  and c not in ("id", "notes", "_row")}
+    else:
+        raise RowError("give the face item: 'results' and 'audio', or 'text'", row=k,
+                       column="results")
+
+    s: dict = {}
+    if "dub_audio" in row and "dub_from" in row:
+        raise RowError("give dub_audio or dub_from, not both", row=k, column="dub_from")
+    if "dub_audio" in row:
+        p = Path(str(row["dub_audio"]))
+        p = p if p.is_absolute() else base / p
+        if not p.is_file():
+            raise RowError(f"file not found: {p}", row=k, column="dub_audio")
+        s["dub_audio"] = str(p)
+    if "dub_from" in row:
+        ref = str(row["dub_from"])
+        if ref not in ids:
+            raise RowError(f"no row has the id {ref!r}", row=k, column="dub_from")
+        if ref == sid:
+            raise RowError("a stimulus cannot be dubbed from itself", row=k, column="dub_from")
+        s["dub_from"] = ref
+    if "dub_audio" in s or "dub_from" in s:
+        align = str(row.get("dub_align", "onset")).strip().lower()
+        if align not in ANCHORS:
+            raise RowError(f"{align!r}: expected {', '.join(ANCHORS)}", row=k, column="dub_align")
+        s["dub_align"] = align
+        for c in ("dub_face_anchor_s", "dub_audio_anchor_s"):
+            if c in row:
+                s[c] = _number(row, c, 0.0, low=0.0)
+    s["time_scale"] = _number(row, "time_scale", 1.0, positive=True)
+    method = str(row.get("time_scale_audio", "stretch")).strip().lower()
+    if method not in ("stretch", "resample", "none"):
+        raise RowError(f"{method!r}: expected stretch, resample or none", row=k,
+                       column="time_scale_audio")
+    s["time_scale_audio"] = method
+    s["amplitude"] = _number(row, "amplitude", 1.0, low=0.0)
+    s["amplitude_region"] = _regions(row, "amplitude_region", "face", parse_regions)
+    if "freeze_region" in row:
+        s["freeze_region"] = _regions(row, "freeze_region", None, parse_regions)
+        s["freeze_at"] = _freeze_at(row)
+    s["av_offset_ms"] = _number(row, "av_offset_ms", 0.0)
+    return Stimulus(sid, k, source, s, str(row.get("notes", "")),
+                    {c: row[c] for c in unknown})
+
+
+def _regions(row, column, default, parse):
+    if column not in row:
+        return default
+    try:
+        return ",".join(parse(str(row[column]), field=column))
+    except InputError as exc:
+        raise RowError(exc.message, row=row["_row"], column=column) from None
+
+
+def _freeze_at(row) -> str | int | float:
+    v = str(row.get("freeze_at", "rest")).strip().lower()
+    if v == "rest":
+        return "rest"
+    try:
+        return float(v[:-1]) if v.endswith("s") else int(v)
+    except ValueError:
+        raise RowError(f"{v!r}: expected rest, a frame number or a time like 0.25s",
+                       row=row["_row"], column="freeze_at") from None
+
+
+# ---- making -----------------------------------------------------------------------------------
+@dataclass
+class DesignReport:
+    """What :func:`run_design` did: ids made and skipped, the rows that failed (RowError), and
+    the manifest's paths."""
+
+    made: list[str] = field(default_factory=list)
+    skipped: list[str] = field(default_factory=list)
+    failed: list[RowError] = field(default_factory=list)
+    manifest_json: Path | None = None
+    manifest_csv: Path | None = None
+
+    def summary(self) -> str:
+        return (f"{len(self.made)} made, {len(self.skipped)} unchanged, {len(self.failed)} "
+                f"failed; manifest -> {self.manifest_json}")
+
+
+def _hash_json(obj) -> str:
+    return hashlib.sha256(json.dumps(obj, sort_keys=True, default=str).encode()).hexdigest()[:16]
+
+
+def _source_hash(source: dict, make_item) -> dict:
+    from ..io.results import file_hash
+
+    if "results" in source:
+        return {"results": file_hash(source["results"]), "audio": file_hash(source["audio"])}
+    return {"item": _hash_json({**source, "hook": getattr(make_item, "version", "")})}
+
+
+def _load_source(source: dict, make_item, row: int):
+    from ..io.results import read_results
+
+    if "results" in source:
+        try:
+            ds = read_results(source["results"])
+        except InputError as exc:
+            raise RowError(exc.message, row=row, column="results") from None
+        face = source.get("face")
+        if face is not None and str(ds.attrs.get("face", "")) != face:
+            raise RowError(f"the results were made with the face {ds.attrs.get('face')!r}, "
+                           f"not {face!r}", row=row, column="face")
+        try:
+            audio = read_wav(source["audio"])
+        except InputError as exc:
+            raise RowError(exc.message, row=row, column="audio") from None
+        return ds, audio
+    try:
+        ds, wav = make_item(dict(source))
+    except FacemechError as exc:
+        raise RowError(exc.one_line(), row=row, column="text") from None
+    return ds, (wav if isinstance(wav, Audio) else read_wav(wav))
+
+
+def make_stimulus(ds, audio: Audio, settings: dict, *, dub_audio: Audio | None = None):
+    """Apply a row's manipulations (in the order dub, time scale, amplitude, freeze, AV offset)
+    to a face and its sound; returns (dataset, Audio)."""
+    from . import stimuli as st
+
+    if dub_audio is not None:
+        ds, audio = st.dub(ds, audio, dub_audio, align=settings.get("dub_align", "onset"),
+                           face_anchor=settings.get("dub_face_anchor_s"),
+                           audio_anchor=settings.get("dub_audio_anchor_s"))
+    if settings.get("time_scale", 1.0) != 1.0:
+        ds, audio = st.time_scale_with_audio(ds, audio, settings["time_scale"],
+                                             audio_method=settings.get("time_scale_audio",
+                                                                       "stretch"))
+    if settings.get("amplitude", 1.0) != 1.0:
+        ds = st.scale_amplitude(ds, settings["amplitude"], settings.get("amplitude_region",
+                                                                        "face"))
+    if settings.get("freeze_region"):
+        ds = st.freeze(ds, settings["freeze_region"], settings.get("freeze_at", "rest"))
+    if settings.get("av_offset_ms", 0.0) != 0.0:
+        ds, audio = st.offset_audio(ds, audio, settings["av_offset_ms"])
+    return ds, audio
+
+
+def run_design(table_path: str | Path, out_dir: str | Path, make_item: MakeItem | None = None,
+               *, options=None, video: bool = True,
+               progress: Callable[[str, int, int], None] | None = None) -> DesignReport:
+    """Make every stimulus of a design table in ``out_dir``, with a manifest.
+
+    Each stimulus writes ``ID.nc`` (results), ``ID.wav`` and, with ``video``, ``ID.mp4``
+    (:func:`facemech.viz.video.render_results`, the sound muxed in), each atomically; then the
+    manifest (``manifest.json`` and ``manifest.csv``) is rewritten, so an interrupted run keeps
+    what it made. A row that cannot be made is reported (a :class:`RowError` in the report and
+    the manifest) and the others are still made. A stimulus whose key (a hash of its settings,
+    its inputs' hashes, the render settings and facemech's version) matches the manifest's, and
+    whose files are all there, is skipped.
+
+    Parameters
+    ----------
+    table_path : CSV or TOML design (see the module)
+    out_dir : folder for the stimuli and the manifest
+    make_item : hook for rows without ``results``: ``make_item(row) -> (dataset, WAV path or
+        Audio)``; may carry a ``version`` attribute that enters the key
+    options : :class:`facemech.viz.render.RenderOptions` of the movies
+    video : render the movies
+    progress : callable(stage, done, total)
+
+    Returns
+    -------
+    DesignReport
+    """
+    from .. import __version__
+    from ..analysis.describe import describe
+    from ..io.results import file_hash, write_dataset
+
+    table_path, out_dir = Path(table_path), Path(out_dir)
+    rows = read_design(table_path)
+    base = table_path.parent
+    ids = {str(r.get("id", "")).strip() for r in rows}
+    render = _render_settings(options, video)
+    old = _old_entries(out_dir / "manifest.json")
+    report = DesignReport()
+    entries: list[dict] = []
+    specs: dict[str, Stimulus] = {}
+    seen: set[str] = set()
+    parsed: list[Stimulus | RowError] = []
+    for row in rows:
+        try:
+            spec = parse_row(row, base=base, ids=ids, has_hook=make_item is not None)
+            if spec.id in seen:
+                raise RowError(f"the id {spec.id!r} is used by an earlier row", row=spec.row,
+                               column="id")
+            seen.add(spec.id)
+            specs[spec.id] = spec
+            parsed.append(spec)
+        except RowError as exc:
+            parsed.append(exc)
+    cache: dict[str, tuple] = {}
+    total = len(parsed)
+    for done, spec in enumerate(parsed):
+        if progress is not None:
+            progress("stimuli", done, total)
+        if isinstance(spec, RowError):
+            report.failed.append(_with_source(spec, table_path))
+            entries.append(_failed_entry(spec, rows))
+            continue
+        try:
+            inputs = {"source": _source_hash(spec.source, make_item)}
+            if "dub_audio" in spec.settings:
+                inputs["dub_audio"] = file_hash(spec.settings["dub_audio"])
+            if "dub_from" in spec.settings:
+                ref = specs.get(spec.settings["dub_from"])
+                if ref is None:
+                    raise RowError(f"row {spec.settings['dub_from']!r} could not be read",
+                                   row=spec.row, column="dub_from")
+                inputs["dub_from"] = _source_hash(ref.source, make_item)
+            key = _hash_json({"settings": spec.settings, "inputs": inputs, "render": render,
+                              "extra": spec.extra, "version": __version__})
+            outputs = {"results": f"{spec.id}.nc", "audio": f"{spec.id}.wav"}
+            if video:
+                outputs["movie"] = f"{spec.id}.mp4"
+            prev = old.get(spec.id)
+            if (prev is not None and prev.get("key") == key and prev.get("status") in (
+                    "made", "unchanged")
+                    and all((out_dir / f).is_file() for f in outputs.values())):
+                entries.append({**prev, "row": spec.row, "status": "unchanged"})
+                report.skipped.append(spec.id)
+                _write_manifest(out_dir, table_path, render, entries, report)
+                continue
+            ds, audio = _item(spec.id, spec.source, make_item, spec.row, cache)
+            dub_audio = None
+            if "dub_audio" in spec.settings:
+                try:
+                    dub_audio = read_wav(spec.settings["dub_audio"])
+                except InputError as exc:
+                    raise RowError(exc.message, row=spec.row, column="dub_audio") from None
+            elif "dub_from" in spec.settings:
+                ref = specs[spec.settings["dub_from"]]
+                dub_audio = _item(ref.id, ref.source, make_item, spec.row, cache)[1]
+            try:
+                ds, audio = make_stimulus(ds, audio, spec.settings, dub_audio=dub_audio)
+            except InputError as exc:
+                raise RowError(exc.message, row=spec.row, column=exc.field) from None
+            ds.attrs["stimulus_id"] = spec.id
+            ds.attrs["stimulus_key"] = key
+            out_dir.mkdir(parents=True, exist_ok=True)
+            write_dataset(out_dir / outputs["results"], ds)
+            write_wav(out_dir / outputs["audio"], audio)
+            if video:
+                from ..viz.video import render_results
+
+                render_results(ds, out_dir / outputs["movie"], options=options,
+                               audio=out_dir / outputs["audio"], source=spec.id,
+                               progress=None if progress is None else (
+                                   lambda d, n, s=spec.id: progress(f"render {s}", d, n)))
+            desc = describe(ds, source=spec.id)
+            entries.append({"id": spec.id, "row": spec.row, "status": "made", "key": key,
+                            "settings": spec.settings, "source": spec.source,
+                            "inputs": inputs, "extra": spec.extra, "notes": spec.notes,
+                            "outputs": outputs, "description": desc.to_dict(),
+                            "flat": desc.flat()})
+            report.made.append(spec.id)
+        except RowError as exc:
+            report.failed.append(_with_source(exc, table_path))
+            entries.append(_failed_entry(exc, rows, spec))
+        except FacemechError as exc:
+            err = _with_source(RowError(exc.one_line(), row=spec.row), table_path)
+            report.failed.append(err)
+            entries.append(_failed_entry(err, rows, spec))
+        _write_manifest(out_dir, table_path, render, entries, report)
+    if progress is not None:
+        progress("stimuli", total, total)
+    _write_manifest(out_dir, table_path, render, entries, report)
+    return report
+
+
+def _item(sid, source, make_item, row, cache):
+    if sid not in cache:
+        cache[sid] = _load_source(source, make_item, row)
+    return cache[sid]
+
+
+def _with_source(exc: RowError, table: Path) -> RowError:
+    if exc.source is None:
+        return RowError(exc.detail, row=exc.row, column=exc.column, source=str(table))
+    return exc
+
+
+def _failed_entry(exc: RowError, rows, spec: Stimulus | None = None) -> dict:
+    sid = spec.id if spec is not None else str(
+        next((r.get("id", "") for r in rows if r["_row"] == exc.row), ""))
+    return {"id": sid, "row": exc.row, "status": "failed",
+            "error": {"column": exc.column, "message": exc.one_line()}}
+
+
+def _render_settings(options, video: bool) -> dict:
+    if not video:
+        return {"video": False}
+    if options is None:
+        from ..viz.render import RenderOptions
+
+        options = RenderOptions()
+    d = asdict(options) if hasattr(options, "__dataclass_fields__") else vars(options)
+    return {"video": True, **{k: (list(v) if isinstance(v, tuple) else v)
+                              for k, v in d.items()}}
+
+
+def _old_entries(path: Path) -> dict[str, dict]:
+    if not path.is_file():
+        return {}
+    try:
+        doc = json.loads(path.read_text())
+        return {e["id"]: e for e in doc.get("stimuli", []) if "id" in e}
+    except (ValueError, KeyError, TypeError, AttributeError):
+        return {}  # an unreadable manifest: everything is made again
+
+
+def _write_manifest(out_dir: Path, table: Path, render: dict, entries: list[dict],
+                    report: DesignReport) -> None:
+    from .. import __version__
+    from ..io.atomic import atomic_path
+    from ..io.results import file_hash
+
+    out_dir.mkdir(parents=True, exist_ok=True)
+    doc = {"facemech_version": __version__, "table": str(table),
+           "table_hash": file_hash(table), "render": render,
+           "order": ["dub", "time_scale", "amplitude", "freeze", "av_offset"],
+           "stimuli": entries}
+    report.manifest_json = out_dir / "manifest.json"
+    report.manifest_csv = out_dir / "manifest.csv"
+    with atomic_path(report.manifest_json) as tmp:
+        tmp.write_text(json.dumps(doc, indent=1, default=str))
+    cols = ["id", "row", "status", "key", *MANIPULATION_COLUMNS, "source_results",
+            "source_audio", "input_hashes"]
+    flat_cols: list[str] = []
+    for e in entries:
+        for c in e.get("flat", {}):
+            if c not in flat_cols:
+                flat_cols.append(c)
+    cols += [*flat_cols, "notes", "error"]
+    with atomic_path(report.manifest_csv) as tmp, open(tmp, "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=cols, extrasaction="ignore")
+        w.writeheader()
+        for e in entries:
+            rec = {"id": e["id"], "row": e["row"], "status": e["status"],
+                   "key": e.get("key", ""), "notes": e.get("notes", ""),
+                   "error": e.get("error", {}).get("message", "")}
+            rec.update({k: v for k, v in e.get("settings", {}).items()})
+            src = e.get("source", {})
+            rec["source_results"] = src.get("results", src.get("text", ""))
+            rec["source_audio"] = src.get("audio", "")
+            if "inputs" in e:
+                rec["input_hashes"] = json.dumps(e["inputs"], sort_keys=True)
+            rec.update({k: ("" if v is None else v) for k, v in e.get("flat", {}).items()})
+            w.writerow(rec)
