@@ -94,6 +94,59 @@ def test_no_background_enclosed_by_the_face_in_any_demo_frame(demo_results):
     assert np.degrees(jaw[:, 0].max()) > 5  # the demo does open the mouth
 
 
+def test_mouth_seal_closes_the_slit_from_inside(face, open_mouth):
+    from facemech.viz.face_parts import mouth_seal
+
+    look = look_from_model(face)
+    seal = mouth_seal(look)
+    epi = face.lip_pairs[face.lip_pairs[:, 0] < face.n_surface]  # (upper, lower) skin twins
+    corners = {face.landmarks["mouth_corner_right"], face.landmarks["mouth_corner_left"]}
+    # a quad per edge of the lip line: two triangles per twin pair (the corners are shared)
+    assert len(seal.faces) == 2 * len(epi)
+    assert set(seal.faces.ravel()) == set(epi.ravel()) | corners
+    assert seal.motion == "skin"
+
+    def areas(pos):
+        a, b, c = (pos[seal.faces[:, i]] for i in range(3))
+        return 0.5 * np.cross(b - a, c - a)
+
+    assert np.abs(areas(look.rest)).max() == 0.0  # at rest the twins coincide: no area
+    pos = open_mouth.positions.values[-1]
+    n = areas(pos)
+    assert np.all(n[:, 2] < 0)  # every triangle faces back, into the mouth: culled from outside
+    # the strip tiles the opening: its frontal area is the lip contour's (shoelace), exactly
+    upper = epi[np.argsort(pos[epi[:, 0], 0]), 0]
+    lower = epi[np.argsort(pos[epi[:, 1], 0]), 1]
+    ring = pos[[face.landmarks["mouth_corner_right"], *upper,
+                face.landmarks["mouth_corner_left"], *lower[::-1]], :2]
+    x, y = ring[:, 0], ring[:, 1]
+    contour = 0.5 * abs(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
+    assert contour > 2e-4  # the lips are well apart (> 2 cm^2)
+    assert -n[:, 2].sum() == pytest.approx(contour, rel=1e-9)
+
+
+def test_mouth_interior_is_dark_from_oblique_views(demo_results):
+    """Close-ups of the mouth from the side, above and below: no background shows through the
+    lips in any fourth frame of the demo (lips a hair apart, apart, the jaw open)."""
+    from facemech.viz.camera import Camera, view_rotation
+    from facemech.viz.render import parse_background, render_panel
+
+    ds = demo_results
+    scene = build_scene(look_from_dataset(ds))
+    pos, jaw = ds.positions.values, jaw_poses_of(ds)
+    bg = parse_background(GREEN)
+    target = scene.framing["mouth"] + np.array([0.0, 0.0, -0.01])
+    cams = [Camera(view_rotation(az, el), target, 0.03, (160, 160), 1.2)
+            for az, el in ((35, 0), (-35, 0), (35, -25), (-20, 25), (90, 0), (-90, 0))]
+    worst = 0
+    for k in range(0, len(pos), 4):
+        verts, norms = scene.frame(pos[k], jaw[k])
+        for cam in cams:
+            img = render_panel(scene, verts, norms, cam, background=bg, supersample=1)
+            worst = max(worst, enclosed_background(img, np.array([0, 255, 0], np.uint8)))
+    assert worst == 0
+
+
 def test_eyes_differ_from_skin_and_sit_under_the_lids(face):
     look = look_from_model(face)
     rend = Renderer(build_scene(look), "frontal", (720, 720))

@@ -1,5 +1,6 @@
 """The face's parts: the skin (its texture, cut-out fissures and inner side), the eyes, and the
-mouth (oral cavity, dental arches, tongue)."""
+mouth (oral cavity, dental arches, tongue, and the seal that closes the lips' slit from
+inside)."""
 
 from __future__ import annotations
 
@@ -66,19 +67,14 @@ def _fit_texture(image: np.ndarray) -> np.ndarray:
 
 
 def _inner_side(look: FaceLook) -> np.ndarray:
-    """Skin triangles whose inner side is drawn (dark): all but those within 15 mm of the
-    skin's edge. The inner side shows only through the parted lips and the palpebral fissures;
-    near the edges the head shell stands behind the skin instead."""
-    from scipy.spatial import cKDTree
+    """Skin triangles whose inner side is drawn (dark): all of them.
 
-    from ..geometry.builder import _boundary_nodes
-
-    edge = look.rest[_boundary_nodes(look.triangles)]
-    centroid = look.rest[look.triangles].mean(axis=1)
-    if len(edge) == 0:
-        return np.ones(len(centroid), bool)
-    dist, _ = cKDTree(edge).query(centroid)
-    return dist > 0.015
+    The inner side is seen only from inside the head: through the parted lips (the lips' own
+    inner side, the cheeks' from an oblique view, out to the skin's edge at the side of the
+    face) and through the palpebral fissures. From outside the skin, the head shell and the
+    skirt stand in front of it.
+    """
+    return np.ones(len(look.triangles), bool)
 
 
 def eye_parts(look: FaceLook) -> list[Part]:
@@ -194,4 +190,80 @@ def mouth_parts(look: FaceLook) -> list[Part]:
     tr = np.array([0.018, 0.0065, 0.019])
     tongue = Part("tongue", np.array([st[0], st[1] - 0.0085, front_z - 0.021]) + unit * tr,
                   faces, np.tile(TONGUE, (len(unit), 1)), (0.25, 30.0), "jaw")
-    return [cavity, _arch(look, True), _arch(look, False), tongue]
+    parts = [cavity, _arch(look, True), _arch(look, False), tongue]
+    seal = mouth_seal(look)
+    return parts if seal is None else [*parts, seal]
+
+
+def slit_bridge(rest: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """Triangles (k, 3) that close the mouth slit between the lips' edge nodes.
+
+    The mouth cut (:func:`facemech.geometry.builder.build_face`) leaves the lips' edges as two
+    boundary paths whose nodes coincide at rest (the corners are shared). Each boundary edge
+    of the upper lip and its twin on the lower lip make a quad, two triangles wound so that
+    they face into the mouth: seen from outside they are culled, seen from inside (a line of
+    sight that entered between the lips and leaves between them again) they are drawn. At rest
+    the strip has no area; it follows the lips as they part.
+
+    Parameters
+    ----------
+    rest : (n, 3) rest positions of the skin nodes, m
+    triangles : (f, 3) skin triangles, counter-clockwise seen from outside
+
+    Returns
+    -------
+    (k, 3) int64 node indices; empty when the skin has no cut slit
+    """
+    tri = np.asarray(triangles, np.int64)
+    directed = np.concatenate([tri[:, [0, 1, 2]], tri[:, [1, 2, 0]], tri[:, [2, 0, 1]]])
+    key = np.sort(directed[:, :2], axis=1)
+    _, inv, count = np.unique(key, axis=0, return_inverse=True, return_counts=True)
+    edges = directed[count[inv.ravel()] == 1]  # boundary edges (a, b) with the third corner
+    nodes = np.unique(edges[:, :2])
+    # twins: boundary nodes at the same rest position (the cut's pairs); others are their own
+    q = np.round(rest[nodes] / 1e-7).astype(np.int64)
+    _, group, size = np.unique(q, axis=0, return_inverse=True, return_counts=True)
+    group = group.ravel()
+    twin = {int(n): int(n) for n in nodes}
+    for g in np.flatnonzero(size == 2):
+        a, b = nodes[group == g]
+        twin[int(a)], twin[int(b)] = int(b), int(a)
+    paired = {int(n) for n in nodes if twin[int(n)] != int(n)}
+    by_edge = {(int(a), int(b)): int(c) for a, b, c in edges}
+    out = []
+    for a, b, c in edges:
+        a, b, c = int(a), int(b), int(c)
+        if not ({a, b} & paired):
+            continue
+        other = by_edge.get((twin[b], twin[a]))
+        # each quad once, from the lip whose edge triangle lies above (the upper lip)
+        if other is None or rest[c, 1] <= rest[other, 1]:
+            continue
+        for t in ((a, b, twin[b]), (a, twin[b], twin[a])):
+            if len(set(t)) == 3:
+                out.append(t)
+    return np.asarray(out, np.int64).reshape(-1, 3)
+
+
+def mouth_seal(look: FaceLook) -> Part | None:
+    """The slit between the lips closed from inside (:func:`slit_bridge`), dark.
+
+    A line of sight that enters between the parted lips and would leave the mouth between them
+    again (from the side, in front of the teeth or past the cavity, even through lips a hair
+    apart) ends on it; from outside it is culled, so it never shows in front of the skin. Its
+    nodes are the lips' edge nodes: it moves with the skin. Only the cut between the mouth
+    corners is closed (a scan's other seams are left alone).
+    """
+    lm = look.landmarks
+    faces = slit_bridge(look.rest, look.triangles)
+    st = lm.get("stomion", 0.5 * (lm["upper_lip_center"] + lm["lower_lip_center"]))
+    ends = np.array([lm["mouth_corner_right"], lm["mouth_corner_left"], st])
+    lo = ends.min(axis=0) - np.array([0.002, 0.006, 0.0])
+    hi = ends.max(axis=0) + np.array([0.002, 0.006, 0.0])
+    xy = look.rest[faces][..., :2]  # (k, 3, 2)
+    faces = faces[np.all((xy >= lo[:2]) & (xy <= hi[:2]), axis=(1, 2))]
+    if len(faces) == 0:
+        return None
+    n = len(look.rest)
+    return Part("mouth_seal", look.rest, faces, np.tile(CAVITY, (n, 1)), (0.0, 1.0), "skin",
+                inward=True)

@@ -8,8 +8,8 @@
   allow, in socket linings (:mod:`.face_parts`);
 * **mouth**: a dark oral cavity, the upper dental arch fixed to the skull, the lower arch and
   the tongue moving with the mandible (the results' jaw angle about the model's hinge, plus the
-  hinge's shift)
-  (:mod:`.face_parts`);
+  hinge's shift), and a dark seal across the slit between the lips' edges, facing into the
+  mouth (it moves with the skin) (:mod:`.face_parts`);
 * **head**: a closed head shell with hair and neck, ears, and a skirt from the skin's edge into
   the shell, for a face surface that stops at the hairline, the ears or the throat
   (:mod:`.head`).
@@ -71,7 +71,9 @@ class Scene:
         for p, n_rest in zip(self.parts, self.rest_normals, strict=True):
             if p.motion == "skin":
                 v = skin
-                n = skin_normals = vertex_normals(v, p.faces)
+                n = vertex_normals(v, p.faces)
+                if skin_normals is None:  # the skin's own (the first part); others share nodes
+                    skin_normals = n
             elif p.motion == "skirt":  # from the skin's edge nodes in towards the head's centre
                 nodes = p.skirt_nodes
                 edge = skin[nodes]
