@@ -644,6 +644,47 @@ def export(
 
 
 @app.command()
+def speak(
+    text: Annotated[str | None, typer.Argument(help="what to say (or --audio with --textgrid)")]
+    = None,
+    output: Annotated[Path, typer.Option("-o", "--output", help="output folder")]
+    = Path("speak-output"),
+    audio: Annotated[Path | None, typer.Option(help="a recorded voice (WAV) to speak with")]
+    = None,
+    textgrid: Annotated[Path | None, typer.Option(
+        help="the recording's Praat TextGrid (word and phone tiers, e.g. from MFA)")] = None,
+    voice: Annotated[str, typer.Option(help="eSpeak NG voice, e.g. en-us, en-gb, en-us+f3")]
+    = "en-us",
+    rate: Annotated[int, typer.Option(help="speaking rate, words per minute (80-450)")] = 160,
+    word_tier: Annotated[str | None, typer.Option(help="TextGrid word tier name")] = None,
+    phone_tier: Annotated[str | None, typer.Option(help="TextGrid phone tier name")] = None,
+    strength: Annotated[float, typer.Option(
+        help="scale of each viseme's departure from rest (1: the table's; 0 to 2)")] = 1.0,
+    face: FaceOpt = "default",
+    preset: PresetOpt = "anatomical",
+    video: Annotated[bool, typer.Option(help="render the MP4 with the audio")] = True,
+    view: ViewOpt = "frontal+profile",
+    size: SizeOpt = "1280x720",
+    background: BackgroundOpt = "#2a2c33",
+    aa: AAOpt = 2,
+):
+    """Make the face say TEXT (eSpeak NG), or speak in sync with a recorded voice: audio,
+    alignment (TextGrid, CSV), muscle activity and jaw, results, MP4 and a manifest."""
+    from .speech.speak import speak as run
+
+    opts = _render_options(view, size, background, aa) if video else None
+    with _staged_progress() as report:
+        res = run(output, text, audio=audio, textgrid=textgrid, voice=voice, rate_wpm=rate,
+                  word_tier=word_tier, phone_tier=phone_tier, face=face, preset=preset,
+                  strength=strength, video=video, render_options=opts, progress=report)
+    words = " ".join(w.label for w in res.alignment.words)
+    out.print(f"{len(res.alignment.phones)} phones ({words}), "
+              f"{res.alignment.duration:.2f} s -> {output}/")
+    for name, path in res.files.items():
+        out.print(f"  {name}: {path}")
+
+
+@app.command()
 def describe(
     result: Annotated[Path, typer.Argument(help="results file (.nc)")],
     as_json: Annotated[bool, typer.Option("--json", help="print JSON")] = False,
