@@ -11,9 +11,11 @@ The alignment (notation ``"espeak"``):
 * each phone runs from its event to the next phone's event (or the end of the audio);
 * pauses (mnemonics starting with ``_``, e.g. ``_:`` at a clause end) are left out, so they are
   gaps between phones, as in alignments read from TextGrids;
-* a word's first phone starts at the word's event when that comes earlier (eSpeak puts the
-  closure of a word-initial stop, e.g. the silence before the /p/ of "puppy", between the word
-  event and the stop's phoneme event, which marks the release);
+* eSpeak's event for a voiceless stop marks its release; the closure comes before it. A
+  word's first phone therefore starts at the word's event when that comes earlier (the closure
+  of "puppy"'s first /p/ lies between the two), and a phone inside a word that follows at least
+  10 ms of digital silence at the end of the previous phone starts where that silence starts
+  (the closure of the second /p/); so at a bilabial's middle the lips are shut;
 * a word runs from its first phone's start to its last phone's end; labels keep eSpeak's stress
   marks (``'`` primary, ``,`` secondary), e.g. ``'0`` in "Bob".
 
@@ -198,7 +200,7 @@ def synthesize(text: str, *, voice: str = "en-us", rate_wpm: int = 160,
     audio = pcm.astype(np.float32) / np.float32(32768.0)
     meta = {"voice": voice, "rate_wpm": rate_wpm, "pitch": pitch,
             "engine": f"eSpeak NG {version}", "sample_rate_hz": rate, "text": text}
-    alignment = _alignment(text, events, len(audio), rate, meta)
+    alignment = _alignment(text, events, pcm, rate, meta)
     if not alignment.phones:
         raise InputError(f"eSpeak NG found nothing to say in {text!r}", field="text")
     return Speech(audio=audio, sample_rate=rate, alignment=alignment)
@@ -211,10 +213,17 @@ def _event_time(audio_ms: int, sample: int, rate: int) -> float:
     return audio_ms / 1000.0
 
 
-def _alignment(text: str, events: list[tuple], n_samples: int, rate: int,
+CLOSURE_MIN_S = 0.010
+"""Shortest run of digital silence before a phone that is taken as its closure (s)."""
+
+
+def _alignment(text: str, events: list[tuple], pcm: np.ndarray, rate: int,
                meta: dict) -> Alignment:
-    """Words and phones from eSpeak's word and phoneme events (see the module's notes)."""
-    duration = n_samples / rate
+    """Words and phones from eSpeak's word and phoneme events (see the module's notes).
+
+    ``pcm`` (samples,) int16 is used only to find the silent closures of stops inside words.
+    """
+    duration = len(pcm) / rate
     # (label, start, word index or None for a pause), in event order
     marks: list[list] = []
     words: list[dict] = []
@@ -237,6 +246,23 @@ def _alignment(text: str, events: list[tuple], n_samples: int, rate: int,
             floor = marks[k - 1][1] if k > 0 else 0.0
             if floor <= w["event"] < marks[k][1]:
                 marks[k][1] = w["event"]
+    # a stop inside a word (the second /p/ of "puppy") follows its closure: eSpeak writes the
+    # closure as digital silence at the end of the previous phone; give it to the stop
+    quiet = np.abs(pcm.astype(np.int32)) <= 2
+    tail, shortest = int(0.0005 * rate), int(CLOSURE_MIN_S * rate)
+    for k in range(1, len(marks)):
+        if marks[k][2] is None or marks[k - 1][2] is None:
+            continue
+        s = min(int(round(marks[k][1] * rate)), len(pcm))
+        back = np.nonzero(quiet[max(s - tail, 0):s])[0]
+        if not back.size:
+            continue
+        e = max(s - tail, 0) + back[-1] + 1  # one past the silent run's last sample
+        loud = np.nonzero(~quiet[:e])[0]
+        st = loud[-1] + 1 if loud.size else 0
+        floor = marks[k - 1][1] + CLOSURE_MIN_S
+        if e - st >= shortest and st / rate < marks[k][1]:
+            marks[k][1] = max(st / rate, min(floor, marks[k][1]))
     phones: list[Segment] = []
     spans: dict[int, list[float]] = {}
     for k, (label, start, w) in enumerate(marks):
