@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
-from ..io.atomic import atomic_path
+from .wav import read_samples, write_samples
 
 
 @dataclass(frozen=True)
@@ -41,32 +41,15 @@ class Audio:
 
 
 def read_wav(path: str | Path) -> Audio:
-    """Read a WAV file (PCM 8/16/24/32-bit or float)."""
-    from scipy.io import wavfile
-
-    path = Path(path)
-    if not path.is_file():
-        raise InputError("audio file not found", source=str(path))
-    try:
-        rate, data = wavfile.read(path)
-    except Exception as exc:  # scipy raises ValueError, struct errors, ... on bad files
-        raise InputError(f"not a readable WAV file ({exc})", source=str(path)) from None
-    data = np.asarray(data)
-    if data.ndim == 1:
-        data = data[:, None]
-    if len(data) == 0:
-        raise InputError("the WAV file holds no samples", source=str(path))
-    return Audio(data, int(rate), str(path))
+    """Read a WAV file (PCM 8/16/24/32-bit or float), keeping its samples as stored."""
+    data, rate = read_samples(path)
+    return Audio(data, rate, str(path))
 
 
 def write_wav(path: str | Path, audio: Audio) -> Path:
     """Write ``audio`` as WAV atomically, in its own sample type."""
-    from scipy.io import wavfile
-
     data = audio.samples[:, 0] if audio.samples.shape[1] == 1 else audio.samples
-    with atomic_path(path, suffix=".wav") as tmp:
-        wavfile.write(tmp, int(audio.rate), data)
-    return Path(path)
+    return write_samples(path, data, audio.rate)
 
 
 def shift(audio: Audio, seconds: float, *, length: int | None = None) -> tuple[Audio, int]:

@@ -1,4 +1,5 @@
-"""WAV files: mono audio as float samples in [-1, 1], written as 16-bit PCM."""
+"""WAV files: the samples as stored (:func:`read_samples`, :func:`write_samples`), and mono
+audio as float samples in [-1, 1], written as 16-bit PCM (:func:`read_wav`, :func:`write_wav`)."""
 
 from __future__ import annotations
 
@@ -25,7 +26,6 @@ def write_wav(path: str | os.PathLike, audio: np.ndarray, rate: int) -> Path:
     -------
     The path written.
     """
-    from scipy.io import wavfile
 
     path = Path(path)
     a = np.asarray(audio, dtype=float)
@@ -38,9 +38,41 @@ def write_wav(path: str | os.PathLike, audio: np.ndarray, rate: int) -> Path:
         raise InputError(f"sample rate must be a positive whole number of Hz, got {rate!r}",
                          source=path, field="rate")
     pcm = np.round(np.clip(a, -1.0, 1.0) * 32767.0).astype(np.int16)
+    return write_samples(path, pcm, int(rate))
+
+
+def write_samples(path: str | os.PathLike, samples: np.ndarray, rate: int) -> Path:
+    """Write samples ((n,) or (n, channels), in their own sample type) as WAV, atomically."""
+    from scipy.io import wavfile
+
+    path = Path(path)
     with atomic_path(path, suffix=".wav") as tmp:
-        wavfile.write(tmp, int(rate), pcm)
+        wavfile.write(tmp, int(rate), np.asarray(samples))
     return path
+
+
+def read_samples(path: str | os.PathLike) -> tuple[np.ndarray, int]:
+    """The samples of a WAV file as stored: ((n, channels) in the file's type, rate Hz)."""
+    from scipy.io import wavfile
+
+    path = Path(path)
+    if not path.is_file():
+        raise InputError("no such audio file", source=path)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", wavfile.WavFileWarning)  # unknown chunks are fine
+            rate, data = wavfile.read(path)
+    except (ValueError, OSError, EOFError) as exc:
+        first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise InputError(f"not a readable WAV file ({first})", source=path) from None
+    data = np.asarray(data)
+    if data.ndim == 1:
+        data = data[:, None]
+    if len(data) == 0:
+        raise InputError("the WAV file holds no samples", source=path, field="data")
+    if not rate > 0:
+        raise InputError(f"sample rate {rate} Hz", source=path, field="rate")
+    return data, int(rate)
 
 
 def read_wav(path: str | os.PathLike) -> tuple[np.ndarray, int]:
@@ -58,26 +90,11 @@ def read_wav(path: str | os.PathLike) -> tuple[np.ndarray, int]:
     audio : (samples,) float64
     rate : sample rate (Hz)
     """
-    from scipy.io import wavfile
-
-    path = Path(path)
-    if not path.is_file():
-        raise InputError("no such audio file", source=path)
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", wavfile.WavFileWarning)  # unknown chunks are fine
-            rate, data = wavfile.read(path)
-    except (ValueError, OSError, EOFError) as exc:
-        first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        raise InputError(f"not a readable WAV file ({first})", source=path) from None
+    data, rate = read_samples(path)
     if data.dtype == np.uint8:
         a = (data.astype(float) - 128.0) / 128.0
     elif np.issubdtype(data.dtype, np.integer):
         a = data.astype(float) / float(-np.iinfo(data.dtype).min)
     else:
         a = data.astype(float)
-    if a.ndim == 2:
-        a = a.mean(axis=1)
-    if a.size == 0:
-        raise InputError("the WAV file holds no samples", source=path, field="data")
-    return a, int(rate)
+    return a.mean(axis=1), rate
