@@ -4,7 +4,8 @@
   over 100 ms and held 300 ms on the default face (anatomical preset); at the end: the lip gap
   at the midline (the lips' contact twins, :mod:`facemech.speech.mouth`), the protrusion of the
   upper and lower lip centres (+z from rest), the change of mouth width, the jaw angle and the
-  lower incisor's drop (mm, degrees).
+  lower incisor's drop (mm, degrees). A target's jaw below rest (the bilabials' virtual target)
+  is held at rest, as :func:`controls_from_alignment` clips it.
 - ``lag_without_lead`` and ``lag_with_lead``: one phone between pauses or vowels, controls from
   :func:`controls_from_alignment` with no lead and with the default leads: the time (ms) from
   its acoustic centre to the visible extreme of the measure the class moves most (for a
@@ -42,13 +43,14 @@ def held_target(face, cls: str) -> dict:
     frames = int(round((RAMP + HOLD) * RATE)) + 1
     shape = np.clip(np.arange(frames) / RATE / RAMP, 0.0, 1.0)
     act = shape[:, None] * v.activity_vector()[None]
-    sim = simulate(face, act, shape * v.jaw)
+    jaw = max(v.jaw, 0.0)  # as the controls: the teeth meet, the jaw never closes past rest
+    sim = simulate(face, act, shape * jaw)
     m = mouth_measures(sim.model, sim.positions[-1])
     return {"lip_gap_mm": round(1e3 * m["lip_gap"], 2),
             "upper_forward_mm": round(1e3 * m["upper_forward"], 2),
             "lower_forward_mm": round(1e3 * m["lower_forward"], 2),
             "width_change_mm": round(1e3 * m["width_change"], 2),
-            "jaw_deg": round(float(np.degrees(v.jaw)), 2),
+            "jaw_deg": round(float(np.degrees(jaw)), 2),
             "incisor_drop_mm": round(1e3 * incisor_drop(sim.model, sim.jaw_pose[-1]), 2)}
 
 

@@ -135,7 +135,7 @@ def controls_from_alignment(alignment: Alignment, *, frame_rate: float = 60.0,
 
     Returns
     -------
-    time : (frames,) s, ``k / frame_rate`` from 0 to the duration
+    time : (frames,) s, ``k / frame_rate`` from 0 to the first frame at or after the duration
     activity : (frames, 16) in [0, 1], columns :data:`~facemech.params.MUSCLE_GROUPS`
     jaw : (frames,) rad, positive opens
 
@@ -146,8 +146,8 @@ def controls_from_alignment(alignment: Alignment, *, frame_rate: float = 60.0,
     Raises
     ------
     InputError
-        An unknown phone label, a non-positive frame rate or strength, a duration shorter than
-        two frames.
+        An unknown phone label, a non-positive frame rate, a negative strength, an alignment
+        of no duration.
     """
     src = alignment.source
     if not frame_rate > 0:
@@ -156,10 +156,10 @@ def controls_from_alignment(alignment: Alignment, *, frame_rate: float = 60.0,
     if not (np.isfinite(strength) and strength >= 0):
         raise InputError(f"strength must be a finite number >= 0, got {strength!r}",
                          source=src, field="strength")
-    frames = int(np.floor(alignment.duration * frame_rate + 1e-9)) + 1
-    if frames < 2:
-        raise InputError(f"the alignment lasts {alignment.duration:.3f} s, shorter than two "
-                         "frames", source=src, field="duration")
+    if not alignment.duration > 0:
+        raise InputError(f"the alignment lasts {alignment.duration!r} s: nothing to say",
+                         source=src, field="duration")
+    frames = int(np.ceil(alignment.duration * frame_rate - 1e-9)) + 1
     time = np.arange(frames) / frame_rate
     items = [Gesture(PAUSE, -np.inf, 0.0), *gestures(alignment),
              Gesture(PAUSE, alignment.duration, np.inf)]

@@ -26,7 +26,6 @@ from ..errors import InputError
 from ..params import MUSCLE_GROUPS
 
 
-
 @dataclass(frozen=True)
 class Viseme:
     """The target of one articulatory class and its dominance.
