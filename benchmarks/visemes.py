@@ -57,7 +57,7 @@ def held_target(face, cls: str) -> dict:
 #: (context before, phone, context after, measure, sign of its extreme) for the lag
 LAG_CASES = (("_", "u:", "_", "lips_forward", 1), ("_", "i:", "_", "width_change", 1),
              ("_", "A:", "_", "lip_gap", 1), ("A:", "b", "A:", "lip_gap", -1),
-             ("A:", "m", "A:", "lip_gap", -1))
+             ("u:", "m", "u:", "lip_gap", -1))
 
 
 def lag_series(face, before: str, label: str, after: str, key: str, *, dur: float = 0.16,

@@ -200,12 +200,17 @@ def test_mouth_measures_at_rest_and_with_the_jaw_open(face):
     assert incisor_drop(face, np.array([0.1, 0.0, 0.0])) > 5e-3  # a hinge opening drops it
 
 
+#: a bilabial between rounded vowels (whose sphincter activity parts the lips)
+ROUNDED_CONTEXT = (["_", "u:", "m", "u:", "_"], [0.2, 0.2, 0.09, 0.2, 0.2])
+
+
 @pytest.fixture(scope="module")
 def spoken(face):
-    """The test utterance simulated on the default face, in each notation."""
+    """The test utterances simulated on the default face, in each notation."""
     out = {}
-    for notation in ("espeak", "arpabet", "ipa"):
-        al = utterance(LABELS[notation], DURATIONS, notation)
+    for notation in ("espeak", "arpabet", "ipa", "rounded"):
+        al = (utterance(*ROUNDED_CONTEXT, "espeak") if notation == "rounded"
+              else utterance(LABELS[notation], DURATIONS, notation))
         _, act, jaw = controls_from_alignment(al)
         sim = simulate(face, act, jaw)
         out[notation] = al, sim, mouth_measures(sim.model, sim.positions)
@@ -217,12 +222,12 @@ def at_middle(sim, series, seg):
     return float(np.interp(seg.mid, sim.time, series))
 
 
-@pytest.mark.parametrize("notation", ["espeak", "arpabet", "ipa"])
+@pytest.mark.parametrize("notation", ["espeak", "arpabet", "ipa", "rounded"])
 def test_speech_on_the_default_face(spoken, notation):
     al, sim, m = spoken[notation]
     checked = set()
     for seg in al.phones:
-        cls = phone_classes(seg.label, notation)[0]
+        cls = phone_classes(seg.label, al.notation)[0]
         if cls == BILABIAL:  # the lips closed
             assert at_middle(sim, m["lip_gap"], seg) < 0.5e-3, seg
         elif cls in (ROUNDED, "w"):  # both lips at least 2 mm forward
@@ -235,6 +240,7 @@ def test_speech_on_the_default_face(spoken, notation):
         else:
             continue
         checked.add(cls)
-    assert checked == {BILABIAL, ROUNDED, "w", SPREAD, OPEN}
+    assert checked == ({BILABIAL, ROUNDED} if notation == "rounded"
+                       else {BILABIAL, ROUNDED, "w", SPREAD, OPEN})
     # the face starts and ends at rest
     assert sim.jaw_angle[0] == 0.0 and sim.jaw_angle[-1] == 0.0

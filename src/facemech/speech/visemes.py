@@ -62,8 +62,8 @@ def _v(jaw_deg: float, lips: float, jaw_dom: float, ant: float, carry: float, **
 #: class -> viseme on the default face (numbers measured in docs/stimuli.md)
 VISEMES: MappingProxyType = MappingProxyType({
     # consonants                 jaw deg, lips alpha, jaw alpha, theta ant, theta carry (1/s)
-    "bilabial": _v(-2.0, 60.0, 60.0, 40.0, 45.0, MEN=0.7),
-    "labiodental": _v(0.8, 25.0, 15.0, 40.0, 45.0, MEN=0.6, OOI=0.15, DAO=0.1),
+    "bilabial": _v(-2.0, 60.0, 60.0, 30.0, 40.0, MEN=0.8),
+    "labiodental": _v(0.8, 25.0, 40.0, 40.0, 45.0, MEN=0.6, OOI=0.15, DAO=0.1),
     "dental": _v(1.5, 1.0, 4.0, 20.0, 25.0, LLS=0.1),
     "alveolar": _v(1.5, 0.4, 4.0, 20.0, 25.0),
     "postalveolar": _v(1.5, 4.0, 4.0, 20.0, 25.0, OOS=0.4, OOI=0.4),
@@ -76,7 +76,7 @@ VISEMES: MappingProxyType = MappingProxyType({
     # vowels
     "close_front_spread": _v(2.5, 3.0, 1.5, 12.0, 15.0, ZYG=0.8, RIS=0.9, LAO=0.2),
     "close_back_rounded": _v(2.5, 4.0, 1.5, 12.0, 15.0, OOS=0.7, OOI=0.6, MEN=0.3),
-    "open": _v(12.0, 1.0, 4.0, 12.0, 15.0),
+    "open": _v(12.0, 1.0, 8.0, 12.0, 15.0),
     "mid": _v(6.0, 1.0, 2.0, 12.0, 15.0),
     "mid_rounded": _v(6.5, 2.0, 2.0, 12.0, 15.0, OOS=0.45, OOI=0.45),
     "schwa": _v(3.5, 0.5, 0.8, 15.0, 18.0),
