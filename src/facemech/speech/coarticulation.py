@@ -1,0 +1,177 @@
+"""Coarticulation: a phone alignment -> muscle activity and jaw angle per frame.
+
+Each phone's viseme target (:mod:`facemech.speech.visemes`) is weighted by its dominance
+function (Cohen & Massaro 1993), a peak at the phone's acoustic centre that falls off
+exponentially in time, at its own rate before the centre (anticipation) and after it
+(carry-over)::
+
+    D_s(t) = alpha_s exp(-theta_s |tau|^c),   tau = centre_s - t,
+    theta_s = anticipatory rate for tau >= 0, carry-over rate for tau < 0
+
+and the controls are the dominance-weighted mean of the targets::
+
+    controls(t) = sum_s D_s(t) T_s / sum_s D_s(t)
+
+separately for the muscle activity (the lips' magnitudes alpha) and the jaw (the jaw's). Pauses
+are the rest target with a dominance flat over the pause (tau is the distance to the pause's
+interval, 0 inside it), so the face rests for the whole pause; the time before 0 and after the
+alignment's duration count as pauses. A diphthong is its parts (:mod:`.phoneclass`) sharing its
+interval equally, each with its own centre.
+
+The muscles take time to act: their activation filter (tau 15 ms, eq. 4 of Lucero & Munhall 1999)
+and the tissue delay the visible motion behind the activity. The controls are therefore
+computed ``lead_s`` ahead: the activity of frame t is the blend at t + lead_s, so that the face is
+at a phone's target at the phone's acoustic centre (the lead and the lag it makes up for were
+measured on the default face: docs/stimuli.md). The jaw is a kinematic drive whose skin follows
+within a few ms, so its lead is ``jaw_lead_s``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import InputError
+from .alignment import Alignment
+from .phoneclass import PAUSE, phone_classes
+from .visemes import VISEMES
+
+#: s, how far the muscle activity leads the acoustics (measured: docs/stimuli.md)
+LEAD_S = 0.100
+#: s, how far the jaw angle leads the acoustics
+JAW_LEAD_S = 0.033
+#: exponent c of the dominance function (1: exponential, as in Cohen & Massaro's examples)
+DOMINANCE_EXPONENT = 1.0
+#: s, the controls are tapered to rest over this time at the start and the end of an utterance
+EDGE_S = 0.05
+
+
+@dataclass(frozen=True)
+class Gesture:
+    """One target in time: an articulatory class over ``[start, end]`` s with its centre."""
+
+    cls: str
+    start: float
+    end: float
+
+    @property
+    def centre(self) -> float:
+        return 0.5 * (self.start + self.end)
+
+
+def gestures(alignment: Alignment) -> list[Gesture]:
+    """The targets of an alignment in time order: a phone's classes, a diphthong's parts
+    sharing its interval equally. Raises InputError for an unknown label."""
+    out = []
+    for seg in alignment.phones:
+        parts = phone_classes(seg.label, alignment.notation, source=alignment.source)
+        step = (seg.end - seg.start) / len(parts)
+        for k, cls in enumerate(parts):
+            out.append(Gesture(cls, seg.start + k * step, seg.start + (k + 1) * step))
+    return out
+
+
+def log_dominance(t: np.ndarray, gesture: Gesture, alpha: float, anticipatory_rate: float,
+                  carryover_rate: float, exponent: float = DOMINANCE_EXPONENT) -> np.ndarray:
+    """log D(t) of one gesture at times ``t`` (s): see the module doc. A pause's tau is the
+    distance to its interval."""
+    t = np.asarray(t, float)
+    if gesture.cls == PAUSE:
+        tau = np.where(t < gesture.start, gesture.start - t, np.minimum(gesture.end - t, 0.0))
+    else:
+        tau = gesture.centre - t
+    rate = np.where(tau >= 0.0, anticipatory_rate, carryover_rate)
+    return np.log(alpha) - rate * np.abs(tau) ** exponent
+
+
+def blend(t: np.ndarray, items: list[Gesture], *, exponent: float = DOMINANCE_EXPONENT
+          ) -> tuple[np.ndarray, np.ndarray]:
+    """The dominance-weighted targets at times ``t``.
+
+    Parameters
+    ----------
+    t : (frames,) s
+    items : gestures (:func:`gestures`), with the rest before and after them as pauses
+
+    Returns
+    -------
+    activity : (frames, 16) in [0, 1]
+    jaw : (frames,) rad
+    """
+    t = np.asarray(t, float)
+    vis = [VISEMES[g.cls] for g in items]
+    act_targets = np.array([v.activity_vector() for v in vis])  # (S, 16)
+    jaw_targets = np.array([v.jaw for v in vis])  # (S,)
+    decay = np.stack([log_dominance(t, g, 1.0, v.anticipatory_rate, v.carryover_rate, exponent)
+                      for g, v in zip(items, vis, strict=True)], axis=1)  # (T, S)
+
+    def weights(alpha):
+        logd = decay + np.log(alpha)[None]
+        logd -= logd.max(axis=1, keepdims=True)
+        w = np.exp(logd)
+        return w / w.sum(axis=1, keepdims=True)
+
+    activity = weights(np.array([v.lips_dominance for v in vis])) @ act_targets
+    jaw = weights(np.array([v.jaw_dominance for v in vis])) @ jaw_targets
+    return activity, jaw
+
+
+def controls_from_alignment(alignment: Alignment, *, frame_rate: float = 60.0,
+                            lead_s: float = LEAD_S, jaw_lead_s: float = JAW_LEAD_S,
+                            strength: float = 1.0
+                            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Muscle activity and jaw angle per frame that make the visible speech of an alignment.
+
+    Parameters
+    ----------
+    alignment : Alignment
+        Phones in any of its notations; the controls cover 0 to ``alignment.duration``.
+    frame_rate : Hz, the control rate of :func:`facemech.simulate` (60)
+    lead_s : s, how far the muscle activity leads the acoustics (:data:`LEAD_S`)
+    jaw_lead_s : s, how far the jaw angle leads the acoustics (:data:`JAW_LEAD_S`)
+    strength : scale of every target's departure from rest (1: the table's; 0.5 hypo-
+        articulated, the activity clipped to [0, 1])
+
+    Returns
+    -------
+    time : (frames,) s, ``k / frame_rate`` from 0 to the first frame at or after the duration
+    activity : (frames, 16) in [0, 1], columns :data:`~facemech.params.MUSCLE_GROUPS`
+    jaw : (frames,) rad, positive opens
+
+    The first and last frames are at rest (zero activity, jaw closed): the controls are tapered
+    to rest over :data:`EDGE_S` at both ends (alignments from a synthesiser begin and end with
+    silence, where the taper changes nothing).
+
+    Raises
+    ------
+    InputError
+        An unknown phone label, a non-positive frame rate, a negative strength, an alignment
+        of no duration.
+    """
+    src = alignment.source
+    if not frame_rate > 0:
+        raise InputError(f"frame rate must be positive, got {frame_rate!r}", source=src,
+                         field="frame_rate")
+    if not (np.isfinite(strength) and strength >= 0):
+        raise InputError(f"strength must be a finite number >= 0, got {strength!r}",
+                         source=src, field="strength")
+    if not alignment.duration > 0:
+        raise InputError(f"the alignment lasts {alignment.duration!r} s: nothing to say",
+                         source=src, field="duration")
+    frames = int(np.ceil(alignment.duration * frame_rate - 1e-9)) + 1
+    time = np.arange(frames) / frame_rate
+    items = [Gesture(PAUSE, -np.inf, 0.0), *gestures(alignment),
+             Gesture(PAUSE, alignment.duration, np.inf)]
+    activity, _ = blend(time + lead_s, items)
+    _, jaw = blend(time + jaw_lead_s, items)
+    edge = _taper(time, alignment.duration)
+    activity = np.clip(strength * edge[:, None] * activity, 0.0, 1.0)
+    jaw = np.maximum(strength * edge * jaw, 0.0)  # the teeth meet: never closed past rest
+    return time, activity, jaw
+
+
+def _taper(t: np.ndarray, duration: float) -> np.ndarray:
+    """1 inside, falling smoothly (smoothstep) to 0 at 0 and at ``duration`` over EDGE_S."""
+    x = np.clip(np.minimum(t, duration - t) / EDGE_S, 0.0, 1.0)
+    return x * x * (3.0 - 2.0 * x)

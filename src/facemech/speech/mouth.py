@@ -1,0 +1,83 @@
+"""Measures of the visible mouth: lip gap, lip protrusion, mouth width and jaw drop.
+
+The lip gap is the true opening between the lips, not the distance between the landmarks
+``upper_lip_center`` and ``lower_lip_center`` (those sit on the front of the vermilion, about
+20 mm apart with the lips closed). The built face's mouth slit is a cut: every node of the lip
+line has a twin, one in the upper lip and one in the lower lip, coinciding at rest (the lip
+contact pairs, ``model.lip_pairs``). The gap is the separation of the midline twins of the
+epidermis along their contact normal (upper minus lower, m): 0 at rest and with the lips
+pressed together, positive when the lips part (slightly negative where the contact penalty
+lets them press into each other).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def midline_lip_pair(model) -> tuple[int, int, np.ndarray]:
+    """The epidermal lip contact pair nearest the midline of a face.
+
+    Returns
+    -------
+    (upper node, lower node, contact normal (3,) from the lower to the upper lip)
+    """
+    up, lo = model.lip_pairs.T
+    skin = np.nonzero(up < model.n_surface)[0]
+    x_mid = model.rest_positions[model.landmarks["stomion"], 0] \
+        if "stomion" in model.landmarks else 0.0
+    k = skin[np.argmin(np.abs(model.rest_positions[up[skin], 0] - x_mid))]
+    return int(up[k]), int(lo[k]), np.asarray(model.lip_normals[k], float)
+
+
+def mouth_measures(model, positions: np.ndarray) -> dict[str, np.ndarray]:
+    """Lip gap, lip protrusion and mouth width of epidermal positions against rest.
+
+    Parameters
+    ----------
+    model : FaceModel
+        The face the positions are of (``sim.model`` of a simulation).
+    positions : (frames, n_surface, 3) or (n_surface, 3) array, m
+
+    Returns
+    -------
+    dict of (frames,) arrays (floats for one frame), m
+        ``lip_gap``: the midline opening between the lips (module doc);
+        ``upper_forward``, ``lower_forward``: +z displacement of the landmarks
+        ``upper_lip_center`` and ``lower_lip_center`` from rest;
+        ``lips_forward``: the smaller of the two;
+        ``width_change``: corner-to-corner distance (``mouth_corner_left`` to
+        ``mouth_corner_right``) minus its rest value (positive: wider).
+    """
+    p = np.asarray(positions, float)
+    single = p.ndim == 2
+    if single:
+        p = p[None]
+    rest = model.rest_positions[: model.n_surface]
+    lm = model.landmarks
+    u, lo, normal = midline_lip_pair(model)
+    gap = (p[:, u] - p[:, lo]) @ normal - (rest[u] - rest[lo]) @ normal
+    upper = p[:, lm["upper_lip_center"], 2] - rest[lm["upper_lip_center"], 2]
+    lower = p[:, lm["lower_lip_center"], 2] - rest[lm["lower_lip_center"], 2]
+    cl, cr = lm["mouth_corner_left"], lm["mouth_corner_right"]
+    width = np.linalg.norm(p[:, cl] - p[:, cr], axis=1) - np.linalg.norm(rest[cl] - rest[cr])
+    out = {"lip_gap": gap, "upper_forward": upper, "lower_forward": lower,
+           "lips_forward": np.minimum(upper, lower), "width_change": width}
+    if single:
+        return {k: float(v[0]) for k, v in out.items()}
+    return out
+
+
+def incisor_drop(model, jaw_pose) -> np.ndarray:
+    """How far (m) the lower incisor tip drops for jaw poses (angle rad, shift_y m, shift_z m).
+
+    ``jaw_pose`` : (3,) or (frames, 3); returns a float or (frames,) of downward displacement of
+    :func:`facemech.solvers.jaw.lower_incisor_point`.
+    """
+    from ..solvers.jaw import lower_incisor_point, move_points
+
+    poses = np.atleast_2d(np.asarray(jaw_pose, float))
+    tip = lower_incisor_point(model)
+    drop = np.array([tip[1] - move_points(tip, p, model.hinge_point, model.hinge_axis)[0, 1]
+                     for p in poses])
+    return float(drop[0]) if np.ndim(jaw_pose) == 1 else drop
