@@ -717,10 +717,12 @@ def stimuli(
     """Make the stimuli of a design table (amplitude, time scale, AV offset, dubbing, freezing),
     each as results, WAV and MP4, with a manifest of their measured parameters."""
     from .speech.design import run_design
+    from .speech.speak import text_items
 
     opts = _render_options(view, size, background, aa)
     with _staged_progress() as report:
-        rep = run_design(design, output, None, options=opts, video=video, progress=report)
+        rep = run_design(design, output, text_items(Path(output) / "items"), options=opts,
+                         video=video, progress=report)
     for e in rep.failed:
         err.print(f"facemech: error: {e.one_line()}", highlight=False, markup=False,
                   soft_wrap=True)

@@ -66,6 +66,8 @@ def gestures(alignment: Alignment) -> list[Gesture]:
     out = []
     for seg in alignment.phones:
         parts = phone_classes(seg.label, alignment.notation, source=alignment.source)
+        if not parts:
+            continue
         step = (seg.end - seg.start) / len(parts)
         for k, cls in enumerate(parts):
             out.append(Gesture(cls, seg.start + k * step, seg.start + (k + 1) * step))

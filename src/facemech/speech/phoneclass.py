@@ -13,7 +13,8 @@ What is read as neutral rather than rejected (documented in docs/stimuli.md):
 - stress, tone and syllable marks around a label (eSpeak ``' , % =``, IPA ``ˈ ˌ .``), length
   marks (IPA ``ː ˑ``), combining diacritics (IPA nasalisation, syllabicity, ...), tie bars, and
   ARPABET's stress digit;
-- eSpeak variant suffixes after ``/`` (``l/2``) and its appended palatal ``;``.
+- eSpeak variant suffixes after ``/`` (``l/2``) and its appended palatal ``;`` (a ``;`` on its
+  own, which eSpeak sometimes emits as a phone, has no classes and makes no gesture).
 
 Any other unknown label raises :class:`~facemech.errors.InputError` naming the label.
 """
@@ -150,7 +151,7 @@ def phone_classes(label: str, notation: str, *, source: str | None = None) -> tu
     -------
     tuple of str
         One class of :data:`CLASSES` for a consonant, a monophthong or a pause; two or three
-        for a diphthong or triphthong (its parts in order).
+        for a diphthong or triphthong (its parts in order); none for eSpeak's bare ``;``.
 
     Raises
     ------
@@ -182,7 +183,9 @@ def _espeak(text: str) -> tuple[str, ...] | None:
         return (PAUSE,)
     if "/" in t and t not in _ESPEAK:
         t = t.split("/", 1)[0]  # l/2, z/2: a variant of the phoneme before the slash
-    t = t.rstrip(";") or t
+    if not t.strip(";"):
+        return ()  # eSpeak's palatalisation mark on its own: no gesture of its own
+    t = t.rstrip(";")
     return _ESPEAK.get(t)
 
 

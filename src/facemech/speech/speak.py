@@ -1,6 +1,7 @@
 """Text, or a recording with its alignment, to a talking face: the ``speak`` workflow.
 
-1. The audio and its phone alignment: eSpeak NG (:func:`facemech.speech.tts.synthesize`), or a
+1. The audio and its phone alignment: eSpeak NG (:func:`facemech.speech.tts.synthesize`, with
+   :data:`LEAD_IN_S` of silence before and :data:`TAIL_S` after), or a
    recorded WAV with a Praat TextGrid (:func:`facemech.speech.alignment_io.read_textgrid`, e.g.
    from the Montreal Forced Aligner or by hand).
 2. The muscle activity and jaw angle per 60-Hz frame: visemes blended by dominance functions
@@ -22,6 +23,12 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
+
+#: s of silence put before and after synthesised speech, so that the face starts at rest and
+#: has the time to anticipate the first phone (muscle activity leads the sound by 100 ms and
+#: the lips take longer to get there) and to come back to rest after the last
+LEAD_IN_S = 0.3
+TAIL_S = 0.2
 
 #: the files ``speak`` writes into its folder
 FILES = {"audio": "speech.wav", "textgrid": "alignment.TextGrid", "alignment": "alignment.csv",
@@ -125,7 +132,8 @@ def speak(
 
         report(progress, "synthesise", 0, 1)
         speech = synthesize(text, voice=voice, rate_wpm=rate_wpm)
-        samples, rate, alignment = speech.audio, speech.sample_rate, speech.alignment
+        samples, rate, alignment = _padded(speech.audio, speech.sample_rate, speech.alignment,
+                                           LEAD_IN_S, TAIL_S)
         inputs["text"] = text
     else:
         samples, rate = read_wav(audio)
@@ -183,6 +191,25 @@ def speak(
                   manifest=manifest)
 
 
+def _padded(samples, rate: int, alignment, before: float, after: float):
+    """Audio with ``before`` and ``after`` s of silence, and its alignment shifted to match."""
+    from dataclasses import replace
+
+    from .alignment import Segment
+
+    k0, k1 = int(round(before * rate)), int(round(after * rate))
+    audio = np.concatenate([np.zeros(k0, np.float32), np.asarray(samples, np.float32),
+                            np.zeros(k1, np.float32)])
+    dt = k0 / rate
+
+    def shift(segs):
+        return tuple(Segment(s.label, s.start + dt, s.end + dt) for s in segs)
+
+    return audio, rate, replace(alignment, words=shift(alignment.words),
+                                phones=shift(alignment.phones),
+                                duration=len(audio) / rate)
+
+
 def report(progress, stage: str, done: int, total: int) -> None:
     if progress is not None:
         progress(stage, done, total)
@@ -194,3 +221,48 @@ def _json_default(v):
     if isinstance(v, np.ndarray):
         return v.tolist()
     return str(v)
+
+
+#: the columns a design table's text row may carry (besides the manipulations)
+TEXT_ROW_COLUMNS = ("text", "face", "voice", "rate_wpm", "strength", "preset")
+
+
+def text_items(work_dir: str | Path, *, preset: str = "anatomical"):
+    """The ``make_item`` hook of :func:`facemech.speech.design.run_design` for text rows: each
+    row's text spoken by :func:`speak` (no movie) into ``work_dir/<key>/``.
+
+    A row may set ``text``, ``face``, ``voice``, ``rate_wpm``, ``strength`` and ``preset``.
+    """
+    from .. import __version__
+
+    work = Path(work_dir)
+
+    def make_item(row: dict):
+        from ..io.results import to_dataset
+
+        unknown = [k for k in row if k not in TEXT_ROW_COLUMNS]
+        if unknown:
+            raise InputError(f"not a column of a text row (have {', '.join(TEXT_ROW_COLUMNS)})",
+                             field=unknown[0])
+        try:
+            rate = int(float(row.get("rate_wpm", 160)))
+            strength = float(row.get("strength", 1.0))
+        except ValueError as exc:
+            raise InputError(f"not a number ({exc})", field="rate_wpm/strength") from None
+        key = _row_key(row, preset)
+        spoken = speak(work / key, str(row["text"]), voice=str(row.get("voice", "en-us")),
+                       rate_wpm=rate, face=row.get("face", "default"),
+                       preset=str(row.get("preset", preset)), strength=strength, video=False)
+        ds = to_dataset(spoken.simulation, spoken.manifest["inputs"])
+        return ds, spoken.files["audio"]
+
+    make_item.version = f"speak {__version__}"
+    return make_item
+
+
+def _row_key(row: dict, preset: str) -> str:
+    import hashlib
+
+    text = json.dumps({**{k: str(v) for k, v in row.items()}, "preset_default": preset},
+                      sort_keys=True)
+    return "item-" + hashlib.sha256(text.encode()).hexdigest()[:12]
