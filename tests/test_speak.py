@@ -140,3 +140,10 @@ def test_a_design_of_text_items_makes_a_mcgurk_set(tmp_path, monkeypatch, capsys
     # a rerun with nothing changed makes nothing
     code, stdout, _ = run_cli(monkeypatch, capsys, "stimuli", table, "-o", out, "--no-video")
     assert code == 0 and "0 made, 5 unchanged" in stdout
+
+
+def test_version_option(monkeypatch, capsys):
+    from facemech import __version__
+
+    code, out, _ = run_cli(monkeypatch, capsys, "--version")
+    assert code == 0 and out.strip() == f"facemech {__version__}"

@@ -30,6 +30,21 @@ app.add_typer(experiment_app, name="experiment")
 app.add_typer(emg_app, name="emg")
 app.add_typer(markers_app, name="markers")
 
+
+def _show_version(value: bool) -> None:
+    if value:
+        from . import __version__
+
+        print(f"facemech {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _root(version: Annotated[bool, typer.Option("--version", callback=_show_version,
+                                                is_eager=True, help="print the version")]
+          = False) -> None:
+    """Physics and kinematics of the speaking face."""
+
 PresetOpt = Annotated[str, typer.Option(help="parameter preset: anatomical (the default), "
                                              "lucero1999, pitermann2001, calibrated, or a .json "
                                              "file written by facemech calibrate")]
