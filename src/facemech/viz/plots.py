@@ -12,16 +12,22 @@ from ..inverse.stats import acceleration, cross_correlation
 from ..io.atomic import atomic_path
 
 
-def save_figure(fig, path: str | Path, title: str = "") -> Path:
-    """Title, lay out and write a figure as PNG (atomically), then close it."""
-    import matplotlib.pyplot as plt
+def subplots(nrows: int = 1, ncols: int = 1, *, figsize, **kw):
+    """A figure and its axes, made without pyplot: no backend is chosen or switched (a
+    notebook's stays as it is) and nothing is kept alive after the figure is dropped."""
+    from matplotlib.figure import Figure
 
+    fig = Figure(figsize=figsize)
+    return fig, fig.subplots(nrows, ncols, **kw)
+
+
+def save_figure(fig, path: str | Path, title: str = "") -> Path:
+    """Title, lay out and write a figure as PNG (atomically)."""
     if title:
         fig.suptitle(title, fontsize=10)
     fig.tight_layout()
     with atomic_path(path, suffix=".png") as tmp:
         fig.savefig(tmp, dpi=110)
-    plt.close(fig)
     return Path(path)
 
 
@@ -36,13 +42,8 @@ def kinematics_figure(path: str | Path, time: np.ndarray, trajectories: dict[str
     trajectories : name -> (frames, 3) positions in metres (simulated)
     measured : name -> (frames, 3) measured positions in metres (dashed), optional
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     names = list(trajectories)
-    fig, axes = plt.subplots(4, len(names), figsize=(3.2 * len(names), 8.5), sharex=True,
+    fig, axes = subplots(4, len(names), figsize=(3.2 * len(names), 8.5), sharex=True,
                              squeeze=False)
     rows = [("y displacement (mm)", 1, False), ("z displacement (mm)", 2, False),
             ("y acceleration (m/s²)", 1, True), ("z acceleration (m/s²)", 2, True)]
@@ -71,14 +72,9 @@ def kinematics_figure(path: str | Path, time: np.ndarray, trajectories: dict[str
 def activity_figure(path: str | Path, time: np.ndarray, activity: np.ndarray,
                     groups: tuple[str, ...], jaw_angle: np.ndarray | None = None) -> Path:
     """Write a PNG of the muscle activity (and jaw angle) driving a simulation."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     used = [g for g in range(activity.shape[1]) if np.any(activity[:, g] > 0)]
     n = len(used) + (jaw_angle is not None)
-    fig, axes = plt.subplots(max(n, 1), 1, figsize=(7, 0.9 * max(n, 1) + 0.8), sharex=True,
+    fig, axes = subplots(max(n, 1), 1, figsize=(7, 0.9 * max(n, 1) + 0.8), sharex=True,
                              squeeze=False)
     for r, g in enumerate(used):
         axes[r, 0].fill_between(time, activity[:, g], color="0.35", lw=0)
@@ -110,13 +106,8 @@ def inversion_figure(path: str | Path, time: np.ndarray, controls: np.ndarray,
     identifiable : (c,) bool: controls the markers do not determine are drawn grey and
         labelled so
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     n = len(names) + (rms_error is not None)
-    fig, axes = plt.subplots(n, 1, figsize=(7, 0.85 * n + 1.0), sharex=True, squeeze=False)
+    fig, axes = subplots(n, 1, figsize=(7, 0.85 * n + 1.0), sharex=True, squeeze=False)
     lo = min(0.0, float(np.min(controls)))
     t = time[:-1]
     for r, name in enumerate(names):

@@ -7,29 +7,18 @@ from pathlib import Path
 import numpy as np
 
 from ..io.atomic import atomic_path
-
-
-def _plt():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
+from .plots import subplots
 
 
 def _save(fig, path):
-    plt = _plt()
     with atomic_path(path, suffix=".png") as tmp:
         fig.savefig(tmp, dpi=110)
-    plt.close(fig)
     return Path(path)
 
 
 def r_values_figure(path, r_values_mm: np.ndarray, eps_mm: float, title: str = ""):
     """Fig. 2: normalised R values against pivot order, with the epsilon line."""
-    plt = _plt()
-    fig, ax = plt.subplots(figsize=(6, 3.6))
+    fig, ax = subplots(figsize=(6, 3.6))
     k = np.arange(1, len(r_values_mm) + 1)
     ax.semilogy(k, np.maximum(r_values_mm, 1e-6), "ko", ms=3)
     ax.axhline(eps_mm, color="0.5", ls="--", lw=1, label=f"epsilon = {eps_mm:.2f} mm")
@@ -43,8 +32,7 @@ def r_values_figure(path, r_values_mm: np.ndarray, eps_mm: float, title: str = "
 
 def stability_figure(path, counts, first_r_mm: np.ndarray):
     """Fig. 3: the first R values against the number of utterances used."""
-    plt = _plt()
-    fig, ax = plt.subplots(figsize=(6, 3.6))
+    fig, ax = subplots(figsize=(6, 3.6))
     for j in range(first_r_mm.shape[1]):
         ax.plot(counts, first_r_mm[:, j], "-o", ms=2, lw=1)
     ax.set_xlabel("number of utterances")
@@ -58,9 +46,8 @@ def region_maps(path, xy_mm: np.ndarray, maps: list[np.ndarray], titles: list[st
     """Signed maps (Figs. 4-7): values at markers interpolated (cubic) over the frontal plane."""
     from scipy.interpolate import griddata
 
-    plt = _plt()
     n = len(maps)
-    fig, axes = plt.subplots(1, n, figsize=(3.2 * n, 4.0), squeeze=False)
+    fig, axes = subplots(1, n, figsize=(3.2 * n, 4.0), squeeze=False)
     gx, gy = np.meshgrid(np.linspace(xy_mm[:, 0].min(), xy_mm[:, 0].max(), 120),
                          np.linspace(xy_mm[:, 1].min(), xy_mm[:, 1].max(), 160))
     for ax, vals, title, mark in zip(axes[0], maps, titles, marks or [None] * n, strict=True):
@@ -80,8 +67,7 @@ def region_maps(path, xy_mm: np.ndarray, maps: list[np.ndarray], titles: list[st
 
 def error_figure(path, ks, abs_mm, rel, pca_mm):
     """Fig. 10: mean absolute and relative error of the secondary markers against k."""
-    plt = _plt()
-    fig, axes = plt.subplots(2, 1, figsize=(6, 5), sharex=True)
+    fig, axes = subplots(2, 1, figsize=(6, 5), sharex=True)
     axes[0].plot(ks, abs_mm, "ko-", ms=3, label="independent markers (QR)")
     axes[0].plot(ks, pca_mm, "s--", color="0.5", ms=3, label="PCA, same k (all markers seen)")
     axes[0].set_ylabel("mean abs. error (mm)")
@@ -95,8 +81,7 @@ def error_figure(path, ks, abs_mm, rel, pca_mm):
 
 def trajectory_figure(path, time, recorded_mm, predicted_mm, title):
     """Fig. 9: one marker's trajectory, recorded (dashed) and predicted (full), x, y, z."""
-    plt = _plt()
-    fig, axes = plt.subplots(3, 1, figsize=(6, 5), sharex=True)
+    fig, axes = subplots(3, 1, figsize=(6, 5), sharex=True)
     for a, ax in enumerate(axes):
         ax.plot(time, predicted_mm[:, a], "k-", lw=1.2, label="model")
         ax.plot(time, recorded_mm[:, a], "k--", lw=1.0, label="recorded")
