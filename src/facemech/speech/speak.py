@@ -39,25 +39,15 @@ FILES = {"audio": "speech.wav", "textgrid": "alignment.TextGrid", "alignment": "
 @dataclass(frozen=True)
 class Spoken:
     """What :func:`speak` made: the folder's files (name -> path), the alignment, the
-    simulation, the stimulus parameters and the manifest (a dict, as written)."""
+    simulation, the stimulus parameters, the manifest (a dict, as written) and the results
+    dataset."""
 
     files: dict
     alignment: object
     simulation: object
     description: dict
     manifest: dict = field(default_factory=dict)
-
-
-def _write_controls(path: Path, time: np.ndarray, activity: np.ndarray,
-                    jaw: np.ndarray) -> None:
-    from ..io.atomic import atomic_path
-    from ..params import MUSCLE_GROUPS
-
-    with atomic_path(path) as tmp, open(tmp, "w") as fh:
-        fh.write("time," + ",".join(MUSCLE_GROUPS) + ",jaw_angle\n")
-        for k in range(len(time)):
-            fh.write(f"{time[k]:.6f}," + ",".join(f"{a:.6f}" for a in activity[k])
-                     + f",{jaw[k]:.8f}\n")
+    dataset: object = None  # the results as an xarray.Dataset (what result.nc holds)
 
 
 def speak(
@@ -100,7 +90,9 @@ def speak(
     from .. import params as P
     from ..analysis.describe import describe
     from ..geometry.builder import load_face
-    from ..io.results import file_hash, to_dataset, write_results
+    from ..io.activity import write_activity
+    from ..io.results import file_hash, to_dataset, write_dataset
+    from ..params import MUSCLE_GROUPS
     from ..solvers.forward import simulate
     from .alignment_io import read_textgrid, write_alignment_csv, write_textgrid
     from .coarticulation import controls_from_alignment
@@ -151,12 +143,13 @@ def speak(
     write_alignment_csv(files["alignment"], alignment)
     t, act, jaw = controls_from_alignment(alignment, frame_rate=prm.frame_rate,
                                           strength=strength)
-    _write_controls(files["controls"], t, act, jaw)
+    write_activity(files["controls"], t, np.column_stack([act, jaw]),
+                   (*MUSCLE_GROUPS, "jaw_angle"))
     sim = simulate(model, act, jaw, params=prm,
                    progress=None if progress is None else
                    (lambda d, n: progress("simulate", d, n)))
-    write_results(files["results"], sim, inputs=inputs)
     ds = to_dataset(sim, inputs)
+    write_dataset(files["results"], ds)
     desc = describe(ds).to_dict()
     if video:
         from ..viz.video import render_results
@@ -188,7 +181,7 @@ def speak(
     with atomic_path(files["manifest"]) as tmp:
         tmp.write_text(json.dumps(manifest, indent=2, default=_json_default))
     return Spoken(files=files, alignment=alignment, simulation=sim, description=desc,
-                  manifest=manifest)
+                  manifest=manifest, dataset=ds)
 
 
 def _padded(samples, rate: int, alignment, before: float, after: float):
@@ -238,8 +231,6 @@ def text_items(work_dir: str | Path, *, preset: str = "anatomical"):
     work = Path(work_dir)
 
     def make_item(row: dict):
-        from ..io.results import to_dataset
-
         unknown = [k for k in row if k not in TEXT_ROW_COLUMNS]
         if unknown:
             raise InputError(f"not a column of a text row (have {', '.join(TEXT_ROW_COLUMNS)})",
@@ -253,8 +244,7 @@ def text_items(work_dir: str | Path, *, preset: str = "anatomical"):
         spoken = speak(work / key, str(row["text"]), voice=str(row.get("voice", "en-us")),
                        rate_wpm=rate, face=row.get("face", "default"),
                        preset=str(row.get("preset", preset)), strength=strength, video=False)
-        ds = to_dataset(spoken.simulation, spoken.manifest["inputs"])
-        return ds, spoken.files["audio"]
+        return spoken.dataset, spoken.files["audio"]
 
     make_item.version = f"speak {__version__}"
     return make_item
