@@ -7,68 +7,83 @@ left, +y up, +z forward.
 
 from __future__ import annotations
 
-from importlib.metadata import PackageNotFoundError, version
+import importlib
 
-try:
-    __version__ = version("facemech")
-except PackageNotFoundError:  # running from a source tree
-    __version__ = "0.0.0+unknown"
+from ._version import __version__
 
-from .emg import EMGActivity, process_emg
-from .errors import FacemechError, InputError, SimulationBlowUp
-from .geometry.builder import BuildOptions, FaceModel, build_face, default_face, load_face
-from .geometry.surface_io import read_landmarks, read_surface
-from .io.activity import read_activity, seven_channel_control, write_activity
-from .io.emg import read_emg
-from .io.markers import read_marker_csv, read_markers, write_marker_csv, write_markers
-from .io.results import read_results, write_results
-from .kinematics.frames import align_to_model, to_anatomical_frame
-from .kinematics.gaps import fill_gaps, find_gaps
-from .kinematics.mapping import closest_nodes, read_mapping, scale_adapt, warp_face
-from .kinematics.resample import derivative, resample
-from .kinematics.rigid import head_correct, rigid_fit
-from .markerset import MarkerSet
-from .params import (
-    EMG_CHANNELS,
-    MUSCLE_GROUPS,
-    PRESETS,
-    Parameters,
-    default_parameters,
-    preset,
-    read_preset,
-    write_preset,
-)
-from .physics.assembly import Physics
-from .solvers.forward import Simulation, simulate
-from .solvers.jaw import angles_from_chin, jaw_angles_from_marker
-from .solvers.state import State
-from .solvers.step import INTEGRATORS, Stepper
-
-#: pictures and exports, imported on first use (they load the renderer's kernels)
-_LAZY = {
-    "RenderOptions": "facemech.viz.video", "render_results": "facemech.viz.video",
-    "still": "facemech.viz.video", "write_viewer": "facemech.viz.viewer",
+#: every public name and the module that defines it; each module is imported on first use, so
+#: ``import facemech`` (and the command line's start) loads neither numba nor scipy
+_PUBLIC = {
+    "BuildOptions": "facemech.geometry.builder",
+    "EMGActivity": "facemech.emg",
+    "EMG_CHANNELS": "facemech.params",
+    "FaceModel": "facemech.geometry.builder",
+    "FacemechError": "facemech.errors",
+    "INTEGRATORS": "facemech.solvers.step",
+    "InputError": "facemech.errors",
+    "MUSCLE_GROUPS": "facemech.params",
+    "MarkerSet": "facemech.markerset",
+    "PRESETS": "facemech.params",
+    "Parameters": "facemech.params",
+    "Physics": "facemech.physics.assembly",
+    "RenderOptions": "facemech.viz.video",
+    "Simulation": "facemech.solvers.forward",
+    "SimulationBlowUp": "facemech.errors",
+    "State": "facemech.solvers.state",
+    "Stepper": "facemech.solvers.step",
+    "align_to_model": "facemech.kinematics.frames",
+    "angles_from_chin": "facemech.solvers.jaw",
+    "build_face": "facemech.geometry.builder",
+    "closest_nodes": "facemech.kinematics.mapping",
+    "default_face": "facemech.geometry.builder",
+    "default_parameters": "facemech.params",
+    "derivative": "facemech.kinematics.resample",
     "export_results": "facemech.io.export",
+    "fill_gaps": "facemech.kinematics.gaps",
+    "find_gaps": "facemech.kinematics.gaps",
+    "head_correct": "facemech.kinematics.rigid",
+    "jaw_angles_from_marker": "facemech.solvers.jaw",
+    "load_face": "facemech.geometry.builder",
+    "preset": "facemech.params",
+    "process_emg": "facemech.emg",
+    "read_activity": "facemech.io.activity",
+    "read_emg": "facemech.io.emg",
+    "read_landmarks": "facemech.geometry.surface_io",
+    "read_mapping": "facemech.kinematics.mapping",
+    "read_marker_csv": "facemech.io.markers",
+    "read_markers": "facemech.io.markers",
+    "read_preset": "facemech.params",
+    "read_results": "facemech.io.results",
+    "read_surface": "facemech.geometry.surface_io",
+    "render_results": "facemech.viz.video",
+    "resample": "facemech.kinematics.resample",
+    "rigid_fit": "facemech.kinematics.rigid",
+    "scale_adapt": "facemech.kinematics.mapping",
+    "seven_channel_control": "facemech.io.activity",
+    "simulate": "facemech.solvers.forward",
+    "still": "facemech.viz.video",
+    "to_anatomical_frame": "facemech.kinematics.frames",
+    "warp_face": "facemech.kinematics.mapping",
+    "write_activity": "facemech.io.activity",
+    "write_marker_csv": "facemech.io.markers",
+    "write_markers": "facemech.io.markers",
+    "write_preset": "facemech.params",
+    "write_results": "facemech.io.results",
+    "write_viewer": "facemech.viz.viewer",
 }
+
+__all__ = ["__version__", *_PUBLIC]
 
 
 def __getattr__(name: str):
-    if name in _LAZY:
-        import importlib
+    try:
+        module = _PUBLIC[name]
+    except KeyError:
+        raise AttributeError(f"module 'facemech' has no attribute {name!r}") from None
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
 
-        return getattr(importlib.import_module(_LAZY[name]), name)
-    raise AttributeError(f"module 'facemech' has no attribute {name!r}")
 
-
-__all__ = [
-    "__version__", "RenderOptions", "render_results", "still", "write_viewer", "export_results",
-    "BuildOptions", "EMGActivity", "EMG_CHANNELS", "FaceModel", "FacemechError",
-    "INTEGRATORS", "InputError", "MUSCLE_GROUPS", "MarkerSet", "PRESETS", "Parameters", "Physics",
-    "Simulation", "SimulationBlowUp", "State", "Stepper", "align_to_model", "angles_from_chin",
-    "build_face", "closest_nodes", "default_face", "default_parameters", "derivative", "fill_gaps",
-    "find_gaps", "head_correct", "jaw_angles_from_marker", "load_face", "preset", "process_emg",
-    "read_activity", "read_emg", "read_landmarks", "read_mapping", "read_marker_csv",
-    "read_markers", "read_preset", "read_results", "read_surface", "resample", "rigid_fit",
-    "scale_adapt", "seven_channel_control", "simulate", "to_anatomical_frame", "warp_face",
-    "write_activity", "write_marker_csv", "write_markers", "write_preset", "write_results",
-]
+def __dir__() -> list[str]:
+    return sorted(__all__)

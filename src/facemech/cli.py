@@ -33,7 +33,7 @@ app.add_typer(markers_app, name="markers")
 
 def _show_version(value: bool) -> None:
     if value:
-        from . import __version__
+        from ._version import __version__
 
         print(f"facemech {__version__}")
         raise typer.Exit()

@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from .params import MUSCLE_GROUPS
+from .waveforms import cosine_bump
 
 SYLLABLES = ("ba", "pi", "ma", "wu", "pa")
 SYLLABLE_S = 0.42
@@ -37,10 +38,7 @@ _CONSONANTS = {
 }
 
 
-def _bump(t: np.ndarray, centre: float, width: float) -> np.ndarray:
-    """Raised-cosine bump of unit height and total width ``width`` (s)."""
-    u = np.clip((t - centre) / width, -0.5, 0.5)
-    return 0.5 * (1 + np.cos(2 * np.pi * u))
+_bump = cosine_bump
 
 
 def utterance(frame_rate: float = 60.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

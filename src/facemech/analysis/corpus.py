@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from ..params import MUSCLE_GROUPS
+from ..waveforms import cosine_bump
 
 # name: (x, y) mm; the seeds number markers from the top of the face down
 SITES: dict[str, tuple[float, float]] = {
@@ -90,8 +91,7 @@ def random_utterance(rng: np.random.Generator, frames: int, frame_rate: float = 
     upper_face = ["COR", "CSU", "FRM", "FRL", "FRI"]
     while onset < t[-1]:
         width = period * rng.uniform(0.8, 1.4)
-        bump = 0.5 * (1 + np.cos(2 * np.pi * np.clip((t - onset - width / 2) / width, -0.5,
-                                                     0.5)))
+        bump = cosine_bump(t, onset + width / 2, width)
         jaw += np.radians(rng.uniform(0.0, 10.0)) * bump
         for g in rng.choice(lower_face, size=rng.integers(1, 5), replace=False):
             act[:, MUSCLE_GROUPS.index(g)] += rng.uniform(0.1, 0.9) * bump
@@ -123,7 +123,7 @@ def simulate_corpus(n_utterances: int = 40, frames: int = 60, seed: int = 2008,
                     progress: Callable[[int, int], None] | None = None,
                     cache: bool = True) -> list[np.ndarray]:
     """Noise-free trajectories of the 57 sites for ``n_utterances`` random utterances."""
-    from .. import __version__
+    from .._version import __version__
     from ..geometry.builder import default_face
     from ..solvers.forward import simulate
 

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..markerset import MarkerSet
+from ..waveforms import cosine_ramp
 
 #: displacements (mm) of each marker group in each posture: (dx, dy, dz); "out" for the corners
 #: is lateral (its sign follows the side). Ranges over the postures: upper lip y 3.6 (-1.6 to
@@ -60,7 +61,7 @@ def speech_targets(face, *, posture_s: float = 0.16, transition_s: float = 0.12,
         sel = (t >= a - 1e-12) & (t < b - 1e-12) if i < len(keys) - 1 else (t >= a - 1e-12)
         if what == "->":
             before, after = seq[i // 2], seq[i // 2 + 1]
-            u = 0.5 - 0.5 * np.cos(np.pi * (t[sel] - a) / (b - a))
+            u = cosine_ramp((t[sel] - a) / (b - a))
         else:
             before = after = what
             u = np.zeros(sel.sum())

@@ -18,6 +18,7 @@ import numpy as np
 
 from ..markerset import MarkerSet
 from ..params import MUSCLE_GROUPS, default_parameters
+from ..waveforms import cosine_bump
 from . import stats
 from .invert import invert
 
@@ -184,7 +185,7 @@ def gesture_controls(frames: int = 120):
     seg = t[-1] / 4 if frames > 1 else 1.0
 
     def bump(c, w):
-        return 0.5 * (1 + np.cos(2 * np.pi * np.clip((t - c) / w, -0.5, 0.5)))
+        return cosine_bump(t, c, w)
 
     for k, (vowel_deg, bilabial) in enumerate(((9.0, True), (5.0, True), (9.0, False),
                                                (5.0, False))):

@@ -7,7 +7,8 @@ All functions take trajectories as (frames, 3) or (frames, markers, 3) arrays in
 from __future__ import annotations
 
 import numpy as np
-from scipy.signal import savgol_filter
+
+from ..kinematics.resample import savgol_derivative
 
 
 def centroid(v: np.ndarray) -> np.ndarray:
@@ -78,19 +79,14 @@ def corr3d(v: np.ndarray, w: np.ndarray, *, published: bool = True) -> np.ndarra
     return np.where(still, np.nan, np.clip(r, -1.0, 1.0))
 
 
-def acceleration(x: np.ndarray, rate: float, window_s: float = 0.1, order: int = 3) -> np.ndarray:
-    """Second derivative along axis 0 by a Savitzky-Golay filter (unit per s^2).
+#: window of the acceleration statistics, s: 7 samples at 60 Hz, smoother than the default
+#: derivative because a second derivative of recorded markers amplifies noise most
+ACCELERATION_WINDOW_S = 0.1
 
-    The window (``window_s``, odd, at least ``order + 2`` samples) shrinks to the series'
-    length; a series too short for it gives zeros.
-    """
-    n = len(x)
-    win = max(order + 2, int(round(window_s * rate)) | 1)
-    if win > n:
-        win = n if n % 2 else n - 1
-    if win <= order:
-        return np.zeros_like(x)
-    return savgol_filter(x, win, order, deriv=2, delta=1.0 / rate, axis=0)
+
+def acceleration(x: np.ndarray, rate: float) -> np.ndarray:
+    """Second derivative along axis 0 (unit per s^2), by :func:`savgol_derivative`."""
+    return savgol_derivative(x, rate, 2, window_s=ACCELERATION_WINDOW_S)
 
 
 def cross_correlation(a: np.ndarray, b: np.ndarray) -> float:

@@ -192,7 +192,7 @@ def _glb(document: dict, binary: bytes) -> bytes:
 
 def gltf_document(ds, source: Path | None = None) -> tuple[dict, bytes]:
     """The glTF JSON document and binary buffer of a results dataset (see :func:`write_gltf`)."""
-    from .. import __version__
+    from .._version import __version__
 
     pos, tris, times = _frames(ds, source)
     n_frames, n_nodes = pos.shape[:2]

@@ -66,7 +66,7 @@ def to_dataset(sim, inputs: dict[str, str] | None = None, extra: dict | None = N
     """An :class:`xarray.Dataset` of a :class:`~facemech.solvers.forward.Simulation`."""
     import xarray as xr
 
-    from .. import __version__
+    from .._version import __version__
     from ..geometry.appearance import dataset_variables
 
     model = sim.model

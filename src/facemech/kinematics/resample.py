@@ -48,11 +48,49 @@ def resample(ms: MarkerSet, rate: float, *, cutoff_fraction: float = 0.8) -> Mar
                      filled=filled, meta={**ms.meta, "resampled_from_hz": ms.rate})
 
 
-def derivative(ms: MarkerSet, order: int = 1, *, window_s: float = 0.05,
-               polyorder: int = 3) -> np.ndarray:
-    """Velocity (order 1, m/s) or acceleration (order 2, m/s^2) by Savitzky-Golay filtering.
+#: the default Savitzky-Golay window of derivatives, s (5 samples at 60 Hz and 100 Hz)
+DERIVATIVE_WINDOW_S = 0.05
 
-    Returns (frames, markers, 3); NaN in gaps and in runs too short for the window.
+
+def savgol_derivative(x: np.ndarray, rate: float, order: int = 1, *,
+                      window_s: float = DERIVATIVE_WINDOW_S, polyorder: int = 3) -> np.ndarray:
+    """Derivative of a gap-free series along axis 0 by a Savitzky-Golay filter.
+
+    Parameters
+    ----------
+    x : ndarray, shape (samples, ...)
+        The series, any unit.
+    rate : float
+        Sampling rate, Hz.
+    order : {1, 2}
+        Velocity (unit/s) or acceleration (unit/s^2).
+    window_s : float
+        Filter window, s; made an odd sample count of at least ``polyorder + 2`` and shrunk to
+        the series' length.
+    polyorder : int
+        Polynomial order of the local fit.
+
+    Returns
+    -------
+    ndarray, the shape of ``x``; zeros when the series is too short for any window.
+    """
+    if order not in (1, 2):
+        raise InputError("order must be 1 or 2", field="order")
+    n = len(x)
+    win = max(polyorder + 2, int(round(window_s * rate)) | 1)
+    if win > n:
+        win = n if n % 2 else n - 1
+    if win <= polyorder:
+        return np.zeros_like(x, dtype=float)
+    return savgol_filter(x, win, polyorder, deriv=order, delta=1.0 / rate, axis=0)
+
+
+def derivative(ms: MarkerSet, order: int = 1, *, window_s: float = DERIVATIVE_WINDOW_S,
+               polyorder: int = 3) -> np.ndarray:
+    """Velocity (order 1, m/s) or acceleration (order 2, m/s^2) of every marker.
+
+    Each gap-free run is differentiated by :func:`savgol_derivative`. Returns
+    (frames, markers, 3); NaN in gaps and in runs shorter than the window.
     """
     if order not in (1, 2):
         raise InputError("order must be 1 or 2", field="order")
@@ -62,6 +100,6 @@ def derivative(ms: MarkerSet, order: int = 1, *, window_s: float = 0.05,
         for a, b in runs(ms.valid[:, m]):
             if b - a < win:
                 continue
-            out[a:b, m] = savgol_filter(ms.positions[a:b, m], win, polyorder, deriv=order,
-                                        delta=1.0 / ms.rate, axis=0)
+            out[a:b, m] = savgol_derivative(ms.positions[a:b, m], ms.rate, order,
+                                            window_s=window_s, polyorder=polyorder)
     return out

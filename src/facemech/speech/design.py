@@ -352,7 +352,7 @@ def run_design(table_path: str | Path, out_dir: str | Path, make_item: MakeItem 
     -------
     DesignReport
     """
-    from .. import __version__
+    from .._version import __version__
     from ..analysis.describe import describe
     from ..io.results import file_hash, write_dataset
 
@@ -500,7 +500,7 @@ def _old_entries(path: Path) -> dict[str, dict]:
 
 def _write_manifest(out_dir: Path, table: Path, render: dict, entries: list[dict],
                     report: DesignReport) -> None:
-    from .. import __version__
+    from .._version import __version__
     from ..io.atomic import atomic_path
     from ..io.results import file_hash
 

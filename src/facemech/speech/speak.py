@@ -226,7 +226,7 @@ def text_items(work_dir: str | Path, *, preset: str = "anatomical"):
 
     A row may set ``text``, ``face``, ``voice``, ``rate_wpm``, ``strength`` and ``preset``.
     """
-    from .. import __version__
+    from .._version import __version__
 
     work = Path(work_dir)
 

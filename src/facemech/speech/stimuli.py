@@ -43,6 +43,7 @@ import json
 import numpy as np
 
 from ..errors import InputError
+from ..waveforms import cosine_ramp
 from .audio import Audio, fit_length, shift, time_stretch
 from .audio import onset as audio_onset
 from .audio import peak as audio_peak
@@ -51,10 +52,7 @@ REGIONS = ("face", "lips", "jaw", "upper_face")
 
 
 # ---- regions ----------------------------------------------------------------------------------
-def _cosine_step(u: np.ndarray) -> np.ndarray:
-    """0 for u <= 0, 1 for u >= 1, a raised cosine between."""
-    u = np.clip(u, 0.0, 1.0)
-    return 0.5 - 0.5 * np.cos(np.pi * u)
+_cosine_step = cosine_ramp
 
 
 def region_partition(ds, *, source: str | None = None) -> dict[str, np.ndarray]:
