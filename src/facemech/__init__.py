@@ -5,9 +5,7 @@ processed EMG or by muscle activity (Lucero & Munhall 1999). SI units inside; +x
 left, +y up, +z forward.
 """
 
-from __future__ import annotations
-
-import importlib
+import importlib as _importlib
 
 from ._version import __version__
 
@@ -80,7 +78,7 @@ def __getattr__(name: str):
         module = _PUBLIC[name]
     except KeyError:
         raise AttributeError(f"module 'facemech' has no attribute {name!r}") from None
-    value = getattr(importlib.import_module(module), name)
+    value = getattr(_importlib.import_module(module), name)
     globals()[name] = value
     return value
 

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .params import MUSCLE_GROUPS
+from .params import FRAME_RATE_HZ, MUSCLE_GROUPS
 from .waveforms import cosine_bump
 
 SYLLABLES = ("ba", "pi", "ma", "wu", "pa")
@@ -41,7 +41,7 @@ _CONSONANTS = {
 _bump = cosine_bump
 
 
-def utterance(frame_rate: float = 60.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def utterance(frame_rate: float = FRAME_RATE_HZ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Synthetic speech-like controls.
 
     Returns

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import InputError
-from .params import MUSCLE_GROUPS
+from .params import FRAME_RATE_HZ, MUSCLE_GROUPS
 
 WINDOW_S = 0.017  #: s, trapezoidal integration window
 QUIET_FRACTION = 0.10  #: fraction of lowest samples averaged for the default baseline
@@ -51,7 +51,7 @@ def trapezoid_kernel(rate: float, width: float = WINDOW_S) -> np.ndarray:
     return w / w.sum()
 
 
-def integrate(signal: np.ndarray, rate: float, out_rate: float = 60.0,
+def integrate(signal: np.ndarray, rate: float, out_rate: float = FRAME_RATE_HZ,
               width: float = WINDOW_S) -> tuple[np.ndarray, np.ndarray]:
     """Rectify and integrate (n, channels) EMG, sampled at ``out_rate`` Hz.
 
@@ -93,7 +93,7 @@ def process_emg(
     rate: float,
     channels: tuple[str, ...] | list[str],
     *,
-    out_rate: float = 60.0,
+    out_rate: float = FRAME_RATE_HZ,
     baseline: tuple[float, float] | None = None,
     calibration: np.ndarray | None = None,
     calibration_rate: float | None = None,

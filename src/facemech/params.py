@@ -22,6 +22,9 @@ MUSCLE_GROUPS: tuple[str, ...] = (
 
 #: The seven EMG control channels of the seeds (LAO and ZYG share one signal).
 EMG_CHANNELS: tuple[str, ...] = ("LLS", "LAO", "DAO", "DLI", "MEN", "OOS", "OOI")
+#: Hz, the control and output frame rate of every preset (the seeds' 60-Hz Optotrak rate); the
+#: one default of every frame rate in facemech
+FRAME_RATE_HZ = 60.0
 
 # Cross-sectional areas S in cm^2.  The eight perioral values are Table II of Lucero & Munhall
 # (1999).  The paper lists the other muscles without an area; our estimates scale each by its size
@@ -101,7 +104,7 @@ class Parameters:
     # under the published k_f (markers within 0.18 mm on the demo utterance); presets on which
     # 1 ms blows up or overshoots keep the paper's step (docs/model.md)
     fast_dt: float = 1e-3
-    frame_rate: float = 60.0  # Hz, control and output rate
+    frame_rate: float = FRAME_RATE_HZ  # Hz, control and output rate
     areas_cm2: MappingProxyType = field(default_factory=lambda: AREA_CM2)
     # ---- how the constants above are read, and what the anatomical preset adds ---------------
     # "per_spring": the seeds' constants per 1-cm spring and per node (Lucero & Munhall 1999);

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
-from ..params import EMG_CHANNELS, MUSCLE_GROUPS
+from ..params import EMG_CHANNELS, FRAME_RATE_HZ, MUSCLE_GROUPS
 from .atomic import atomic_path
 from .tables import read_table
 
@@ -21,7 +21,8 @@ def resample_to_frames(t: np.ndarray, values: np.ndarray, rate: float) -> tuple[
     return grid, out
 
 
-def read_activity(path: str | Path, *, frame_rate: float = 60.0) -> tuple[np.ndarray, np.ndarray]:
+def read_activity(path: str | Path, *,
+                  frame_rate: float = FRAME_RATE_HZ) -> tuple[np.ndarray, np.ndarray]:
     """Read an activity CSV and return it at the frame rate.
 
     Columns are muscle groups (:data:`~facemech.params.MUSCLE_GROUPS`, case-insensitive);

@@ -29,6 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
+from ..params import FRAME_RATE_HZ
 from ..units import length_scale
 from .atomic import atomic_path
 
@@ -228,7 +229,7 @@ def gltf_document(ds, source: Path | None = None) -> tuple[dict, bytes]:
         "asset": {"version": "2.0", "generator": f"facemech {__version__}",
                   "extras": {"units": "m", "axes": "+x subject's left, +y up, +z forward "
                              "(glTF's own: +Y up, +Z forward, right-handed)",
-                             "frame_rate_hz": float(ds.attrs.get("frame_rate_hz", 60.0)),
+                             "frame_rate_hz": float(ds.attrs.get("frame_rate_hz", FRAME_RATE_HZ)),
                              "frames": n_frames, "face": str(ds.attrs.get("face", "")),
                              "preset": str(ds.attrs.get("preset", "")),
                              "source": "" if source is None else Path(source).name,
@@ -386,7 +387,7 @@ def write_mesh_sequence(results, folder: str | Path, fmt: str = "obj", *,
             entries.append({"file": name, "time_s": float(times[k])})
         index = {"format": SEQUENCE_FORMAT, "version": 1, "mesh_format": fmt, "units": units,
                  "axes": "+x subject's left, +y up, +z forward",
-                 "frame_rate_hz": float(ds.attrs.get("frame_rate_hz", 60.0)),
+                 "frame_rate_hz": float(ds.attrs.get("frame_rate_hz", FRAME_RATE_HZ)),
                  "nodes": int(pos.shape[1]), "triangles": int(len(tris)),
                  "source": "" if source is None else Path(source).name, "frames": entries}
         (tmp / "index.json").write_text(_index_text(index))

@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
-from ..params import MUSCLE_GROUPS
+from ..params import FRAME_RATE_HZ, MUSCLE_GROUPS
 from .atomic import atomic_path
 
 
@@ -241,7 +241,7 @@ def results_markers(ds, *, source: str | Path | None = None):
     if unit != "m":
         raise InputError(f"markers must be in metres, not {unit!r}", source=src,
                          field="markers")
-    rate = float(ds.attrs.get("frame_rate_hz", 60.0))
+    rate = float(ds.attrs.get("frame_rate_hz", FRAME_RATE_HZ))
     return MarkerSet(var.transpose("time", "marker", "axis").values,
                      tuple(str(n) for n in ds["marker"].values), rate,
                      time=ds["time"].values, source_units="m",

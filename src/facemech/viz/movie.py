@@ -18,6 +18,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..io.atomic import atomic_path
+from ..params import FRAME_RATE_HZ
 from .render import RenderOptions
 from .scene import Scene
 
@@ -59,7 +60,7 @@ def write_movie(
     positions: np.ndarray,
     jaw_angle: np.ndarray | None = None,
     *,
-    fps: float = 60.0,
+    fps: float = FRAME_RATE_HZ,
     audio: str | Path | None = None,
     options: RenderOptions | None = None,
     progress: Callable[[int, int], None] | None = None,

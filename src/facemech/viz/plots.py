@@ -10,6 +10,7 @@ import numpy as np
 
 from ..inverse.stats import acceleration, cross_correlation
 from ..io.atomic import atomic_path
+from ..params import FRAME_RATE_HZ
 
 
 def subplots(nrows: int = 1, ncols: int = 1, *, figsize, **kw):
@@ -32,7 +33,7 @@ def save_figure(fig, path: str | Path, title: str = "") -> Path:
 
 
 def kinematics_figure(path: str | Path, time: np.ndarray, trajectories: dict[str, np.ndarray],
-                      *, rate: float = 60.0, measured: dict[str, np.ndarray] | None = None,
+                      *, rate: float = FRAME_RATE_HZ, measured: dict[str, np.ndarray] | None = None,
                       title: str = "") -> Path:
     """Write a PNG with, per marker, displacement and acceleration in y and z.
 

@@ -15,6 +15,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..io.atomic import atomic_path
+from ..params import FRAME_RATE_HZ
 from .render import Renderer, RenderOptions
 from .scene import Scene, build_scene, look_from_dataset, look_from_model
 
@@ -53,7 +54,7 @@ def render_results(ds, output: str | Path, *, options: RenderOptions | None = No
     scene = scene_of(ds)
     pos = ds["positions"].values
     jaw = jaw_poses_of(ds)
-    fps = float(fps or ds.attrs.get("frame_rate_hz", 60.0))
+    fps = float(fps or ds.attrs.get("frame_rate_hz", FRAME_RATE_HZ))
     output = Path(output)
     if output.suffix.lower() == ".mp4":
         return write_movie(output, scene, pos, jaw, fps=fps, audio=audio, options=opt,

@@ -67,6 +67,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..io.atomic import atomic_path
+from ..params import FRAME_RATE_HZ
 
 FORMAT = "facemech-viewer/1"
 DATA_ID = "facemech-data"
@@ -295,10 +296,10 @@ def viewer_data(results, measured=None, title: str | None = None) -> dict:
     if rest.shape != (nodes, 3) or not np.all(np.isfinite(rest)):
         rest = pos[0]
     time = (np.asarray(results["time"].values, float) if "time" in results.coords
-            else np.arange(frames) / float(results.attrs.get("frame_rate_hz", 60.0)))
+            else np.arange(frames) / float(results.attrs.get("frame_rate_hz", FRAME_RATE_HZ)))
     rate = float(results.attrs.get("frame_rate_hz", 0.0) or 0.0)
     if not rate > 0:
-        rate = 1.0 / float(np.median(np.diff(time))) if frames > 1 else 60.0
+        rate = 1.0 / float(np.median(np.diff(time))) if frames > 1 else FRAME_RATE_HZ
     steps, scale = quantise(pos, rest)
 
     mk = np.asarray(results["markers"].transpose("time", "marker", "axis").values, float)
