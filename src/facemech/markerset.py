@@ -14,6 +14,9 @@ import numpy as np
 
 from .errors import InputError
 
+#: Hz, the highest sampling rate accepted: above any motion-capture system (they reach a few kHz)
+MAX_RATE_HZ = 100_000.0
+
 
 @dataclass(frozen=True, eq=False)
 class MarkerSet:
@@ -49,10 +52,18 @@ class MarkerSet:
         if len(set(names)) != len(names):
             dup = next(n for n in names if names.count(n) > 1)
             raise InputError("duplicate marker label", field=dup)
-        if not self.rate > 0:
-            raise InputError("sampling rate must be positive", field="rate")
+        if not (np.isfinite(self.rate) and 0 < self.rate <= MAX_RATE_HZ):
+            raise InputError(f"sampling rate {self.rate!r} Hz is not a finite rate in "
+                             f"(0, {MAX_RATE_HZ:g}] Hz", field="rate")
         t = (np.arange(pos.shape[0]) / self.rate if self.time is None
              else np.asarray(self.time, float))
+        if t.shape != pos.shape[:1]:
+            raise InputError(f"{t.size} times for {pos.shape[0]} frames", field="time")
+        if not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
+            bad = int(np.argmax(~np.isfinite(t))) if not np.all(np.isfinite(t)) else \
+                int(np.argmax(np.diff(t) <= 0)) + 1
+            raise InputError(f"time must be finite and strictly increasing (frame {bad + 1}: "
+                             f"{float(t[bad])!r} s)", field="time")
         filled = (np.zeros(pos.shape[:2], bool) if self.filled is None
                   else np.asarray(self.filled, bool))
         for name, a in (("positions", pos), ("time", t), ("filled", filled)):

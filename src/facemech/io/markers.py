@@ -137,6 +137,18 @@ def read_markers(path: str | Path, *, units: str | None = None) -> MarkerSet:
                          f"{', '.join(FORMATS)})", source=str(path))
     if not path.is_file():
         raise InputError("file not found", source=str(path))
+    try:
+        return _read(path, fmt, units)
+    except UnicodeDecodeError:
+        raise InputError(f"binary data where a text {fmt.upper()} file was expected",
+                         source=str(path)) from None
+    except InputError as exc:
+        if exc.source is None:  # raised by the marker-set type: name the file it came from
+            raise InputError(exc.message, source=str(path), field=exc.field) from None
+        raise
+
+
+def _read(path: Path, fmt: str, units: str | None) -> MarkerSet:
     if fmt == "csv":
         return read_marker_csv(path, units=units)
     if fmt == "tsv":

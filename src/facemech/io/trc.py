@@ -31,6 +31,9 @@ def read_trc(path: str | Path, *, units: str | None = None) -> MarkerSet:
         n_markers = int(info["NumMarkers"])
     except (KeyError, ValueError):
         raise InputError("bad header", source=str(path), field="DataRate/NumMarkers") from None
+    if not (np.isfinite(rate) and rate > 0):
+        raise InputError(f"DataRate {rate:g} Hz is not a positive finite rate", source=str(path),
+                         field="DataRate")
     names = [c.strip() for c in lines[3].split("\t")[2:] if c.strip()]
     if len(names) != n_markers:
         raise InputError(f"{len(names)} marker labels but NumMarkers = {n_markers}",
@@ -49,6 +52,10 @@ def read_trc(path: str | Path, *, units: str | None = None) -> MarkerSet:
     data = np.array(rows)
     if len(data) == 0:
         raise InputError("no frames", source=str(path), field="data")
+    t = data[:, 1]
+    if not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
+        raise InputError("the Time column must be finite and strictly increasing",
+                         source=str(path), field="Time")
     if len(data) > 1:
         file_rate = 1.0 / float(np.median(np.diff(data[:, 1])))
         if abs(file_rate - rate) > 0.01 * rate:

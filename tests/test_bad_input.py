@@ -1,0 +1,101 @@
+"""Bad input (issue 18): one stderr line naming the file and the field, exit 2, no traceback,
+and the folder left exactly as it was (input bytes identical, nothing new, no temporary file).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+
+import numpy as np
+import pytest
+
+from conftest import run_cli
+from facemech.errors import InputError
+from facemech.markerset import MarkerSet
+
+TRC_HEADER = ("PathFileType\t4\t(X/Y/Z)\tx.trc\n"
+              "DataRate\tCameraRate\tNumFrames\tNumMarkers\tUnits\tOrigDataRate\t"
+              "OrigDataStartFrame\tOrigNumFrames\n"
+              "{rate}\t{rate}\t3\t{n}\tmm\t{rate}\t1\t3\n"
+              "Frame#\tTime\t{labels}\n"
+              "\t\t{axes}\n\n")
+
+
+def _trc(rate="60", times=("0.0", "0.0166667", "0.0333333"), labels=("A",)) -> str:
+    head = TRC_HEADER.format(rate=rate, n=len(labels), labels="\t\t\t".join(labels) + "\t\t",
+                             axes="\t".join(f"{a}{k + 1}" for k in range(len(labels))
+                                            for a in "XYZ"))
+    rows = "".join(f"{k + 1}\t{t}\t" + "\t".join(["1.0", "2.0", "3.0"] * len(labels)) + "\n"
+                   for k, t in enumerate(times))
+    return head + rows
+
+
+def _snapshot(folder):
+    return {p.name: hashlib.sha256(p.read_bytes()).hexdigest() for p in sorted(folder.iterdir())}
+
+
+def _refused(monkeypatch, capsys, tmp_path, name: str, content, field: str | None,
+             command=("markers", "convert")):
+    path = tmp_path / name
+    if isinstance(content, bytes):
+        path.write_bytes(content)
+    else:
+        path.write_text(content)
+    before = _snapshot(tmp_path)
+    code, out, err = run_cli(monkeypatch, capsys, *command, path, tmp_path / "out.csv")
+    lines = err.strip().splitlines()
+    assert code == 2, err
+    assert len(lines) == 1 and "Traceback" not in err, err
+    assert lines[0].startswith(f"facemech: error: {path}"), lines[0]
+    if field is not None:
+        assert f"field '{field}'" in lines[0], lines[0]
+    assert _snapshot(tmp_path) == before, "the folder changed"
+    return lines[0]
+
+
+JUNK = bytes(range(256)) * 8
+
+
+@pytest.mark.parametrize("name", ["junk.trc", "junk.csv", "junk.tsv"])
+def test_binary_junk_in_a_text_format(monkeypatch, capsys, tmp_path, name):
+    line = _refused(monkeypatch, capsys, tmp_path, name, JUNK, None)
+    assert "text" in line or "binary" in line
+
+
+@pytest.mark.parametrize("times, why", [
+    (("0.0", "nan", "0.0333333"), "a NaN time"),
+    (("0.0", "0.05", "0.0333333"), "time going back"),
+    (("0.0", "0.0", "0.0333333"), "a repeated time"),
+])
+def test_trc_time_must_be_finite_and_increasing(monkeypatch, capsys, tmp_path, times, why):
+    line = _refused(monkeypatch, capsys, tmp_path, "t.trc", _trc(times=times), "Time")
+    assert "strictly increasing" in line, why
+
+
+@pytest.mark.parametrize("rate", ["inf", "0", "-60", "nan"])
+def test_trc_rate_must_be_positive_and_finite(monkeypatch, capsys, tmp_path, rate):
+    _refused(monkeypatch, capsys, tmp_path, "r.trc", _trc(rate=rate), "DataRate")
+
+
+def test_duplicate_marker_labels_name_the_file_and_the_label(monkeypatch, capsys, tmp_path):
+    line = _refused(monkeypatch, capsys, tmp_path, "d.trc", _trc(labels=("UL", "UL")), "UL")
+    assert "duplicate" in line
+
+
+def test_csv_time_in_the_wrong_order(monkeypatch, capsys, tmp_path):
+    text = "# units: mm\ntime,A_x,A_y,A_z\n0.0,1,2,3\n0.02,1,2,3\n0.01,1,2,3\n"
+    _refused(monkeypatch, capsys, tmp_path, "m.csv", text, "time")
+
+
+@pytest.mark.parametrize("rate", [0.0, -1.0, math.inf, math.nan, 1e9])
+def test_the_marker_set_refuses_impossible_rates(rate):
+    with pytest.raises(InputError, match="rate"):
+        MarkerSet(np.zeros((3, 1, 3)), ("A",), rate)
+
+
+def test_the_marker_set_refuses_unordered_time():
+    with pytest.raises(InputError, match="frame 3"):
+        MarkerSet(np.zeros((3, 1, 3)), ("A",), 60.0, time=np.array([0.0, 0.2, 0.1]))
+    with pytest.raises(InputError, match="2 times for 3 frames"):
+        MarkerSet(np.zeros((3, 1, 3)), ("A",), 60.0, time=np.array([0.0, 0.2]))
