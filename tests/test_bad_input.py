@@ -99,3 +99,103 @@ def test_the_marker_set_refuses_unordered_time():
         MarkerSet(np.zeros((3, 1, 3)), ("A",), 60.0, time=np.array([0.0, 0.2, 0.1]))
     with pytest.raises(InputError, match="2 times for 3 frames"):
         MarkerSet(np.zeros((3, 1, 3)), ("A",), 60.0, time=np.array([0.0, 0.2]))
+
+
+# ---- results files -----------------------------------------------------------------------------
+def _tiny_results(path, positions):
+    import xarray as xr
+
+    ds = xr.Dataset({"positions": (("time", "node", "axis"), positions),
+                     "markers": (("time", "marker", "axis"), np.zeros((2, 1, 3))),
+                     "triangles": (("triangle", "corner"), np.array([[0, 1, 2]]))},
+                    attrs={"frame_rate_hz": 60.0})
+    ds.to_netcdf(path, engine="h5netcdf")
+
+
+def test_a_results_file_holding_nan_is_refused_on_reading(tmp_path):
+    from facemech.io.results import read_results
+
+    pos = np.zeros((2, 3, 3))
+    _tiny_results(tmp_path / "ok.nc", pos)
+    assert read_results(tmp_path / "ok.nc")["positions"].shape == (2, 3, 3)
+    pos[1, 2, 0] = np.nan
+    _tiny_results(tmp_path / "nan.nc", pos)
+    with pytest.raises(InputError, match=r"nan\.nc: field 'positions': non-finite value at "
+                                         r"index \(1, 2, 0\)"):
+        read_results(tmp_path / "nan.nc")
+
+
+# ---- outputs -----------------------------------------------------------------------------------
+def test_an_output_equal_to_an_input_is_refused(tmp_path):
+    from facemech.io.atomic import check_output
+
+    src = tmp_path / "in.csv"
+    src.write_text("x")
+    with pytest.raises(InputError, match="refusing to overwrite an input"):
+        check_output(src, [None, src], field="-o")
+    link = tmp_path / "link.csv"
+    link.symlink_to(src)
+    with pytest.raises(InputError, match="field '-o'"):
+        check_output(link, [src], field="-o")
+    with pytest.raises(InputError, match="refusing"):
+        check_output(tmp_path / "sub" / ".." / "in.csv", [src])
+    assert check_output(tmp_path / "out.csv", [src]) == tmp_path / "out.csv"
+    assert src.read_text() == "x" and sorted(p.name for p in tmp_path.iterdir()) == [
+        "in.csv", "link.csv"]
+
+
+def test_an_output_where_it_cannot_be_written_is_refused(tmp_path):
+    from facemech.io.atomic import check_output
+
+    (tmp_path / "file").write_text("x")
+    (tmp_path / "folder").mkdir()
+    with pytest.raises(InputError, match="goes through the file"):
+        check_output(tmp_path / "file" / "out.nc")
+    with pytest.raises(InputError, match="a folder is in the way"):
+        check_output(tmp_path / "folder")
+    with pytest.raises(InputError, match="a file is in the way"):
+        check_output(tmp_path / "file", folder=True)
+    assert check_output(tmp_path / "new" / "deeper", folder=True).name == "deeper"
+    assert not (tmp_path / "new").exists(), "checking created the folder"
+
+
+def test_pending_temporary_files_are_removed(tmp_path):
+    from facemech.io.atomic import atomic_path, remove_pending
+
+    with pytest.raises(RuntimeError), atomic_path(tmp_path / "out.csv") as tmp:
+        tmp.write_text("half")
+        assert remove_pending() == 1 and not tmp.exists()
+        raise RuntimeError
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("sig, status", [("SIGINT", 130), ("SIGTERM", 143)])
+def test_a_signal_removes_temporary_files_and_exits_with_the_shell_status(tmp_path, sig,
+                                                                          status):
+    import subprocess
+    import sys
+
+    code = f"""
+import os, signal
+from facemech.interrupts import install
+from facemech.io.atomic import atomic_path
+install()
+with atomic_path({str(tmp_path / 'out.nc')!r}) as tmp:
+    tmp.write_text("half written")
+    os.kill(os.getpid(), signal.{sig})
+    import time; time.sleep(5)
+"""
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=60)
+    assert done.returncode == status
+    assert done.stderr.strip() == "facemech: interrupted"
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_an_unwritable_package_sends_the_numba_cache_to_a_temporary_folder():
+    import facemech
+
+    assert facemech._numba_cache_dir("/pkg", {}, lambda d: True) is None
+    assert facemech._numba_cache_dir("/pkg", {"NUMBA_CACHE_DIR": "/c"}, lambda d: False) is None
+    where = facemech._numba_cache_dir("/pkg", {}, lambda d: False)
+    assert "facemech-numba-cache" in where

@@ -158,6 +158,11 @@ def write_dataset(path: str | Path, ds) -> Path:
     return Path(path)
 
 
+#: the variables of a results file that must be finite everywhere (checked on reading)
+FINITE_VARIABLES = ("positions", "markers", "rest_positions", "activity", "jaw_angle",
+                    "jaw_shift")
+
+
 def read_results(path: str | Path):
     """Open a results file as an :class:`xarray.Dataset` (loaded into memory)."""
     import xarray as xr
@@ -174,6 +179,12 @@ def read_results(path: str | Path):
     for need in ("positions", "markers", "triangles"):
         if need not in ds:
             raise InputError("not a facemech results file", source=str(path), field=need)
+    for name in FINITE_VARIABLES:
+        if name in ds and not np.all(np.isfinite(ds[name].values)):
+            bad = np.argwhere(~np.isfinite(ds[name].values))[0]
+            raise InputError(f"non-finite value at index {tuple(int(i) for i in bad)}: a results "
+                             "file holds finite numbers only (was it edited by hand?)",
+                             source=str(path), field=name)
     return with_jaw_shift(ds)
 
 

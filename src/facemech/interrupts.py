@@ -1,0 +1,36 @@
+"""Interrupted commands: SIGINT and SIGTERM end a command cleanly.
+
+The handler removes the temporary files being written (:func:`facemech.io.atomic.remove_pending`),
+prints ``facemech: interrupted`` on stderr and exits with the shell's status for the signal:
+130 for SIGINT (Ctrl-C), 143 for SIGTERM. Finished outputs are complete files (they were renamed
+into place whole); nothing half-written is left.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import sys
+
+__all__ = ["EXIT_STATUS", "install", "handle"]
+
+#: the exit status of a command ended by each signal (128 + the signal number)
+EXIT_STATUS = {signal.SIGINT: 130, signal.SIGTERM: 143}
+
+
+def handle(signum: int, frame=None) -> None:
+    """Clean up and exit: remove pending temporary files, say so, exit 128 + ``signum``."""
+    from .io.atomic import remove_pending
+
+    remove_pending()
+    try:
+        sys.stderr.write("facemech: interrupted\n")
+        sys.stderr.flush()
+    finally:
+        os._exit(EXIT_STATUS.get(signum, 128 + int(signum)))
+
+
+def install() -> None:
+    """Install :func:`handle` for SIGINT and SIGTERM (main thread only)."""
+    for sig in EXIT_STATUS:
+        signal.signal(sig, handle)
