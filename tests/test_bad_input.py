@@ -199,3 +199,39 @@ def test_an_unwritable_package_sends_the_numba_cache_to_a_temporary_folder():
     assert facemech._numba_cache_dir("/pkg", {"NUMBA_CACHE_DIR": "/c"}, lambda d: False) is None
     where = facemech._numba_cache_dir("/pkg", {}, lambda d: False)
     assert "facemech-numba-cache" in where
+
+
+# ---- C3D in every byte order -------------------------------------------------------------------
+def _c3d_bytes(processor: int, frames: int, data_bytes: int) -> bytes:
+    """A C3D header + parameter header announcing 2 float points over ``frames`` frames."""
+    order = ">" if processor == 86 else "<"
+    words = np.zeros(256, dtype=f"{order}u2")
+    words[1], words[2], words[3], words[4], words[8] = 2, 0, 1, frames, 3
+    head = bytearray(words.tobytes())
+    head[0], head[1] = 2, 0x50
+    sign = {84: 15, 85: 13, 86: 12}[processor]
+    head[sign] |= 0x80  # a negative scale: float samples
+    params = bytearray(512)
+    params[:4] = bytes([1, 0x50, 1, processor])
+    return bytes(head) + bytes(params) + bytes(data_bytes)
+
+
+@pytest.mark.parametrize("processor", [84, 85, 86])
+def test_a_truncated_c3d_is_refused_in_every_byte_order(tmp_path, processor):
+    from facemech.io.c3d import check_header
+
+    whole = 10 * 2 * 4 * 4  # 10 frames x 2 points x (x, y, z, residual) x 4 bytes
+    (tmp_path / "whole.c3d").write_bytes(_c3d_bytes(processor, 10, whole))
+    check_header(tmp_path / "whole.c3d")
+    (tmp_path / "cut.c3d").write_bytes(_c3d_bytes(processor, 10, whole - 16))
+    with pytest.raises(InputError, match=r"cut\.c3d: field .header.: truncated"):
+        check_header(tmp_path / "cut.c3d")
+
+
+def test_a_c3d_with_an_unknown_processor_is_refused(tmp_path):
+    from facemech.io.c3d import check_header
+
+    (tmp_path / "odd.c3d").write_bytes(_c3d_bytes(84, 10, 320)[:515] + b"\x57"
+                                       + _c3d_bytes(84, 10, 320)[516:])
+    with pytest.raises(InputError, match="field 'processor'"):
+        check_header(tmp_path / "odd.c3d")

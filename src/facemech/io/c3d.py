@@ -56,12 +56,18 @@ with open(target, "wb") as fh:
 """
 
 
+#: C3D processor types: the byte order of the header's integers, and which byte of the 4-byte
+#: scale factor holds its sign bit (IEEE little-endian: the last; DEC VAX F: the second, the
+#: high byte of its first 16-bit word; IEEE big-endian: the first)
+PROCESSORS = {84: ("<", 3), 85: ("<", 1), 86: (">", 0)}
+
+
 def check_header(path: Path) -> None:
     """Cheap sanity checks of a C3D header before ezc3d sees the file.
 
     ezc3d may crash or loop forever on a malformed or truncated file; these checks catch the
     common cases (wrong magic byte, data start beyond the end, fewer data bytes than the header
-    announces) with a clear message.
+    announces, in any of the three byte orders) with a clear message.
     """
     size = path.stat().st_size
     with path.open("rb") as fh:
@@ -77,17 +83,19 @@ def check_header(path: Path) -> None:
         fh.seek((param_block - 1) * 512)
         phead = fh.read(4)
     processor = phead[3] if len(phead) == 4 else 0
-    if processor != 84:  # only Intel (little-endian) files get the size check
-        return
-    w = np.frombuffer(head[:24], "<u2")
+    if processor not in PROCESSORS:
+        raise InputError(f"corrupt C3D: unknown processor type {processor} (expected 84 Intel, "
+                         "85 DEC or 86 MIPS)", source=str(path), field="processor")
+    order, sign_byte = PROCESSORS[processor]
+    w = np.frombuffer(head[:24], f"{order}u2")
     points, analog_total, first, last, data_start = (int(w[1]), int(w[2]), int(w[3]), int(w[4]),
                                                       int(w[8]))
-    scale = float(np.frombuffer(head[12:16], "<f4")[0])
+    float_data = bool(head[12 + sign_byte] & 0x80)  # POINT:SCALE < 0 means float samples
     if last < first:
         raise InputError("corrupt C3D: last frame before first frame", source=str(path),
                          field="header")
     frames = last - first + 1
-    per_value = 4 if scale < 0 else 2
+    per_value = 4 if float_data else 2
     need = (data_start - 1) * 512 + frames * (4 * points + analog_total) * per_value
     if data_start < 2 or need > size:
         raise InputError(f"truncated or corrupt C3D: the header announces {need} bytes, the "
