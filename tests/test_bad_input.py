@@ -235,3 +235,27 @@ def test_a_c3d_with_an_unknown_processor_is_refused(tmp_path):
                                        + _c3d_bytes(84, 10, 320)[516:])
     with pytest.raises(InputError, match="field 'processor'"):
         check_header(tmp_path / "odd.c3d")
+
+
+# ---- plausibility: the declared unit -----------------------------------------------------------
+def _marker_csv(scale: float, unit: str) -> str:
+    rows = [f"{k / 60:.6f}," + ",".join(f"{v * scale:.9g}" for v in (0.03, 0.0, 0.1, -0.03, 0.0,
+                                                                       0.1, 0.0, -0.04, 0.11))
+            for k in range(4)]
+    return f"# units: {unit}\ntime,L_x,L_y,L_z,R_x,R_y,R_z,C_x,C_y,C_z\n" + "\n".join(rows) + "\n"
+
+
+@pytest.mark.parametrize("scale, unit, looks", [(1.0, "mm", "m"), (1e6, "mm", "um"),
+                                                (1e3, "m", "mm")])
+def test_values_in_another_unit_than_declared_are_refused(monkeypatch, capsys, tmp_path, scale,
+                                                          unit, looks):
+    line = _refused(monkeypatch, capsys, tmp_path, "m.csv", _marker_csv(scale, unit), "units")
+    assert f"the values look like {looks}" in line
+
+
+def test_a_face_in_its_declared_unit_is_read(monkeypatch, capsys, tmp_path):
+    from facemech.io.markers import read_markers
+
+    (tmp_path / "m.csv").write_text(_marker_csv(1e3, "mm"))
+    ms = read_markers(tmp_path / "m.csv")
+    np.testing.assert_allclose(ms.positions[0, 2], [0.0, -0.04, 0.11])

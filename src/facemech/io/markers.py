@@ -138,7 +138,7 @@ def read_markers(path: str | Path, *, units: str | None = None) -> MarkerSet:
     if not path.is_file():
         raise InputError("file not found", source=str(path))
     try:
-        return _read(path, fmt, units)
+        return check_span(_read(path, fmt, units), source=path)
     except UnicodeDecodeError:
         raise InputError(f"binary data where a text {fmt.upper()} file was expected",
                          source=str(path)) from None
@@ -146,6 +146,46 @@ def read_markers(path: str | Path, *, units: str | None = None) -> MarkerSet:
         if exc.source is None:  # raised by the marker-set type: name the file it came from
             raise InputError(exc.message, source=str(path), field=exc.field) from None
         raise
+
+
+#: m, the extent of a marker recording of two or more markers that is plausible for a face (or
+#: a face and a body): between 1 mm (two lip markers at closure) and 5 m (a capture volume)
+SPAN_LIMITS = (0.001, 5.0)
+FACE_SPAN = 0.15  #: m, the extent of a face's marker set (ear to ear, brow to chin)
+
+
+def check_span(ms: MarkerSet, *, source: str | Path | None = None) -> MarkerSet:
+    """Refuse a recording whose size is implausible for its declared length unit.
+
+    The span is the largest extent, over the three axes, of every measured sample. Metres
+    declared as millimetres make a face 0.2 mm wide, micrometres as millimetres one 200 m wide;
+    both are errors naming the unit the values look like.
+
+    Parameters
+    ----------
+    ms : the marker set, positions in metres as converted with its ``source_units``
+    source : the file, for the message
+
+    Returns
+    -------
+    MarkerSet
+        ``ms`` unchanged.
+    """
+    pts = ms.positions[ms.valid]
+    if len(pts) < 2 or ms.n_markers < 2:
+        return ms
+    span = float(np.max(np.ptp(pts, axis=0)))
+    low, high = SPAN_LIMITS
+    if span == 0.0 or low <= span <= high:
+        return ms
+    unit = ms.source_units
+    values = span / length_scale(unit)
+    guess = min(("m", "cm", "mm", "um"),  # the unit that makes the span closest to a face's
+                key=lambda u: abs(np.log(values * length_scale(u) / FACE_SPAN)))
+    hint = f"; the values look like {guess}" if guess != unit else ""
+    raise InputError(f"the markers span {span * 1e3:.3g} mm, not a face or a capture volume "
+                     f"({low * 1e3:g} mm to {high:g} m) in the declared unit {unit!r}{hint}",
+                     source=None if source is None else str(source), field="units")
 
 
 def _read(path: Path, fmt: str, units: str | None) -> MarkerSet:
