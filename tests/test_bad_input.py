@@ -259,3 +259,53 @@ def test_a_face_in_its_declared_unit_is_read(monkeypatch, capsys, tmp_path):
     (tmp_path / "m.csv").write_text(_marker_csv(1e3, "mm"))
     ms = read_markers(tmp_path / "m.csv")
     np.testing.assert_allclose(ms.positions[0, 2], [0.0, -0.04, 0.11])
+
+
+# ---- plausibility: times, jaw angles, face size ------------------------------------------------
+def test_an_activity_time_column_in_milliseconds_is_refused(monkeypatch, capsys, tmp_path):
+    from facemech.io.activity import read_activity
+
+    (tmp_path / "a.csv").write_text("time,OOS\n0,0\n500,1\n1000,0\n")
+    with pytest.raises(InputError, match=r"a\.csv: field 'time': rows 500 s apart; the times "
+                                         r"look like milliseconds"):
+        read_activity(tmp_path / "a.csv")
+    (tmp_path / "b.csv").write_text("time,OOS\n0,0\n0.5,1\n1.0,0\n")
+    t, act = read_activity(tmp_path / "b.csv")
+    assert t[-1] == pytest.approx(1.0) and act.max() == pytest.approx(1.0)
+
+
+def test_an_emg_time_column_in_milliseconds_is_refused(tmp_path):
+    from facemech.io.emg import read_emg
+
+    t = np.arange(2000) / 1000.0
+    rows = "\n".join(f"{x * 1e3:g},{np.sin(x):.4f}" for x in t)
+    (tmp_path / "e.csv").write_text("time,OOS\n" + rows + "\n")
+    with pytest.raises(InputError, match=r"e\.csv: field 'time': EMG sampled at 1 Hz.*look like "
+                                         r"milliseconds"):
+        read_emg(tmp_path / "e.csv")
+    rows = "\n".join(f"{x:.4f},{np.sin(x):.4f}" for x in t)
+    (tmp_path / "s.csv").write_text("time,OOS\n" + rows + "\n")
+    assert read_emg(tmp_path / "s.csv")[1] == pytest.approx(1000.0)
+
+
+def test_jaw_angles_outside_the_anatomy_are_refused():
+    from facemech.plausibility import check_jaw_angles
+
+    ok = np.radians([0.0, 12.0, 34.0, -4.0])
+    assert check_jaw_angles(ok) is not None
+    with pytest.raises(InputError, match="sample 2: a jaw angle of -34.0 degrees"):
+        check_jaw_angles(np.radians([0.0, -34.0]), source="j.csv")
+    with pytest.raises(InputError, match="20 looks like degrees given as radians"):
+        check_jaw_angles([0.0, 20.0], source="j.csv", field="angle")
+    assert check_jaw_angles(np.radians([50.0]), limits_deg=(-5, 60))[0] == pytest.approx(
+        np.radians(50.0))
+
+
+@pytest.mark.parametrize("width_m, unit, looks", [(0.15e-3, "mm", "m"), (150.0, "mm", "um"),
+                                                  (1.5, "cm", "mm")])
+def test_a_face_not_face_sized_in_its_unit_is_refused(width_m, unit, looks):
+    from facemech.plausibility import check_face_width
+
+    with pytest.raises(InputError, match=f"the values look like {looks}$"):
+        check_face_width(width_m, unit=unit, source="scan.obj")
+    assert check_face_width(0.16, unit=unit) == 0.16

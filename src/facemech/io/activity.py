@@ -8,6 +8,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..params import EMG_CHANNELS, FRAME_RATE_HZ, MUSCLE_GROUPS
+from ..plausibility import check_time_column
 from .atomic import atomic_path
 from .tables import read_table
 
@@ -36,6 +37,7 @@ def read_activity(path: str | Path, *,
     """
     t, cols = read_table(path)
     cols.pop("__meta__")
+    check_time_column(t, kind="control", source=str(path))
     act = np.zeros((len(t), len(MUSCLE_GROUPS)))
     if not cols:
         raise InputError("no muscle columns", source=str(path), field="header")

@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
+from ..plausibility import check_time_column
 from .tables import read_table, uniform_rate
 
 
@@ -29,6 +30,7 @@ def read_emg(path: str | Path) -> tuple[np.ndarray, float, tuple[str, ...]]:
     cols.pop("__meta__")
     if not cols:
         raise InputError("no EMG channels", source=str(path), field="header")
+    check_time_column(t, kind="emg", source=str(path))
     rate = uniform_rate(t, source=str(path))
     names = tuple(cols)
     for n in names:
