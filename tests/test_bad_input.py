@@ -309,3 +309,20 @@ def test_a_face_not_face_sized_in_its_unit_is_refused(width_m, unit, looks):
     with pytest.raises(InputError, match=f"the values look like {looks}$"):
         check_face_width(width_m, unit=unit, source="scan.obj")
     assert check_face_width(0.16, unit=unit) == 0.16
+
+
+def test_collinear_head_markers_are_refused_before_anything_is_written():
+    from facemech.kinematics.rigid import head_correct
+
+    pos = np.zeros((5, 4, 3))
+    pos[:, 0] = [0.0, 0.0, 0.1]
+    pos[:, 1] = [0.02, 0.0, 0.1]
+    pos[:, 2] = [0.04, 0.0, 0.1]  # on the line through the first two
+    pos[:, 3] = [0.0, -0.05, 0.1]
+    ms = MarkerSet(pos.copy(), ("H1", "H2", "H3", "UL"), 60.0, meta={"source": "rec.trc"})
+    with pytest.raises(InputError, match=r"rec\.trc: field 'head': the head markers H1, H2, H3 "
+                                         r"lie on one line"):
+        head_correct(ms, ["H1", "H2", "H3"])
+    pos[:, 2] = [0.02, 0.03, 0.09]
+    fixed = head_correct(MarkerSet(pos, ("H1", "H2", "H3", "UL"), 60.0), ["H1", "H2", "H3"])
+    np.testing.assert_allclose(fixed.markers.positions[:, 3], pos[:, 3], atol=1e-12)

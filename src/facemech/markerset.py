@@ -67,6 +67,7 @@ class MarkerSet:
         filled = (np.zeros(pos.shape[:2], bool) if self.filled is None
                   else np.asarray(self.filled, bool))
         for name, a in (("positions", pos), ("time", t), ("filled", filled)):
+            a = a.view()  # read-only through this set; the caller's array stays writable
             a.flags.writeable = False
             object.__setattr__(self, name, a)
         object.__setattr__(self, "names", names)

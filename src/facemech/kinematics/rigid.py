@@ -106,7 +106,14 @@ def head_correct(ms: MarkerSet, head: list[str] | tuple[str, ...], *,
                          field="reference")
     ref = hp[reference]
     ref_ok = ok[reference]
+    if not _usable(ref[ref_ok]):
+        raise InputError(f"the head markers {', '.join(head)} lie on one line (within 1 mm) at "
+                         f"the reference frame {reference}: a rigid fit needs three spread "
+                         "markers", source=ms.meta.get("source"), field="head")
     first = _fit_all(ms, hp, ok, ref, ref_ok)
+    if len(first[5]) == ms.n_frames:
+        raise InputError("no frame has three usable head markers (present and not on one line)",
+                         source=ms.meta.get("source"), field="head")
     if refine:
         corrected_head = first[4][:, idx]
         counts = np.sum(np.all(np.isfinite(corrected_head), axis=2), axis=0)
