@@ -67,7 +67,8 @@ class MarkerSet:
         filled = (np.zeros(pos.shape[:2], bool) if self.filled is None
                   else np.asarray(self.filled, bool))
         for name, a in (("positions", pos), ("time", t), ("filled", filled)):
-            a = a.view()  # read-only through this set; the caller's array stays writable
+            # read-only, also the caller's array if it was passed without a copy: an edit of
+            # the data after the set is made fails loudly instead of changing the set silently
             a.flags.writeable = False
             object.__setattr__(self, name, a)
         object.__setattr__(self, "names", names)
