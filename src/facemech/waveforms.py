@@ -45,5 +45,5 @@ def cosine_bump(t, centre: float, width: float) -> np.ndarray:
     -------
     ndarray, same shape as ``t``: 1 at ``centre``, 0 at and beyond ``centre +- width / 2``.
     """
-    t = np.asarray(t, dtype=float)
-    return cosine_ramp(1.0 - 2.0 * np.abs(t - centre) / width)
+    u = np.clip((np.asarray(t, dtype=float) - centre) / width, -0.5, 0.5)
+    return 0.5 * (1.0 + np.cos(2.0 * np.pi * u))
