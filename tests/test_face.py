@@ -132,3 +132,121 @@ def test_generic_surface_is_a_graph_over_the_frontal_plane():
     v = s.vertices.reshape(s.rows, s.cols, 3)
     assert np.all(np.diff(v[:, :, 0], axis=1) > 0)  # each row monotone in x
     assert np.all(np.isfinite(s.vertices))
+
+
+# ---- the builder's steps ---------------------------------------------------------------------
+def test_old_import_paths_name_the_new_homes():
+    from facemech.geometry import builder, face_file, kinds, mesh, model, options
+
+    assert builder.FaceModel is model.FaceModel and builder.Muscles is model.Muscles
+    assert builder.BuildOptions is options.BuildOptions
+    assert builder.tissue_options is options.tissue_options
+    assert builder.vertex_normals is mesh.vertex_normals
+    assert builder._boundary_nodes is mesh.boundary_nodes
+    assert builder.SPHINCTER is model.SPHINCTER is kinds.MuscleKind.SPHINCTER
+    assert FaceModel.load.__func__.__module__ == "facemech.geometry.model"
+    assert face_file.read_face.__module__ == "facemech.geometry.face_file"
+
+
+def test_spring_and_layer_codes_are_the_face_files(seeds_face, face):
+    from facemech.geometry.kinds import LAYER_NAMES, SPRING_KINDS, Layer, SpringKind
+
+    # the integers are stored in face files: they never change
+    assert [int(k) for k in SpringKind] == list(range(7))
+    assert SPRING_KINDS == ("epidermis", "dermal_fatty", "fascia", "muscle_layer", "skull",
+                            "superficial_diagonal", "deep_diagonal")
+    assert LAYER_NAMES == ("epidermis", "fascia", "skull") and Layer.SKULL == 2
+    for model in (seeds_face, face):
+        n = model.n_surface
+        layer = model.layer
+        kind = model.spring_kind
+        between = {SpringKind.EPIDERMIS: (0, 0), SpringKind.DERMAL_FATTY: (0, 1),
+                   SpringKind.FASCIA: (1, 1), SpringKind.MUSCLE_LAYER: (1, 2),
+                   SpringKind.SKULL: (2, 2), SpringKind.SUPERFICIAL_DIAGONAL: (0, 1),
+                   SpringKind.DEEP_DIAGONAL: (1, 2)}
+        for k, (li, lj) in between.items():
+            sel = kind == k
+            assert np.all(layer[model.spring_i[sel]] == li), k.name
+            assert np.all(layer[model.spring_j[sel]] == lj), k.name
+        vertical = (kind == SpringKind.DERMAL_FATTY) | (kind == SpringKind.MUSCLE_LAYER)
+        assert np.all(model.spring_j[vertical] - model.spring_i[vertical] == n)
+    assert not np.isin(seeds_face.spring_kind, [4, 5, 6]).any()
+
+
+def test_topology_of_two_triangles():
+    from facemech.geometry.kinds import SpringKind
+    from facemech.geometry.layers import Layers
+    from facemech.geometry.topology import anatomical_topology, uniform_topology
+
+    faces = np.array([[0, 1, 2], [1, 3, 2]])
+    rest = np.zeros((12, 3))
+    layers = Layers(rest=rest, skull_normals=rest, lip_region=np.zeros(4, bool),
+                    free=np.array([False, False, False, True]),
+                    slides=np.array([True, True, False, False]))
+    seeds = uniform_topology(faces, layers)
+    counts = np.bincount(seeds.spring_kind, minlength=7)
+    # 5 edges per surface layer, 4 dermal-fatty, 3 tied fascia nodes
+    assert counts.tolist() == [5, 4, 5, 3, 0, 0, 0]
+    np.testing.assert_array_equal(seeds.prism_nodes, [[0, 1, 2, 4, 5, 6], [1, 3, 2, 5, 7, 6],
+                                                      [4, 5, 6, 8, 9, 10]])
+    anat = anatomical_topology(faces, layers)
+    counts = np.bincount(anat.spring_kind, minlength=7)
+    assert counts.tolist() == [5, 4, 5, 4, 1, 10, 10]  # one skull edge: (0, 1) slides
+    skull = anat.spring_kind == SpringKind.SKULL
+    assert (anat.spring_i[skull].tolist(), anat.spring_j[skull].tolist()) == ([8], [9])
+    assert anat.prism_nodes.shape == (4, 6) and anat.prism_nodes.dtype == np.int64
+
+
+def test_lip_line_sides_and_contact_pairs():
+    from facemech.geometry.mouth import LOWER_LIP, UPPER_LIP, LipLine, lip_contact
+
+    line = LipLine(np.array([-0.025, -0.070, 0.0]), np.array([0.0, -0.072, 0.01]),
+                   np.array([0.025, -0.070, 0.0]))
+    assert line.half_width == pytest.approx(0.025, abs=1e-15)
+    assert line.y(-0.025) == -0.070 and line.y(0.0) == -0.072
+    assert line.y(0.0125) == pytest.approx(-0.071, abs=1e-15)
+    assert line.y(0.05) == -0.070 and line.y(-0.05) == -0.070  # level beyond the corners
+    assert line.side_of(np.array([0.01, -0.0705, 0.0])) == UPPER_LIP
+    assert line.side_of(np.array([0.01, -0.0720, 0.0])) == LOWER_LIP
+    assert line.side_of(np.array([0.03, -0.0720, 0.0])) is None  # beyond 1.1 half widths
+    pairs, normals = lip_contact(np.array([[1, 2], [3, 4]]), 10, deep=True)
+    assert pairs.tolist() == [[1, 2], [3, 4], [11, 12], [13, 14], [21, 22], [23, 24]]
+    np.testing.assert_array_equal(normals, np.tile([0.0, 1.0, 0.0], (6, 1)))
+    assert len(lip_contact(np.array([[1, 2]]), 10, deep=False)[0]) == 2
+
+
+def test_landmark_warp_and_jaw_line():
+    from facemech.geometry.jaw import hinge, jaw_line_y
+    from facemech.geometry.mouth import LipLine, stomion
+    from facemech.geometry.warp import generic_landmarks, landmark_warp
+
+    gen = generic_landmarks()
+    other = {k: v * np.array([1.1, 0.95, 1.05]) + 0.002 for k, v in gen.items()}
+    warp = landmark_warp(gen, other)
+    moved = warp(np.array([gen[k] for k in other]))
+    np.testing.assert_allclose(moved, np.array(list(other.values())), atol=1e-9)
+    assert landmark_warp(gen, gen).displacement is None
+    line = LipLine(other["mouth_corner_right"], stomion(other), other["mouth_corner_left"])
+    ga = other["jaw_angle_left"]
+    assert jaw_line_y(ga[0], line, other) == pytest.approx(ga[1], abs=1e-15)
+    assert jaw_line_y(ga[0] + 0.01, line, other) == pytest.approx(ga[1], abs=1e-15)
+    assert jaw_line_y(0.0, line, other) == line.y(0.0)
+    point, axis = hinge(other, 25e-3)
+    assert point[2] == pytest.approx(0.5 * (ga[2] + other["jaw_angle_right"][2]) - 25e-3)
+    assert axis.tolist() == [1.0, 0.0, 0.0]
+
+
+def test_muscles_are_assembled_in_csr_form(face):
+    from facemech.geometry.muscle_sites import bump_weights
+
+    m = face.muscles
+    assert m.ptr[0] == 0 and m.ptr[-1] == len(m.nodes) == len(m.weights) == len(m.bead)
+    for k in range(len(m)):
+        w, b = m.weights[m.ptr[k]:m.ptr[k + 1]], m.bead[m.ptr[k]:m.ptr[k + 1]]
+        for bead in np.unique(b):  # each bead's weights share its force
+            assert w[b == bead].sum() == pytest.approx(1.0, abs=1e-12)
+    names = list(m.names)
+    assert names[-4:] == ["OOS_R", "OOS_L", "OOI_R", "OOI_L"]
+    assert names[:2] == ["ZYG_R", "ZYG_L"]
+    np.testing.assert_allclose(bump_weights(np.array([0.0, 0.5, 1.0, 2.0]), np.full(4, 2.0)),
+                               [2.0, 2.0 * 0.75**2, 2.0 * 0.05**2, 2.0 * 0.05**2])

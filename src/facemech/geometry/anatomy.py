@@ -3,9 +3,9 @@
 Each site is a frontal ``(x, y)`` position in mm on the generic face of :mod:`generic` (right side,
 ``x < 0``; the left-side twin mirrors ``x``).  For any other face the sites are carried over by the
 thin-plate-spline warp that takes the generic landmarks onto that face's landmarks, then snapped
-to the nearest node (see :mod:`builder`).  Origins and insertions follow ANATOMY.md (Kennedy & Abbs
-1979 via the seeds): origins on bone are skull-layer nodes, those on the mandible belong to the
-jaw; insertions are fascia-layer nodes.
+to the nearest node (see :mod:`sites` and :mod:`muscle_sites`).  Origins and insertions follow
+ANATOMY.md (Kennedy & Abbs 1979 via the seeds): origins on bone are skull-layer nodes, those on
+the mandible belong to the jaw; insertions are fascia-layer nodes.
 """
 
 from __future__ import annotations
@@ -75,8 +75,9 @@ INCISIVE_MUSCLES: tuple[LinearMuscleSite, ...] = (
                      name="OOI_incisive"),
 )
 
-#: Sphincter groups: orbicularis oris superior and inferior, each side a half path from the
-#: mouth corner to the midline along the lip margin.
+#: Sphincter groups: orbicularis oris superior and inferior, in that order (upper lip, lower
+#: lip); each side a half path from the mouth corner to the midline along the lip margin
+#: (:func:`facemech.geometry.muscle_sites.sphincter_paths`).
 SPHINCTERS: tuple[str, ...] = ("OOS", "OOI")
 
 # Virtual OPTOTRAK-like markers: 11 on the right half of the lower face (R01 on the chin, used to

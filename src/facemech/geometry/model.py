@@ -1,7 +1,8 @@
 """The layered face model as data: geometry and topology, no material constants.
 
 :class:`FaceModel` is what :func:`facemech.geometry.builder.build_face` makes and what the
-physics reads; :meth:`FaceModel.save` and :meth:`FaceModel.load` keep it in a ``.npz`` file.
+physics reads; :meth:`FaceModel.save` and :meth:`FaceModel.load` keep it in a ``.npz`` file
+(:mod:`facemech.geometry.face_file`). The integer codes it stores are in :mod:`~.kinds`.
 A model remembers the surface and landmarks it was built from, so that a preset whose tissue
 geometry differs (the seeds' uniform 4-mm layers, or the anatomical thickness map) can rebuild
 it (:func:`facemech.geometry.builder.for_tissue`).
@@ -9,25 +10,28 @@ it (:func:`facemech.geometry.builder.for_tissue`).
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
 from ..params import MUSCLE_GROUPS
 from .appearance import Appearance
+from .kinds import (  # noqa: F401  (re-exported: the model's codes, by their old names)
+    EPIDERMIS,
+    FASCIA,
+    LAYER_NAMES,
+    LINEAR,
+    SKULL,
+    SPHINCTER,
+    SPRING_KINDS,
+    Layer,
+    MuscleKind,
+    SpringKind,
+    layer_nodes,
+)
 
-EPIDERMIS, FASCIA, SKULL = 0, 1, 2
-LAYER_NAMES = ("epidermis", "fascia", "skull")
-#: spring kinds, the index stored in :attr:`FaceModel.spring_kind`. The first four are the
-#: seeds' (Lucero & Munhall 1999, I.A); the anatomical tissue adds the edges of the skull layer
-#: where it slides (lips, chin), and the diagonals of the side faces of both prism layers, which
-#: give the tissue its shear stiffness.
-SPRING_KINDS = ("epidermis", "dermal_fatty", "fascia", "muscle_layer", "skull",
-                "superficial_diagonal", "deep_diagonal")
-LINEAR, SPHINCTER = 0, 1
+#: the tissue geometries a face is built with (:class:`~.options.BuildOptions`)
 TISSUES = ("uniform", "anatomical")
 
 
@@ -46,7 +50,7 @@ class Muscles:
 
     names: tuple[str, ...]
     group: np.ndarray  # (m,) index into MUSCLE_GROUPS
-    kind: np.ndarray  # (m,) LINEAR or SPHINCTER
+    kind: np.ndarray  # (m,) MuscleKind: LINEAR or SPHINCTER
     origin: np.ndarray  # (m,) skull node (-1 for sphincters)
     ptr: np.ndarray  # (m + 1,)
     nodes: np.ndarray  # insertion fascia nodes, or the sphincter path in order
@@ -77,13 +81,8 @@ class Muscles:
         return out
 
 
-_ARRAYS = ("rest_positions", "faces", "spring_i", "spring_j", "spring_kind", "prism_nodes",
-           "tied_fascia", "skull_normals", "jaw_nodes", "hinge_point", "hinge_axis",
-           "lip_pairs", "lip_normals")
-_MUSCLE_ARRAYS = ("group", "kind", "origin", "ptr", "nodes", "weights", "rest_length")
-
-
-def _empty_int() -> np.ndarray:
+def empty_nodes() -> np.ndarray:
+    """No nodes: an empty int64 index array."""
     return np.zeros(0, np.int64)
 
 
@@ -105,7 +104,7 @@ class FaceModel:
     n_surface: int
     spring_i: np.ndarray
     spring_j: np.ndarray
-    spring_kind: np.ndarray  # index into SPRING_KINDS
+    spring_kind: np.ndarray  # (s,) int8 SpringKind (names: SPRING_KINDS)
     prism_nodes: np.ndarray  # (p, 6): top triangle then the one below
     tied_fascia: np.ndarray  # fascia nodes tied to the skull (the seeds' restoration, eq. 11)
     skull_normals: np.ndarray  # (3 n_surface, 3) outward normals of the skull layer at rest
@@ -121,7 +120,7 @@ class FaceModel:
     tissue: str = "uniform"  # one of TISSUES
     #: (len(jaw_nodes),) share of the jaw's rotation each jaw node takes, in [0, 1]; None: all 1
     jaw_weights: np.ndarray | None = None
-    sliding: np.ndarray = field(default_factory=_empty_int)  # skull nodes that move
+    sliding: np.ndarray = field(default_factory=empty_nodes)  # skull nodes that move
     #: (len(sliding),) share of the jaw's rotation of the bone under each sliding node
     sliding_weights: np.ndarray | None = None
     #: (len(sliding),) how firmly each sliding node is held to the bone, 0 to 1 (None: 1)
@@ -141,12 +140,13 @@ class FaceModel:
 
     @property
     def layer(self) -> np.ndarray:
-        return np.repeat(np.arange(3, dtype=np.int8), self.n_surface)
+        """The :class:`Layer` of every node, (n_nodes,) int8."""
+        return np.repeat(np.arange(len(Layer), dtype=np.int8), self.n_surface)
 
     @property
     def free_fascia(self) -> np.ndarray:
         """Fascia nodes not tied to the skull (lips and cheeks)."""
-        fascia = np.arange(self.n_surface, 2 * self.n_surface)
+        fascia = layer_nodes(np.arange(self.n_surface), FASCIA, self.n_surface)
         return np.setdiff1d(fascia, self.tied_fascia)
 
     @property
@@ -166,20 +166,21 @@ class FaceModel:
     @property
     def dynamic_nodes(self) -> np.ndarray:
         """Nodes that move under forces: epidermis, fascia and the sliding skull nodes."""
-        return np.concatenate([np.arange(2 * self.n_surface),
+        return np.concatenate([np.arange(layer_nodes(0, SKULL, self.n_surface)),
                                np.sort(np.asarray(self.sliding, np.int64))])
 
     def skull_node(self, epidermal_node: int) -> int:
         """The skull-layer copy of an epidermal node."""
-        return int(epidermal_node) + 2 * self.n_surface
+        return int(layer_nodes(int(epidermal_node), SKULL, self.n_surface))
 
     def landmark_positions(self) -> dict[str, np.ndarray]:
         return {k: self.rest_positions[v] for k, v in self.landmarks.items()}
 
     def summary(self) -> dict:
         """Counts a user checks a model by (``facemech face info``)."""
+        # the seeds' four kinds always, the anatomical ones where the model has them
         kinds = {k: int(np.sum(self.spring_kind == i)) for i, k in enumerate(SPRING_KINDS)
-                 if np.any(self.spring_kind == i) or i < 4}
+                 if np.any(self.spring_kind == i) or i <= SpringKind.MUSCLE_LAYER}
         return {
             "name": self.name,
             "tissue": self.tissue,
@@ -206,106 +207,26 @@ class FaceModel:
             "appearance": "none" if self.appearance is None else self.appearance.describe(),
         }
 
-    # ---- persistence ---------------------------------------------------------------------
+    # ---- persistence (:mod:`facemech.geometry.face_file`) ----------------------------------
     def save(self, path: str | Path) -> None:
-        """Write the model to a ``.npz`` file, atomically."""
-        from ..io.atomic import atomic_path
+        """Write the model to a ``.npz`` file, atomically (:func:`~.face_file.write_face`)."""
+        from .face_file import write_face
 
-        arrays = {k: getattr(self, k) for k in _ARRAYS}
-        m = self.muscles
-        arrays.update({f"muscle_{k}": getattr(m, k) for k in _MUSCLE_ARRAYS})
-        arrays["muscle_bead"] = m.beads()
-        arrays["muscle_origin_offset"] = m.offsets()
-        arrays["jaw_weights"] = self.jaw_weight
-        arrays["sliding"] = np.asarray(self.sliding, np.int64)
-        arrays["sliding_weights"] = self.sliding_weight
-        arrays["sliding_tether"] = (np.ones(len(self.sliding)) if self.sliding_tether is None
-                                    else np.asarray(self.sliding_tether, float))
-        if self.lip_region is not None:
-            arrays["lip_region"] = np.asarray(self.lip_region, bool)
-        surface_landmarks = None
-        if self.surface is not None:
-            arrays["surface_vertices"] = np.asarray(self.surface["vertices"], float)
-            arrays["surface_faces"] = np.asarray(self.surface["faces"], np.int64)
-            surface_landmarks = {k: np.asarray(v, float).tolist()
-                                 for k, v in self.surface["landmarks"].items()}
-        appearance_source = None
-        if self.appearance is not None:
-            a = self.appearance
-            appearance_source = a.source
-            for key, value in (("uv", a.uv), ("image", a.image),
-                               ("vertex_colours", a.vertex_colours)):
-                if value is not None:
-                    arrays[f"appearance_{key}"] = value
-        meta = {"format": "facemech-face", "version": 2, "name": self.name,
-                "tissue": self.tissue, "n_surface": self.n_surface,
-                "muscle_names": list(m.names),
-                "landmarks": {k: int(v) for k, v in self.landmarks.items()},
-                "markers": {k: int(v) for k, v in self.markers.items()},
-                "surface_landmarks": surface_landmarks,
-                "appearance_source": appearance_source}
-        arrays["meta"] = np.array(json.dumps(meta))
-        with atomic_path(path, suffix=".npz") as tmp, open(tmp, "wb") as fh:
-            np.savez_compressed(fh, **arrays)
+        write_face(self, path)
 
     @classmethod
     def load(cls, path: str | Path) -> FaceModel:
-        """Read a model written by :meth:`save` (format versions 1 and 2)."""
-        path = Path(path)
-        if not path.is_file():
-            raise InputError("file not found", source=str(path))
-        try:
-            with np.load(path, allow_pickle=False) as z:
-                data = {k: z[k] for k in z.files}
-            meta = json.loads(str(data.pop("meta")))
-        except Exception as exc:
-            raise InputError(f"not a facemech face file ({type(exc).__name__})",
-                             source=str(path)) from None
-        if meta.get("format") != "facemech-face":
-            raise InputError("not a facemech face file", source=str(path), field="format")
-        try:
-            muscles = Muscles(names=tuple(meta["muscle_names"]),
-                              bead=data.pop("muscle_bead", None),
-                              origin_offset=data.pop("muscle_origin_offset", None),
-                              **{k: data.pop(f"muscle_{k}") for k in _MUSCLE_ARRAYS})
-            surface = None
-            if "surface_vertices" in data:
-                surface = {"vertices": data.pop("surface_vertices"),
-                           "faces": data.pop("surface_faces"),
-                           "landmarks": {k: np.asarray(v, float)
-                                         for k, v in meta["surface_landmarks"].items()}}
-            appearance = None
-            if meta.get("appearance_source") is not None:
-                try:
-                    appearance = Appearance(
-                        uv=data.pop("appearance_uv", None),
-                        image=data.pop("appearance_image", None),
-                        vertex_colours=data.pop("appearance_vertex_colours", None),
-                        source=meta["appearance_source"])
-                    appearance.check_surface(int(meta["n_surface"]), len(data["faces"]))
-                except InputError as exc:
-                    raise InputError(exc.message, source=str(path),
-                                     field=f"appearance_{exc.field}") from None
-            return cls(muscles=muscles, appearance=appearance, n_surface=int(meta["n_surface"]),
-                       name=meta["name"],
-                       landmarks=meta["landmarks"], markers=meta["markers"],
-                       tissue=meta.get("tissue", "uniform"),
-                       jaw_weights=data.pop("jaw_weights", None),
-                       sliding=data.pop("sliding", _empty_int()),
-                       sliding_weights=data.pop("sliding_weights", None),
-                       sliding_tether=data.pop("sliding_tether", None),
-                       lip_region=data.pop("lip_region", None), surface=surface,
-                       **{k: data[k] for k in _ARRAYS})
-        except (KeyError, TypeError, ValueError) as exc:
-            raise InputError(f"incomplete facemech face file ({exc})", source=str(path),
-                             field="format") from None
+        """Read a model written by :meth:`save` (:func:`~.face_file.read_face`)."""
+        from .face_file import read_face
+
+        return read_face(path)
 
 
 def _thickness_summary(model: FaceModel) -> dict:
     """Skin-to-bone depth (mm) at a few landmarks: what the tissue geometry gave."""
     n = model.n_surface
     rest = model.rest_positions
-    depth = np.linalg.norm(rest[:n] - rest[2 * n:], axis=1) * 1e3
+    depth = np.linalg.norm(rest[:n] - rest[layer_nodes(0, SKULL, n):], axis=1) * 1e3
     out = {"min": round(float(depth.min()), 2), "max": round(float(depth.max()), 2)}
     for name in ("upper_lip_center", "lower_lip_center", "chin", "cheek_right", "nasion"):
         if name in model.landmarks:
