@@ -69,9 +69,9 @@ def ear_parts(look: FaceLook) -> list[Part]:
     nasion = lm.get("nasion")
     if nasion is None:
         return []
-    from ..geometry.builder import _boundary_nodes
+    from ..geometry.mesh import boundary_nodes
 
-    edge = _boundary_nodes(look.triangles)
+    edge = boundary_nodes(look.triangles)
     parts = []
     yc = nasion[1] - 0.024
     for side, name in ((1, "ear_left"), (-1, "ear_right")):
