@@ -304,11 +304,11 @@ def test_jaw_angles_outside_the_anatomy_are_refused():
 @pytest.mark.parametrize("width_m, unit, looks", [(0.15e-3, "mm", "m"), (150.0, "mm", "um"),
                                                   (1.5, "cm", "mm")])
 def test_a_face_not_face_sized_in_its_unit_is_refused(width_m, unit, looks):
-    from facemech.plausibility import check_face_width
+    from facemech.plausibility import check_face_size
 
     with pytest.raises(InputError, match=f"the values look like {looks}$"):
-        check_face_width(width_m, unit=unit, source="scan.obj")
-    assert check_face_width(0.16, unit=unit) == 0.16
+        check_face_size(width_m, unit=unit, source="scan.obj")
+    assert check_face_size(0.16, unit=unit) == 0.16
 
 
 def test_collinear_head_markers_are_refused_before_anything_is_written():

@@ -14,7 +14,7 @@ import numpy as np
 from .errors import InputError
 
 __all__ = ["JAW_LIMITS_DEG", "EMG_MIN_RATE_HZ", "MAX_CONTROL_STEP_S", "MAX_DURATION_S",
-           "FACE_WIDTH_M", "check_jaw_angles", "check_time_column", "check_face_width"]
+           "FACE_SIZE_M", "check_jaw_angles", "check_time_column", "check_face_size"]
 
 #: degrees, the anatomical range of jaw opening: slightly closed past rest (a clench) to a wide
 #: yawn; speech uses 0-20 degrees (Ostry & Flanagan 1989; REALISM.md)
@@ -25,9 +25,9 @@ EMG_MIN_RATE_HZ = 200.0
 MAX_CONTROL_STEP_S = 10.0
 #: s, the longest single recording accepted (two hours)
 MAX_DURATION_S = 7200.0
-#: m, the width of an adult face, ear to ear (forensic tables: 120-160 mm bizygomatic, the ears
-#: a little wider), with a margin
-FACE_WIDTH_M = (0.10, 0.30)
+#: m, the largest extent of a face scan: an adult face is 120-160 mm wide (bizygomatic) and
+#: 180-250 mm from hairline to chin; a head with neck and shoulders reaches about 500 mm
+FACE_SIZE_M = (0.10, 0.60)
 
 
 def check_jaw_angles(angles_rad, *, source=None, field: str = "jaw_angle",
@@ -95,29 +95,29 @@ def check_time_column(t, *, kind: str, source=None, field: str = "time") -> np.n
     return t
 
 
-def check_face_width(width_m: float, *, unit: str, source=None, field: str = "units",
-                     limits_m: tuple[float, float] = FACE_WIDTH_M) -> float:
-    """Refuse a face whose width, read in its declared unit, is not a face's.
+def check_face_size(size_m: float, *, unit: str, source=None, field: str = "units",
+                    limits_m: tuple[float, float] = FACE_SIZE_M) -> float:
+    """Refuse a face scan whose size, read in its declared unit, is not a face's.
 
     Parameters
     ----------
-    width_m : the face's extent along x (ear to ear), metres as read with ``unit``
+    size_m : the scan's largest extent along the three axes, metres as read with ``unit``
     unit : the declared length unit of the file (``m``, ``cm``, ``mm``, ``um``)
     source, field : the file and the field, for the message
-    limits_m : (narrowest, widest) accepted width, m
+    limits_m : (smallest, largest) accepted extent, m
 
     Returns
     -------
     float
-        ``width_m``.
+        ``size_m``.
     """
-    from .units import LENGTH_TO_M
+    from .units import LENGTH_TO_M, length_scale
 
     lo, hi = limits_m
-    if lo <= width_m <= hi:
-        return width_m
-    values = width_m / LENGTH_TO_M[unit]
+    if lo <= size_m <= hi:
+        return size_m
+    values = size_m / length_scale(unit, source=source)
     guess = min(LENGTH_TO_M, key=lambda u: abs(np.log(values * LENGTH_TO_M[u] / 0.15)))
-    hint = f"; the values look like {guess}" if guess != unit else ""
-    raise InputError(f"the face is {width_m * 1e3:.4g} mm wide read in {unit}, not "
+    hint = f"; the values look like {guess}" if guess != unit.strip().lower() else ""
+    raise InputError(f"the face spans {size_m * 1e3:.4g} mm read in {unit}, not "
                      f"{lo * 1e3:g}-{hi * 1e3:g} mm{hint}", source=source, field=field)
