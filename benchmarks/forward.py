@@ -22,7 +22,7 @@ import numpy as np  # noqa: E402
 
 from facemech import Physics, Stepper, default_face, preset, simulate  # noqa: E402
 from facemech.demo import utterance  # noqa: E402
-from facemech.physics.assembly import accumulate_forces, force_arguments  # noqa: E402
+from facemech.physics.assembly import accumulate_forces, rest_anchors  # noqa: E402
 
 
 def timed(fn, repeat=3):
@@ -49,20 +49,20 @@ def main() -> None:
     simulate(anat_face, act[:3], jaw[:3], params=anat)
     wall, sim = timed(lambda: simulate(anat_face, act, jaw, params=anat), repeat)
     ph_a = Physics.build(anat_face, anat)
-    st_a = Stepper(ph_a)
-    fa = force_arguments(ph_a, np.zeros(ph_a.n_muscles), st_a._tied_rest, st_a._tied_normal,
-                         anat_face.lip_normals)
+    ss_a = Stepper(ph_a).solver_state
+    m_a = np.zeros(ph_a.n_muscles)
+    anchors_a = rest_anchors(ph_a)
     pos_a = anat_face.rest_positions.copy()
     vel_a = np.zeros_like(pos_a)
     out_a = np.zeros_like(pos_a)
     t0 = time.perf_counter()
     for _ in range(200):
-        accumulate_forces(pos_a, vel_a, out_a, *fa)
+        accumulate_forces(ss_a.forces, pos_a, vel_a, m_a, anchors_a, out_a)
     force_a = (time.perf_counter() - t0) / 200 * 1e3
     rhs_a = np.random.default_rng(0).normal(size=(ph_a.n_dynamic, 3))
     t0 = time.perf_counter()
     for _ in range(200):
-        st_a._lu.solve(rhs_a)
+        ss_a.system.lu.solve(rhs_a)
     solve_a = (time.perf_counter() - t0) / 200 * 1e3
     sa = anat_face.summary()
     anatomical = {"preset": "anatomical", "integrator": sim.integrator,
@@ -103,21 +103,21 @@ def main() -> None:
         results[label]["rms_deviation_nodes_mm"] = float(np.sqrt(np.mean(nodes**2)) * 1e3)
     # where the time of one step goes
     ph = Physics.build(face, seeds)
-    st = Stepper(ph, integrator="rosenbrock", substeps=4)
-    fargs = force_arguments(ph, np.zeros(ph.n_muscles), st._tied_rest, st._tied_normal,
-                            face.lip_normals)
+    ss = Stepper(ph, integrator="rosenbrock", substeps=4).solver_state
+    m = np.zeros(ph.n_muscles)
+    anchors = rest_anchors(ph)
     pos = face.rest_positions.copy()
     vel = np.zeros_like(pos)
     out = np.zeros_like(pos)
     n = 300
     t0 = time.perf_counter()
     for _ in range(n):
-        accumulate_forces(pos, vel, out, *fargs)
+        accumulate_forces(ss.forces, pos, vel, m, anchors, out)
     force_ms = (time.perf_counter() - t0) / n * 1e3
     rhs = np.random.default_rng(0).normal(size=(ph.n_dynamic, 3))
     t0 = time.perf_counter()
     for _ in range(n):
-        st._lu.solve(rhs)
+        ss.system.lu.solve(rhs)
     solve_ms = (time.perf_counter() - t0) / n * 1e3
     s = face.summary()
     report = {

@@ -115,6 +115,8 @@ def test_bead_jacobian_matches_finite_differences():
     (one node per bead) equal central differences of the bead forces. The stiffness is taken at
     rest velocities: the linearisation leaves out dF/dl' dl'/dx, which vanishes there."""
     from facemech.physics.assembly import bead_muscle_forces
+    from facemech.physics.bundles import MuscleBundle
+    from facemech.physics.kinds import MusclePull
     from facemech.solvers.muscle_implicit import bead_jacobian
 
     p = preset("anatomical")
@@ -135,22 +137,21 @@ def test_bead_jacobian_matches_finite_differences():
                      0.95 * sum(np.linalg.norm(pos[k + 1] - pos[k]) for k in (1, 2))])
     k_passive = np.array([2.0, 5.0])
     m_force = np.array([2.0, 4.0])
+    muscles = MuscleBundle(kind=kind, origin=origin, offset=offset, ptr=ptr, nodes=nodes,
+                           weights=weights, bead=bead, bead_start=bead_start, rest_length=rest,
+                           k_passive=k_passive, pull=MusclePull.ALONG_LENGTH.value, f1=p.f1,
+                           f2=p.f2, f3=p.f3, f4=p.f4)
 
     def forces(q, u):
         out = np.zeros_like(q)
-        bead_muscle_forces(q, u, out, m_force, kind, origin, offset, ptr, nodes, weights, bead,
-                           bead_start, rest, k_passive, p.f1, p.f2, p.f3, p.f4)
+        bead_muscle_forces(muscles, q, u, m_force, out)
         return out[:4].reshape(-1)
 
     still = np.zeros_like(vel)
-    stiff = np.zeros((12, 12))
-    damp = np.zeros((12, 12))
-    bead_jacobian(pos[:4].copy(), still[:4].copy(), pos, still, m_force, kind, origin, offset,
-                  bead_start, rest, k_passive, p.f1, p.f2, p.f3, p.f4, np.array([0, 1]),
-                  stiff, np.zeros((12, 12)))
-    bead_jacobian(pos[:4].copy(), vel[:4].copy(), pos, vel, m_force, kind, origin, offset,
-                  bead_start, rest, k_passive, p.f1, p.f2, p.f3, p.f4, np.array([0, 1]),
-                  np.zeros((12, 12)), damp)
+    active = np.array([0, 1])
+    stiff, _ = bead_jacobian(muscles, pos[:4].copy(), still[:4].copy(), pos, still, m_force,
+                             active)
+    _, damp = bead_jacobian(muscles, pos[:4].copy(), vel[:4].copy(), pos, vel, m_force, active)
     h = 1e-7
     for col in range(12):
         k, a = divmod(col, 3)
@@ -173,17 +174,17 @@ def test_woodbury_solve_equals_the_direct_solve(face):
 
     p = preset("anatomical")
     ph = Physics.build(face, p)
-    st = Stepper(ph)
-    mj = st._muscles
+    system = Stepper(ph).solver_state.system
+    mj = system.muscles
     m_force = np.zeros(ph.n_muscles)
     m_force[ph.model.muscles.names.index("OOI_L")] = 3.0
     m_force[ph.model.muscles.names.index("RIS_R")] = 1.0
     pos = ph.model.rest_positions.copy()
     jac = mj.linearise(pos, np.zeros_like(pos), m_force, m_force)
-    h = st.dt
+    h = system.factor_step
     rhs = np.random.default_rng(4).normal(size=(ph.n_dynamic, 3))
     x = mj.solve(rhs, jac, h)
-    a0 = sp.diags(st._mass) + h * st._damp_matrix + h * h * st._K
+    a0 = sp.diags(system.mass) + h * system.damping + h * h * system.stiffness
     u = sp.kron(jac.wa, sp.identity(3)).tocsr()
     s = sp.csr_matrix(h * jac.damp + h * h * jac.stiff)
     full = (sp.kron(a0, sp.identity(3)) + u @ s @ u.T).tocsc()

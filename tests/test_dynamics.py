@@ -1,20 +1,28 @@
 """Dynamics of the assembled kernel with the paper's integrator on small systems."""
 
-import inspect
-
 import numpy as np
 import pytest
 
 from facemech.params import Parameters
-from facemech.physics.assembly import accumulate_forces
+from facemech.physics.bundles import (
+    ContactBundle,
+    ForceBundles,
+    MuscleBundle,
+    PrismBundle,
+    RestorationBundle,
+    SpringBundle,
+)
 from facemech.physics.springs import scaled_stiffness
-from facemech.solvers.step import _euler_frame
+from facemech.solvers.explicit import ExplicitEuler
+from facemech.solvers.mandible import JawBundle
+from facemech.solvers.solver_state import SolverState
+from facemech.solvers.state import Controls, State
 
 
-def network_args(n_nodes, springs_ij, rest, k, *, damping, biphasic=None, tied=(),
-                 tied_rest=None, k_restore=0.0):
-    """Arguments of accumulate_forces after (pos, vel, out) for a bare spring network, built by
-    name from the kernel's own signature (nothing but springs and tied nodes)."""
+def network(n_nodes, springs_ij, rest, k, *, damping, biphasic=None, tied=(), tied_rest=None,
+            k_restore=0.0):
+    """The force bundles of a bare spring network (nothing but springs and tied nodes), built
+    by name, and the jaw bundle that carries its tied nodes' anchors (a jaw with no nodes)."""
     i = np.array([s[0] for s in springs_ij], np.int64)
     j = np.array([s[1] for s in springs_ij], np.int64)
     l0 = np.linalg.norm(rest[j] - rest[i], axis=1)
@@ -22,49 +30,45 @@ def network_args(n_nodes, springs_ij, rest, k, *, damping, biphasic=None, tied=(
     bip = np.zeros(len(i), bool) if biphasic is None else np.asarray(biphasic)
     tied = np.asarray(tied, np.int64)
     t_rest = rest[tied] if tied_rest is None else np.asarray(tied_rest, float)
-    none_i, none_f = np.zeros(0, np.int64), np.zeros(0)
-    values = {
-        "spring_i": i, "spring_j": j, "spring_rest": l0, "k_low": k, "k_high": 10 * k,
-        "biphasic": bip, "damping": np.full(len(i), float(damping)), "knee": 0.2,
-        "sigma": 0.98,
-        "prism_nodes": np.zeros((0, 6), np.int64), "prism_rest_volume": none_f,
-        "prism_rest_rel": np.zeros((0, 6, 3)), "k_volume": 0.0, "k_shape": 0.0,
-        "prism_bulk": none_f,
-        "muscle_force": none_f, "muscle_kind": none_i, "muscle_origin": none_i,
-        "muscle_ptr": np.zeros(1, np.int64), "muscle_nodes": none_i, "muscle_weights": none_f,
-        "muscle_rest": none_f, "muscle_k_passive": none_f, "f1": 0.82, "f2": 0.5, "f3": 0.43,
-        "f4": 20.0, "muscle_pull": 0, "muscle_bead": none_i,
-        "bead_start": np.zeros(1, np.int64), "muscle_offset": np.zeros((0, 3)),
-        "tied": tied, "tied_skull": tied + n_nodes, "tied_height": np.full(len(tied), -1.0),
-        "tied_rest": t_rest, "tied_normal": np.zeros((len(tied), 3)),
-        "k_restore": np.full(len(tied), float(k_restore)), "bone_k": np.zeros(len(tied)),
-        "skull_contact": True, "lip_pairs": np.zeros((0, 2), np.int64),
-        "lip_normals": np.zeros((0, 3)), "k_contact": none_f,
-    }
-    names = inspect.signature(accumulate_forces.py_func).parameters
-    return tuple(values[n] for n in list(names)[3:])
+    forces = ForceBundles(
+        springs=SpringBundle(i=i, j=j, rest_length=l0, k_low=k, k_high=10 * k, biphasic=bip,
+                             damping=np.full(len(i), float(damping)), knee=0.2, sigma=0.98),
+        prisms=PrismBundle.empty(),
+        muscles=MuscleBundle.empty(),
+        restoration=RestorationBundle(nodes=tied, skull=tied + n_nodes,
+                                      height=np.full(len(tied), -1.0),
+                                      k_restore=np.full(len(tied), float(k_restore)),
+                                      bone_k=np.zeros(len(tied)), skull_contact=True),
+        contact=ContactBundle.empty(),
+    )
+    jaw = JawBundle(hinge_point=np.zeros(3), hinge_axis=np.array([1.0, 0.0, 0.0]),
+                    nodes=np.zeros(0, np.int64), weights=np.zeros(0),
+                    rest_from_hinge=np.zeros((0, 3)), anchor_weights=np.zeros(len(tied)),
+                    anchor_rest=t_rest, anchor_normal=np.zeros((len(tied), 3)))
+    return forces, jaw
 
 
-def run_euler(pos, vel, fargs, n_dynamic, mass, dt, steps):
-    out = np.zeros_like(pos)
-    empty = np.zeros(0)
-    jargs = (np.zeros(3), np.array([1.0, 0, 0]), np.zeros(0, np.int64), np.zeros(0),
-             np.zeros((0, 3)), np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3)),
-             np.zeros((0, 3)))
-    inv_mass = np.full(len(pos), 1.0 / mass)
-    _euler_frame(pos, vel, empty, empty, empty, steps, dt, inv_mass,
-                 np.arange(n_dynamic, dtype=np.int64), 0.015, out, fargs, np.zeros(3), np.zeros(3),
-                 jargs)
+def run_euler(pos, vel, net, n_dynamic, mass, dt, steps):
+    """Positions after ``steps`` explicit Euler steps of ``dt`` s: one frame of the public
+    solver, with a solver state made by name."""
+    forces, jaw = net
+    ss = SolverState(forces=forces, jaw=jaw, dynamic=np.arange(n_dynamic, dtype=np.int64),
+                     inv_mass=np.full(len(pos), 1.0 / mass),
+                     muscle_group=np.zeros(0, np.int64), max_force=np.zeros(0), tau=0.015,
+                     frame_duration=steps * dt, n_steps=steps, step=dt)
+    state = State(pos, vel, np.zeros(0), np.zeros(0))
+    controls = Controls(np.zeros(16), np.zeros(3), np.zeros(3))
+    return ExplicitEuler(dt).step(ss, state, controls).positions
 
 
 def single_oscillator(dt, duration, mass, k, r, x0=1e-4):
     """Node 0 (mass) on a 1-cm spring to fixed node 1, pulled x0 along the spring, released."""
     rest = np.array([[0.0, 0.0, 0.0], [0.01, 0.0, 0.0]])
-    fargs = network_args(2, [(0, 1)], rest, k, damping=r)
+    net = network(2, [(0, 1)], rest, k, damping=r)
     pos = rest.copy()
     pos[0, 0] -= x0  # stretched: elongation regime, linear law
     vel = np.zeros_like(pos)
-    run_euler(pos, vel, fargs, 1, mass, dt, round(duration / dt))
+    pos = run_euler(pos, vel, net, 1, mass, dt, round(duration / dt))
     return -pos[0, 0]
 
 
@@ -126,10 +130,10 @@ def test_static_sag_matches_linear_solve():
     pulled = remap[12]  # the centre node
     shift = np.array([1e-6, 0.5e-6, 0.0])  # tiny: linear regime
     k_pull = 0.5
-    fargs = network_args(len(rest), edges, rest, k, damping=0.03, tied=[pulled],
-                         tied_rest=(rest[pulled] + shift)[None], k_restore=k_pull)
+    net = network(len(rest), edges, rest, k, damping=0.03, tied=[pulled],
+                  tied_rest=(rest[pulled] + shift)[None], k_restore=k_pull)
     pos, vel = rest.copy(), np.zeros_like(rest)
-    run_euler(pos, vel, fargs, len(interior), 2.3e-4, 1 / 3000, 30000)
+    pos = run_euler(pos, vel, net, len(interior), 2.3e-4, 1 / 3000, 30000)
     # piecewise-linear statics: a spring's stiffness is k when stretched and pi sigma k / 2
     # when compressed (slopes of eqs. 1-2 at rest); solve, update the pattern, repeat
     nd = len(interior)

@@ -19,7 +19,7 @@ from facemech.solvers.jaw import (
     lower_incisor_point,
     move_points,
 )
-from facemech.solvers.mandible import place_jaw
+from facemech.solvers.mandible import JawBundle, place_jaw
 
 DEG = np.pi / 180
 
@@ -33,9 +33,13 @@ def place(face, points, pose, rate=(0.0, 0.0, 0.0)):
     nodes = np.concatenate([face.jaw_nodes, extra]).astype(np.int64)
     weights = np.concatenate([face.jaw_weight, np.ones(len(extra))])
     none = np.zeros((0, 3))
-    place_jaw(pos, vel, *pose, *rate, np.asarray(face.hinge_point, float),
-              np.asarray(face.hinge_axis, float), nodes, weights,
-              pos[nodes] - face.hinge_point, np.zeros(0), none, none, none.copy(), none.copy())
+    jaw = JawBundle(hinge_point=np.asarray(face.hinge_point, float),
+                    hinge_axis=np.asarray(face.hinge_axis, float), nodes=nodes, weights=weights,
+                    rest_from_hinge=pos[nodes] - face.hinge_point, anchor_weights=np.zeros(0),
+                    anchor_rest=none, anchor_normal=none)
+    jaw_pos, jaw_vel, _ = place_jaw(jaw, np.asarray(pose, float), np.asarray(rate, float))
+    pos[nodes] = jaw_pos
+    vel[nodes] = jaw_vel
     return pos, vel
 
 

@@ -133,3 +133,70 @@ def test_eq9_prism_forces():
     np.testing.assert_allclose(out.sum(axis=0), 0.0, atol=1e-15)
     rel = p - p.mean(axis=0)
     np.testing.assert_allclose(out, -2.0 * (rel - rel0[0]), atol=1e-15)
+
+
+def _assembled(face, params):
+    """The bundles of a face through the public assembly (what every solver uses)."""
+    from facemech.physics.assembly import Physics, force_bundles, rest_anchors
+
+    ph = Physics.build(face, params)
+    return ph, force_bundles(ph), rest_anchors(ph)
+
+
+def test_springs_bundle_gives_eqs_1_2_on_a_perturbed_face(seeds_face):
+    """The springs alone (the other bundles emptied by name) give the sum over springs of the
+    vectorised law of eqs. (1)-(2) along each spring, biphasic on the dermal-fatty ones."""
+    from facemech.physics.assembly import accumulate_forces
+    from facemech.physics.bundles import (
+        ContactBundle,
+        MuscleBundle,
+        PrismBundle,
+        RestorationBundle,
+    )
+    from facemech.physics.kinds import SpringKind
+
+    p = preset("lucero1999")
+    ph, bundles, anchors = _assembled(seeds_face, p)
+    springs_only = bundles._replace(prisms=PrismBundle.empty(), muscles=MuscleBundle.empty(),
+                                    restoration=RestorationBundle.empty(),
+                                    contact=ContactBundle.empty())
+    rng = np.random.default_rng(5)
+    pos = ph.model.rest_positions + rng.normal(0, 3e-4, ph.model.rest_positions.shape)
+    out = np.empty_like(pos)
+    no_anchors = anchors._replace(rest=np.zeros((0, 3)), normal=np.zeros((0, 3)))
+    accumulate_forces(springs_only, pos, np.zeros_like(pos), np.zeros(0), no_anchors, out)
+    s = bundles.springs
+    d = pos[s.j] - pos[s.i]
+    length = np.linalg.norm(d, axis=1)
+    dermal = ph.model.spring_kind == SpringKind.DERMAL_FATTY
+    assert dermal.any() and np.array_equal(s.biphasic, dermal)
+    t = np.where(dermal,
+                 springs.spring_force(length, s.rest_length, s.k_low, s.k_high, biphasic=True,
+                                      knee=p.biphasic_knee, sigma=p.sigma),
+                 springs.spring_force(length, s.rest_length, s.k_low, s.k_high, biphasic=False,
+                                      knee=p.biphasic_knee, sigma=p.sigma))
+    f = (t / length)[:, None] * d
+    want = np.zeros_like(pos)
+    np.add.at(want, s.i, f)
+    np.add.at(want, s.j, -f)
+    np.testing.assert_allclose(out, want, rtol=1e-9, atol=1e-12 * np.abs(want).max())
+
+
+def test_assembled_forces_at_rest_are_the_dashpots_alone(face):
+    """At rest positions every elastic term of the anatomical preset vanishes (springs at rest
+    length, prisms at rest volume, tethers at their anchors, no muscle force), so the net force
+    is the springs' dashpots on the velocities: r (v_j - v_i) on node i, its opposite on j."""
+    from facemech.physics.assembly import accumulate_forces
+
+    ph, bundles, anchors = _assembled(face, preset("anatomical"))
+    pos = ph.model.rest_positions.copy()
+    vel = np.random.default_rng(6).normal(0, 0.01, pos.shape)
+    out = np.empty_like(pos)
+    accumulate_forces(bundles, pos, vel, np.zeros(ph.n_muscles), anchors, out)
+    s = bundles.springs
+    f = s.damping[:, None] * (vel[s.j] - vel[s.i])
+    want = np.zeros_like(pos)
+    np.add.at(want, s.i, f)
+    np.add.at(want, s.j, -f)
+    assert np.abs(want).max() > 1e-4  # the dashpots do act
+    np.testing.assert_allclose(out, want, rtol=1e-9, atol=1e-9 * np.abs(want).max())

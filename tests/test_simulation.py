@@ -6,10 +6,13 @@ import pytest
 
 from conftest import activity
 from facemech import SimulationBlowUp, Stepper, simulate
+from facemech.errors import InputError
 from facemech.params import Parameters
 from facemech.physics.assembly import Physics
+from facemech.solvers.explicit import ExplicitEuler
+from facemech.solvers.implicit import LinearImplicitEuler, Rosenbrock2
 from facemech.solvers.jaw import angle_for_drop, angles_from_chin, rotate_about
-from facemech.solvers.state import State
+from facemech.solvers.state import Controls, State
 
 FRAMES = 25
 SEEDS = Parameters()  # lucero1999
@@ -144,6 +147,58 @@ def test_state_restart_is_exact(seeds_face):
     np.testing.assert_array_equal(again.muscle_force, s.muscle_force)
     assert not s.positions.flags.writeable  # states are immutable
     assert s.time == pytest.approx(10 / 60)
+
+
+def test_solver_objects_step_without_hidden_state(seeds_face):
+    """Each integrator's name stands for one solver object; ``step`` of the object gives the
+    stepper's state, the same state every time it is called on the same arguments (in any
+    order), and leaves its arguments and the solver state as they were."""
+    ph = Physics.build(seeds_face, SEEDS)
+    a = activity(1, ZYG=0.6, OOS=0.3)[0]
+    s0 = State.at_rest(ph.model.rest_positions, ph.n_muscles)
+    opened = np.array([0.05, 0.0, 0.0])
+    controls = Controls(a, s0.jaw_pose, opened)
+    for name, solver, kw in (("euler", ExplicitEuler(SEEDS.dt), {}),
+                             ("implicit", LinearImplicitEuler(4), {"substeps": 4}),
+                             ("rosenbrock", Rosenbrock2(2), {"substeps": 2})):
+        stepper = Stepper(ph, integrator=name, **kw)
+        assert stepper.solver == solver and stepper.integrator == name
+        ss = solver.init(ph)
+        jaw_before = [np.array(x) for x in ss.jaw]
+        s1 = solver.step(ss, s0, controls)
+        s2 = solver.step(ss, s1, Controls(a, opened, opened))
+        again = solver.step(ss, s0, controls)
+        np.testing.assert_array_equal(again.positions, s1.positions)
+        np.testing.assert_array_equal(again.muscle_force, s1.muscle_force)
+        np.testing.assert_array_equal(stepper.advance(s0, a, 0.05).positions, s1.positions)
+        assert s1.jaw_angle == 0.05 and s1.time == pytest.approx(1 / 60)
+        assert s2.time == pytest.approx(2 / 60)
+        assert np.abs(s1.positions - s0.positions).max() > 1e-5  # the jaw and muscles moved it
+        np.testing.assert_array_equal(s0.positions, ph.model.rest_positions)
+        for before, after in zip(jaw_before, ss.jaw, strict=True):
+            np.testing.assert_array_equal(before, after)
+
+
+def test_an_option_a_solver_does_not_take_is_an_error(seeds_face):
+    """``substeps`` with explicit Euler and a ``dt`` that is not the implicit step are errors
+    naming the field; the presets' own defaults are not."""
+    ph = Physics.build(seeds_face, SEEDS)
+    for kw, field in (({"integrator": "euler", "substeps": 4}, "substeps"),
+                      ({"integrator": "implicit", "dt": 1e-3}, "dt"),
+                      ({"integrator": "rosenbrock", "substeps": 0}, "substeps"),
+                      ({"integrator": "euler", "dt": -1e-3}, "dt"),
+                      ({"integrator": Rosenbrock2(2), "substeps": 2}, "substeps"),
+                      ({"integrator": "midpoint"}, "integrator")):
+        with pytest.raises(InputError) as info:
+            Stepper(ph, **kw)
+        assert info.value.field == field, kw
+    for bad in (lambda: ExplicitEuler(0.0), lambda: LinearImplicitEuler(2.5),
+                lambda: Rosenbrock2(True)):
+        with pytest.raises(InputError):
+            bad()
+    assert Stepper(ph).n_steps == 50  # the preset's euler and 0.33 ms
+    assert Stepper(ph, integrator="implicit").n_steps == SEEDS.substeps
+    assert Stepper(ph, integrator="implicit", dt=1 / 240).n_steps == 4  # dt repeats h
 
 
 def test_blow_up_is_caught_with_the_frame(seeds_face):

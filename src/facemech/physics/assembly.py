@@ -4,7 +4,8 @@
 :class:`~facemech.params.Parameters` into flat arrays once; :func:`accumulate_forces` is the
 numba kernel that maps the pure element kernels of :mod:`springs`, :mod:`volume` and
 :mod:`muscle` over springs, prisms and muscles, then applies restoration (eq. 11), lip contact and
-skull non-penetration (eq. 10).
+skull non-penetration (eq. 10). The kernels take their constants as the typed bundles of
+:mod:`.bundles`, made from a :class:`Physics` by :func:`force_bundles`.
 """
 
 from __future__ import annotations
@@ -15,8 +16,24 @@ import numba as nb
 import numpy as np
 
 from ..errors import InputError
-from ..geometry.builder import SPHINCTER, FaceModel, for_tissue
+from ..geometry.builder import FaceModel, for_tissue
 from ..params import MUSCLE_GROUPS, Parameters
+from .bundles import (
+    Anchors,
+    ContactBundle,
+    ForceBundles,
+    MuscleBundle,
+    PrismBundle,
+    RestorationBundle,
+    SpringBundle,
+)
+from .kinds import (
+    PULL_ALONG_LENGTH,
+    PULL_TOWARDS_ORIGIN,
+    SEED_SPRING_KINDS,
+    SPHINCTER,
+    SpringKind,
+)
 from .materials import continuum_constants
 from .muscle import hill_force
 from .springs import scaled_stiffness, tension
@@ -68,7 +85,7 @@ class Physics:
     muscle_rest: np.ndarray
     muscle_area: np.ndarray  # m^2
     muscle_k_passive: np.ndarray  # N/m
-    muscle_pull: int  # 0: each insertion node towards the origin (seeds); 1: along the muscle
+    muscle_pull: int  # MusclePull: towards the origin (seeds) or along the muscle's length
     muscle_offset: np.ndarray  # (m, 3) m, origin point minus origin node (fixed origins)
     muscle_bead: np.ndarray  # (entries,) global bead of each muscle entry
     bead_start: np.ndarray  # (muscles + 1,) first global bead of each muscle
@@ -86,7 +103,7 @@ class Physics:
             c = continuum_constants(model, params)
             k_low = c.spring_k
             # strain stiffening, both ways, of every spring but the mucosa's (skull layer)
-            biphasic = (kind != 4) & (params.stiffening != 1.0)
+            biphasic = (kind != SpringKind.SKULL) & (params.stiffening != 1.0)
             k_high = np.where(biphasic, c.spring_k * params.stiffening, c.spring_k)
             damping = c.spring_damping
             mass = c.node_mass
@@ -102,13 +119,17 @@ class Physics:
             tied_skull = tied
             tied_height = np.zeros(len(tied))
         else:
-            k_ref = np.choose(np.minimum(kind, 3), [params.k_epidermis, params.k_dermal_low,
-                                                    params.k_fascia, params.k_muscle_layer])
+            # the seeds' constants, in the order of SEED_SPRING_KINDS (a later kind takes the
+            # muscle layer's)
+            k_ref = np.choose(np.minimum(kind, SEED_SPRING_KINDS[-1]),
+                              [params.k_epidermis, params.k_dermal_low, params.k_fascia,
+                               params.k_muscle_layer])
             k_low = scaled_stiffness(k_ref, l0, params.spring_ref_length)
-            k_high = np.where(kind == 1,
+            dermal = kind == SpringKind.DERMAL_FATTY
+            k_high = np.where(dermal,
                               scaled_stiffness(params.k_dermal_high, l0,
                                                params.spring_ref_length), k_low)
-            biphasic = kind == 1
+            biphasic = dermal
             damping = np.full(len(l0), params.damping)
             inv_mass = np.zeros(model.n_nodes)
             inv_mass[dynamic] = 1.0 / params.node_mass
@@ -153,7 +174,7 @@ class Physics:
             muscle_area=np.array([params.instance_area(nm, g)
                                   for nm, g in zip(mus.names, groups, strict=True)]),
             muscle_k_passive=np.array([params.passive_stiffness(g) for g in groups]),
-            muscle_pull=1 if params.is_continuum else 0,
+            muscle_pull=PULL_ALONG_LENGTH if params.is_continuum else PULL_TOWARDS_ORIGIN,
             muscle_bead=muscle_bead, bead_start=bead_start, muscle_offset=mus.offsets(),
         )
 
@@ -200,22 +221,32 @@ def segment_length_rate(p, v, i, j):
 
 
 @nb.njit(cache=True, inline="always")
-def muscle_length_rate(m, pos, vel, bp, bv, pull, kind, origin, offset, ptr, nodes, weights,
-                       bead_start):
+def muscle_length_rate(muscles, m, pos, vel, bp, bv):
     """Length l (m) and lengthening rate dl/dt (m/s) of muscle instance ``m``, as the force
     kernels measure them (the one definition they and the muscle outputs share).
 
-    ``pull`` 1 (the continuum's beads): a sphincter is the chain of its beads ``bp`` (velocities
-    ``bv``, from :func:`bead_positions`), a linear muscle runs from its origin point (origin node
-    plus ``offset``) to its bead. ``pull`` 0 (the seeds'): a sphincter is the chain of its path
-    nodes, a linear muscle runs from its origin node to the weighted mean of its insertion nodes
-    (``bp`` and ``bv`` unused).
+    Parameters
+    ----------
+    muscles : MuscleBundle
+    m : int -- the muscle instance
+    pos, vel : (nodes, 3) m and m/s
+    bp, bv : (beads, 3) m and m/s -- the beads' positions and velocities
+        (:func:`bead_positions`); read only when the muscles pull along their length
+
+    Pulling along the length (the continuum's beads): a sphincter is the chain of its beads, a
+    linear muscle runs from its origin point (origin node plus ``offset``) to its bead. Pulling
+    towards the origin (the seeds'): a sphincter is the chain of its path nodes, a linear muscle
+    runs from its origin node to the weighted mean of its insertion nodes.
     """
+    kind = muscles.kind
+    origin = muscles.origin
+    offset = muscles.offset
     length = 0.0
     rate = 0.0
-    if pull == 1:
+    if muscles.pull == PULL_ALONG_LENGTH:
+        bead_start = muscles.bead_start
         b0 = bead_start[m]
-        if kind[m] == 1:
+        if kind[m] == SPHINCTER:
             for b in range(b0, bead_start[m + 1] - 1):
                 seg, r = segment_length_rate(bp, bv, b, b + 1)
                 length += seg
@@ -229,9 +260,11 @@ def muscle_length_rate(m, pos, vel, bp, bv, pull, kind, origin, offset, ptr, nod
             rate = (dx * (bv[b0, 0] - vel[o, 0]) + dy * (bv[b0, 1] - vel[o, 1])
                     + dz * (bv[b0, 2] - vel[o, 2])) / length
     else:
-        a0 = ptr[m]
-        a1 = ptr[m + 1]
-        if kind[m] == 1:
+        nodes = muscles.nodes
+        weights = muscles.weights
+        a0 = muscles.ptr[m]
+        a1 = muscles.ptr[m + 1]
+        if kind[m] == SPHINCTER:
             for k in range(a0, a1 - 1):
                 seg, r = segment_length_rate(pos, vel, nodes[k], nodes[k + 1])
                 length += seg
@@ -258,40 +291,68 @@ def muscle_length_rate(m, pos, vel, bp, bv, pull, kind, origin, offset, ptr, nod
 
 
 @nb.njit(cache=True)
-def muscle_lengths(pos, vel, pull, kind, origin, offset, ptr, nodes, weights, bead, bead_start,
-                   length, rate):
-    """Length (m) and lengthening rate (m/s) of every muscle instance into ``length`` and
-    ``rate`` (muscles,), exactly as :func:`accumulate_forces` measures them."""
-    nb_ = bead_start[bead_start.shape[0] - 1]
-    if pull == 1:
-        bp, bv = bead_positions(pos, vel, nodes, weights, bead, nb_)
+def muscle_lengths(muscles, pos, vel):
+    """Length and lengthening rate of every muscle instance, exactly as
+    :func:`accumulate_forces` measures them.
+
+    Parameters
+    ----------
+    muscles : MuscleBundle
+    pos, vel : (nodes, 3) m and m/s
+
+    Returns
+    -------
+    length : (muscles,) m
+    rate : (muscles,) m/s, lengthening positive
+    """
+    n = muscles.kind.shape[0]
+    length = np.empty(n)
+    rate = np.empty(n)
+    if muscles.pull == PULL_ALONG_LENGTH:
+        bp, bv = bead_positions(pos, vel, muscles.nodes, muscles.weights, muscles.bead,
+                                muscles.bead_start[muscles.bead_start.shape[0] - 1])
     else:
         bp = np.zeros((0, 3))
         bv = np.zeros((0, 3))
-    for m in range(kind.shape[0]):
-        length[m], rate[m] = muscle_length_rate(m, pos, vel, bp, bv, pull, kind, origin, offset,
-                                                ptr, nodes, weights, bead_start)
+    for m in range(n):
+        length[m], rate[m] = muscle_length_rate(muscles, m, pos, vel, bp, bv)
+    return length, rate
 
 
 @nb.njit(cache=True)
-def bead_muscle_forces(pos, vel, out, muscle_force, kind, origin, offset, ptr, nodes, weights,
-                       bead, bead_start, rest_length, k_passive, f1, f2, f3, f4):
+def bead_muscle_forces(muscles, pos, vel, muscle_force, out):
     """Muscle forces (eqs. 5-7) acting through beads (the continuum tissue), added to ``out``.
 
     A linear muscle pulls its bead (the weighted mean of its insertion nodes) towards its origin;
     a sphincter's tension acts along the chain of its beads. Each bead's force is shared among
     its nodes by their weights, so the force on the nodes is minus the tension times the
     gradient of the muscle's length.
+
+    Parameters
+    ----------
+    muscles : MuscleBundle -- pulling along their length
+    pos, vel : (nodes, 3) m and m/s
+    muscle_force : (muscles,) N -- the filtered force M of eq. (4)
+    out : (nodes, 3) N -- the forces are added to it
     """
+    kind = muscles.kind
+    origin = muscles.origin
+    offset = muscles.offset
+    nodes = muscles.nodes
+    weights = muscles.weights
+    bead = muscles.bead
+    bead_start = muscles.bead_start
+    rest_length = muscles.rest_length
+    k_passive = muscles.k_passive
+    f1, f2, f3, f4 = muscles.f1, muscles.f2, muscles.f3, muscles.f4
     nb_ = bead_start[bead_start.shape[0] - 1]
     bp, bv = bead_positions(pos, vel, nodes, weights, bead, nb_)
     fb = np.zeros((nb_, 3))
     for m in range(kind.shape[0]):
         b0 = bead_start[m]
         b1 = bead_start[m + 1]
-        length, rate = muscle_length_rate(m, pos, vel, bp, bv, 1, kind, origin, offset, ptr,
-                                          nodes, weights, bead_start)
-        if kind[m] == 1:
+        length, rate = muscle_length_rate(muscles, m, pos, vel, bp, bv)
+        if kind[m] == SPHINCTER:
             tf = hill_force(muscle_force[m], length, rest_length[m], rate, k_passive[m],
                             f1, f2, f3, f4)
             for b in range(b0, b1 - 1):
@@ -325,29 +386,62 @@ def bead_muscle_forces(pos, vel, out, muscle_force, kind, origin, offset, ptr, n
 
 
 @nb.njit(cache=True)
-def accumulate_forces(
-    pos, vel, out,
-    spring_i, spring_j, spring_rest, k_low, k_high, biphasic, damping, knee, sigma,
-    prism_nodes, prism_rest_volume, prism_rest_rel, k_volume, k_shape, prism_bulk,
-    muscle_force, muscle_kind, muscle_origin, muscle_ptr, muscle_nodes, muscle_weights,
-    muscle_rest, muscle_k_passive, f1, f2, f3, f4, muscle_pull, muscle_bead, bead_start,
-    muscle_offset, tied, tied_skull, tied_height, tied_rest, tied_normal, k_restore, bone_k,
-    skull_contact, lip_pairs, lip_normals, k_contact,
-):  # fmt: skip
+def accumulate_forces(forces, pos, vel, muscle_force, anchors, out):
     """Net force (N) on every node: the terms of eq. (8) moved to the right-hand side.
 
-    ``out`` (N, 3) is overwritten. ``tied_rest`` and ``tied_normal`` are the rest positions and
-    outward skull normals under the tied fascia nodes, already rotated with the jaw. ``damping``
-    is the dashpot of each spring (N s/m), acting on the whole relative velocity of its ends (eq.
-    8); ``prism_bulk`` (K / V0 of each prism) switches on the
-    volume-preserving pressure of the continuum tissue, ``k_volume`` and ``k_shape`` eq. (9);
-    ``muscle_pull`` 0 pulls each insertion node towards the origin (the seeds'), 1 pulls them
-    along the muscle (the gradient of its length, so the force does work on its length only);
-    ``k_contact`` is the lip contact stiffness of each pair (N/m), ``k_restore`` the stiffness
-    holding each tied node to its anchor (N/m), ``bone_k`` the stiffness of its one-sided
-    contact with the bone's tangent plane at the anchor (N/m), ``skull_contact`` switches
-    eq. (10) on.
+    Parameters
+    ----------
+    forces : ForceBundles -- the springs, prisms, muscles, restoration and lip contact
+        (:func:`force_bundles`)
+    pos, vel : (nodes, 3) m and m/s
+    muscle_force : (muscles,) N -- the filtered force M of eq. (4) of each muscle instance
+    anchors : Anchors -- the tied nodes' anchors and the bone's normals there, already moved
+        with the jaw (:func:`facemech.solvers.mandible.place_jaw`)
+    out : (nodes, 3) N -- overwritten with the forces
+
+    Each spring's dashpot acts on the whole relative velocity of its ends (eq. 8); a prism's
+    ``bulk`` switches on the volume-preserving pressure of the continuum tissue, ``k_volume``
+    and ``k_shape`` eq. (9); the muscles pull as ``muscles.pull`` says; restoration holds each
+    tied node to its anchor (eq. 11) with a one-sided contact with the bone's tangent plane
+    there (``bone_k``); ``skull_contact`` switches eq. (10) on.
     """
+    springs = forces.springs
+    spring_i = springs.i
+    spring_j = springs.j
+    spring_rest = springs.rest_length
+    k_low = springs.k_low
+    k_high = springs.k_high
+    biphasic = springs.biphasic
+    damping = springs.damping
+    knee = springs.knee
+    sigma = springs.sigma
+    prisms = forces.prisms
+    prism_nodes = prisms.nodes
+    prism_rest_volume = prisms.rest_volume
+    prism_rest_rel = prisms.rest_rel
+    k_volume = prisms.k_volume
+    k_shape = prisms.k_shape
+    prism_bulk = prisms.bulk
+    muscles = forces.muscles
+    muscle_kind = muscles.kind
+    muscle_origin = muscles.origin
+    muscle_ptr = muscles.ptr
+    muscle_nodes = muscles.nodes
+    muscle_weights = muscles.weights
+    muscle_rest = muscles.rest_length
+    muscle_k_passive = muscles.k_passive
+    f1, f2, f3, f4 = muscles.f1, muscles.f2, muscles.f3, muscles.f4
+    restoration = forces.restoration
+    tied = restoration.nodes
+    tied_skull = restoration.skull
+    tied_height = restoration.height
+    k_restore = restoration.k_restore
+    bone_k = restoration.bone_k
+    tied_rest = anchors.rest
+    tied_normal = anchors.normal
+    lip_pairs = forces.contact.pairs
+    lip_normals = forces.contact.normals
+    k_contact = forces.contact.k
     out[:] = 0.0
     # springs, eqs. (1)-(2), and damping r (v_j - v_i), eq. (8) second term
     for s in range(spring_i.shape[0]):
@@ -390,17 +484,13 @@ def accumulate_forces(
                 for a in range(3):
                     out[prism_nodes[e, k], a] += q[k, a]
     # muscles, eqs. (5)-(7); muscle_force holds the filtered M of eq. (4)
-    if muscle_pull == 1:
-        bead_muscle_forces(pos, vel, out, muscle_force, muscle_kind, muscle_origin, muscle_offset,
-                           muscle_ptr, muscle_nodes, muscle_weights, muscle_bead, bead_start,
-                           muscle_rest, muscle_k_passive, f1, f2, f3, f4)
-    for m in range(muscle_kind.shape[0] if muscle_pull == 0 else 0):
+    if muscles.pull == PULL_ALONG_LENGTH:
+        bead_muscle_forces(muscles, pos, vel, muscle_force, out)
+    for m in range(muscle_kind.shape[0] if muscles.pull == PULL_TOWARDS_ORIGIN else 0):
         a0 = muscle_ptr[m]
         a1 = muscle_ptr[m + 1]
-        length, rate = muscle_length_rate(m, pos, vel, pos, vel, 0, muscle_kind, muscle_origin,
-                                          muscle_offset, muscle_ptr, muscle_nodes,
-                                          muscle_weights, bead_start)
-        if muscle_kind[m] == 1:  # sphincter path: tension along the chain of nodes
+        length, rate = muscle_length_rate(muscles, m, pos, vel, pos, vel)
+        if muscle_kind[m] == SPHINCTER:  # sphincter path: tension along the chain of nodes
             tf = hill_force(muscle_force[m], length, muscle_rest[m], rate, muscle_k_passive[m],
                             f1, f2, f3, f4)
             for k in range(a0, a1 - 1):
@@ -456,7 +546,7 @@ def accumulate_forces(
     # skull non-penetration, eq. (10): cancel the net force on a tied fascia node into the skull
     # while the node sits at or below its rest height above the skull (a node lifted off the
     # skull may come back down; otherwise nothing would ever pull it back)
-    for k in range(tied.shape[0] if skull_contact else 0):
+    for k in range(tied.shape[0] if restoration.skull_contact else 0):
         i = tied[k]
         s = tied_skull[k]
         fn = 0.0
@@ -469,21 +559,53 @@ def accumulate_forces(
                 out[i, a] -= fn * tied_normal[k, a]
 
 
-def force_arguments(ph: Physics, muscle_force: np.ndarray, tied_rest: np.ndarray,
-                    tied_normal: np.ndarray, lip_normals: np.ndarray) -> tuple:
-    """The arguments of :func:`accumulate_forces` after ``pos, vel, out``, in order."""
+def force_bundles(ph: Physics) -> ForceBundles:
+    """The constant arguments of :func:`accumulate_forces` for a model: every solver's, and
+    the way tests and benchmarks make them.
+
+    Parameters
+    ----------
+    ph : Physics
+
+    Returns
+    -------
+    ForceBundles
+    """
     p = ph.params
-    return (
-        ph.spring_i, ph.spring_j, ph.spring_rest, ph.spring_k_low, ph.spring_k_high,
-        ph.spring_biphasic, ph.spring_damping, p.biphasic_knee, p.sigma,
-        ph.prism_nodes, ph.prism_rest_volume, ph.prism_rest_rel, p.k_volume, p.k_shape,
-        ph.prism_bulk,
-        muscle_force, ph.muscle_kind, ph.muscle_origin, ph.muscle_ptr, ph.muscle_nodes,
-        ph.muscle_weights, ph.muscle_rest, ph.muscle_k_passive, p.f1, p.f2, p.f3, p.f4,
-        ph.muscle_pull, ph.muscle_bead, ph.bead_start, ph.muscle_offset,
-        ph.tied, ph.tied_skull, ph.tied_height, tied_rest, tied_normal, ph.restore_k,
-        ph.bone_k, ph.skull_contact, ph.model.lip_pairs, lip_normals, ph.contact_k,
+    return ForceBundles(
+        springs=SpringBundle(
+            i=ph.spring_i, j=ph.spring_j, rest_length=ph.spring_rest, k_low=ph.spring_k_low,
+            k_high=ph.spring_k_high, biphasic=ph.spring_biphasic, damping=ph.spring_damping,
+            knee=p.biphasic_knee, sigma=p.sigma),
+        prisms=PrismBundle(
+            nodes=ph.prism_nodes, rest_volume=ph.prism_rest_volume, rest_rel=ph.prism_rest_rel,
+            k_volume=p.k_volume, k_shape=p.k_shape, bulk=ph.prism_bulk),
+        muscles=muscle_bundle(ph),
+        restoration=RestorationBundle(
+            nodes=ph.tied, skull=ph.tied_skull, height=ph.tied_height, k_restore=ph.restore_k,
+            bone_k=ph.bone_k, skull_contact=ph.skull_contact),
+        contact=ContactBundle(pairs=ph.model.lip_pairs, normals=ph.model.lip_normals,
+                              k=ph.contact_k),
     )
 
 
-__all__ = ["Physics", "accumulate_forces", "force_arguments", "muscle_lengths", "SPHINCTER"]
+def muscle_bundle(ph: Physics) -> MuscleBundle:
+    """The muscle instances of a model and its preset's Hill constants, as the kernels read
+    them."""
+    p = ph.params
+    return MuscleBundle(
+        kind=ph.muscle_kind, origin=ph.muscle_origin, offset=ph.muscle_offset, ptr=ph.muscle_ptr,
+        nodes=ph.muscle_nodes, weights=ph.muscle_weights, bead=ph.muscle_bead,
+        bead_start=ph.bead_start, rest_length=ph.muscle_rest, k_passive=ph.muscle_k_passive,
+        pull=ph.muscle_pull, f1=p.f1, f2=p.f2, f3=p.f3, f4=p.f4)
+
+
+def rest_anchors(ph: Physics) -> Anchors:
+    """The tied nodes' anchors with the jaw closed: their rest positions and the bone's
+    normals there (new arrays)."""
+    return Anchors(rest=ph.model.rest_positions[ph.tied].copy(),
+                   normal=ph.model.skull_normals[ph.tied_skull].copy())
+
+
+__all__ = ["Physics", "accumulate_forces", "force_bundles", "muscle_bundle", "muscle_lengths",
+           "rest_anchors", "SPHINCTER"]

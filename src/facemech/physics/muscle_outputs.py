@@ -21,7 +21,7 @@ import numba as nb
 import numpy as np
 
 from ..params import MUSCLE_GROUPS
-from .assembly import Physics, muscle_lengths
+from .assembly import Physics, muscle_bundle, muscle_lengths
 from .muscle import hill_force
 
 #: the quantities of :class:`MuscleSeries` as (attribute, results variable, units, long name)
@@ -78,13 +78,8 @@ def muscle_outputs(physics: Physics, positions: np.ndarray, velocities: np.ndarr
     pos = np.ascontiguousarray(positions, float)
     vel = np.ascontiguousarray(velocities, float)
     act = np.ascontiguousarray(activation, float)
-    n = ph.n_muscles
-    length = np.empty(n)
-    rate = np.empty(n)
-    muscle_lengths(pos, vel, ph.muscle_pull, ph.muscle_kind, ph.muscle_origin, ph.muscle_offset,
-                   ph.muscle_ptr, ph.muscle_nodes, ph.muscle_weights, ph.muscle_bead,
-                   ph.bead_start, length, rate)
-    force = np.empty(n)
+    length, rate = muscle_lengths(muscle_bundle(ph), pos, vel)
+    force = np.empty(ph.n_muscles)
     _tensions(act, length, rate, ph.muscle_rest, ph.muscle_k_passive, p.f1, p.f2, p.f3, p.f4,
               force)
     return MuscleOutputs(force, length, rate, act.copy())

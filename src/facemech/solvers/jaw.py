@@ -89,16 +89,13 @@ def move_points(points: np.ndarray, pose, hinge_point: np.ndarray, hinge_axis: n
                 weights: np.ndarray | None = None) -> np.ndarray:
     """Points (k, 3) m carried by the mandible into ``pose`` (angle, shift_y, shift_z), each by
     its jaw weight (default 1), with the stepper's own kernel (:mod:`.mandible`)."""
-    from .mandible import move_anchors
+    from .mandible import moved_anchors
 
     pts = np.ascontiguousarray(np.atleast_2d(np.asarray(points, float)))
     w = np.ones(len(pts)) if weights is None else np.asarray(weights, float)
     pose = np.asarray(pose, float)
-    out = np.empty_like(pts)
-    normal = np.empty_like(pts)
-    move_anchors(float(pose[0]), float(pose[1]), float(pose[2]),
-                 np.asarray(hinge_point, float), np.asarray(hinge_axis, float), w, pts,
-                 np.zeros_like(pts), out, normal)
+    out, _ = moved_anchors(pose, np.asarray(hinge_point, float), np.asarray(hinge_axis, float),
+                           w, pts, np.zeros_like(pts))
     return out
 
 

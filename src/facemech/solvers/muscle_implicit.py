@@ -27,7 +27,8 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.linalg import lu_factor, lu_solve
 
-from ..physics.assembly import bead_positions
+from ..physics.assembly import bead_positions, muscle_bundle
+from ..physics.kinds import SPHINCTER
 from ..physics.muscle import force_length
 
 
@@ -54,17 +55,37 @@ def hill_derivatives(m_filtered, length, rest_length, velocity, k_passive, f1, f
 
 
 @nb.njit(cache=True)
-def bead_jacobian(bp, bv, pos, vel, m_force, kind, origin, offset, bead_start, rest_length,
-                  k_passive, f1, f2, f3, f4, active, stiff, damp):
-    """Bead-space stiffness ``-df/dp`` and damping ``-df/dv`` (3B x 3B, bead-major) of the
-    active muscles, written into ``stiff`` and ``damp`` (zeroed first)."""
-    stiff[:] = 0.0
-    damp[:] = 0.0
+def bead_jacobian(muscles, bp, bv, pos, vel, m_force, active):
+    """Bead-space stiffness ``-df/dp`` and damping ``-df/dv`` of the active muscles.
+
+    Parameters
+    ----------
+    muscles : MuscleBundle -- pulling along their length (through beads)
+    bp, bv : (B, 3) m and m/s -- the beads' positions and velocities
+    pos, vel : (nodes, 3) m and m/s -- the nodes' (for the linear muscles' origins)
+    m_force : (muscles,) N -- the filtered force M of eq. (4)
+    active : (a,) int64 -- the muscles to take
+
+    Returns
+    -------
+    stiff : (3B, 3B) N/m, bead-major
+    damp : (3B, 3B) N s/m, bead-major
+    """
+    kind = muscles.kind
+    origin = muscles.origin
+    offset = muscles.offset
+    bead_start = muscles.bead_start
+    rest_length = muscles.rest_length
+    k_passive = muscles.k_passive
+    f1, f2, f3, f4 = muscles.f1, muscles.f2, muscles.f3, muscles.f4
+    n3 = 3 * bead_start[bead_start.shape[0] - 1]
+    stiff = np.zeros((n3, n3))
+    damp = np.zeros((n3, n3))
     for q in range(active.shape[0]):
         m = active[q]
         b0 = bead_start[m]
         b1 = bead_start[m + 1]
-        if kind[m] == 1:
+        if kind[m] == SPHINCTER:
             nseg = b1 - b0 - 1
             units = np.zeros((nseg, 3))
             seglen = np.zeros(nseg)
@@ -125,6 +146,7 @@ def bead_jacobian(bp, bv, pos, vel, m_force, kind, origin, offset, bead_start, r
                     uu = d[a] * d[c]
                     stiff[3 * b0 + a, 3 * b0 + c] += dl * uu + g * ((1.0 if a == c else 0.0) - uu)
                     damp[3 * b0 + a, 3 * b0 + c] += dv * uu
+    return stiff, damp
 
 
 class MuscleJacobian:
@@ -141,6 +163,7 @@ class MuscleJacobian:
     def __init__(self, physics, lu):
         ph = physics
         self.physics = ph
+        self.muscles = muscle_bundle(ph)
         self.lu = lu
         row = np.full(ph.model.n_nodes, -1, np.int64)
         row[ph.dynamic] = np.arange(ph.n_dynamic)
@@ -151,8 +174,8 @@ class MuscleJacobian:
                                shape=(ph.n_dynamic, self.n_beads))
         self.Y = lu.solve(self.W.toarray()) if self.n_beads else np.zeros((ph.n_dynamic, 0))
         self.G = np.asarray(self.W.T @ self.Y)
-        self._stiff = np.zeros((3 * self.n_beads, 3 * self.n_beads))
-        self._damp = np.zeros_like(self._stiff)
+        # a cache of what depends on the set of active muscles only (no state: the results of
+        # every call are those of a fresh object)
         self._subspaces: dict = {}
 
     def _subspace(self, active):
@@ -175,20 +198,15 @@ class MuscleJacobian:
 
     def linearise(self, pos, vel, m_force, m_steady):
         """Bead-space Jacobian of the active muscles at a state, or None when none is active."""
-        ph = self.physics
-        p = ph.params
+        mu = self.muscles
         active = np.nonzero((np.abs(m_force) > self.THRESHOLD)
                             | (np.abs(m_steady) > self.THRESHOLD))[0].astype(np.int64)
         if len(active) == 0:
             return None
-        bp, bv = bead_positions(pos, vel, ph.muscle_nodes, ph.muscle_weights, ph.muscle_bead,
-                                self.n_beads)
-        bead_jacobian(bp, bv, pos, vel, np.asarray(m_force, float), ph.muscle_kind,
-                      ph.muscle_origin, ph.muscle_offset, ph.bead_start, ph.muscle_rest,
-                      ph.muscle_k_passive, p.f1, p.f2, p.f3, p.f4, active, self._stiff,
-                      self._damp)
+        bp, bv = bead_positions(pos, vel, mu.nodes, mu.weights, mu.bead, self.n_beads)
+        stiff, damp = bead_jacobian(mu, bp, bv, pos, vel, np.asarray(m_force, float), active)
         beads, idx, wa, wat, ya, g3 = self._subspace(active)
-        return _Linearised(beads, self._stiff[np.ix_(idx, idx)], self._damp[np.ix_(idx, idx)],
+        return _Linearised(beads, stiff[np.ix_(idx, idx)], damp[np.ix_(idx, idx)],
                            wa, wat, ya, g3)
 
     def apply_stiffness(self, v: np.ndarray, jac) -> np.ndarray:

@@ -1,7 +1,9 @@
-"""The explicit, immutable state of the face model.
+"""The explicit, immutable state of the face model, and the controls of one frame.
 
-Both the forward simulation and the inverse solver advance a :class:`State` with
-:func:`facemech.solvers.step.advance`; a state can be kept and restarted from at any frame.
+Both the forward simulation and the inverse solver advance a :class:`State` with a solver's
+``step(solver_state, state, controls)`` (:mod:`facemech.solvers.explicit`,
+:mod:`facemech.solvers.implicit`; :meth:`facemech.solvers.step.Stepper.advance` makes the
+:class:`Controls`); a state can be kept and restarted from at any frame.
 """
 
 from __future__ import annotations
@@ -61,3 +63,29 @@ class State:
         """The rest state: rest positions, no motion, no muscle force."""
         return cls(rest_positions, np.zeros_like(rest_positions), np.zeros(n_muscles),
                    np.zeros(n_muscles), jaw_angle, time, jaw_shift)
+
+
+@dataclass(frozen=True, eq=False)
+class Controls:
+    """What drives the face over one frame.
+
+    Attributes
+    ----------
+    activity : (16,) array in [0, 1] -- muscle activity per group
+        (:data:`~facemech.params.MUSCLE_GROUPS`), held over the frame
+    jaw_start : (3,) array -- the jaw's pose (angle rad, shift_y m, shift_z m) at the frame's
+        start
+    jaw_end : (3,) array -- its pose at the frame's end; the pose moves linearly from one to
+        the other over the frame (equal: the jaw holds its pose)
+    """
+
+    activity: np.ndarray
+    jaw_start: np.ndarray
+    jaw_end: np.ndarray
+
+    def __post_init__(self):
+        for name in ("activity", "jaw_start", "jaw_end"):
+            object.__setattr__(self, name, _frozen(getattr(self, name)))
+        for name in ("jaw_start", "jaw_end"):
+            if getattr(self, name).shape != (3,):
+                raise ValueError(f"{name} must have shape (3,), got {getattr(self, name).shape}")

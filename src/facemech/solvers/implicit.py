@@ -1,0 +1,320 @@
+"""Two fast implicit integrators on one constant, factorised matrix.
+
+:class:`LinearImplicitEuler`
+    linearly implicit (Baraff-Witkin) Euler with a constant matrix ``A = M + h C + h^2 K``
+    (masses M, damping C, a rest stiffness K), factorised once with SuperLU and reused:
+    ``A dv = h (f(x, v) - h K v)``. The nonlinear forces are evaluated exactly each step, so
+    only the stability, not the consistency, rests on K.
+:class:`Rosenbrock2`
+    the two-stage Rosenbrock-W method ROS2 (Verwer et al. 1999), second order for any
+    approximation of the Jacobian, so one constant factorised matrix (gamma h in place of h)
+    serves every step: two force evaluations and two solves per step.
+
+Both integrate the muscle filter of eq. (4) exactly. K and C are isotropic (the same for x, y
+and z) so one factorisation of a nodes x nodes matrix serves the three axes.
+
+For the seeds' constants K is the rest tangent of springs, shape and restoration terms and C
+the damping graph Laplacian. For the continuum tissue (the anatomical preset) C is exact (each
+spring's dashpot acts on the whole relative velocity of its ends), and K holds a share
+(:data:`IMPLICIT_STIFFNESS_SHARE`) of each spring's stiff branch, the volume term (the Gram
+matrix of each prism's volume gradient, within a factor 3 of its true rank-one Hessian) and the
+tethers: with the exact damping in the matrix, the stiffness left explicit is stable for steps
+below 2 b / ((1 - share) k_high) (docs/model.md). Physiological muscle forces make the velocity
+term of the Hill law (eq. 6) and the geometric stiffness of a tension stiff on the insertion
+nodes; both are taken into the implicit solve exactly, through the muscles' beads, by the
+Sherman-Morrison-Woodbury identity on the constant factorisation
+(:class:`~facemech.solvers.muscle_implicit.MuscleJacobian`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import ClassVar
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.linalg import splu
+
+from ..errors import InputError
+from ..physics.assembly import Physics, accumulate_forces, rest_anchors
+from ..physics.volume import volume_gradients
+from .muscle_implicit import MuscleJacobian
+from .solver_state import (
+    SolverState,
+    filter_exact,
+    finish_frame,
+    place_jaw_into,
+    solver_state,
+    start_frame,
+)
+from .state import Controls, State
+
+ROS2_GAMMA = 1.0 + 1.0 / np.sqrt(2.0)
+#: share of the springs' stiffness (of their stiff branch) that the constant matrix of the
+#: continuum carries: with the exact damping in the matrix, the rest left explicit is stable at
+#: 4 steps per frame and the lips do not ring (docs/model.md, Integration)
+IMPLICIT_STIFFNESS_SHARE = 0.3
+
+
+@dataclass(frozen=True, eq=False)
+class ImplicitSystem:
+    """The constant matrices of an implicit method over the moving nodes, shared by the axes.
+
+    Attributes
+    ----------
+    stiffness : (d, d) sparse CSR, N/m -- the constant stiffness K
+    damping : (d, d) sparse CSR, N s/m -- the damping C
+    mass : (d,) kg
+    lu : SuperLU -- the factorisation of ``M + g C + g^2 K``
+    factor_step : float, s -- g (h for linear implicit Euler, gamma h for ROS2)
+    muscles : MuscleJacobian or None -- the muscles' bead-space Jacobian and the Woodbury solve
+        (the continuum tissue); None: the muscles stay explicit
+    """
+
+    stiffness: sp.csr_matrix
+    damping: sp.csr_matrix
+    mass: np.ndarray
+    lu: object
+    factor_step: float
+    muscles: MuscleJacobian | None
+
+    def linearise(self, pos, vel, m_force, m_steady):
+        """The muscles' Jacobian at a state (None: no muscle in the solve)."""
+        if self.muscles is None:
+            return None
+        return self.muscles.linearise(pos, vel, m_force, m_steady)
+
+    def solve(self, rhs: np.ndarray, jac, h: float) -> np.ndarray:
+        """Solve the implicit system (with the muscles' Jacobian ``jac``) for rhs (d, 3)."""
+        if self.muscles is None:
+            return self.lu.solve(rhs)
+        return self.muscles.solve(rhs, jac, h)
+
+    def apply_stiffness(self, v: np.ndarray, jac) -> np.ndarray:
+        """The system's stiffness times v (d, 3): constant part and muscles."""
+        out = self.stiffness @ v
+        if self.muscles is not None:
+            out += self.muscles.apply_stiffness(v, jac)
+        return out
+
+
+def implicit_system(physics: Physics, h: float) -> ImplicitSystem:
+    """The constant matrices of a model, factorised for the step ``h`` s.
+
+    Seeds' constants: K is the isotropic (per-axis) rest tangent stiffness: springs (mean of
+    the elongation slope k and the compression slope pi sigma k / 2 of eqs. 1-2), the shape
+    term of eq. (9) and the restoration of eq. (11); C is r times the spring graph Laplacian
+    (eq. 8). The isotropic K over-estimates the transverse stiffness of unloaded springs,
+    which only adds numerical damping; the exact forces are evaluated every step.
+
+    Continuum: C is the exact Laplacian of the springs' dashpots; K a share of the springs'
+    stiff branch, the volume term's Gram matrices and the tethers (see the module doc); the
+    muscles join the solve through their beads.
+    """
+    ph, p = physics, physics.params
+    nd = ph.n_dynamic
+    row = np.full(ph.model.n_nodes, -1, np.int64)
+    row[ph.dynamic] = np.arange(nd)
+    si, sj = row[ph.spring_i], row[ph.spring_j]
+    pn = row[ph.prism_nodes]
+    a_idx = np.repeat(np.arange(6), 6)
+    b_idx = np.tile(np.arange(6), 6)
+    ra, rb = pn[:, a_idx].reshape(-1), pn[:, b_idx].reshape(-1)
+    ok = (ra >= 0) & (rb >= 0)
+    if p.is_continuum:
+        # damping exactly as the forces have it (the springs' dashpots): a matrix that
+        # over-damps acts as inertia and makes the step ring; stiffness: a share of each
+        # spring's stiff branch, the volume term's Gram matrices (within a factor 3 of its
+        # rank-one Hessian) and the tethers
+        damp = _graph_matrix(si, sj, ph.spring_damping, nd)
+        k_springs = _graph_matrix(si, sj, IMPLICIT_STIFFNESS_SHARE * ph.spring_k_high, nd)
+        grads = volume_gradients(ph.model.rest_positions[ph.prism_nodes])  # (p, 6, 3)
+        gram = np.einsum("pac,pbc->pab", grads, grads) * ph.prism_bulk[:, None, None]
+        tether = np.zeros(nd)
+        np.add.at(tether, row[ph.tied], ph.restore_k)
+        stiff = (k_springs + sp.csc_matrix((gram.reshape(-1)[ok], (ra[ok], rb[ok])),
+                                           shape=(nd, nd)) + sp.diags(tether)).tocsc()
+        mass = 1.0 / ph.inv_mass[ph.dynamic]
+    else:
+        k_tan = ph.spring_k_low * 0.5 * (1.0 + 0.5 * np.pi * p.sigma)
+        stiff = _graph_matrix(si, sj, k_tan, nd)
+        # shape term of eq. (9): d(-k_e2 (x_a - centroid))/dx_b = -k_e2 (delta_ab - 1/6)
+        coef = p.k_shape * ((a_idx == b_idx).astype(float) - 1.0 / 6.0)
+        cv = np.broadcast_to(coef, (len(pn), 36)).reshape(-1)
+        stiff = stiff + sp.csc_matrix((cv[ok], (ra[ok], rb[ok])), shape=(nd, nd))
+        restore = np.zeros(nd)
+        restore[row[ph.tied]] = ph.restore_k
+        stiff = stiff + sp.diags(restore)
+        damp = _graph_matrix(si, sj, ph.spring_damping, nd)
+        mass = np.full(nd, p.node_mass)
+    stiff = stiff.tocsc()
+    a_mat = (sp.diags(mass) + h * damp + h * h * stiff).tocsc()
+    # the matrix is symmetric positive definite: no pivoting and a symmetric ordering fill in
+    # less than SuperLU's general settings (a third faster to solve here)
+    lu = splu(a_mat, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+              options={"SymmetricMode": True})
+    return ImplicitSystem(stiffness=stiff.tocsr(), damping=damp.tocsr(), mass=mass, lu=lu,
+                          factor_step=h,
+                          muscles=MuscleJacobian(ph, lu) if p.is_continuum else None)
+
+
+def _graph_matrix(i: np.ndarray, j: np.ndarray, w: np.ndarray, nd: int) -> sp.csc_matrix:
+    """Weighted graph Laplacian of edges (i, j) over rows 0..nd-1 (-1: a kinematic node).
+
+    An edge to a kinematic node keeps its diagonal term only.
+    """
+    i = np.asarray(i)
+    j = np.asarray(j)
+    ii = i >= 0
+    jj = j >= 0
+    both = ii & jj
+    rows = np.concatenate([i[ii], j[jj], i[both], j[both]])
+    cols = np.concatenate([i[ii], j[jj], j[both], i[both]])
+    vals = np.concatenate([w[ii], w[jj], -w[both], -w[both]])
+    return sp.csc_matrix((vals, (rows, cols)), shape=(nd, nd))
+
+
+def _check_substeps(substeps) -> int:
+    if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)) or substeps < 1:
+        raise InputError(f"substeps must be a whole number of steps per frame, at least 1 "
+                         f"(got {substeps!r})", field="substeps")
+    return int(substeps)
+
+
+def _init(physics: Physics, substeps: int, gamma: float) -> SolverState:
+    frame = 1.0 / physics.params.frame_rate
+    system = implicit_system(physics, gamma * (frame / substeps))
+    ss = solver_state(physics, substeps, system)
+    _warm_up(ss, physics)
+    return ss
+
+
+def _warm_up(ss: SolverState, physics: Physics) -> None:
+    """Compile (or load) the kernels now, so that timings of the first frame are not the
+    compiler's."""
+    pos = physics.model.rest_positions.copy()
+    vel = np.zeros_like(pos)
+    m = np.zeros(len(ss.muscle_group))
+    place_jaw_into(ss.jaw, np.zeros(3), np.zeros(3), pos, vel)
+    accumulate_forces(ss.forces, pos, vel, m, rest_anchors(physics), np.zeros_like(pos))
+    filter_exact(m, m, m, ss.tau, ss.step)
+    ss.system.linearise(pos, vel, m + 1.0, m)
+
+
+def _frame_force_bound(ss: SolverState, m_force, m_rate, m_steady):
+    """The larger of each muscle's filtered force now and at the frame's end (eq. 4)."""
+    end, _ = filter_exact(m_force, m_rate, m_steady, ss.tau, ss.frame_duration)
+    return np.maximum(m_force, end)
+
+
+@dataclass(frozen=True)
+class LinearImplicitEuler:
+    """Linearly implicit Euler with the constant factorised matrix (see the module doc).
+
+    Parameters
+    ----------
+    substeps : int
+        Steps per frame (4 at 60 Hz: h = 4.2 ms).
+    """
+
+    substeps: int
+    name: ClassVar[str] = "implicit"
+
+    def __post_init__(self):
+        object.__setattr__(self, "substeps", _check_substeps(self.substeps))
+
+    def init(self, physics: Physics) -> SolverState:
+        """The solver state of a model: its matrix factorised for h = frame / substeps."""
+        return _init(physics, self.substeps, 1.0)
+
+    def step(self, solver_state: SolverState, state: State, controls: Controls) -> State:
+        """``state`` advanced by one frame under ``controls`` (a new :class:`State`)."""
+        ss = solver_state
+        system = ss.system
+        f = start_frame(ss, state, controls)
+        pos, vel = f.positions, f.velocities
+        m_force, m_rate, m_steady = f.muscle_force, f.muscle_force_rate, f.muscle_steady
+        dyn = ss.dynamic
+        h = ss.step
+        out = np.zeros_like(pos)
+        jac = system.linearise(pos, vel, _frame_force_bound(ss, m_force, m_rate, m_steady),
+                               m_steady)
+        for step in range(ss.n_steps):
+            anchors = place_jaw_into(ss.jaw, f.jaw_start + f.jaw_rate * (step * h), f.jaw_rate,
+                                     pos, vel)
+            accumulate_forces(ss.forces, pos, vel, m_force, anchors, out)
+            v0 = vel[dyn]
+            rhs = h * (out[dyn] - h * system.apply_stiffness(v0, jac))
+            vel[dyn] = v0 + system.solve(rhs, jac, h)
+            pos[dyn] += h * vel[dyn]
+            m_force, m_rate = filter_exact(m_force, m_rate, m_steady, ss.tau, h)
+        return finish_frame(ss, state, controls, pos, vel, m_force, m_rate, f.jaw_rate)
+
+
+@dataclass(frozen=True)
+class Rosenbrock2:
+    """The two-stage Rosenbrock-W method ROS2 (Verwer et al. 1999) with the constant
+    factorised matrix (see the module doc).
+
+    Parameters
+    ----------
+    substeps : int
+        Steps per frame (each two force evaluations and two solves).
+    """
+
+    substeps: int
+    name: ClassVar[str] = "rosenbrock"
+
+    def __post_init__(self):
+        object.__setattr__(self, "substeps", _check_substeps(self.substeps))
+
+    def init(self, physics: Physics) -> SolverState:
+        """The solver state of a model: its matrix factorised for gamma h."""
+        return _init(physics, self.substeps, ROS2_GAMMA)
+
+    def step(self, solver_state: SolverState, state: State, controls: Controls) -> State:
+        """``state`` advanced by one frame under ``controls`` (a new :class:`State`)."""
+        ss = solver_state
+        system = ss.system
+        f = start_frame(ss, state, controls)
+        pos, vel = f.positions, f.velocities
+        m_force, m_rate, m_steady = f.muscle_force, f.muscle_force_rate, f.muscle_steady
+        dyn = ss.dynamic
+        h = ss.step
+        inv_m = ss.inv_mass[dyn][:, None]
+        out = np.zeros_like(pos)
+        jac = system.linearise(pos, vel, _frame_force_bound(ss, m_force, m_rate, m_steady),
+                               m_steady)
+        for step in range(ss.n_steps):
+            x0, v0 = pos[dyn].copy(), vel[dyn].copy()
+            anchors = place_jaw_into(ss.jaw, f.jaw_start + f.jaw_rate * (step * h), f.jaw_rate,
+                                     pos, vel)
+            accumulate_forces(ss.forces, pos, vel, m_force, anchors, out)
+            k1x, k1v = _ros2_stage(ss, v0, out[dyn] * inv_m, jac)
+            pos[dyn] = x0 + h * k1x
+            vel[dyn] = v0 + h * k1v
+            m_force, m_rate = filter_exact(m_force, m_rate, m_steady, ss.tau, h)
+            anchors = place_jaw_into(ss.jaw, f.jaw_start + f.jaw_rate * ((step + 1) * h),
+                                     f.jaw_rate, pos, vel)
+            accumulate_forces(ss.forces, pos, vel, m_force, anchors, out)
+            k2x, k2v = _ros2_stage(ss, vel[dyn] - 2.0 * k1x, out[dyn] * inv_m - 2.0 * k1v, jac)
+            pos[dyn] = x0 + h * (1.5 * k1x + 0.5 * k2x)
+            vel[dyn] = v0 + h * (1.5 * k1v + 0.5 * k2v)
+        return finish_frame(ss, state, controls, pos, vel, m_force, m_rate, f.jaw_rate)
+
+
+def _ros2_stage(ss: SolverState, r_x, r_v, jac):
+    """Solve (I - gamma h J) k = r for the state (x, v) with the constant matrices.
+
+    With J = [[0, I], [-K/m, -C/m]]: (m + g C + g^2 K) k_v = m r_v - g K r_x and
+    k_x = r_x + g k_v, g = gamma h (the factorised matrix).
+    """
+    system = ss.system
+    g = ROS2_GAMMA * ss.step
+    m = system.mass[:, None]
+    k_v = system.solve(m * r_v - g * system.apply_stiffness(r_x, jac), jac, g)
+    return r_x + g * k_v, k_v
+
+
+__all__ = ["LinearImplicitEuler", "Rosenbrock2", "ImplicitSystem", "implicit_system",
+           "ROS2_GAMMA", "IMPLICIT_STIFFNESS_SHARE"]
