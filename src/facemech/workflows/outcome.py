@@ -25,3 +25,6 @@ class Written:
 
     def __str__(self) -> str:
         return self.line
+
+    def __rich__(self) -> str:  # what a rich console prints
+        return self.line

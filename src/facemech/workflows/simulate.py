@@ -188,6 +188,8 @@ class SimulationRun:
                 f"{sim.real_time_factor:.2f}) -> {self.output}")
         return text if self.movie is None else f"{text}\n{self.movie}"
 
+    __rich__ = __str__
+
 
 def simulate_files(output: str | Path, controls: Controls, jaw: JawSource = JawSource(), *,
                    face: str | Path = "default", preset: str = "anatomical",
