@@ -44,8 +44,8 @@ def stage(progress: StagedProgress | None, name: str) -> Callable[[int, int], No
 
 def staged(display) -> StagedProgress:
     """The staged callback of a progress display with ``add_task(description, total=)`` and
-    ``update(task, completed=, total=)`` (:class:`LogProgress`, or rich's ``Progress``): one
-    task per stage, added on the stage's first report."""
+    ``update(task, completed=, total=)`` (:class:`LogProgress`, or the command line's bars):
+    one task per stage, added on the stage's first report."""
     tasks: dict[str, int] = {}
 
     def report(stage: str, done: int, total: int | None) -> None:
@@ -72,8 +72,8 @@ class _Task:
 class LogProgress:
     """Progress as plain lines on ``stream`` (default: stderr), with a heartbeat.
 
-    The interface is that of :class:`rich.progress.Progress` that the command line uses
-    (``add_task``, ``update``, a context manager), plus :meth:`report`, a staged callback. The
+    The interface is that of the progress bars (rich's) that the command line uses
+    (``add_task``, ``update``, a context manager), plus ``report``, a staged callback. The
     context may be entered again while it is open (a command's stages inside the command's
     whole run): the heartbeat starts with the first entry and stops with the last exit.
 
