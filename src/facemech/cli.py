@@ -1,5 +1,5 @@
 """The ``facemech`` command line: each command parses its options, makes one call into the
-library (:mod:`facemech.workflows`) and prints what it did (see docs/cli.md)."""
+library (:mod:`facemech.workflows`) and prints what it did; bad input: one line, exit 2."""
 
 from __future__ import annotations
 
@@ -18,13 +18,10 @@ from .errors import FacemechError, InputError
 
 app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_enable=False,
                   help="Physics and kinematics of the speaking face.")
-face_app, emg_app, markers_app, experiment_app = (typer.Typer(no_args_is_help=True, help=h) for h
-                                                  in ("Build and inspect face models.",
-                                                      "Process EMG recordings.",
-                                                      "Read, convert and clean marker data.",
-                                                      "The seeds' experiments, reproduced."))
-for _sub, _name in zip((face_app, emg_app, markers_app, experiment_app),
-                       ("face", "emg", "markers", "experiment"), strict=True):
+face_app, emg_app, markers_app, experiment_app = _subs = [typer.Typer(
+    no_args_is_help=True, help=h) for h in ("Build and inspect face models.", "Process EMG "
+    "recordings.", "Read, convert and clean marker data.", "The seeds' experiments, reproduced.")]
+for _sub, _name in zip(_subs, ("face", "emg", "markers", "experiment"), strict=True):
     app.add_typer(_sub, name=_name)
 err, out = Console(stderr=True), Console(soft_wrap=True)
 
