@@ -107,11 +107,18 @@ def run_demo(out_dir: str | Path, *, integrator: str | None = None, video: bool 
     from .viz.scene import build_scene, look_from_model
 
     t0 = time.perf_counter()
+
+    def report(stage, done, total):
+        if progress is not None:
+            progress(stage, done, total)
+
     params = get_preset(preset)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
+    report("build the face", 0, 1)
     face = default_face(tissue=params.tissue)
-    t, act, jaw = utterance()
+    report("build the face", 1, 1)
+    t, act, jaw = utterance(params.frame_rate)
 
     def step(stage):
         return None if progress is None else (lambda d, n: progress(stage, d, n))
@@ -119,17 +126,20 @@ def run_demo(out_dir: str | Path, *, integrator: str | None = None, video: bool 
     sim = simulate(face, act, jaw, params=params, integrator=integrator,
                    progress=step("simulate"))
     files = {}
+    report("write results and figures", 0, 4)
     write_activity(out / "activity.csv", t, act)
     files["activity"] = "activity.csv"
     write_results(out / "result.nc", sim, inputs={"activity": array_hash(act),
                                                   "jaw_angle": array_hash(jaw)})
     files["results"] = "result.nc"
+    report("write results and figures", 1, 4)
     names = ["R03", "R05", "R07", "R01"]
     kinematics_figure(out / "kinematics.png", sim.time, {n: sim.marker(n) for n in names},
                       title="Synthetic utterance /ba pi ma wu pa/: model markers")
     files["kinematics"] = "kinematics.png"
     activity_figure(out / "activity.png", t, act, MUSCLE_GROUPS, jaw)
     files["activity_plot"] = "activity.png"
+    report("write results and figures", 3, 4)
     peak = int(np.argmax(jaw))
     scene = build_scene(look_from_model(face))
     opt = render or RenderOptions()
@@ -138,6 +148,7 @@ def run_demo(out_dir: str | Path, *, integrator: str | None = None, video: bool 
     write_snapshot(out / "snapshot.png", scene, sim.positions[peak], sim.jaw_pose[peak],
                    options=still)
     files["snapshot"] = "snapshot.png"
+    report("write results and figures", 4, 4)
     if video:
         write_movie(out / "movie.mp4", scene, sim.positions, sim.jaw_pose,
                     fps=sim.params.frame_rate, options=opt, progress=step("render"))

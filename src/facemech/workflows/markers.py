@@ -1,0 +1,202 @@
+"""Marker-file workflows: describe, convert, head-correct, resample, re-frame and fill gaps, and
+read named trajectories from a marker or results file onto a time grid."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError
+from .outcome import Written
+
+
+def names_of(names: str | Sequence[str]) -> list[str]:
+    """Marker names from a sequence or from comma-separated text (blanks dropped)."""
+    items = names.split(",") if isinstance(names, str) else names
+    return [n.strip() for n in items if n.strip()]
+
+
+def trajectories(path: str | Path, names: str | Sequence[str], *, units: str | None = None,
+                 times: np.ndarray | None = None, cover: str | None = None,
+                 missing: str = "error") -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """Named marker trajectories from a marker file or a results file (its model markers).
+
+    Parameters
+    ----------
+    path : ``.c3d``, ``.trc``, ``.csv``, ``.tsv``, or a results ``.nc`` file
+    names : the markers wanted (a sequence, or comma-separated text)
+    units : length unit of a marker file that does not say
+    times : (frames,) s, a grid to interpolate onto (linearly; default: the file's frames)
+    cover : with ``times``, what the trajectories are, for an error when ``times`` reach
+        outside the file's time span (e.g. ``"the chin trajectory"``); None: the end samples
+        are held outside it
+    missing : ``"error"`` (an :class:`~facemech.errors.InputError` naming the marker) or
+        ``"skip"`` for a marker the file does not have
+
+    Returns
+    -------
+    time : (frames,) s, ``times`` or the file's
+    trajectories : name -> (frames, 3) positions, m, in the order of ``names``
+    """
+    from ..io.markers import read_markers
+
+    ms = read_markers(path, units=units)
+    wanted = [n for n in names_of(names) if missing == "error" or n in ms.names]
+    if times is None:
+        return ms.time, {n: ms.marker(n) for n in wanted}
+    times = np.asarray(times, float)
+    if cover is not None and (times[0] < ms.time[0] - 1e-6 or times[-1] > ms.time[-1] + 1e-6):
+        raise InputError(f"{cover} does not cover the activity's time span", source=str(path),
+                         field="time")
+    return times, {n: np.column_stack([np.interp(times, ms.time, ms.marker(n)[:, a])
+                                       for a in range(3)]) for n in wanted}
+
+
+@dataclass(frozen=True)
+class MarkerInfo:
+    """What ``markers info`` shows of a marker file: rate, units, markers and gaps."""
+
+    path: Path
+    markers: object  # MarkerSet
+    gaps: list
+
+    def to_dict(self) -> dict:
+        ms = self.markers
+        return {"file": str(self.path), "format": ms.meta.get("format"), "rate_hz": ms.rate,
+                "frames": ms.n_frames, "duration_s": float(ms.time[-1] - ms.time[0]),
+                "units": ms.source_units, "markers": list(ms.names),
+                "missing_samples": int((~ms.valid).sum()),
+                "gaps": [{"marker": g.marker, "start": g.start, "frames": g.length,
+                          "interior": g.interior} for g in self.gaps]}
+
+    def text(self, as_json: bool = False, max_gaps: int = 50) -> str:
+        """JSON (:meth:`to_dict`), or lines: format, rate, frames, units, markers and gaps."""
+        d, ms = self.to_dict(), self.markers
+        if as_json:
+            return json.dumps(d, indent=2)
+        lines = [f"{self.path}: {d['format']}, {ms.rate:g} Hz, {ms.n_frames} frames "
+                 f"({d['duration_s']:.2f} s), unit {ms.source_units}, {ms.n_markers} markers",
+                 "markers: " + ", ".join(ms.names),
+                 f"gaps: {len(self.gaps)} ({d['missing_samples']} missing samples)"]
+        return "\n".join(lines + [f"  {gap_text(g)}" for g in self.gaps[:max_gaps]])
+
+
+def gap_text(g) -> str:
+    """``MARKER: frames A-B (N)`` for a :class:`~facemech.kinematics.gaps.Gap`."""
+    return (f"{g.marker}: frames {g.start}-{g.stop - 1} ({g.length})"
+            + ("" if g.interior else " at an end"))
+
+
+def marker_info(path: str | Path, *, units: str | None = None) -> MarkerInfo:
+    """Read a marker file and find its gaps (``units``: length unit if the file has none)."""
+    from ..io.markers import read_markers
+    from ..kinematics.gaps import find_gaps
+
+    ms = read_markers(path, units=units)
+    return MarkerInfo(Path(path), ms, find_gaps(ms))
+
+
+def convert_markers(source: str | Path, target: str | Path | None, *, units: str | None = None,
+                    out_units: str | None = None):
+    """Copy a marker file (or a results file's model markers) to ``target`` (``.c3d``, ``.trc``
+    or ``.csv``) in ``out_units`` (default: the input's). Returns :class:`Written` with the
+    MarkerSet read."""
+    from ..io.markers import read_markers, write_markers
+
+    if target is None:
+        raise InputError("give the output file (-o)", field="output")
+    ms = read_markers(source, units=units)
+    write_markers(target, ms, units=out_units)
+    return Written(Path(target), ms, f"{ms.n_markers} markers, {ms.n_frames} frames -> {target}")
+
+
+def head_correct_file(source: str | Path, output: str | Path, head: str | Sequence[str], *,
+                      reference: int | None = None, units: str | None = None,
+                      report: str | Path | None = None):
+    """Remove head motion by a per-frame rigid fit of ``head`` markers (at least three) to a
+    reference frame (default: the first with every head marker); write the corrected markers
+    to ``output`` and, with ``report``, the per-frame residuals (mm) as JSON.
+
+    Returns
+    -------
+    Written : ``data`` the :class:`~facemech.kinematics.rigid.HeadCorrection`; a warning names
+        the frames with fewer than three usable head markers (left empty)
+    """
+    from ..io.atomic import atomic_path
+    from ..io.markers import read_markers, write_markers
+    from ..kinematics.rigid import head_correct
+
+    ms = read_markers(source, units=units)
+    res = head_correct(ms, names_of(head), reference=reference)
+    write_markers(output, res.markers)
+    if report is not None:
+        data = {**res.summary(), "residual_mm": (res.residual * 1e3).tolist(),
+                "head_markers_used": res.head_markers_used.tolist()}
+        with atomic_path(report, suffix=".json") as tmp:
+            tmp.write_text(json.dumps(data, allow_nan=True))
+    s = res.summary()
+    line = (f"head-corrected {s['frames']} frames against frame {s['reference_frame']}: "
+            f"median residual {s['residual_mm']['median']:.3f} mm, max "
+            f"{s['residual_mm']['max']:.3f} mm -> {output}")
+    warn = ""
+    if len(res.unfixed_frames):
+        warn = (f"facemech: warning: {len(res.unfixed_frames)} frames had fewer than 3 usable "
+                f"head markers and are left empty: {res.unfixed_frames[:20].tolist()}\n")
+    return Written(Path(output), res, line, warn)
+
+
+def resample_file(source: str | Path, output: str | Path, *, rate: float | None = None,
+                  units: str | None = None):
+    """Resample a marker file to ``rate`` Hz (default: the parameters' frame rate) with
+    anti-aliasing (gaps stay gaps). Returns :class:`Written` with the resampled MarkerSet."""
+    from ..io.markers import read_markers, write_markers
+    from ..kinematics.resample import resample
+    from .emg import frame_rate
+
+    ms = read_markers(source, units=units)
+    res = resample(ms, frame_rate(rate))
+    write_markers(output, res)
+    return Written(Path(output), res, f"{ms.rate:g} Hz -> {res.rate:g} Hz, {res.n_frames} frames "
+                   f"-> {output}")
+
+
+def frame_file(source: str | Path, output: str | Path, *, right: str, left: str, front: str,
+               origin: str | None = None, reference: int = 0, units: str | None = None):
+    """Express markers in an anatomical frame (+x right to left, +y up, +z forward) set by
+    three markers in frame ``reference``, origin at ``origin`` (default: ``front``); write them
+    to ``output``. Returns :class:`Written` with the MarkerSet written."""
+    from ..io.markers import read_markers, write_markers
+    from ..kinematics.frames import to_anatomical_frame
+
+    ms = read_markers(source, units=units)
+    res = to_anatomical_frame(ms, right=right, left=left, front=front, origin=origin,
+                              reference=reference)
+    write_markers(output, res)
+    return Written(Path(output), res, f"markers in the frame of {right}, {left}, {front} (origin "
+                   f"{origin or front}) -> {output}")
+
+
+def fill_gaps_file(source: str | Path, output: str | Path, *, max_gap: float = 0.1,
+                   units: str | None = None):
+    """Fill interior gaps of at most ``max_gap`` s with a cubic spline (filled samples are
+    flagged) and write the result.
+
+    Returns
+    -------
+    Written : ``data`` (MarkerSet, gaps filled, gaps left); the gaps left (first 20) as
+        warnings
+    """
+    from ..io.markers import read_markers, write_markers
+    from ..kinematics.gaps import fill_gaps
+
+    ms = read_markers(source, units=units)
+    res, done, left = fill_gaps(ms, int(round(max_gap * ms.rate)))
+    write_markers(output, res)
+    line = (f"filled {len(done)} gaps ({sum(g.length for g in done)} samples); {len(left)} left "
+            f"-> {output}")
+    notes = "".join(f"  not filled: {gap_text(g)}\n" for g in left[:20])
+    return Written(Path(output), (res, done, left), line, notes)

@@ -1,0 +1,244 @@
+"""The simulation workflow: muscle input (activity or EMG), a jaw trajectory (a CSV of angles,
+a chin marker, two mandible markers, or none; with or without a bite block), the face driven by
+them, the results written and, if asked, rendered."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError
+from ..progress import StagedProgress, stage
+
+
+@dataclass(frozen=True)
+class Controls:
+    """Where the muscle input comes from: exactly one of ``activity`` (a CSV, time and muscle
+    groups in [0, 1]) and ``emg`` (raw EMG, CSV or C3D, the seeds' seven channels), with the
+    EMG's rest interval ``emg_baseline`` (start, stop) s and a calibration recording of maximal
+    gestures ``emg_calibration`` (its channels those of ``emg``)."""
+
+    activity: Path | None = None
+    emg: Path | None = None
+    emg_baseline: str | tuple[float, float] | None = None
+    emg_calibration: Path | None = None
+
+    def __post_init__(self):
+        if (self.activity is None) == (self.emg is None):
+            raise InputError("give exactly one of --activity and --emg", field="activity")
+
+
+@dataclass(frozen=True)
+class JawSource:
+    """Where the jaw's trajectory comes from: at most one of ``angles`` (a CSV of ``time`` and
+    ``jaw_angle`` rad or ``jaw_angle_deg``) and ``markers`` (a marker file with the chin marker
+    ``chin_marker`` and, for a two-marker drive, a second mandible marker ``second_marker``;
+    lengths in ``units`` if the file does not say); neither: the jaw stays closed.
+    ``bite_block`` holds the jaw at its first pose whatever the source."""
+
+    angles: Path | None = None
+    markers: Path | None = None
+    chin_marker: str = "R01"
+    second_marker: str | None = None
+    units: str | None = None
+    bite_block: bool = False
+
+    def __post_init__(self):
+        if self.markers is not None and self.angles is not None:
+            raise InputError("give at most one of --jaw-chin and --jaw-angle", field="jaw")
+        if self.second_marker is not None and self.markers is None:
+            raise InputError("--jaw-second-marker names a marker of the --jaw-chin file: give "
+                             "--jaw-chin too", field="jaw-second-marker")
+
+
+def read_controls(controls: Controls, frame_rate: float) -> tuple[np.ndarray, np.ndarray, dict]:
+    """The muscle activity of ``controls`` at ``frame_rate`` Hz.
+
+    Returns
+    -------
+    time : (frames,) s
+    activity : (frames, 16) in [0, 1], columns :data:`~facemech.params.MUSCLE_GROUPS`
+    inputs : input name -> file hash, for the results' provenance
+    """
+    from ..io.activity import read_activity, seven_channel_control
+    from ..io.results import file_hash
+    from .emg import emg_activity
+
+    if controls.activity is not None:
+        times, act = read_activity(controls.activity, frame_rate=frame_rate)
+        return times, act, {"activity": file_hash(controls.activity)}
+    res = emg_activity(controls.emg, rate=frame_rate, baseline=controls.emg_baseline,
+                       calibration=controls.emg_calibration, baseline_field="emg-baseline")
+    act = seven_channel_control(dict(zip(res.channels, res.activity.T, strict=True)))
+    inputs = {"emg": file_hash(controls.emg)}
+    if controls.emg_calibration is not None:
+        inputs["emg_calibration"] = file_hash(controls.emg_calibration)
+    return res.time, act, inputs
+
+
+def jaw_from_csv(path: str | Path, times: np.ndarray) -> np.ndarray:
+    """Jaw angles (frames,) rad at ``times`` (s) from a CSV of ``time`` and ``jaw_angle`` (rad)
+    or ``jaw_angle_deg``, interpolated linearly; the file must cover ``times``."""
+    from ..io.tables import read_table
+
+    t, cols = read_table(path)
+    cols.pop("__meta__")
+    if "jaw_angle" in cols:
+        a = cols["jaw_angle"]
+    elif "jaw_angle_deg" in cols:
+        a = np.radians(cols["jaw_angle_deg"])
+    else:
+        raise InputError("needs a jaw_angle (rad) or jaw_angle_deg column", source=str(path),
+                         field="jaw_angle")
+    if not np.all(np.isfinite(a)):
+        raise InputError("empty or NaN values", source=str(path), field="jaw_angle")
+    if times[0] < t[0] - 1e-6 or times[-1] > t[-1] + 1e-6:
+        raise InputError("the jaw series does not cover the activity's time span",
+                         source=str(path), field="time")
+    return np.interp(times, t, a)
+
+
+def _marker_node(model, name: str) -> int:
+    """The face's epidermal node of marker ``name``, or its chin landmark."""
+    return model.markers.get(name, model.landmarks["chin"])
+
+
+def jaw_from_chin(path: str | Path, marker: str, model, params, times: np.ndarray, *,
+                  units: str | None = None) -> np.ndarray:
+    """Jaw angles (frames,) rad at ``times`` (s) from the vertical trajectory of a chin marker
+    in a marker file (model axes), 33 ms early
+    (:func:`facemech.solvers.jaw.jaw_angles_from_marker`); the marker is the face's node of
+    that name, or its chin landmark. The file must cover ``times``."""
+    from ..solvers.jaw import jaw_angles_from_marker
+    from .markers import trajectories
+
+    y = trajectories(path, [marker], units=units, times=times,
+                     cover="the chin trajectory")[1][marker][:, 1]
+    return jaw_angles_from_marker(model, params, _marker_node(model, marker), y,
+                                  source=str(path))
+
+
+def jaw_from_two_markers(path: str | Path, first: str, second: str, model, times: np.ndarray,
+                         *, units: str | None = None) -> np.ndarray:
+    """Jaw poses (frames, 3) (angle rad, shift_y m, shift_z m) at ``times`` from two mandible
+    markers of a marker file (model axes).
+
+    The recording is moved so that the first marker's first sample sits on the face's node of
+    that name (the chin landmark if the face has none), and the poses are taken about the face's
+    hinge (:func:`facemech.solvers.jaw.jaw_poses_from_points`).
+    """
+    from ..solvers.jaw import jaw_poses_from_points
+    from .markers import trajectories
+
+    pts = trajectories(path, [first, second], units=units, times=times,
+                       cover="the jaw markers")[1]
+    offset = model.rest_positions[_marker_node(model, first)] - pts[first][0]
+    return jaw_poses_from_points(pts[first] + offset, pts[second] + offset,
+                                 hinge_point=model.hinge_point, names=(first, second),
+                                 source=str(path))
+
+
+def bite_block(jaw: np.ndarray) -> np.ndarray:
+    """A jaw series (frames,) or (frames, 3) held at its first value: a bite block."""
+    jaw = np.asarray(jaw, float)
+    return np.repeat(jaw[:1], len(jaw), axis=0)
+
+
+def jaw_series(source: JawSource, model, params, times: np.ndarray) -> tuple[np.ndarray, dict]:
+    """The jaw of ``source`` at ``times`` (s) for ``model`` under ``params``.
+
+    Returns
+    -------
+    jaw : (frames,) angles rad, or (frames, 3) poses for a two-marker drive; zeros without a
+        source; held at the first value under a bite block (the one place it is applied)
+    inputs : input name -> file hash
+    """
+    from ..io.results import file_hash
+
+    if source.markers is not None and source.second_marker is not None:
+        jaw = jaw_from_two_markers(source.markers, source.chin_marker, source.second_marker,
+                                   model, times, units=source.units)
+    elif source.markers is not None:
+        jaw = jaw_from_chin(source.markers, source.chin_marker, model, params, times,
+                            units=source.units)
+    elif source.angles is not None:
+        jaw = jaw_from_csv(source.angles, times)
+    else:
+        return np.zeros(len(times)), {}
+    path = source.markers if source.markers is not None else source.angles
+    inputs = {"jaw_chin" if source.markers is not None else "jaw_angle": file_hash(path)}
+    return (bite_block(jaw) if source.bite_block else jaw), inputs
+
+
+@dataclass(frozen=True)
+class SimulationRun:
+    """What :func:`simulate_files` did: the simulation, the results file, the input hashes
+    and the movie written (or None)."""
+
+    simulation: object  # facemech.solvers.forward.Simulation
+    output: Path
+    inputs: dict = field(default_factory=dict)
+    movie: object | None = None  # outcome.Written
+
+    def __str__(self) -> str:
+        sim = self.simulation
+        text = (f"{len(sim.time)} frames, {sim.wall_seconds:.1f} s wall (real-time factor "
+                f"{sim.real_time_factor:.2f}) -> {self.output}")
+        return text if self.movie is None else f"{text}\n{self.movie}"
+
+    __rich__ = __str__
+
+
+def simulate_files(output: str | Path, controls: Controls, jaw: JawSource = JawSource(), *,
+                   face: str | Path = "default", preset: str = "anatomical",
+                   jaw_kinematics: str | None = None, integrator: str | None = None,
+                   substeps: int | None = None, dt: float | None = None,
+                   jaw_drive: str = "ramp", movie=None,
+                   progress: StagedProgress | None = None) -> SimulationRun:
+    """Simulate a face driven by muscle input and a jaw trajectory; write the results.
+
+    Parameters
+    ----------
+    output : results file (``.nc``), written atomically
+    controls : the muscle input, :class:`Controls`
+    jaw : the jaw's trajectory, :class:`JawSource` (default: closed)
+    face : face file (``.npz``) or a built-in face (``default``, ``default-coarse``,
+        ``default-fine``)
+    preset : parameter preset name or a preset ``.json`` file
+    jaw_kinematics : ``hinge`` or ``glide`` (default: the preset's)
+    integrator, substeps, dt : as :func:`facemech.solvers.forward.simulate` (default: the
+        preset's)
+    jaw_drive : ``ramp`` or ``hold``
+    movie : a :class:`facemech.workflows.pictures.Movie` (or its fields as a tuple) to render
+        from the results; None for none
+    progress : staged callback: ``simulate (INTEGRATOR)`` (frames), then ``render`` (frames)
+
+    Returns
+    -------
+    SimulationRun
+    """
+    from ..geometry.builder import load_face
+    from ..io.results import to_dataset, write_results
+    from ..params import preset as get_preset
+    from ..solvers.forward import simulate
+
+    prm = get_preset(preset)
+    if jaw_kinematics is not None:
+        prm = prm.with_(jaw_kinematics=jaw_kinematics)
+    times, act, inputs = read_controls(controls, prm.frame_rate)  # before the slow face
+    model = load_face(face, tissue=prm.tissue)
+    jaw_angles, jaw_inputs = jaw_series(jaw, model, prm, times)
+    inputs.update(jaw_inputs)
+    src = str(controls.activity if controls.activity is not None else controls.emg)
+    sim = simulate(model, act, jaw_angles, params=prm, integrator=integrator, substeps=substeps,
+                   dt=dt, jaw_drive=jaw_drive, source=src,
+                   progress=stage(progress, f"simulate ({integrator or prm.integrator})"))
+    write_results(output, sim, inputs=inputs)
+    written = None
+    if movie:
+        from .pictures import render_movie
+
+        written = render_movie(to_dataset(sim), movie, progress=progress)
+    return SimulationRun(sim, Path(output), inputs, written)
