@@ -1,0 +1,72 @@
+"""``facemech speak``, ``describe`` and ``stimuli``: a talking face from text or a recording,
+the stimulus parameters of a result, and the stimuli of a design table."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+__all__ = ["describe_file", "describe_report", "describe_text", "speak", "speak_report",
+           "stimuli", "stimuli_report"]
+
+
+def speak(output: str | Path, text: str | None = None, **options):
+    """Make the face say ``text``, or speak in sync with a recorded voice, into the folder
+    ``output``: :func:`facemech.speech.speak.speak` (its keywords: ``audio``, ``textgrid``,
+    ``voice``, ``rate_wpm``, ``word_tier``, ``phone_tier``, ``face``, ``preset``, ``strength``,
+    ``video``, ``render_options``, ``progress``). Returns its
+    :class:`~facemech.speech.speak.Spoken`."""
+    from ..speech.speak import speak as run
+
+    return run(output, text, **options)
+
+
+def speak_report(res, output: str | Path) -> list[str]:
+    """What ``facemech speak`` prints: the phones and words, the duration and the files.
+
+    ``res`` is the :class:`~facemech.speech.speak.Spoken` that :func:`speak` returns.
+    """
+    words = " ".join(w.label for w in res.alignment.words)
+    return [f"{len(res.alignment.phones)} phones ({words}), {res.alignment.duration:.2f} s "
+            f"-> {output}/", *(f"  {name}: {path}" for name, path in res.files.items())]
+
+
+def describe_file(result: str | Path):
+    """Stimulus parameters of a results file (.nc): displacement and speed of lips, jaw and
+    mouth corners, lip aperture and mouth width, the audio-visual offset, settings and input
+    hashes (:class:`facemech.analysis.describe.Description`)."""
+    from ..analysis.describe import describe
+    from ..io.results import read_results
+
+    return describe(read_results(result), source=str(result))
+
+
+def describe_report(d, *, as_json: bool = False, series: bool = False) -> str:
+    """What ``facemech describe`` prints: a table, or JSON (``series``: with the per-frame lip
+    aperture and mouth width)."""
+    return json.dumps(d.to_dict(series=series), indent=2) if as_json else d.table()
+
+
+def describe_text(result: str | Path, *, as_json: bool = False, series: bool = False) -> str:
+    """What ``facemech describe`` prints for a results file (:func:`describe_file`,
+    :func:`describe_report`)."""
+    return describe_report(describe_file(result), as_json=as_json, series=series)
+
+
+def stimuli(design: str | Path, output: str | Path, *, render_options=None, video: bool = True,
+            progress=None):
+    """Make the stimuli of a design table in the folder ``output``
+    (:func:`facemech.speech.design.run_design`); text rows are spoken by :func:`speak` into
+    ``output/items``. ``render_options`` are the movies' :class:`~facemech.viz.video.RenderOptions`;
+    ``progress`` is callable(stage, done, total). Returns the
+    :class:`~facemech.speech.design.DesignReport`."""
+    from ..speech.design import run_design
+    from ..speech.speak import text_items
+
+    return run_design(design, output, text_items(Path(output) / "items"),
+                      options=render_options, video=video, progress=progress)
+
+
+def stimuli_report(rep) -> tuple[list[str], list[str]]:
+    """What ``facemech stimuli`` prints: (the summary lines, the failed rows' error lines)."""
+    return [rep.summary()], [f"error: {e.one_line()}" for e in rep.failed]
