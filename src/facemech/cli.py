@@ -658,7 +658,6 @@ def export(
     out.print(export_results(result, output, fmt=fmt, units=units).summary())
 
 
-# ---- speech, regions, inversion, experiments, calibration: one call into facemech.workflows each
 def _o(help: str, *names: str):
     return typer.Option(*names, help=help)
 
@@ -683,6 +682,7 @@ VideoOpt = Annotated[bool, _o("render the MP4")]
 MapOpt = Annotated[Path | None, _o("marker,node CSV (default: closest nodes)", "--map")]
 DtOpt = Annotated[float | None, _o("Euler step of every evaluation, s (default: the preset's)")]
 TierOpt = Annotated[str | None, _o("TextGrid tier name (default: found by name)")]
+LsqWeight = Annotated[float | None, _o("lsq weight, mm/unit: --bend, --smooth (0.3), --effort")]
 
 
 @app.command()
@@ -718,9 +718,8 @@ def stimuli(design: Annotated[Path, typer.Argument(help="design table (.csv or .
             size: SizeOpt = "1280x720", background: BackgroundOpt = "#2a2c33", aa: AAOpt = 2):
     """Make the stimuli of a design table (docs/stimuli.md) as results, WAV, MP4, manifest."""
     render_options = _render_options(view, size, background, aa)
-    made, failed = _wf("speech").stimuli_report(_staged(_wf("speech").stimuli, design=design,
-                                                        output=output, video=video,
-                                                        render_options=render_options))
+    kw = {k: v for k, v in locals().items() if k not in ("view", "size", "background", "aa")}
+    made, failed = _wf("speech").stimuli_report(_staged(_wf("speech").stimuli, **kw))
     _say(failed, True, markup=False, highlight=False, soft_wrap=True)
     _say(made)
     raise typer.Exit(2 if failed else 0)
@@ -805,28 +804,25 @@ def experiment_lucero2008(
 
 
 @app.command()
-def invert(
-        markers: Annotated[Path, _o("marker file in the model's frame and frame rate")],
-        output: Annotated[Path, _o("results file (.nc)", "-o", "--output")],
-        face: FaceOpt = "default", map_file: MapOpt = None, preset: PresetOpt = "anatomical",
-        method: Annotated[str, _o("lsq (fast) or powell (the seeds')")] = "lsq",
-        positive: Annotated[bool, _o("keep activity >= 0")] = True,
-        controls: Annotated[str, _o("speech, emg7, all, or comma-separated groups")] = "speech",
-        chin_marker: Annotated[str | None, _o("a jaw marker: its drop gives the jaw")] = None,
-        jaw_second_marker: Annotated[str | None, _o("a second one: rotation and glide")] = None,
-        jaw_fixed: Annotated[bool, _o("hold the recorded jaw as given (no estimate)")] = False,
-        jaw_lead: Annotated[int, _o("frames the recorded jaw leads the skin")] = 2,
-        noise: Annotated[float | None, _o("marker noise for the SEs, mm (default: fit)")] = None,
-        window: Annotated[int | None, _o("lsq: frames fitted per frame (2)")] = None,
-        tol: Annotated[float | None, _o("lsq: stop at RMS gains below this, mm (0.01)")] = None,
-        bend: Annotated[float | None, _o("lsq: weight of second differences, mm/unit")] = None,
-        smooth: Annotated[float | None, _o("lsq: weight of changes, mm/unit (0.3)")] = None,
-        effort: Annotated[float | None, _o("lsq: effort weight, mm per unit")] = None,
-        max_evaluations: Annotated[int | None, _o("model frame steps per frame (400)")] = None,
-        scale_pair: Annotated[str | None, _o("A,B: scale the markers per axis by two")] = None,
-        jaw_kinematics: Annotated[str | None, _o("hinge or glide (default: preset's)")] = None,
-        dt: DtOpt = None, units: UnitsOpt = None,
-        figure: Annotated[Path | None, _o("PNG of the controls (+-2 SE) and the error")] = None):
+def invert(markers: Annotated[Path, _o("marker file in the model's frame and frame rate")],
+           output: Annotated[Path, _o("results file (.nc)", "-o", "--output")],
+           face: FaceOpt = "default", map_file: MapOpt = None, preset: PresetOpt = "anatomical",
+           method: Annotated[str, _o("lsq (fast) or powell (the seeds')")] = "lsq",
+           positive: Annotated[bool, _o("keep activity >= 0")] = True,
+           controls: Annotated[str, _o("speech, emg7, all, or listed groups")] = "speech",
+           chin_marker: Annotated[str | None, _o("a jaw marker: its drop gives the jaw")] = None,
+           jaw_second_marker: Annotated[str | None, _o("another: rotation and glide")] = None,
+           jaw_fixed: Annotated[bool, _o("hold the recorded jaw as given")] = False,
+           jaw_lead: Annotated[int, _o("frames the recorded jaw leads the skin")] = 2,
+           noise: Annotated[float | None, _o("marker noise for the SEs, mm (or fit)")] = None,
+           window: Annotated[int | None, _o("lsq: frames fitted per frame (2)")] = None,
+           tol: Annotated[float | None, _o("lsq: stop at RMS gains below this, mm")] = None,
+           bend: LsqWeight = None, smooth: LsqWeight = None, effort: LsqWeight = None,
+           max_evaluations: Annotated[int | None, _o("model steps per frame (400)")] = None,
+           scale_pair: Annotated[str | None, _o("A,B: scale the markers per axis")] = None,
+           jaw_kinematics: Annotated[str | None, _o("hinge or glide (or the preset's)")] = None,
+           dt: DtOpt = None, units: UnitsOpt = None,
+           figure: Annotated[Path | None, _o("PNG of the controls (+-2 SE) and error")] = None):
     """Recover muscle activity and the jaw frame by frame from markers; re-animate the face."""
     res = _staged(_wf("invert").invert, **locals())
     _say(_wf("invert").report(res, output, figure))
@@ -866,16 +862,15 @@ def experiment_pitermann_crosstalker(
 
 
 @app.command()
-def calibrate(
-        gestures: Annotated[list[str] | None, typer.Argument(
-            help="maximal gestures, each FILE:GROUPS, e.g. smile.c3d:ZYG,LAO,RIS")] = None,
-        output: Annotated[Path, _o("preset file (.json)", "-o", "--output")]
-        = Path("calibrated-preset.json"),
-        face: FaceOpt = "default", map_file: MapOpt = None, units: UnitsOpt = None,
-        builtin: Annotated[bool, _o("refit the built-in targets", "--builtin")] = False,
-        fit: Annotated[str, _o("scales: force, lips, stiffness, sphincter")] = "force,lips",
-        max_evaluations: Annotated[int, _o("gesture sets simulated at most")] = 30,
-        name: Annotated[str | None, _o("preset name (default: the file's)")] = None):
+def calibrate(gestures: Annotated[list[str] | None, typer.Argument(
+              help="maximal gestures, each FILE:GROUPS, e.g. smile.c3d:ZYG,LAO,RIS")] = None,
+              output: Annotated[Path, _o("preset file (.json)", "-o", "--output")]
+              = Path("calibrated-preset.json"),
+              face: FaceOpt = "default", map_file: MapOpt = None, units: UnitsOpt = None,
+              builtin: Annotated[bool, _o("refit the built-in targets", "--builtin")] = False,
+              fit: Annotated[str, _o("scales: force, lips, stiffness, sphincter")] = "force,lips",
+              max_evaluations: Annotated[int, _o("gesture sets simulated at most")] = 30,
+              name: Annotated[str | None, _o("preset name (default: the file's)")] = None):
     """Fit the anatomical preset's scales to maximal gestures; write a preset file (--preset)."""
     res = _staged(_wf("calibrate").calibrate, **locals())
     _say(_wf("calibrate").report(res, output, builtin=builtin))
