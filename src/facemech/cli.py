@@ -844,8 +844,8 @@ def compare(a: Annotated[Path, typer.Argument(help="results or marker file: the 
 def experiment_pitermann_synthetic(
         method: Annotated[str, _o("lsq, powell or both")] = "lsq", dt: DtOpt = None,
         noise_mm: Annotated[float, _o("Gaussian marker noise, mm", "--noise")] = 0.0,
-        preset: PresetOpt = "anatomical", output: OutDirOpt | None = None,
-        figures: Annotated[bool, _o("with -o: one PNG per run")] = True):
+        preset: PresetOpt = "anatomical", figures: Annotated[bool, _o("with -o: PNGs")] = True,
+        output: Annotated[Path | None, _o("folder: summary.json, PNGs", "-o", "--output")] = None):
     """Pitermann & Munhall (2001) Experiment 1: Tables I, II and the top of Table III."""
     res = _staged(_wf("experiments").synthetic, **locals())
     _say(_wf("experiments").synthetic_report(res, output, figures=figures))
