@@ -698,9 +698,7 @@ def speak(text: Annotated[str | None, typer.Argument(help="what to say (or --aud
           view: ViewOpt = "frontal+profile", size: SizeOpt = "1280x720",
           background: BackgroundOpt = "#2a2c33", aa: AAOpt = 2):
     """Make the face say TEXT (eSpeak NG), or speak in sync with a recorded voice (--audio)."""
-    render_options = _render_options(view, size, background, aa) if video else None
-    kw = {k: v for k, v in locals().items() if k not in ("view", "size", "background", "aa")}
-    _say(_wf("speech").speak_report(_staged(_wf("speech").speak, **kw), output))
+    _say(_wf("speech").speak_report(_staged(_wf("speech").speak, **locals()), output))
 
 
 @app.command()
@@ -717,9 +715,7 @@ def stimuli(design: Annotated[Path, typer.Argument(help="design table (.csv or .
             output: OutDirOpt, video: VideoOpt = True, view: ViewOpt = "frontal",
             size: SizeOpt = "1280x720", background: BackgroundOpt = "#2a2c33", aa: AAOpt = 2):
     """Make the stimuli of a design table (docs/stimuli.md) as results, WAV, MP4, manifest."""
-    render_options = _render_options(view, size, background, aa)
-    kw = {k: v for k, v in locals().items() if k not in ("view", "size", "background", "aa")}
-    made, failed = _wf("speech").stimuli_report(_staged(_wf("speech").stimuli, **kw))
+    made, failed = _wf("speech").stimuli_report(_staged(_wf("speech").stimuli, **locals()))
     _say(failed, True, markup=False, highlight=False, soft_wrap=True)
     _say(made)
     raise typer.Exit(2 if failed else 0)
@@ -796,8 +792,7 @@ def regions(files: Annotated[list[Path], typer.Argument(help="marker files, one 
 def experiment_lucero2008(
         output: OutDirOpt = Path("lucero2008"), frames: Annotated[int, _o("per utterance")] = 60,
         utterances: Annotated[int, _o("utterances in the corpus")] = 40,
-        k: Annotated[int, _o("independent markers of the basis", "-k")] = 10,
-        video: Annotated[bool, _o("render the animation from k markers")] = True):
+        k: Annotated[int, _o("markers of the basis", "-k")] = 10, video: VideoOpt = True):
     """Lucero & Munhall (2008) on the embedded corpus, our numbers beside the paper's."""
     res = _staged(_wf("experiments").lucero2008, **locals())
     _say(_wf("experiments").lucero2008_report(res, output))

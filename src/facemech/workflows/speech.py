@@ -6,19 +6,34 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-__all__ = ["describe_file", "describe_report", "describe_text", "speak", "speak_report",
-           "stimuli", "stimuli_report"]
+__all__ = ["describe_file", "describe_report", "describe_text", "render_options", "speak",
+           "speak_report", "stimuli", "stimuli_report"]
 
 
-def speak(output: str | Path, text: str | None = None, **options):
+def render_options(view: str = "frontal+profile", size: str = "1280x720",
+                   background: str = "#2a2c33", aa: int = 2):
+    """The movies' :class:`~facemech.viz.video.RenderOptions` from the commands' settings: a
+    view name, ``"WIDTHxHEIGHT"`` in pixels, a background colour, anti-aliasing samples per
+    pixel along each axis (1-4)."""
+    from ..viz.camera import parse_size
+    from ..viz.video import RenderOptions
+
+    return RenderOptions(view=view, size=parse_size(size), background=background,
+                         supersample=aa)
+
+
+def speak(output: str | Path, text: str | None = None, *, video: bool = True,
+          view: str = "frontal+profile", size: str = "1280x720", background: str = "#2a2c33",
+          aa: int = 2, **options):
     """Make the face say ``text``, or speak in sync with a recorded voice, into the folder
     ``output``: :func:`facemech.speech.speak.speak` (its keywords: ``audio``, ``textgrid``,
     ``voice``, ``rate_wpm``, ``word_tier``, ``phone_tier``, ``face``, ``preset``, ``strength``,
-    ``video``, ``render_options``, ``progress``). Returns its
-    :class:`~facemech.speech.speak.Spoken`."""
+    ``progress``), the MP4 with ``video`` (:func:`render_options` of ``view``, ``size``,
+    ``background``, ``aa``). Returns its :class:`~facemech.speech.speak.Spoken`."""
     from ..speech.speak import speak as run
 
-    return run(output, text, **options)
+    opts = render_options(view, size, background, aa) if video else None
+    return run(output, text, video=video, render_options=opts, **options)
 
 
 def speak_report(res, output: str | Path) -> list[str]:
@@ -53,18 +68,20 @@ def describe_text(result: str | Path, *, as_json: bool = False, series: bool = F
     return describe_report(describe_file(result), as_json=as_json, series=series)
 
 
-def stimuli(design: str | Path, output: str | Path, *, render_options=None, video: bool = True,
-            progress=None):
+def stimuli(design: str | Path, output: str | Path, *, video: bool = True,
+            view: str = "frontal", size: str = "1280x720", background: str = "#2a2c33",
+            aa: int = 2, progress=None):
     """Make the stimuli of a design table in the folder ``output``
     (:func:`facemech.speech.design.run_design`); text rows are spoken by :func:`speak` into
-    ``output/items``. ``render_options`` are the movies' :class:`~facemech.viz.video.RenderOptions`;
-    ``progress`` is callable(stage, done, total). Returns the
+    ``output/items``; the movies' :func:`render_options` are ``view``, ``size``, ``background``
+    and ``aa``; ``progress`` is callable(stage, done, total). Returns the
     :class:`~facemech.speech.design.DesignReport`."""
     from ..speech.design import run_design
     from ..speech.speak import text_items
 
     return run_design(design, output, text_items(Path(output) / "items"),
-                      options=render_options, video=video, progress=progress)
+                      options=render_options(view, size, background, aa), video=video,
+                      progress=progress)
 
 
 def stimuli_report(rep) -> tuple[list[str], list[str]]:
