@@ -137,7 +137,7 @@ def test_first_selected_markers_sit_near_muscle_insertions(corpus, face):
     m = IndependentMarkers().fit(corpus.utterances)
     sel = [corpus.names[i] for i in m.order_[:10]]
     d = insertion_distances(face, corpus.nodes, sel, draws=500)
-    assert d["selected_mean_mm"] < d["random_mean_mm"]
+    assert d.selected_mean_mm < d.random_mean_mm
 
 
 def test_regions_cli(tmp_path, monkeypatch, capsys):

@@ -5,16 +5,14 @@ from __future__ import annotations
 
 import contextlib
 import importlib
-import json
 import sys
 from pathlib import Path
 from typing import Annotated
 
-import numpy as np
 import typer
 from rich.console import Console
 
-from .errors import FacemechError, InputError
+from .errors import FacemechError
 
 app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_enable=False,
                   help="Physics and kinematics of the speaking face.")
@@ -252,532 +250,163 @@ def view(result: Result, output: OutOpt, units: UnitsOpt = None,
     out.print(wf.pictures.view_file(result, output, markers=markers, units=units, title=title))
 
 
-@app.command()
-def speak(
-    text: Annotated[str | None, typer.Argument(help="what to say (or --audio with --textgrid)")]
-    = None,
-    output: Annotated[Path, typer.Option("-o", "--output", help="output folder")]
-    = Path("speak-output"),
-    audio: Annotated[Path | None, typer.Option(help="a recorded voice (WAV) to speak with")]
-    = None,
-    textgrid: Annotated[Path | None, typer.Option(
-        help="the recording's Praat TextGrid (word and phone tiers, e.g. from MFA)")] = None,
-    voice: Annotated[str, typer.Option(help="eSpeak NG voice, e.g. en-us, en-gb, en-us+f3")]
-    = "en-us",
-    rate: Annotated[int, typer.Option(help="speaking rate, words per minute (80-450)")] = 160,
-    word_tier: Annotated[str | None, typer.Option(help="TextGrid word tier name")] = None,
-    phone_tier: Annotated[str | None, typer.Option(help="TextGrid phone tier name")] = None,
-    strength: Annotated[float, typer.Option(
-        help="scale of each viseme's departure from rest (1: the table's; 0 to 2)")] = 1.0,
-    face: FaceOpt = "default",
-    preset: PresetOpt = "anatomical",
-    video: Annotated[bool, typer.Option(help="render the MP4 with the audio")] = True,
-    view: ViewOpt = "frontal+profile",
-    size: SizeOpt = "1280x720",
-    background: BackgroundOpt = "#2a2c33",
-    aa: AAOpt = 2,
-):
-    """Make the face say TEXT (eSpeak NG), or speak in sync with a recorded voice: audio,
-    alignment (TextGrid, CSV), muscle activity and jaw, results, MP4 and a manifest."""
-    from .speech.speak import speak as run
+def _o(help: str, *names: str):
+    return typer.Option(*names, help=help)
 
-    opts = _render_options(view, size, background, aa) if video else None
-    with _staged_progress() as report:
-        res = run(output, text, audio=audio, textgrid=textgrid, voice=voice, rate_wpm=rate,
-                  word_tier=word_tier, phone_tier=phone_tier, face=face, preset=preset,
-                  strength=strength, video=video, render_options=opts, progress=report)
-    words = " ".join(w.label for w in res.alignment.words)
-    out.print(f"{len(res.alignment.phones)} phones ({words}), "
-              f"{res.alignment.duration:.2f} s -> {output}/")
-    for name, path in res.files.items():
-        out.print(f"  {name}: {path}")
+
+def _wf(name: str):  # facemech.workflows.NAME, imported when its command runs: a light CLI
+    from importlib import import_module
+    return import_module(f"{__package__}.workflows.{name}")
+
+
+def _staged(run, **options):
+    with _staged_progress() as progress:
+        return run(**options, progress=progress)
+
+
+def _say(lines, note: bool = False, **kw) -> None:  # note: on stderr, "facemech: " first
+    for line in lines:
+        (err if note else out).print(("facemech: " if note else "") + line, **kw)
+
+
+OutDirOpt = Annotated[Path, _o("output folder", "-o", "--output")]
+VideoOpt = Annotated[bool, _o("render the MP4")]
+MapOpt = Annotated[Path | None, _o("marker,node CSV (default: closest nodes)", "--map")]
+DtOpt = Annotated[float | None, _o("Euler step of every evaluation, s (default: the preset's)")]
+TierOpt = Annotated[str | None, _o("TextGrid tier name (default: found by name)")]
+LsqWeight = Annotated[float | None, _o("lsq weight, mm/unit: --bend, --smooth (0.3), --effort")]
 
 
 @app.command()
-def describe(
-    result: Annotated[Path, typer.Argument(help="results file (.nc)")],
-    as_json: Annotated[bool, typer.Option("--json", help="print JSON")] = False,
-    series: Annotated[bool, typer.Option(help="with --json: add the per-frame lip aperture "
-                                              "and mouth width")] = False,
-):
-    """Stimulus parameters of a result: displacement and speed of lips, jaw and mouth corners,
-    lip aperture and mouth width, the audio-visual offset, settings and input hashes."""
-    from .analysis.describe import describe as measure
-    from .io.results import read_results
-
-    d = measure(read_results(result), source=str(result))
-    if as_json:
-        print(json.dumps(d.to_dict(series=series), indent=2))
-    else:
-        out.print(d.table(), markup=False, highlight=False)
+def speak(text: Annotated[str | None, typer.Argument(help="what to say (or --audio)")] = None,
+          output: OutDirOpt = Path("speak-output"),
+          audio: Annotated[Path | None, _o("a recorded voice (WAV) to speak with")] = None,
+          textgrid: Annotated[Path | None, _o("the recording's Praat TextGrid (MFA)")] = None,
+          voice: Annotated[str, _o("eSpeak NG voice, e.g. en-us, en-gb, en-us+f3")] = "en-us",
+          rate_wpm: Annotated[int, _o("words per minute (80-450)", "--rate")] = 160,
+          word_tier: TierOpt = None, phone_tier: TierOpt = None,
+          strength: Annotated[float, _o("scale of the visemes' departure from rest")] = 1.0,
+          face: FaceOpt = "default", preset: PresetOpt = "anatomical", video: VideoOpt = True,
+          view: ViewOpt = "frontal+profile", size: SizeOpt = "1280x720",
+          background: BackgroundOpt = "#2a2c33", aa: AAOpt = 2):
+    """Make the face say TEXT (eSpeak NG), or speak in sync with a recorded voice (--audio)."""
+    _say(_wf("speech").speak_report(_staged(_wf("speech").speak, **locals()), output))
 
 
 @app.command()
-def stimuli(
-    design: Annotated[Path, typer.Argument(help="design table (.csv or .toml), one row per "
-                                                "stimulus (see docs/stimuli.md)")],
-    output: Annotated[Path, typer.Option("-o", "--output", help="output folder")],
-    video: Annotated[bool, typer.Option(help="render the MP4s")] = True,
-    view: ViewOpt = "frontal",
-    size: SizeOpt = "1280x720",
-    background: BackgroundOpt = "#2a2c33",
-    aa: AAOpt = 2,
-):
-    """Make the stimuli of a design table (amplitude, time scale, AV offset, dubbing, freezing),
-    each as results, WAV and MP4, with a manifest of their measured parameters."""
-    from .speech.design import run_design
-    from .speech.speak import text_items
-
-    opts = _render_options(view, size, background, aa)
-    with _staged_progress() as report:
-        rep = run_design(design, output, text_items(Path(output) / "items"), options=opts,
-                         video=video, progress=report)
-    for e in rep.failed:
-        err.print(f"facemech: error: {e.one_line()}", highlight=False, markup=False,
-                  soft_wrap=True)
-    out.print(rep.summary())
-    if rep.failed:
-        raise typer.Exit(2)
-
-
-def _ranges(text: str | None, n: int, field: str) -> list[int] | None:
-    """'1-30' or '1,3,5-7' (1-based, inclusive) -> 0-based indices."""
-    if text is None:
-        return None
-    out: list[int] = []
-    try:
-        for part in text.split(","):
-            a, _, b = part.strip().partition("-")
-            lo, hi = int(a), int(b or a)
-            out.extend(range(lo - 1, hi))
-    except ValueError:
-        raise InputError("expected ranges such as 1-30 or 1,3,5-7", field=field) from None
-    if any(i < 0 or i >= n for i in out):
-        raise InputError(f"utterance numbers must lie in 1..{n}", field=field)
-    return out
-
-
-def _length(text: str | None, field: str) -> float | None:
-    """'0.5mm', '0.05cm' or '0.0005' (metres) -> metres; None or 'auto' -> None."""
-    if text is None or text == "auto":
-        return None
-    from .units import LENGTH_TO_M
-
-    t = text.strip().lower()
-    for unit in sorted(LENGTH_TO_M, key=len, reverse=True):
-        if t.endswith(unit):
-            try:
-                return float(t[: -len(unit)]) * LENGTH_TO_M[unit]
-            except ValueError:
-                break
-    try:
-        return float(t)
-    except ValueError:
-        raise InputError(f"not a length: {text!r} (e.g. 0.5mm)", field=field) from None
+def describe(result: Annotated[Path, typer.Argument(help="results file (.nc)")],
+             as_json: Annotated[bool, _o("print JSON", "--json")] = False,
+             series: Annotated[bool, _o("with --json: the per-frame mouth measures")] = False):
+    """Stimulus parameters of a result: lips, jaw, mouth corners, AV offset, settings."""
+    text = _wf("speech").describe_text(result, as_json=as_json, series=series)
+    print(text) if as_json else out.print(text, markup=False, highlight=False)
 
 
 @app.command()
-def regions(
-    files: Annotated[list[Path], typer.Argument(help="marker files, one utterance each")],
-    output: Annotated[Path, typer.Option("-o", "--output", help="output folder")],
-    k: Annotated[int | None, typer.Option("-k", help="independent markers (default: "
-                                                     "min(epsilon-rank, 10))")] = None,
-    eps: Annotated[str | None, typer.Option(help="data precision, e.g. 0.5mm (default: "
-                                                 "estimated noise floor)")] = None,
-    neutral: Annotated[str, typer.Option(help="'first' or a marker file whose first frame is "
-                                              "the neutral")] = "first",
-    train: Annotated[str | None, typer.Option(help="utterances to fit, e.g. 1-30")] = None,
-    test: Annotated[str | None, typer.Option(help="held-out utterances, e.g. 31-40")] = None,
-    method: Annotated[str, typer.Option(help="qrcp or strong")] = "qrcp",
-    units: UnitsOpt = None,
-):
+def stimuli(design: Annotated[Path, typer.Argument(help="design table (.csv or .toml)")],
+            output: OutDirOpt, video: VideoOpt = True, view: ViewOpt = "frontal",
+            size: SizeOpt = "1280x720", background: BackgroundOpt = "#2a2c33", aa: AAOpt = 2):
+    """Make the stimuli of a design table (docs/stimuli.md) as results, WAV, MP4, manifest."""
+    made, failed = _wf("speech").stimuli_report(_staged(_wf("speech").stimuli, **locals()))
+    _say(failed, True, markup=False, highlight=False, soft_wrap=True)
+    _say(made)
+    raise typer.Exit(2 if failed else 0)
+
+
+@app.command()
+def regions(files: Annotated[list[Path], typer.Argument(help="marker files, one per utterance")],
+            output: OutDirOpt, units: UnitsOpt = None,
+            k: Annotated[int | None, _o("independent markers (default: <= 10)", "-k")] = None,
+            eps: Annotated[str | None, _o("data precision, e.g. 0.5mm (default: noise)")] = None,
+            neutral: Annotated[str, _o("'first' or a marker file: its first frame")] = "first",
+            train: Annotated[str | None, _o("utterances to fit, e.g. 1-30")] = None,
+            test: Annotated[str | None, _o("held-out utterances, e.g. 31-40")] = None,
+            method: Annotated[str, _o("qrcp or strong")] = "qrcp"):
     """Independent markers and eigenregions by QR with column pivoting (Lucero & Munhall 2008)."""
-    from .analysis.lucero2008 import analyse
-    from .io.markers import read_markers
-
-    sets = [read_markers(f, units=units) for f in files]
-    names = sets[0].names
-    for f, ms in zip(files, sets, strict=True):
-        if ms.names != names:
-            missing = sorted(set(names) ^ set(ms.names))
-            raise InputError("markers differ from the first file's", source=str(f),
-                             field=missing[0] if missing else "order")
-    neutral_pos: str | np.ndarray = "first"
-    if neutral != "first":
-        nm = read_markers(Path(neutral), units=units)
-        neutral_pos = nm.select(names).positions[0]
-    s = analyse([ms.positions for ms in sets], names, output, k=k, eps=_length(eps, "eps"),
-                method=method, train=_ranges(train, len(sets), "train"),
-                test=_ranges(test, len(sets), "test"), neutral=neutral_pos, rate=sets[0].rate)
-    s.pop("_model", None)
-    out.print(f"epsilon {s['eps_mm']:.3f} mm, rank {s['rank']} of {s['markers']}; k = {s['k']}")
-    out.print("independent markers: " + ", ".join(s["selected"]))
-    out.print(f"summary and figures -> {output}/")
+    _say(_wf("regions").report(_wf("regions").regions(**locals()), output))
 
 
 @experiment_app.command("lucero2008")
 def experiment_lucero2008(
-    output: Annotated[Path, typer.Option("-o", "--output", help="output folder")] = Path(
-        "lucero2008"),
-    utterances: Annotated[int, typer.Option(help="utterances in the corpus")] = 40,
-    frames: Annotated[int, typer.Option(help="frames per utterance (60 Hz)")] = 60,
-    k: Annotated[int, typer.Option("-k", help="independent markers of the basis")] = 10,
-    video: Annotated[bool, typer.Option(help="render the animation from k markers")] = True,
-):
+        output: OutDirOpt = Path("lucero2008"), frames: Annotated[int, _o("per utterance")] = 60,
+        utterances: Annotated[int, _o("utterances in the corpus")] = 40,
+        k: Annotated[int, _o("markers of the basis", "-k")] = 10, video: VideoOpt = True):
     """Lucero & Munhall (2008) on the embedded corpus, our numbers beside the paper's."""
-    from .analysis.lucero2008 import run_lucero2008
-
-    if utterances < 8:
-        raise InputError("needs at least 8 utterances", field="utterances")
-    with _staged_progress() as report:
-        s = run_lucero2008(output, n_utterances=utterances, frames=frames, k=k, video=video,
-                           progress=report)
-    p, a = s["paper"], s["all_utterances"]
-    out.print("[bold]Lucero & Munhall (2008) on the embedded corpus[/bold]  (ours | paper, S1)")
-    out.print(f"  epsilon-rank: {a['rank']} of 57 | {p['rank']} of 57")
-    out.print(f"  last two R values: {a['r_before_last_mm']:.2f}, {a['r_last_mm']:.4f} mm | "
-              f"{p['r_56_mm']:.2f}, {p['r_57_mm']:.2f} mm")
-    out.print(f"  last selected: {a['last_selected']} (copied pair {', '.join(s['copied_pair'])})"
-              f" | {p['copied_marker_selected']}")
-    out.print(f"  first selected: {', '.join(s['order'][:4])} | {p['first_selected']}")
-    if "trajectory" in s:
-        e = s["trajectory"]["max_error_xyz_mm"]
-        q = p["jaw_marker_max_error_k10_mm"]
-        out.print(f"  jaw marker max error, k = {s['k']} (x, y, z): "
-                  f"{e[0]:.2f}, {e[1]:.2f}, {e[2]:.2f} mm | {q[0]}, {q[1]}, {q[2]} mm")
-    for row in s.get("held_out_error", [])[:: max(1, len(s.get("held_out_error", [])) // 6)]:
-        out.print(f"  k = {row['k']:2d}: held-out error {row['mean_abs_error_mm']:.3f} mm "
-                  f"(relative {row['relative_error']:.2f}; PCA {row['pca_mean_abs_error_mm']:.3f})")
-    sr = s["strong_rrqr"]
-    out.print(f"  max |X|: QRCP {sr['qrcp_max_abs_coefficient']:.2f}, strong RRQR "
-              f"{sr['max_abs_coefficient']:.2f} (bound {sr['bound']})")
-    mi = s["muscle_insertions"]
-    out.print(f"  first 10 selected markers lie {mi['selected_mean_mm']:.1f} mm from the nearest "
-              f"muscle insertion; random markers {mi['random_mean_mm']:.1f} mm "
-              f"(p = {mi['random_p_value']:.3f})")
-    out.print(f"  summary and figures -> {output}/")
+    res = _staged(_wf("experiments").lucero2008, **locals())
+    _say(_wf("experiments").lucero2008_report(res, output))
 
 
 @app.command()
-def invert(
-    markers: Annotated[Path, typer.Option(help="marker file in the model's frame, 60 Hz")],
-    output: Annotated[Path, typer.Option("-o", "--output", help="results file (.nc)")],
-    face: FaceOpt = "default",
-    map_file: Annotated[Path | None, typer.Option("--map", help="marker,node CSV (default: "
-                                                                "closest nodes)")] = None,
-    method: Annotated[str, typer.Option(help="lsq (fast) or powell (the seeds')")] = "lsq",
-    positive: Annotated[bool, typer.Option(help="keep activity >= 0")] = True,
-    controls: Annotated[str, typer.Option(help="speech, emg7, all, or comma-separated groups")]
-    = "speech",
-    chin_marker: Annotated[str | None, typer.Option(
-        help="a jaw recording: this marker's drop gives the jaw angle (33-ms lead)")] = None,
-    jaw_second_marker: Annotated[str | None, typer.Option(
-        help="a second mandible marker: with --chin-marker, drives rotation and condyle glide")]
-    = None,
-    jaw_fixed: Annotated[bool, typer.Option(
-        help="hold the recorded jaw as given (default: estimate the jaw, starting from it)")]
-    = False,
-    jaw_lead: Annotated[int, typer.Option(help="frames the recorded jaw leads the skin")] = 2,
-    noise: Annotated[float | None, typer.Option(
-        help="marker noise for the standard errors, mm (default: from the residuals)")] = None,
-    window: Annotated[int | None, typer.Option(
-        help="frames fitted per frame, first kept (lsq; default 2)")] = None,
-    tol: Annotated[float | None, typer.Option(
-        help="stop a frame's fit when the RMS error improves by less than this, mm (lsq; "
-             "default 0.01)")] = None,
-    bend: Annotated[float | None, typer.Option(
-        help="weight of second differences across the window, mm per unit (lsq)")] = None,
-    smooth: Annotated[float | None, typer.Option(
-        help="weight of frame-to-frame changes, mm per unit (lsq; default 0.3)")] = None,
-    effort: Annotated[float | None, typer.Option(help="effort weight, mm per unit (lsq)")]
-    = None,
-    max_evaluations: Annotated[int | None, typer.Option(
-        help="model frame steps per frame, at most (default 400)")] = None,
-    scale_pair: Annotated[str | None, typer.Option(help="A,B: adapt the markers by per-axis "
-                                                        "scaling from two markers far apart")]
-    = None,
-    preset: PresetOpt = "anatomical",
-    jaw_kinematics: Annotated[str | None, typer.Option(
-        help="hinge or glide (the condyle glides as the jaw opens; default: the preset's)")]
-    = None,
-    dt: Annotated[float | None, typer.Option(help="explicit Euler step of every evaluation, s "
-                                                  "(default: the preset's fast step)")] = None,
-    units: UnitsOpt = None,
-    figure: Annotated[Path | None, typer.Option(help="PNG of the inverted controls with +-2 SE "
-                                                     "bands and the per-frame error")] = None,
-):
+def invert(markers: Annotated[Path, _o("marker file in the model's frame and frame rate")],
+           output: Annotated[Path, _o("results file (.nc)", "-o", "--output")],
+           face: FaceOpt = "default", map_file: MapOpt = None, preset: PresetOpt = "anatomical",
+           method: Annotated[str, _o("lsq (fast) or powell (the seeds')")] = "lsq",
+           positive: Annotated[bool, _o("keep activity >= 0")] = True,
+           controls: Annotated[str, _o("speech, emg7, all, or listed groups")] = "speech",
+           chin_marker: Annotated[str | None, _o("a jaw marker: its drop gives the jaw")] = None,
+           jaw_second_marker: Annotated[str | None, _o("another: rotation and glide")] = None,
+           jaw_fixed: Annotated[bool, _o("hold the recorded jaw as given")] = False,
+           jaw_lead: Annotated[int, _o("frames the recorded jaw leads the skin")] = 2,
+           noise: Annotated[float | None, _o("marker noise for the SEs, mm (or fit)")] = None,
+           window: Annotated[int | None, _o("lsq: frames fitted per frame (2)")] = None,
+           tol: Annotated[float | None, _o("lsq: stop at RMS gains below this, mm")] = None,
+           bend: LsqWeight = None, smooth: LsqWeight = None, effort: LsqWeight = None,
+           max_evaluations: Annotated[int | None, _o("model steps per frame (400)")] = None,
+           scale_pair: Annotated[str | None, _o("A,B: scale the markers per axis")] = None,
+           jaw_kinematics: Annotated[str | None, _o("hinge or glide (or the preset's)")] = None,
+           dt: DtOpt = None, units: UnitsOpt = None,
+           figure: Annotated[Path | None, _o("PNG of the controls (+-2 SE) and error")] = None):
     """Recover muscle activity and the jaw frame by frame from markers; re-animate the face."""
-    from .inverse.workflow import invert_markers
-    from .io.results import file_hash
-
-    with _progress() as prog:
-        task = prog.add_task(f"invert ({method})", total=None)
-        res = invert_markers(
-            markers, face=face, map_file=map_file, units=units, scale_pair=scale_pair,
-            preset=preset, jaw_kinematics=jaw_kinematics, method=method, positive=positive,
-            controls=controls,
-            chin_marker=chin_marker, jaw_second_marker=jaw_second_marker, jaw_fixed=jaw_fixed,
-            jaw_lead=jaw_lead, noise=noise,
-            dt=dt, options=dict(window=window, tol=tol, bend=bend, smooth=smooth,
-                                effort=effort, max_evaluations=max_evaluations),
-            progress=lambda d, n: prog.update(task, completed=d, total=n))
-    res.write(output, inputs={"markers": file_hash(markers)})
-    s = res.error_summary()
-    out.print(f"{len(res.time)} frames inverted ({res.method.name}) in {res.wall_seconds:.1f} s;"
-              f" per-frame error (RMS over {len(res.marker_names)} markers): median "
-              f"{s['median_mm']:.3f} mm, max {s['max_mm']:.3f} mm -> {output}")
-    seen = [n for n, ok in zip(res.control_names, res.identifiable, strict=True) if ok]
-    out.print(f"  determined by the markers (noise {res.noise_mm:.3f} mm, {res.noise_how}): "
-              f"{', '.join(seen) or 'none'}")
-    if figure is not None:
-        from .viz.plots import inversion_figure
-
-        inversion_figure(figure, res.time, res.controls, res.control_names,
-                         rms_error=res.rms_error, se=res.control_se,
-                         identifiable=res.identifiable,
-                         title=f"{markers.name}: inverted controls ({res.method.name})")
-        out.print(f"figure -> {figure}")
-    for note in res.notes:
-        err.print(f"facemech: note: {note}")
-    for warning in s["warnings"]:
-        err.print(f"facemech: warning: {warning}")
-
-
-def _json_safe(obj):
-    """A copy of nested dicts and lists with NaN and infinities as null (strict JSON)."""
-    if isinstance(obj, dict):
-        return {k: _json_safe(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_json_safe(v) for v in obj]
-    if isinstance(obj, float) and not np.isfinite(obj):
-        return None
-    return obj
+    res = _staged(_wf("invert").invert, **locals())
+    _say(_wf("invert").report(res, output, figure))
+    _say(_wf("invert").notes(res), True)
 
 
 @app.command()
-def compare(
-    a: Annotated[Path, typer.Argument(help="results (.nc) or marker file: the model")],
-    b: Annotated[Path, typer.Argument(help="results (.nc) or marker file: the data")],
-    markers: Annotated[str | None, typer.Option(help="comma-separated markers (default: all "
-                                                     "shared)")] = None,
-    as_json: Annotated[bool, typer.Option("--json", help="print JSON")] = False,
-    units: UnitsOpt = None,
-):
-    """3-D statistics, per-axis correlations and per-frame errors of A against B.
-
-    The per-frame error is the RMS over the markers present in both (mm); its median and
-    maximum are reported, with a warning when the maximum exceeds 1 mm or 5 x the median.
-    """
-    from .inverse.stats import compare as run
-
-    def load(p: Path):
-        if p.suffix.lower() == ".nc":
-            from .io.results import read_results
-
-            ds = read_results(p)
-            return [str(m) for m in ds["marker"].values], ds["markers"].values, float(
-                ds.attrs.get("frame_rate_hz", 60.0))
-        from .io.markers import read_markers
-
-        ms = read_markers(p, units=units)
-        return list(ms.names), ms.positions, ms.rate
-
-    na, pa, ra = load(a)
-    nb, pb, rb = load(b)
-    if abs(ra - rb) > 1e-3 * ra or len(pa) != len(pb):
-        raise InputError(f"A has {len(pa)} frames at {ra:g} Hz, B {len(pb)} at {rb:g} Hz",
-                         source=str(b), field="time")
-    names = ([m.strip() for m in markers.split(",")] if markers
-             else [n for n in na if n in nb])
-    for n in names:
-        if n not in na or n not in nb:
-            raise InputError("marker not in both inputs", field=n)
-    if not names:
-        raise InputError("no marker names shared by the inputs", field="markers")
-    res = run(pa[:, [na.index(n) for n in names]], pb[:, [nb.index(n) for n in names]], names,
-              ra)
-    for w in res["error"]["warnings"]:
-        err.print(f"facemech: warning: {w}", markup=False, highlight=False)
-    if as_json:
-        print(json.dumps(_json_safe(res), indent=2))
-        return
-    e, s = res["error"], res["frame_error_mm"]
-    out.print(f"{res['frames']} frames, {len(names)} markers; per-frame error (RMS over the "
-              f"markers, mm): median {e['median_mm']:.3f}, max {e['max_mm']:.3f} at "
-              f"{e['max_time_s']:.2f} s (min {s['min']:.3f} q1 {s['q1']:.3f} q3 {s['q3']:.3f}); "
-              f"movement {res['movement_mm']:.3f} mm")
-    for n, v in res["markers"].items():
-        out.print(f"  {n}: 3-D r {v['corr3d_published']:.3f}")
+def compare(a: Annotated[Path, typer.Argument(help="results or marker file: the model")],
+            b: Annotated[Path, typer.Argument(help="results or marker file: the data")],
+            markers: Annotated[str | None, _o("comma-separated (default: all shared)")] = None,
+            as_json: Annotated[bool, _o("print JSON", "--json")] = False, units: UnitsOpt = None):
+    """3-D statistics, per-axis correlations and per-frame errors (RMS, mm) of A against B."""
+    res = _wf("compare").compare_files(a, b, markers=markers, units=units)
+    _say([f"warning: {w}" for w in res.warnings], True, markup=False, highlight=False)
+    (print if as_json else out.print)("\n".join(_wf("compare").report(res, as_json=as_json)))
 
 
 @experiment_app.command("pitermann2001-synthetic")
 def experiment_pitermann_synthetic(
-    method: Annotated[str, typer.Option(help="lsq, powell or both")] = "lsq",
-    noise: Annotated[float, typer.Option(help="Gaussian marker noise, mm")] = 0.0,
-    preset: PresetOpt = "anatomical",
-    dt: Annotated[float | None, typer.Option(help="Euler step of synthesis and inversion, s "
-                                                  "(default: the preset's fast step)")] = None,
-    output: Annotated[Path | None, typer.Option("-o", "--output", help="JSON file")] = None,
-    figures: Annotated[Path | None, typer.Option(help="folder for one PNG per run: inverted "
-                                                      "against true activity, and the error")]
-    = None,
-):
+        method: Annotated[str, _o("lsq, powell or both")] = "lsq", dt: DtOpt = None,
+        noise_mm: Annotated[float, _o("Gaussian marker noise, mm", "--noise")] = 0.0,
+        preset: PresetOpt = "anatomical", figures: Annotated[bool, _o("with -o: PNGs")] = True,
+        output: Annotated[Path | None, _o("folder: summary.json, PNGs", "-o", "--output")] = None):
     """Pitermann & Munhall (2001) Experiment 1: Tables I, II and the top of Table III."""
-    from .geometry.builder import default_face
-    from .inverse.experiments import run_synthetic
-    from .params import preset as get_preset
-
-    if method not in ("lsq", "powell", "both"):
-        raise InputError("method must be lsq, powell or both", field="method")
-    methods = ("lsq", "powell") if method == "both" else (method,)
-    with _staged_progress() as report:
-        prm = get_preset(preset)
-        res = run_synthetic(default_face(tissue=prm.tissue), methods=methods, noise=noise * 1e-3,
-                            params=prm, dt=dt, progress=report)
-    paper = res["paper"]
-    out.print("[bold]Pitermann & Munhall (2001), Experiment 1[/bold] (ours | paper)")
-    for label, r in res["runs"].items():
-        out.print(f"[bold]{label}[/bold]: {r['wall_s']:.1f} s, {r['evaluations']} steps")
-        t1 = r["table1_activity_correlation"]
-        ref = paper["activity_correlations_no_constraint"]
-        out.print("  Table I, activity correlation: " + ", ".join(
-            f"{k} {v:.2f}" + (f" | {ref[k]:.2f}" if "no constraint" in label else "")
-            for k, v in t1.items()))
-        out.print(f"  Table II, 3-D correlations >= 0.95: {r['corr3d_at_least_0.95']} of 19; "
-                  f"> 0.8: {r['corr3d_above_0.8']} of 19 | {paper['kinematic_corr_above_0.8']} "
-                  "over both conditions")
-        e = r["table3_frame_error_mm"]
-        pe = paper["median_error_mm"]["positive" if "positive" in label else "no_constraint"]
-        out.print(f"  Table III, per-frame error (mm): min {e['min']:.3f} q1 {e['q1']:.3f} "
-                  f"median {e['median']:.3f} | {pe} q3 {e['q3']:.3f} max {e['max']:.3f}; "
-                  f"movement {r['movement_mm']:.3f} | {paper['movement_mm']} mm")
-        if "vs_noise_free" in r:
-            v = r["vs_noise_free"]
-            out.print(f"  against the noise-free markers: median error "
-                      f"{v['frame_error_mm']['median']:.3f} mm; 3-D correlations > 0.8: "
-                      f"{v['corr3d_above_0.8']} of 19")
-    if figures is not None:
-        from .viz.plots import inversion_figure
-
-        figures.mkdir(parents=True, exist_ok=True)
-        for label, r in res["runs"].items():
-            path = figures / f"experiment1_{label.replace(', ', '_').replace(' ', '-')}.png"
-            t = np.arange(res["frames"]) / 60.0
-            inversion_figure(path, t, np.array(r["controls"]), tuple(r["control_names"]),
-                             truth=np.array(r["true_controls"]),
-                             rms_error=np.array(r["rms_error_m"]),
-                             title=f"Experiment 1, {label} ({preset})")
-            out.print(f"figure -> {path}")
-    if output is not None:
-        from .io.atomic import atomic_path
-
-        with atomic_path(output, suffix=".json") as tmp:
-            tmp.write_text(json.dumps(res, indent=2))
-        out.print(f"tables -> {output}")
+    res = _staged(_wf("experiments").synthetic, **locals())
+    _say(_wf("experiments").synthetic_report(res, output, figures=figures))
 
 
 @experiment_app.command("pitermann2001-crosstalker")
 def experiment_pitermann_crosstalker(
-    frames: Annotated[int, typer.Option(help="frames of the gesture sequence (60 Hz)")] = 120,
-    preset: PresetOpt = "anatomical",
-    dt: Annotated[float | None, typer.Option(help="Euler step of synthesis and inversion, s "
-                                                  "(default: the preset's fast step)")] = None,
-    output: Annotated[Path | None, typer.Option("-o", "--output", help="JSON file")] = None,
-):
+        frames: Annotated[int, _o("frames of the gesture sequence")] = 120, dt: DtOpt = None,
+        preset: PresetOpt = "anatomical",
+        output: Annotated[Path | None, _o("JSON file of the table", "-o", "--output")] = None):
     """Experiment 3 analogue: another talker inverted on the default face (Table VI)."""
-    from .geometry.builder import default_face
-    from .inverse.experiments import run_crosstalker
-    from .params import preset as get_preset
-
-    if frames < 8:
-        raise InputError("needs at least 8 frames", field="frames")
-    with _staged_progress() as report:
-        prm = get_preset(preset)
-        res = run_crosstalker(default_face(tissue=prm.tissue), frames=frames, params=prm, dt=dt,
-                              progress=report)
-    out.print("[bold]Pitermann & Munhall (2001), Experiment 3 analogue[/bold] (paper, Table VI: "
-              "3-D correlations mostly 0.75-0.97, upper lip centre poor)")
-    for label, r in res["runs"].items():
-        e = r["frame_error_mm"]
-        out.print(f"[bold]{label}[/bold]: {r['wall_s']:.1f} s; per-frame error (mm) median "
-                  f"{e['median']:.3f} max {e['max']:.3f}; movement {r['movement_mm']:.3f} mm")
-        out.print("  Table VI: " + ", ".join(
-            f"{n}{'*' if n in res['held_out'] else ''} {v:.2f}"
-            for n, v in r["table6_corr3d"].items()))
-    out.print("  (* held out)")
-    if output is not None:
-        from .io.atomic import atomic_path
-
-        with atomic_path(output, suffix=".json") as tmp:
-            tmp.write_text(json.dumps(res, indent=2))
-        out.print(f"tables -> {output}")
+    res = _staged(_wf("experiments").crosstalker, **locals())
+    _say(_wf("experiments").crosstalker_report(res, output))
 
 
 @app.command()
-def calibrate(
-    gestures: Annotated[list[str] | None, typer.Argument(
-        help="maximal gestures, each FILE:GROUPS (a marker file in the model's frame and the "
-             "muscle groups it uses), e.g. smile.c3d:ZYG,LAO,RIS pucker.trc:OOS,OOI")] = None,
-    output: Annotated[Path, typer.Option("-o", "--output", help="preset file (.json)")]
-    = Path("calibrated-preset.json"),
-    face: FaceOpt = "default",
-    builtin: Annotated[bool, typer.Option("--builtin", help="refit the built-in targets "
-                                                            "(gestures of real faces, docs)")]
-    = False,
-    fit: Annotated[str, typer.Option(help="scales to fit, comma-separated (force, lips, "
-                                          "stiffness, sphincter)")]
-    = "force,lips",
-    map_file: Annotated[Path | None, typer.Option("--map", help="marker,node CSV (default: "
-                                                                "closest nodes)")] = None,
-    max_evaluations: Annotated[int, typer.Option(help="gesture sets simulated at most")] = 30,
-    units: UnitsOpt = None,
-    name: Annotated[str | None, typer.Option(help="preset name (default: the file's)")] = None,
-):
-    """Fit the anatomical preset's global scales to a subject's maximal gestures (or to the
-    built-in targets) and write a preset file that every --preset option accepts."""
-    from .analysis.calibration import check_fit, fit_scales, fit_subject, recorded_gesture
-    from .geometry.builder import load_face
-    from .io.markers import read_markers
-    from .kinematics.mapping import closest_nodes, read_mapping
-    from .params import anatomical, write_preset
-
-    scales = tuple(x.strip() for x in fit.split(",") if x.strip())
-    check_fit(scales)
-    if max_evaluations < 2:
-        raise InputError("max-evaluations must be at least 2", field="max-evaluations")
-    if builtin == bool(gestures):
-        raise InputError("give gestures (FILE:GROUPS ...) or --builtin", field="gestures")
-    if output.suffix.lower() != ".json":
-        raise InputError("the preset file must end in .json", source=str(output),
-                         field="output")
-    model = load_face(face, tissue=anatomical().tissue)
-    with _staged_progress() as report:
-        if builtin:
-            res = fit_scales(model, fit=scales, max_evaluations=max_evaluations,
-                             progress=lambda d, n: report("fit", d, n))
-            fitted_to = "built-in targets"
-        else:
-            recs, mapping = [], None
-            for spec in gestures:
-                path, sep, groups = spec.rpartition(":")
-                if not sep or not path or not groups:
-                    raise InputError("expected FILE:GROUPS, e.g. smile.c3d:ZYG,LAO", field=spec)
-                ms = read_markers(Path(path), units=units)
-                if mapping is None:
-                    mapping = (read_mapping(map_file, ms, model) if map_file is not None
-                               else closest_nodes(ms, model))
-                recs.append(recorded_gesture(ms, groups.split(","), name=Path(path).stem))
-            res = fit_subject(model, recs, mapping, fit=scales, max_evaluations=max_evaluations,
-                              progress=lambda d, n: report("fit", d, n))
-            fitted_to = [r.source for r in recs]
-    write_preset(output, name or output.stem, res.scales,
-                 extra={"fitted_to": fitted_to, "face": model.name, "cost": res.cost,
-                        "evaluations": res.evaluations, "rows": res.rows})
-    out.print(f"[bold]fitted[/bold] {', '.join(f'{k} {v:.3g}' for k, v in res.scales.items())} "
-              f"({res.evaluations} evaluations, cost {res.cost:.4g})")
-    if builtin:
-        out.print(res.table(), markup=False)
-    out.print(f"preset -> {output} (use it as --preset {output})")
+def calibrate(gestures: Annotated[list[str] | None, typer.Argument(
+              help="maximal gestures, each FILE:GROUPS, e.g. smile.c3d:ZYG,LAO,RIS")] = None,
+              output: Annotated[Path, _o("preset file (.json)", "-o", "--output")]
+              = Path("calibrated-preset.json"),
+              face: FaceOpt = "default", map_file: MapOpt = None, units: UnitsOpt = None,
+              builtin: Annotated[bool, _o("refit the built-in targets", "--builtin")] = False,
+              fit: Annotated[str, _o("scales: force, lips, stiffness, sphincter")] = "force,lips",
+              max_evaluations: Annotated[int, _o("gesture sets simulated at most")] = 30,
+              name: Annotated[str | None, _o("preset name (default: the file's)")] = None):
+    """Fit the anatomical preset's scales to maximal gestures; write a preset file (--preset)."""
+    res = _staged(_wf("calibrate").calibrate, **locals())
+    _say(_wf("calibrate").report(res, output, builtin=builtin))
 
 
 def main() -> None:

@@ -92,24 +92,66 @@ TARGETS: tuple[Target, ...] = (
 
 
 @dataclass(frozen=True)
+class CalibrationRow:
+    """A target beside the model's amplitude at the fitted scales.
+
+    Attributes
+    ----------
+    name, groups, measure : the target's name, its muscle groups ("+"-joined) and measure
+    target, model : the target's and the model's amplitude, mm
+    kind : "equal", "difference", "at_least" or "at_most" (see :class:`Target`)
+    fitted : whether the fit uses it (False: reported only)
+    source : where the target comes from
+    """
+
+    name: str
+    groups: str
+    measure: str
+    target: float
+    kind: str
+    model: float
+    fitted: bool
+    source: str
+
+    def as_dict(self) -> dict:
+        return {"name": self.name, "groups": self.groups, "measure": self.measure,
+                "target": self.target, "kind": self.kind, "model": self.model,
+                "fitted": self.fitted, "source": self.source}
+
+
+@dataclass(frozen=True)
 class CalibrationResult:
-    """Fitted scales, the gesture amplitudes they give beside the targets, and the fit's trace."""
+    """Fitted scales, the gesture amplitudes they give beside the targets, and the fit's trace.
+
+    Attributes
+    ----------
+    scales : scale name -> fitted factor (see :data:`~facemech.params.ANATOMICAL_SCALES`)
+    rows : :class:`CalibrationRow` per target, at the fitted scales
+    cost : half the sum of squared residuals at the fitted scales
+    evaluations : gesture sets simulated
+    trace : (scales, cost) per evaluation
+    status : the optimiser's message
+    """
 
     scales: dict
-    rows: list  # dicts: name, groups, measure, target, kind, model, source
+    rows: tuple
     cost: float
     evaluations: int
-    trace: list = field(default_factory=list)  # (scales, cost) per evaluation
+    trace: list = field(default_factory=list)
     status: str = ""
+
+    def as_dict(self) -> dict:
+        """The fit as the preset file records it: ``cost``, ``evaluations`` and ``rows``."""
+        return {"cost": self.cost, "evaluations": self.evaluations,
+                "rows": [r.as_dict() for r in self.rows]}
 
     def table(self) -> str:
         """The targets and the model's amplitudes, one line each."""
         out = []
         for r in self.rows:
-            rel = {"equal": "=", "difference": "=", "at_least": ">=", "at_most": "<="}[r["kind"]]
-            note = "" if r.get("fitted", True) else ", reported only"
-            out.append(f"{r['name']:28s} {r['model']:7.2f} mm  (target {rel} {r['target']:.2f}"
-                       f"{note})")
+            rel = {"equal": "=", "difference": "=", "at_least": ">=", "at_most": "<="}[r.kind]
+            note = "" if r.fitted else ", reported only"
+            out.append(f"{r.name:28s} {r.model:7.2f} mm  (target {rel} {r.target:.2f}{note})")
         return "\n".join(out)
 
 
@@ -145,12 +187,11 @@ def _evaluate(face, scales: dict, targets, run) -> tuple[np.ndarray, list]:
                 cache[key] = (run(face, key, params) if run
                               else run_gesture(face, key, params=params).measures)
         got = cache[key][t.measure]
-        rows.append({"name": t.name, "groups": "+".join(t.groups), "measure": t.measure,
-                     "target": t.value, "kind": t.kind, "model": float(got),
-                     "fitted": t.weight > 0, "source": t.source})
+        rows.append(CalibrationRow(t.name, "+".join(t.groups), t.measure, t.value, t.kind,
+                                   float(got), t.weight > 0, t.source))
     res = []
     for t, r in zip(targets, rows, strict=True):
-        got = r["model"]
+        got = r.model
         if t.weight == 0.0:
             continue  # reported only
         if t.kind == "equal":
@@ -222,7 +263,7 @@ def fit_scales(face, *, targets=TARGETS, fit=FITTED, start: dict | None = None,
     best = min(cache.items(), key=lambda kv: float(kv[1][0] @ kv[1][0]))
     x_best = np.array(best[0])
     r, rows = cache[tuple(np.round(x_best, 10))]
-    return CalibrationResult(scales=scales_of(x_best), rows=rows, cost=float(0.5 * r @ r),
+    return CalibrationResult(scales=scales_of(x_best), rows=tuple(rows), cost=float(0.5 * r @ r),
                              evaluations=len(trace), trace=trace, status=str(sol.message))
 
 

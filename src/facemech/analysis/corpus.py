@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..params import MUSCLE_GROUPS
+from ..params import MUSCLE_GROUPS, Parameters
 from ..waveforms import cosine_bump
 
 # name: (x, y) mm; the seeds number markers from the top of the face down
@@ -80,8 +80,10 @@ def site_nodes(face) -> dict[str, int]:
     return out
 
 
-def random_utterance(rng: np.random.Generator, frames: int, frame_rate: float = 60.0):
-    """Activity (frames, 16) and jaw angles (frames,) of a random CV-syllable string."""
+def random_utterance(rng: np.random.Generator, frames: int,
+                     frame_rate: float = Parameters.frame_rate):
+    """Activity (frames, 16) and jaw angles (frames,) rad of a random CV-syllable string at
+    ``frame_rate`` (Hz)."""
     t = np.arange(frames) / frame_rate
     act = np.zeros((frames, len(MUSCLE_GROUPS)))
     jaw = np.zeros(frames)
@@ -143,7 +145,7 @@ def simulate_corpus(n_utterances: int = 40, frames: int = 60, seed: int = 2008,
     out = []
     seeds = preset("lucero1999")
     for k in range(n_utterances):
-        act, jaw = random_utterance(rng, frames)
+        act, jaw = random_utterance(rng, frames, seeds.frame_rate)
         sim = simulate(face, act, jaw, integrator="euler", dt=1e-3, params=seeds)
         out.append(sim.positions[:, idx])
         if progress is not None:
@@ -162,6 +164,7 @@ def embedded_corpus(n_utterances: int = 40, frames: int = 60, *, noise: float = 
                     cache: bool = True) -> Corpus:
     """The embedded corpus: simulated trajectories plus measurement noise (and the artifact)."""
     from ..geometry.builder import default_face
+    from ..params import preset
 
     clean = simulate_corpus(n_utterances, frames, seed, progress, cache)
     rng = np.random.default_rng(seed + 1)
@@ -173,4 +176,5 @@ def embedded_corpus(n_utterances: int = 40, frames: int = 60, *, noise: float = 
         if copied_eyelid:
             x[:, tgt] = x[:, src] - x[0, src] + x[0, tgt]  # the same displacement
         utts.append(x)
-    return Corpus(utts, names, site_nodes(default_face()), 60.0, noise, copied_eyelid)
+    return Corpus(utts, names, site_nodes(default_face()), preset("lucero1999").frame_rate, noise,
+                  copied_eyelid)

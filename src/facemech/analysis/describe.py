@@ -34,6 +34,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from ..errors import InputError
+from ..params import Parameters
 
 #: the landmarks measured, by part
 PARTS: dict[str, tuple[str, ...]] = {
@@ -254,7 +255,7 @@ def describe(ds, *, audio_offset_s: float | None = None,
     nodes = marker_nodes(ds, source=source)
     pos = ds["positions"].transpose("time", "node", "axis").values
     rest = ds["rest_positions"].transpose("node", "axis").values
-    rate = float(ds.attrs.get("frame_rate_hz", 60.0))
+    rate = float(ds.attrs.get("frame_rate_hz", Parameters.frame_rate))
     t = ds["time"].values
     names = [n for part in PARTS.values() for n in part if n in nodes]
     idx = [nodes[n] for n in names]

@@ -47,7 +47,7 @@ MAX_DISPLACEMENT_MM = 20.0
 
 
 def gesture_activity(groups, *, ramp: float = 0.2, hold: float = 0.5, level: float = 1.0,
-                     frame_rate: float = 60.0) -> np.ndarray:
+                     frame_rate: float = Parameters.frame_rate) -> np.ndarray:
     """Activity (frames, 16): the groups ramped linearly to ``level`` over ``ramp`` s, held for
     ``hold`` s (frame 0 at rest)."""
     frames = int(round((ramp + hold) * frame_rate)) + 1
@@ -108,7 +108,7 @@ def run_gesture(face, groups, *, params: Parameters | None = None, ramp: float =
     from ..solvers.forward import simulate
 
     act = gesture_activity(groups, ramp=ramp, hold=hold, level=level,
-                           frame_rate=(params.frame_rate if params else 60.0))
+                           frame_rate=(params.frame_rate if params else Parameters.frame_rate))
     sim = simulate(face, act, np.full(len(act), jaw_angle), params=params, **simulate_kw)
     model = sim.model
     disp = sim.positions - sim.positions[0]

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..markerset import MarkerSet
+from ..params import Parameters
 from ..waveforms import cosine_ramp
 
 #: displacements (mm) of each marker group in each posture: (dx, dy, dz); "out" for the corners
@@ -38,7 +39,7 @@ GROUPS = {"upper": ("R05", "L04"), "lower": ("R03", "L02"), "corner": ("R07", "L
 
 
 def speech_targets(face, *, posture_s: float = 0.16, transition_s: float = 0.12,
-                   frame_rate: float = 60.0, sequence=SEQUENCE) -> MarkerSet:
+                   frame_rate: float = Parameters.frame_rate, sequence=SEQUENCE) -> MarkerSet:
     """Marker trajectories (metres, the face's frame) of the synthetic utterance.
 
     Each posture is held ``posture_s`` and joined to the next by a raised-cosine transition of

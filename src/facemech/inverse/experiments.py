@@ -6,21 +6,32 @@ DAO, DLI, LAO, ZYG, LLS, MEN, OOS, OOI, left and right) follow the triangle sequ
 closed). The 11 right-side markers (R01-R11) are used for the inversion, the 8 left-side ones
 (L01-L08) are held out. The inversion recovers the seven EMG controls, with and without the
 positive constraint. Synthesis and inversion use the same explicit Euler step (1 ms by default).
+
+Each experiment returns a frozen dataclass (:class:`SyntheticExperiment`,
+:class:`CrossTalkerExperiment`) whose ``as_dict()`` is the JSON the command writes; drawing
+(:func:`draw_synthetic`) and writing (:func:`write`) are separate steps.
 """
 
 from __future__ import annotations
 
+import json
 import time
 import warnings
 from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
 from ..markerset import MarkerSet
-from ..params import MUSCLE_GROUPS, default_parameters
+from ..params import MUSCLE_GROUPS, Parameters, default_parameters
 from ..waveforms import cosine_bump
 from . import stats
 from .invert import invert
+
+__all__ = ["CrossTalkerExperiment", "CrossTalkerRun", "NoiseFreeScore", "SyntheticExperiment",
+           "SyntheticRun", "draw_synthetic", "figure_name", "run_crosstalker", "run_synthetic",
+           "synthetic_data", "write"]
 
 PERIORAL = ("DAO", "DLI", "LAO", "ZYG", "LLS", "MEN", "OOS", "OOI")
 
@@ -78,19 +89,155 @@ def synthetic_data(face, *, dt: float | None = None, noise: float = 0.0, seed: i
     pos = sim.positions[:, [face.markers[n] for n in names]]
     if noise > 0:
         pos = pos + np.random.default_rng(seed).normal(0.0, noise, pos.shape)
-    return MarkerSet(pos, tuple(names), 60.0), act
+    return MarkerSet(pos, tuple(names), params.frame_rate), act
+
+
+#: 3-D correlations at least this high count as good in Table II ...
+CORR_HIGH = 0.95
+#: ... and above this one as acceptable (the paper's "33 of 38")
+CORR_LOW = 0.8
+
+
+@dataclass(frozen=True)
+class NoiseFreeScore:
+    """A re-animation of noisy markers scored against the noise-free ones (the true motion).
+
+    Attributes
+    ----------
+    corr3d : marker -> 3-D correlation with the true motion
+    corr3d_above : markers whose correlation exceeds ``threshold``
+    frame_error_mm : five-number summary of the per-frame error against the true motion, mm
+    threshold : the correlation ``corr3d_above`` counts above
+    """
+
+    corr3d: dict
+    corr3d_above: int
+    frame_error_mm: dict
+    threshold: float = CORR_LOW
+
+    def as_dict(self) -> dict:
+        return {"corr3d": self.corr3d, f"corr3d_above_{self.threshold:g}": self.corr3d_above,
+                "frame_error_mm": self.frame_error_mm}
+
+
+@dataclass(frozen=True)
+class SyntheticRun:
+    """One inversion of Experiment 1 (a method, with or without the positive constraint).
+
+    Attributes
+    ----------
+    method, positive : the inversion's method ("lsq" or "powell") and constraint
+    wall_s, evaluations : wall time (s) and model frame steps of the inversion
+    activity_correlation : control -> correlation with the true activity (Table I)
+    corr3d : marker -> {"published", "unbiased"} 3-D correlation (Table II), all 19 markers
+    corr3d_at_least, corr3d_above : markers with a correlation >= ``high`` and > ``low``
+    frame_error_mm : five-number summary of the per-frame error, mm (Table III)
+    movement_mm : movement of the markers used, mm (Table III)
+    condition_median : median Jacobian condition number (None: none finite)
+    control_names : the inverted controls
+    controls, true_controls : (frames, controls) recovered and true activity
+    rms_error_m : (frames,) per-frame error, m
+    vs_noise_free : the score against the noise-free markers (noisy data only)
+    high, low : the thresholds of ``corr3d_at_least`` and ``corr3d_above``
+    """
+
+    method: str
+    positive: bool
+    wall_s: float
+    evaluations: int
+    activity_correlation: dict
+    corr3d: dict
+    corr3d_at_least: int
+    corr3d_above: int
+    frame_error_mm: dict
+    movement_mm: float
+    condition_median: float | None
+    control_names: tuple
+    controls: np.ndarray
+    true_controls: np.ndarray
+    rms_error_m: np.ndarray
+    vs_noise_free: NoiseFreeScore | None = None
+    high: float = CORR_HIGH
+    low: float = CORR_LOW
+
+    def as_dict(self) -> dict:
+        out = {"method": self.method, "positive": self.positive, "wall_s": self.wall_s,
+               "evaluations": self.evaluations,
+               "table1_activity_correlation": self.activity_correlation,
+               "table2_corr3d": self.corr3d,
+               f"corr3d_at_least_{self.high:g}": self.corr3d_at_least,
+               f"corr3d_above_{self.low:g}": self.corr3d_above,
+               "table3_frame_error_mm": self.frame_error_mm, "movement_mm": self.movement_mm,
+               "condition_median": self.condition_median,
+               "control_names": list(self.control_names), "controls": self.controls.tolist(),
+               "true_controls": self.true_controls.tolist(),
+               "rms_error_m": self.rms_error_m.tolist()}
+        if self.vs_noise_free is not None:
+            out["vs_noise_free"] = self.vs_noise_free.as_dict()
+        return out
+
+
+@dataclass(frozen=True)
+class SyntheticExperiment:
+    """Experiment 1 of Pitermann & Munhall (2001): Tables I, II and the top of Table III.
+
+    Attributes
+    ----------
+    frames : frames of the synthetic markers
+    noise_mm : standard deviation of the marker noise, mm
+    dt_s : Euler step of synthesis and inversion, s
+    markers_used, held_out : the inverted (right-side) and held-out (left-side) markers
+    runs : label (e.g. "lsq, positive") -> :class:`SyntheticRun`
+    paper : what the paper reports (:data:`PAPER`)
+    frame_rate_hz : the markers' frame rate (the parameters'), Hz
+    preset : the parameters' name
+    """
+
+    frames: int
+    noise_mm: float
+    dt_s: float
+    markers_used: tuple
+    held_out: tuple
+    runs: dict
+    paper: dict
+    frame_rate_hz: float
+    preset: str = ""
+
+    @property
+    def time(self) -> np.ndarray:
+        """(frames,) s, the frames' times."""
+        return np.arange(self.frames) / self.frame_rate_hz
+
+    def as_dict(self) -> dict:
+        """The tables as the command writes them (JSON-ready)."""
+        return {"frames": self.frames, "noise_mm": self.noise_mm, "dt_s": self.dt_s,
+                "markers_used": list(self.markers_used), "held_out": list(self.held_out),
+                "runs": {k: r.as_dict() for k, r in self.runs.items()}, "paper": self.paper}
 
 
 def run_synthetic(face, *, methods=("lsq",), dt: float | None = None, noise: float = 0.0,
                   params=None,
-                  progress: Callable[[str, int, int], None] | None = None) -> dict:
-    """Experiment 1 for each method, with and without the positive constraint (tables as dicts).
+                  progress: Callable[[str, int, int], None] | None = None) -> SyntheticExperiment:
+    """Experiment 1 for each method, with and without the positive constraint.
 
     Table I: correlation of each recovered control with the true activity; Table II: 3-D
     correlations (published and unbiased) of every marker, the 8 held-out ones included;
     Table III (top): per-frame error summary and movement. Each run also carries its recovered
     and true controls and per-frame RMS error (for figures). With ``noise`` (m) the
     re-animation is also compared with the noise-free markers (``vs_noise_free``).
+
+    Parameters
+    ----------
+    face : FaceModel
+    methods : inversion methods, each of "lsq" and "powell"
+    dt : Euler step of synthesis and inversion, s (default: ``params.fast_dt``)
+    noise : standard deviation of the Gaussian marker noise, m
+    params : Parameters (default: the default preset)
+    progress : callable(stage, done, total)
+
+    Returns
+    -------
+    SyntheticExperiment
     """
     params = params or default_parameters()
     dt = params.fast_dt if dt is None else dt
@@ -99,10 +246,7 @@ def run_synthetic(face, *, methods=("lsq",), dt: float | None = None, noise: flo
     clean = synthetic_data(face, dt=dt, params=params)[0] if noise > 0 else None
     used = {n: face.markers[n] for n in data.names if n.startswith("R")}
     all_nodes = [face.markers[n] for n in data.names]
-    out: dict = {"frames": data.n_frames, "noise_mm": noise * 1e3, "dt_s": dt,
-                 "markers_used": list(used), "held_out": [n for n in data.names
-                                                          if n.startswith("L")],
-                 "runs": {}, "paper": PAPER}
+    runs: dict = {}
     for method in methods:
         for positive in (False, True):
             label = f"{method}, {'positive' if positive else 'no constraint'}"
@@ -123,34 +267,64 @@ def run_synthetic(face, *, methods=("lsq",), dt: float | None = None, noise: flo
                       for m, n in enumerate(data.names)}
             err = stats.frame_errors(model[1:, :len(used)], data.positions[1:, :len(used)])
             corr = np.array([v["published"] for v in table2.values()])
-            run = out["runs"][label] = {
-                "method": method, "positive": positive, "wall_s": wall,
-                "evaluations": int(res.evaluations.sum()),
-                "table1_activity_correlation": table1,
-                "table2_corr3d": table2,
-                "corr3d_at_least_0.95": int(np.sum(corr >= 0.95)),
-                "corr3d_above_0.8": int(np.sum(corr > 0.8)),
-                "table3_frame_error_mm": stats.summary5(err * 1e3),
-                "movement_mm": stats.movement(data.positions[:, :len(used)]) * 1e3,
-                "condition_median": float(np.nanmedian(res.condition))
-                if np.isfinite(res.condition).any() else None,
-                "control_names": list(res.control_names),
-                "controls": res.controls.tolist(),
-                "true_controls": truth[:, [MUSCLE_GROUPS.index(c)
-                                           for c in res.control_names]].tolist(),
-                "rms_error_m": res.rms_error.tolist(),
-            }
+            vs_true = None
             if clean is not None:
                 true = clean.positions
                 c_true = np.array([stats.corr3d(model[:, m], true[:, m])
                                    for m in range(len(all_nodes))])
                 e_true = stats.frame_errors(model[1:, :len(used)], true[1:, :len(used)])
-                run["vs_noise_free"] = {
-                    "corr3d": dict(zip(data.names, c_true.tolist(), strict=True)),
-                    "corr3d_above_0.8": int(np.sum(c_true > 0.8)),
-                    "frame_error_mm": stats.summary5(e_true * 1e3),
-                }
-    return out
+                vs_true = NoiseFreeScore(
+                    corr3d=dict(zip(data.names, c_true.tolist(), strict=True)),
+                    corr3d_above=int(np.sum(c_true > CORR_LOW)),
+                    frame_error_mm=stats.summary5(e_true * 1e3))
+            runs[label] = SyntheticRun(
+                method=method, positive=positive, wall_s=wall,
+                evaluations=int(res.evaluations.sum()), activity_correlation=table1,
+                corr3d=table2, corr3d_at_least=int(np.sum(corr >= CORR_HIGH)),
+                corr3d_above=int(np.sum(corr > CORR_LOW)),
+                frame_error_mm=stats.summary5(err * 1e3),
+                movement_mm=stats.movement(data.positions[:, :len(used)]) * 1e3,
+                condition_median=float(np.nanmedian(res.condition))
+                if np.isfinite(res.condition).any() else None,
+                control_names=tuple(res.control_names), controls=res.controls,
+                true_controls=truth[:, [MUSCLE_GROUPS.index(c) for c in res.control_names]],
+                rms_error_m=res.rms_error, vs_noise_free=vs_true)
+    return SyntheticExperiment(
+        frames=data.n_frames, noise_mm=noise * 1e3, dt_s=dt, markers_used=tuple(used),
+        held_out=tuple(n for n in data.names if n.startswith("L")), runs=runs, paper=PAPER,
+        frame_rate_hz=float(params.frame_rate), preset=params.name)
+
+
+def figure_name(label: str) -> str:
+    """The PNG file name of a run's figure, e.g. ``experiment1_lsq_no-constraint.png``."""
+    return f"experiment1_{label.replace(', ', '_').replace(' ', '-')}.png"
+
+
+def draw_synthetic(result: SyntheticExperiment, folder: str | Path) -> list[Path]:
+    """One PNG per run in ``folder``: the inverted against the true activity, and the error.
+
+    Files are named ``experiment1_<method>_<constraint>.png``; returns their paths.
+    """
+    from ..viz.plots import inversion_figure
+
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for label, r in result.runs.items():
+        path = folder / figure_name(label)
+        paths.append(inversion_figure(path, result.time, r.controls, r.control_names,
+                                      truth=r.true_controls, rms_error=r.rms_error_m,
+                                      title=f"Experiment 1, {label} ({result.preset})"))
+    return paths
+
+
+def write(result: SyntheticExperiment | CrossTalkerExperiment, path: str | Path) -> Path:
+    """Write an experiment's tables (``result.as_dict()``) as JSON, atomically."""
+    from ..io.atomic import atomic_path
+
+    with atomic_path(path, suffix=".json") as tmp:
+        tmp.write_text(json.dumps(result.as_dict(), indent=2))
+    return Path(path)
 
 
 # ---- Experiment 3 analogue: another talker ---------------------------------------------------
@@ -177,9 +351,10 @@ def second_talker():
     return build_face(reshape(v), f, {k: reshape(p) for k, p in lm.items()}, name="talker-2")
 
 
-def gesture_controls(frames: int = 120):
-    """Activity (frames, 16) and jaw angles of /baeb beb daed ded/-like gestures."""
-    t = np.arange(frames) / 60.0
+def gesture_controls(frames: int = 120, frame_rate: float = Parameters.frame_rate):
+    """Activity (frames, 16) and jaw angles (frames,) rad of /baeb beb daed ded/-like gestures
+    at ``frame_rate`` (Hz)."""
+    t = np.arange(frames) / frame_rate
     act = np.zeros((frames, len(MUSCLE_GROUPS)))
     jaw = np.zeros(frames)
     seg = t[-1] / 4 if frames > 1 else 1.0
@@ -205,10 +380,66 @@ def gesture_controls(frames: int = 120):
     return np.clip(act, 0, 1), jaw
 
 
+@dataclass(frozen=True)
+class CrossTalkerRun:
+    """One inversion of the Experiment 3 analogue (an adaptation of the face to the talker).
+
+    Attributes
+    ----------
+    wall_s : wall time of the inversion, s
+    corr3d : marker -> 3-D correlation of the re-animation with the data (Table VI)
+    frame_error_mm : five-number summary of the per-frame error, mm
+    movement_mm : movement of the adapted markers, mm
+    """
+
+    wall_s: float
+    corr3d: dict
+    frame_error_mm: dict
+    movement_mm: float
+
+    def as_dict(self) -> dict:
+        return {"wall_s": self.wall_s, "table6_corr3d": self.corr3d,
+                "frame_error_mm": self.frame_error_mm, "movement_mm": self.movement_mm}
+
+
+@dataclass(frozen=True)
+class CrossTalkerExperiment:
+    """The Experiment 3 analogue: another talker inverted on the default face (Table VI).
+
+    Attributes
+    ----------
+    frames : frames of the gesture sequence
+    markers : the talker's markers (held-out ones included)
+    held_out : markers left out of the inversion
+    runs : label (e.g. "lsq, positive, warp") -> :class:`CrossTalkerRun`
+    """
+
+    frames: int
+    markers: tuple
+    held_out: tuple
+    runs: dict
+
+    def as_dict(self) -> dict:
+        """The table as the command writes it (JSON-ready)."""
+        return {"frames": self.frames, "markers": list(self.markers),
+                "held_out": list(self.held_out),
+                "runs": {k: r.as_dict() for k, r in self.runs.items()}}
+
+
 def run_crosstalker(face, *, frames: int = 120, dt: float | None = None, params=None,
-                    progress: Callable[[str, int, int], None] | None = None) -> dict:
+                    progress: Callable[[str, int, int], None] | None = None
+                    ) -> CrossTalkerExperiment:
     """Experiment 3 analogue: markers of a second talker, inverted on the default face after
-    per-axis scaling, and separately after a thin-plate-spline warp of the face (Table VI)."""
+    per-axis scaling, and separately after a thin-plate-spline warp of the face (Table VI).
+
+    Parameters
+    ----------
+    face : FaceModel (the default face)
+    frames : frames of the gesture sequence (at the parameters' frame rate)
+    dt : Euler step of synthesis and inversion, s (default: ``params.fast_dt``)
+    params : Parameters (default: the default preset)
+    progress : callable(stage, done, total)
+    """
     from ..geometry.builder import for_tissue
     from ..kinematics.mapping import scale_adapt, warp_face
     from ..solvers.forward import simulate
@@ -218,15 +449,14 @@ def run_crosstalker(face, *, frames: int = 120, dt: float | None = None, params=
     dt = params.fast_dt if dt is None else dt
     face = for_tissue(face, params.tissue)
     other = for_tissue(second_talker(), params.tissue)
-    act, jaw = gesture_controls(frames)
+    act, jaw = gesture_controls(frames, params.frame_rate)
     sim = simulate(other, act, jaw, dt=dt, params=params)
     names = [*other.markers, *CROSS_EXTRA]
     nodes_other = [other.markers.get(n, other.landmarks.get(n)) for n in names]
-    data = MarkerSet(sim.positions[:, nodes_other], tuple(names), 60.0)
+    data = MarkerSet(sim.positions[:, nodes_other], tuple(names), params.frame_rate)
     mapping_all = {n: face.markers.get(n, face.landmarks.get(n)) for n in names}
     used = {n: v for n, v in mapping_all.items() if n not in CROSS_HELD_OUT}
-    out: dict = {"frames": frames, "markers": names, "held_out": list(CROSS_HELD_OUT),
-                 "runs": {}}
+    runs: dict = {}
     for adaptation in ("scaling", "warp"):
         if adaptation == "scaling":
             adapted = scale_adapt(data, face, mapping_all, ("R02", "L07")).markers
@@ -245,7 +475,8 @@ def run_crosstalker(face, *, frames: int = 120, dt: float | None = None, params=
         table6 = {n: float(stats.corr3d(mod[:, m], adapted.positions[:, m]))
                   for m, n in enumerate(names)}
         err = stats.frame_errors(mod[1:], adapted.positions[1:])
-        out["runs"][label] = {"wall_s": time.perf_counter() - t0, "table6_corr3d": table6,
-                              "frame_error_mm": stats.summary5(err * 1e3),
-                              "movement_mm": stats.movement(adapted.positions) * 1e3}
-    return out
+        runs[label] = CrossTalkerRun(wall_s=time.perf_counter() - t0, corr3d=table6,
+                                     frame_error_mm=stats.summary5(err * 1e3),
+                                     movement_mm=stats.movement(adapted.positions) * 1e3)
+    return CrossTalkerExperiment(frames=frames, markers=tuple(names),
+                                 held_out=CROSS_HELD_OUT, runs=runs)

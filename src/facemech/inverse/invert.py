@@ -22,6 +22,7 @@ from __future__ import annotations
 import time
 import warnings
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -38,6 +39,8 @@ from . import uncertainty as U
 from .frame import JAW_UNIT, FrameProblem
 from .methods import LeastSquares, Powell, method_from_options
 from .result import Inversion
+
+__all__ = ["SPEECH_CONTROLS", "control_matrix", "invert"]
 
 ILL_POSED_CONDITION = 1e4  #: Jacobian condition number above which a frame is flagged
 #: rad: the estimated jaw stays within [JAW_CLOSE, MAX_JAW_ANGLE] (closing a little past the
@@ -227,9 +230,9 @@ def invert(
     wall = time.perf_counter() - t0
     if frames > 1:
         run.controls[-1] = run.controls[-2]
-    return _finish(run, distance, face, params, stepper, names, nodes, data, cnames, gmat, jaw,
-                   estimate_jaw, jaw_note, method, positive, noise_mm, wall, src,
-                   muscles.series())
+    problem = _Problem(face, params, stepper, tuple(names), nodes, data, cnames, gmat, jaw,
+                       estimate_jaw, jaw_note, method, positive, noise_mm, src)
+    return _finish(run, problem, distance, wall, muscles.series())
 
 
 def _control_stepper(stepper, gmat, estimate_jaw, jaw_rest, jaw):
@@ -304,31 +307,52 @@ class _Run:
         self.se_unit[k] = self.se_unit[k - 1]
 
 
-def _finish(run, distance, face, params, stepper, names, nodes, data, cnames, gmat, jaw,
-            estimate_jaw, jaw_note, method, positive, noise_mm, wall, src,
-            muscles) -> Inversion:
+@dataclass(frozen=True)
+class _Problem:
+    """What an inversion was asked, for :func:`_finish`: the face, parameters and stepper, the
+    markers used (names, nodes, data (frames, markers, 3) m), the controls (names, the
+    (16, controls) map), the jaw plan, the method and the noise (mm, None: estimated)."""
+
+    face: object
+    params: Parameters
+    stepper: Stepper
+    names: tuple
+    nodes: np.ndarray
+    data: np.ndarray
+    cnames: tuple
+    gmat: np.ndarray
+    jaw: np.ndarray | None
+    estimate_jaw: bool
+    jaw_note: str
+    method: LeastSquares | Powell
+    positive: bool
+    noise_mm: float | None
+    src: str | None
+
+
+def _finish(run, p: _Problem, distance, wall, muscles) -> Inversion:
     frames, nc = run.controls.shape
-    nm = len(cnames)
+    nm = len(p.cnames)
     if frames > 1:
         run.se_unit[-1] = run.se_unit[-2]
-    notes = [jaw_note]
-    if noise_mm is None:
+    notes = [p.jaw_note]
+    if p.noise_mm is None:
         sigma = U.noise_from_residuals(run.rss, run.dof)
         noise_how = "estimated from the residuals"
     else:
-        sigma, noise_how = float(noise_mm), "given"
+        sigma, noise_how = float(p.noise_mm), "given"
     se = run.se_unit * (sigma if np.isfinite(sigma) else np.nan)
     seen = U.identifiable(distance, sigma)
-    if estimate_jaw:
+    if p.estimate_jaw:
         jaw_series = np.empty(frames)
-        jaw_series[0] = 0.0 if jaw is None else jaw[0]
+        jaw_series[0] = 0.0 if p.jaw is None else p.jaw[0]
         jaw_series[1:] = run.controls[:-1, -1] * JAW_UNIT
         jaw_pose = None
-        control_names = (*cnames, "jaw")
+        control_names = (*p.cnames, "jaw")
     else:
-        jaw_series = jaw[:, 0] if jaw.ndim == 2 else jaw
-        jaw_pose = jaw if jaw.ndim == 2 else None
-        control_names = tuple(cnames)
+        jaw_series = p.jaw[:, 0] if p.jaw.ndim == 2 else p.jaw
+        jaw_pose = p.jaw if p.jaw.ndim == 2 else None
+        control_names = tuple(p.cnames)
     if run.gaps:
         notes.append(f"{run.gaps} missing marker samples were left out of their frames' costs")
     hidden = [control_names[j] for j in range(nc) if not seen[j]]
@@ -344,14 +368,14 @@ def _finish(run, distance, face, params, stepper, names, nodes, data, cnames, gm
         notes.append(msg)
         warnings.warn(msg, stacklevel=3)
     return Inversion(
-        model=face, params=params, time=np.arange(frames) / params.frame_rate,
-        positions=run.positions, marker_names=tuple(names), marker_nodes=nodes,
-        data_markers=data, activity=run.controls[:, :nm] @ gmat.T, jaw_angle=jaw_series,
+        model=p.face, params=p.params, time=np.arange(frames) / p.params.frame_rate,
+        positions=run.positions, marker_names=tuple(p.names), marker_nodes=p.nodes,
+        data_markers=p.data, activity=run.controls[:, :nm] @ p.gmat.T, jaw_angle=jaw_series,
         jaw_pose=jaw_pose,
         control_names=control_names, controls=run.controls, control_se=se,
         identifiability=distance, identifiable=seen, noise_mm=sigma, noise_how=noise_how,
         rms_error=run.rms, markers_used=run.used, on_bound=run.on_bound,
-        condition=run.condition, evaluations=run.evaluations, method=method,
-        positive=positive, integrator=f"{stepper.integrator} (inversion, {method.name})",
-        dt=stepper.dt, wall_seconds=wall, notes=notes, source=src, muscles=muscles,
+        condition=run.condition, evaluations=run.evaluations, method=p.method,
+        positive=p.positive, integrator=f"{p.stepper.integrator} (inversion, {p.method.name})",
+        dt=p.stepper.dt, wall_seconds=wall, notes=notes, source=p.src, muscles=muscles,
     )

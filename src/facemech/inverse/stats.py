@@ -6,9 +6,19 @@ All functions take trajectories as (frames, 3) or (frames, markers, 3) arrays in
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from ..kinematics.resample import savgol_derivative
+from ..params import Parameters
+
+__all__ = ["Comparison", "MarkerStatistics", "acceleration", "axis_correlations", "centroid",
+           "compare", "corr3d", "cross_correlation", "error_summary", "frame_errors", "json_safe",
+           "movement", "std3d", "summary5"]
+
+#: Hz, the frame rate assumed where none is given: the parameters' (the model's output rate)
+FRAME_RATE = Parameters.frame_rate
 
 
 def centroid(v: np.ndarray) -> np.ndarray:
@@ -97,9 +107,19 @@ def cross_correlation(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.clip(np.sum(a * b) / den, -1.0, 1.0)) if den > 0 else float("nan")
 
 
-def axis_correlations(a: np.ndarray, b: np.ndarray, rate: float = 60.0) -> dict:
+def axis_correlations(a: np.ndarray, b: np.ndarray, rate: float = FRAME_RATE) -> dict:
     """Per-axis Pearson correlations of displacement and of acceleration (Savitzky-Golay,
-    0.1-s cubic; left out for fewer than 5 frames)."""
+    0.1-s cubic; left out for fewer than 5 frames).
+
+    Parameters
+    ----------
+    a, b : (frames, 3) arrays, same units
+    rate : frame rate, Hz
+
+    Returns
+    -------
+    dict: ``displacement`` (and ``acceleration``) -> {"x", "y", "z"} -> Pearson r
+    """
     out = {}
     for kind in ("displacement", "acceleration"):
         x, y = a - a[0], b - b[0]
@@ -137,7 +157,7 @@ ERROR_WARN_MM = 1.0
 ERROR_WARN_RATIO = 5.0
 
 
-def error_summary(per_frame_m: np.ndarray, rate_hz: float = 60.0, *,
+def error_summary(per_frame_m: np.ndarray, rate_hz: float = FRAME_RATE, *,
                   time_s: np.ndarray | None = None, warn_mm: float = ERROR_WARN_MM,
                   warn_ratio: float = ERROR_WARN_RATIO) -> dict:
     """Median and maximum of a per-frame error, with the warnings a summary must show.
@@ -196,23 +216,94 @@ def movement(data: np.ndarray) -> float:
     return float(2.0 * np.sqrt(np.mean(s * s)))
 
 
-def compare(a: np.ndarray, b: np.ndarray, names, rate: float = 60.0) -> dict:
-    """All statistics of model ``a`` against data ``b`` (frames, markers, 3), metres -> mm.
+@dataclass(frozen=True)
+class MarkerStatistics:
+    """One marker's statistics of model against data.
 
-    Returns per-marker 3-D correlations (:func:`corr3d`, NaN written as None by the CLI's
-    JSON) and per-axis correlations, ``frame_error_mm`` (the five-number summary of
-    :func:`frame_errors`), ``error`` (:func:`error_summary`: median, maximum, warnings),
-    ``movement_mm`` and ``frames``.
+    Attributes
+    ----------
+    corr3d_published, corr3d_unbiased : 3-D correlation (:func:`corr3d`; NaN: no motion)
+    displacement : {"x", "y", "z"} -> Pearson r of the displacements from the first frame
+    acceleration : the same of the accelerations; None for fewer than 5 frames
+    """
+
+    corr3d_published: float
+    corr3d_unbiased: float
+    displacement: dict
+    acceleration: dict | None = None
+
+    def as_dict(self) -> dict:
+        out = {"corr3d_published": self.corr3d_published,
+               "corr3d_unbiased": self.corr3d_unbiased, "displacement": self.displacement}
+        if self.acceleration is not None:
+            out["acceleration"] = self.acceleration
+        return out
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """All statistics of a model's markers against data (:func:`compare`).
+
+    Attributes
+    ----------
+    markers : name -> :class:`MarkerStatistics`
+    frame_error_mm : five-number summary (min, q1, median, q3, max) of the per-frame error
+        (:func:`frame_errors`), mm
+    error : :func:`error_summary` of the per-frame error (median, maximum, warnings)
+    movement_mm : movement amplitude of the data (:func:`movement`), mm
+    frames : number of frames
+    """
+
+    markers: dict
+    frame_error_mm: dict
+    error: dict
+    movement_mm: float
+    frames: int
+
+    @property
+    def warnings(self) -> list:
+        """The error summary's warnings (str)."""
+        return self.error["warnings"]
+
+    def as_dict(self) -> dict:
+        """The statistics as JSON-ready nested dicts (NaN kept: see :func:`json_safe`)."""
+        return {"markers": {n: m.as_dict() for n, m in self.markers.items()},
+                "frame_error_mm": self.frame_error_mm, "error": self.error,
+                "movement_mm": self.movement_mm, "frames": self.frames}
+
+
+def json_safe(obj):
+    """A copy of nested dicts and lists with NaN and infinities as None (strict JSON)."""
+    if isinstance(obj, dict):
+        return {k: json_safe(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [json_safe(v) for v in obj]
+    if isinstance(obj, float) and not np.isfinite(obj):
+        return None
+    return obj
+
+
+def compare(a: np.ndarray, b: np.ndarray, names, rate: float = FRAME_RATE) -> Comparison:
+    """All statistics of model ``a`` against data ``b``.
+
+    Parameters
+    ----------
+    a, b : (frames, markers, 3) arrays, metres, the markers ``names`` in that order
+    names : marker names
+    rate : frame rate, Hz (the times of the warnings, the acceleration's window)
+
+    Returns
+    -------
+    Comparison
+        Per-marker 3-D correlations (:func:`corr3d`) and per-axis correlations, the per-frame
+        error's five-number summary and :func:`error_summary`, the movement (mm) and frames.
     """
     per_marker = {}
     for m, name in enumerate(names):
-        per_marker[name] = {
-            "corr3d_published": float(corr3d(a[:, m], b[:, m])),
-            "corr3d_unbiased": float(corr3d(a[:, m], b[:, m], published=False)),
-            **axis_correlations(a[:, m], b[:, m], rate),
-        }
-    err = frame_errors(a, b)
-    summary = error_summary(err, rate)
-    return {"markers": per_marker, "frame_error_mm": summary["summary_mm"], "error": summary,
-            "movement_mm": movement(b) * 1e3, "frames": int(len(a))}
-
+        ax = axis_correlations(a[:, m], b[:, m], rate)
+        per_marker[name] = MarkerStatistics(
+            float(corr3d(a[:, m], b[:, m])), float(corr3d(a[:, m], b[:, m], published=False)),
+            ax["displacement"], ax.get("acceleration"))
+    summary = error_summary(frame_errors(a, b), rate)
+    return Comparison(markers=per_marker, frame_error_mm=summary["summary_mm"], error=summary,
+                      movement_mm=movement(b) * 1e3, frames=int(len(a)))

@@ -9,6 +9,8 @@ from pathlib import Path
 from ..errors import InputError
 from .result import Inversion
 
+__all__ = ["invert_markers"]
+
 
 def invert_markers(
     markers: str | Path,
@@ -33,13 +35,29 @@ def invert_markers(
 ) -> Inversion:
     """Invert a marker file on a face (see :func:`facemech.inverse.invert.invert`).
 
-    ``controls`` is "speech", "emg7", "all" or comma-separated groups; ``chin_marker`` names a
-    jaw recording (its vertical drop gives the jaw angle, ``jaw_lead`` frames early), estimated
-    further with the muscles unless ``jaw_fixed``; with ``jaw_second_marker`` (a second point
-    on the mandible) the two markers' planar rigid motion drives the jaw's three degrees of
-    freedom, held as given; ``options`` are the method's (None: not
-    given; an option of the other method is an error); ``jaw_kinematics`` ("hinge" or
-    "glide") overrides the preset's.
+    Parameters
+    ----------
+    markers : marker file in the model's frame, at the preset's frame rate
+    face : face file or built-in face name
+    map_file : marker,node CSV (default: the closest nodes)
+    units : length unit of a marker file that carries none
+    scale_pair : "A,B": adapt the markers by per-axis scaling from two markers far apart
+    preset : the parameter preset; ``jaw_kinematics`` ("hinge" or "glide") overrides its
+    method, positive : "lsq" or "powell"; activity kept >= 0
+    controls : "speech", "emg7", "all" or comma-separated groups
+    chin_marker : a jaw recording: its vertical drop gives the jaw angle, ``jaw_lead`` frames
+        early, estimated further with the muscles unless ``jaw_fixed``
+    jaw_second_marker : a second point on the mandible: the two markers' planar rigid motion
+        drives the jaw's three degrees of freedom, held as given
+    noise : marker noise for the standard errors, mm (None: from the residuals)
+    dt : explicit Euler step of every evaluation, s (None: the preset's fast step)
+    options : the method's options (None: not given; an option of the other method is an
+        error)
+    progress : callable(done, total)
+
+    Returns
+    -------
+    Inversion
     """
     from .. import params as P
     from ..geometry.builder import load_face

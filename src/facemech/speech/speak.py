@@ -24,6 +24,8 @@ import numpy as np
 
 from ..errors import InputError
 
+__all__ = ["FILES", "LEAD_IN_S", "TAIL_S", "Spoken", "speak", "text_items"]
+
 #: s of silence put before and after synthesised speech, so that the face starts at rest and
 #: has the time to anticipate the first phone (muscle activity leads the sound by 100 ms and
 #: the lips take longer to get there) and to come back to rest after the last

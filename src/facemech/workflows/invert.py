@@ -1,0 +1,90 @@
+"""``facemech invert``: a marker file inverted, the results written, the figure drawn."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+
+__all__ = ["draw", "invert", "notes", "report"]
+
+
+def invert(markers: str | Path, output: str | Path, *, face: str | Path = "default",
+           map_file: str | Path | None = None, method: str = "lsq", positive: bool = True,
+           controls: str = "speech", chin_marker: str | None = None,
+           jaw_second_marker: str | None = None, jaw_fixed: bool = False, jaw_lead: int = 2,
+           noise: float | None = None, window: int | None = None, tol: float | None = None,
+           bend: float | None = None, smooth: float | None = None, effort: float | None = None,
+           max_evaluations: int | None = None, scale_pair: str | None = None,
+           preset: str = "anatomical", jaw_kinematics: str | None = None,
+           dt: float | None = None, units: str | None = None, figure: str | Path | None = None,
+           progress: Callable[[str, int, int], None] | None = None):
+    """Recover muscle activity and the jaw frame by frame from a marker file, write the
+    results file (re-animated face, controls, standard errors) and, if asked, the figure.
+
+    Parameters
+    ----------
+    markers : marker file in the model's frame, at the preset's frame rate
+    output : results file (.nc), written atomically
+    face, map_file : the face (file or built-in name) and a marker,node CSV (default: the
+        closest nodes)
+    method, positive, controls : "lsq" or "powell"; activity >= 0; "speech", "emg7", "all" or
+        comma-separated groups
+    chin_marker, jaw_second_marker, jaw_fixed, jaw_lead : a jaw recording (see
+        :func:`facemech.inverse.workflow.invert_markers`), lead in frames
+    noise : marker noise for the standard errors, mm (default: from the residuals)
+    window, tol, bend, smooth, effort, max_evaluations : the method's options (None: its
+        default; tol in mm, weights in mm per unit)
+    scale_pair : "A,B": adapt the markers by per-axis scaling from two markers far apart
+    preset, jaw_kinematics, dt : the parameters, "hinge" or "glide", the Euler step (s)
+    units : length unit of a marker file that carries none
+    figure : PNG of the inverted controls with +-2 SE bands and the per-frame error
+    progress : callable(stage, done, total)
+
+    Returns
+    -------
+    facemech.inverse.result.Inversion
+    """
+    from ..inverse.workflow import invert_markers
+    from ..io.results import file_hash
+
+    label = f"invert ({method})"
+    res = invert_markers(
+        markers, face=face, map_file=map_file, units=units, scale_pair=scale_pair,
+        preset=preset, jaw_kinematics=jaw_kinematics, method=method, positive=positive,
+        controls=controls, chin_marker=chin_marker, jaw_second_marker=jaw_second_marker,
+        jaw_fixed=jaw_fixed, jaw_lead=jaw_lead, noise=noise, dt=dt,
+        options=dict(window=window, tol=tol, bend=bend, smooth=smooth, effort=effort,
+                     max_evaluations=max_evaluations),
+        progress=None if progress is None else (lambda d, n: progress(label, d, n)))
+    res.write(output, inputs={"markers": file_hash(markers)})
+    if figure is not None:
+        draw(res, figure, title=f"{Path(markers).name}: inverted controls ({res.method.name})")
+    return res
+
+
+def draw(res, path: str | Path, *, title: str = "") -> Path:
+    """PNG of an inversion's controls with +-2 SE bands and its per-frame error."""
+    from ..viz.plots import inversion_figure
+
+    return inversion_figure(path, res.time, res.controls, res.control_names,
+                            rms_error=res.rms_error, se=res.control_se,
+                            identifiable=res.identifiable, title=title)
+
+
+def report(res, output: str | Path, figure: str | Path | None = None) -> list[str]:
+    """What ``facemech invert`` prints: the per-frame error, the controls the markers
+    determine, and the figure."""
+    s = res.error_summary()
+    seen = [n for n, ok in zip(res.control_names, res.identifiable, strict=True) if ok]
+    lines = [f"{len(res.time)} frames inverted ({res.method.name}) in {res.wall_seconds:.1f} s;"
+             f" per-frame error (RMS over {len(res.marker_names)} markers): median "
+             f"{s['median_mm']:.3f} mm, max {s['max_mm']:.3f} mm -> {output}",
+             f"  determined by the markers (noise {res.noise_mm:.3f} mm, {res.noise_how}): "
+             f"{', '.join(seen) or 'none'}"]
+    return lines + ([] if figure is None else [f"figure -> {figure}"])
+
+
+def notes(res) -> list[str]:
+    """The inversion's notes and warnings, for stderr ("note: ...", "warning: ...")."""
+    return ([f"note: {n}" for n in res.notes]
+            + [f"warning: {w}" for w in res.error_summary()["warnings"]])

@@ -1,0 +1,121 @@
+"""``facemech regions``: independent markers and eigenregions of the user's marker files
+(Lucero & Munhall 2008), with the parsing of its utterance ranges and lengths."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError
+
+__all__ = ["parse_length", "parse_ranges", "read_utterances", "regions", "report"]
+
+
+def parse_ranges(text: str | None, n: int, field: str) -> list[int] | None:
+    """Utterance numbers such as ``"1-30"`` or ``"1,3,5-7"`` (1-based, inclusive) as 0-based
+    indices below ``n``; None for None. ``field`` names the option in errors."""
+    if text is None:
+        return None
+    out: list[int] = []
+    try:
+        for part in text.split(","):
+            a, _, b = part.strip().partition("-")
+            lo, hi = int(a), int(b or a)
+            out.extend(range(lo - 1, hi))
+    except ValueError:
+        raise InputError("expected ranges such as 1-30 or 1,3,5-7", field=field) from None
+    if any(i < 0 or i >= n for i in out):
+        raise InputError(f"utterance numbers must lie in 1..{n}", field=field)
+    return out
+
+
+def parse_length(text: str | None, field: str) -> float | None:
+    """A length such as ``"0.5mm"``, ``"0.05cm"`` or ``"0.0005"`` (metres) in metres; None for
+    None or ``"auto"``. ``field`` names the option in errors."""
+    if text is None or text == "auto":
+        return None
+    from ..units import LENGTH_TO_M
+
+    t = text.strip().lower()
+    for unit in sorted(LENGTH_TO_M, key=len, reverse=True):
+        if t.endswith(unit):
+            try:
+                return float(t[: -len(unit)]) * LENGTH_TO_M[unit]
+            except ValueError:
+                break
+    try:
+        return float(t)
+    except ValueError:
+        raise InputError(f"not a length: {text!r} (e.g. 0.5mm)", field=field) from None
+
+
+def read_utterances(files: Sequence[str | Path], *, neutral: str | Path = "first",
+                    units: str | None = None):
+    """Marker files, one utterance each, with the same markers.
+
+    Parameters
+    ----------
+    files : marker files (any format :func:`facemech.read_markers` reads)
+    neutral : "first" (each utterance's first frame) or a marker file whose first frame is the
+        neutral
+    units : length unit of files that carry none
+
+    Returns
+    -------
+    (utterances, names, neutral, rate) : (frames, markers, 3) arrays in metres, the marker
+        names, "first" or a (markers, 3) array in metres, and the first file's rate (Hz)
+    """
+    from ..io.markers import read_markers
+
+    sets = [read_markers(f, units=units) for f in files]
+    names = sets[0].names
+    for f, ms in zip(files, sets, strict=True):
+        if ms.names != names:
+            missing = sorted(set(names) ^ set(ms.names))
+            raise InputError("markers differ from the first file's", source=str(f),
+                             field=missing[0] if missing else "order")
+    base: str | np.ndarray = "first"
+    if str(neutral) != "first":
+        base = read_markers(Path(neutral), units=units).select(names).positions[0]
+    return [ms.positions for ms in sets], names, base, sets[0].rate
+
+
+def regions(files: Sequence[str | Path], output: str | Path, *, k: int | None = None,
+            eps: str | float | None = None, neutral: str | Path = "first",
+            train: str | None = None, test: str | None = None, method: str = "qrcp",
+            units: str | None = None):
+    """Fit, draw and write the region analysis of marker files into the folder ``output``.
+
+    Parameters
+    ----------
+    files : marker files, one utterance each (see :func:`read_utterances`)
+    output : folder for ``summary.json`` and the PNG figures
+    k : independent markers (default: min(epsilon-rank, 10))
+    eps : data precision: metres, or a length such as "0.5mm" (default: the noise floor)
+    neutral : "first" or a marker file whose first frame is the neutral
+    train, test : utterances to fit and to hold out, e.g. "1-30" and "31-40" (1-based)
+    method : "qrcp" or "strong"
+    units : length unit of files that carry none
+
+    Returns
+    -------
+    facemech.analysis.lucero2008.RegionAnalysis, with its figures
+    """
+    from ..analysis.lucero2008 import analyse, draw, write
+
+    utts, names, base, rate = read_utterances(files, neutral=neutral, units=units)
+    res = analyse(utts, names, k=k, method=method, neutral=base, rate=rate,
+                  eps=eps if isinstance(eps, float) else parse_length(eps, "eps"),
+                  train=parse_ranges(train, len(utts), "train"),
+                  test=parse_ranges(test, len(utts), "test"))
+    res = draw(res, output)
+    write(res, Path(output) / "summary.json")
+    return res
+
+
+def report(res, output: str | Path) -> list[str]:
+    """What ``facemech regions`` prints."""
+    return [f"epsilon {res.eps_mm:.3f} mm, rank {res.rank} of {res.markers}; k = {res.k}",
+            "independent markers: " + ", ".join(res.selected), f"summary and figures -> {output}/"]

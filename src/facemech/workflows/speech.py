@@ -1,0 +1,89 @@
+"""``facemech speak``, ``describe`` and ``stimuli``: a talking face from text or a recording,
+the stimulus parameters of a result, and the stimuli of a design table."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+__all__ = ["describe_file", "describe_report", "describe_text", "render_options", "speak",
+           "speak_report", "stimuli", "stimuli_report"]
+
+
+def render_options(view: str = "frontal+profile", size: str = "1280x720",
+                   background: str = "#2a2c33", aa: int = 2):
+    """The movies' :class:`~facemech.viz.video.RenderOptions` from the commands' settings: a
+    view name, ``"WIDTHxHEIGHT"`` in pixels, a background colour, anti-aliasing samples per
+    pixel along each axis (1-4)."""
+    from ..viz.camera import parse_size
+    from ..viz.video import RenderOptions
+
+    return RenderOptions(view=view, size=parse_size(size), background=background,
+                         supersample=aa)
+
+
+def speak(output: str | Path, text: str | None = None, *, video: bool = True,
+          view: str = "frontal+profile", size: str = "1280x720", background: str = "#2a2c33",
+          aa: int = 2, **options):
+    """Make the face say ``text``, or speak in sync with a recorded voice, into the folder
+    ``output``: :func:`facemech.speech.speak.speak` (its keywords: ``audio``, ``textgrid``,
+    ``voice``, ``rate_wpm``, ``word_tier``, ``phone_tier``, ``face``, ``preset``, ``strength``,
+    ``progress``), the MP4 with ``video`` (:func:`render_options` of ``view``, ``size``,
+    ``background``, ``aa``). Returns its :class:`~facemech.speech.speak.Spoken`."""
+    from ..speech.speak import speak as run
+
+    opts = render_options(view, size, background, aa) if video else None
+    return run(output, text, video=video, render_options=opts, **options)
+
+
+def speak_report(res, output: str | Path) -> list[str]:
+    """What ``facemech speak`` prints: the phones and words, the duration and the files.
+
+    ``res`` is the :class:`~facemech.speech.speak.Spoken` that :func:`speak` returns.
+    """
+    words = " ".join(w.label for w in res.alignment.words)
+    return [f"{len(res.alignment.phones)} phones ({words}), {res.alignment.duration:.2f} s "
+            f"-> {output}/", *(f"  {name}: {path}" for name, path in res.files.items())]
+
+
+def describe_file(result: str | Path):
+    """Stimulus parameters of a results file (.nc): displacement and speed of lips, jaw and
+    mouth corners, lip aperture and mouth width, the audio-visual offset, settings and input
+    hashes (:class:`facemech.analysis.describe.Description`)."""
+    from ..analysis.describe import describe
+    from ..io.results import read_results
+
+    return describe(read_results(result), source=str(result))
+
+
+def describe_report(d, *, as_json: bool = False, series: bool = False) -> str:
+    """What ``facemech describe`` prints: a table, or JSON (``series``: with the per-frame lip
+    aperture and mouth width)."""
+    return json.dumps(d.to_dict(series=series), indent=2) if as_json else d.table()
+
+
+def describe_text(result: str | Path, *, as_json: bool = False, series: bool = False) -> str:
+    """What ``facemech describe`` prints for a results file (:func:`describe_file`,
+    :func:`describe_report`)."""
+    return describe_report(describe_file(result), as_json=as_json, series=series)
+
+
+def stimuli(design: str | Path, output: str | Path, *, video: bool = True,
+            view: str = "frontal", size: str = "1280x720", background: str = "#2a2c33",
+            aa: int = 2, progress=None):
+    """Make the stimuli of a design table in the folder ``output``
+    (:func:`facemech.speech.design.run_design`); text rows are spoken by :func:`speak` into
+    ``output/items``; the movies' :func:`render_options` are ``view``, ``size``, ``background``
+    and ``aa``; ``progress`` is callable(stage, done, total). Returns the
+    :class:`~facemech.speech.design.DesignReport`."""
+    from ..speech.design import run_design
+    from ..speech.speak import text_items
+
+    return run_design(design, output, text_items(Path(output) / "items"),
+                      options=render_options(view, size, background, aa), video=video,
+                      progress=progress)
+
+
+def stimuli_report(rep) -> tuple[list[str], list[str]]:
+    """What ``facemech stimuli`` prints: (the summary lines, the failed rows' error lines)."""
+    return [rep.summary()], [f"error: {e.one_line()}" for e in rep.failed]
