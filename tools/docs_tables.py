@@ -405,9 +405,11 @@ def select(only: list[str] | None = None, fast: bool = False) -> list[Table]:
 
 
 def generate(tables: list[Table], jobs: int = 2,
-             runner: Callable[[Run], dict] = run_command) -> dict[str, str]:
-    """Run the commands the tables need (each once, ``jobs`` at a time) and format the tables:
-    name -> generated block. Prints a line per command and per table with elapsed times."""
+             runner: Callable[[Run], dict] | None = None) -> dict[str, str]:
+    """Run the commands the tables need (each once, ``jobs`` at a time; ``runner`` defaults to
+    :func:`run_command`) and format the tables: name -> generated block. Prints a line per
+    command and per table with elapsed times."""
+    runner = runner or run_command
     t0 = time.perf_counter()
     needed = list(dict.fromkeys(r for t in tables for r in t.runs))
     results: dict[str, dict] = {}
