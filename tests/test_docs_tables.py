@@ -90,6 +90,21 @@ def test_check_lists_a_stale_table_and_make_docs_rewrites_it(tmp_path, monkeypat
     assert dt.main(["--check"]) == 0
 
 
+def test_cache_runs_a_command_once_and_reuses_its_json(tmp_path, monkeypatch, capsys):
+    monkeypatch.setattr(dt, "RUNS", {"r": dt.Run(("facemech", "x"))})
+    calls = []
+
+    def fake_run(run):
+        calls.append(run)
+        return {"v": [1.5, None]}
+
+    runner = dt.cached(fake_run, tmp_path / "cache")
+    assert runner(dt.RUNS["r"]) == {"v": [1.5, None]}
+    assert runner(dt.RUNS["r"]) == {"v": [1.5, None]}
+    assert len(calls) == 1 and [p.name for p in (tmp_path / "cache").iterdir()] == ["r.json"]
+    assert "run r: reused" in capsys.readouterr().err
+
+
 def test_a_missing_marker_is_an_error(tmp_path, monkeypatch):
     (tmp_path / "doc.md").write_text("no tables here\n")
     monkeypatch.setattr(dt, "ROOT", tmp_path)
