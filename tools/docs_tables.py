@@ -315,9 +315,9 @@ def visemes(out: dict) -> str:
         dom = "/".join(_num(x) for x in (v.lips_dominance, v.jaw_dominance,
                                          v.anticipatory_rate, v.carryover_rate))
         rows.append([cls, act, jaw_cell, dom,
-                     f"{m['lip_gap_mm']:.2f}", f"{m['upper_forward_mm']:.2f}",
-                     f"{m['lower_forward_mm']:.2f}", f"{m['width_change_mm']:+.2f}",
-                     f"{m['incisor_drop_mm']:.1f}"])
+                     fixed(m["lip_gap_mm"], 2), fixed(m["upper_forward_mm"], 2),
+                     fixed(m["lower_forward_mm"], 2), f"{m['width_change_mm']:+.2f}",
+                     fixed(m["incisor_drop_mm"], 1)])
     return table(["class", "activity", "jaw °", "dominance", "gap mm", "upper fwd",
                   "lower fwd", "width mm", "incisor mm"], rows)
 
@@ -330,11 +330,19 @@ LAG_ROWS = (("_ u: _ (lips_forward)", "_ u: _, both lips forward", "{:.1f} mm fo
             ("u: m u: (lip_gap)", "u: m u: (m of 160 ms)", "gap {:.2f} mm"))
 
 
+#: a closure found further than this from the phone's centre (ms) is the rest around the
+#: utterance (the lips meet at rest), not the phone's own: the phone never closed the lips
+CLOSURE_REACH_MS = 200.0
+
+
 def _lag_cell(r: dict, fmt: str) -> str:
     lag = r["visible_lag_ms"]
+    size = fmt.format(r["at_acoustic_centre_mm"]) + " at the centre"
     if lag is None or (isinstance(lag, float) and math.isnan(lag)):
-        return "never closes"
-    return f"{lag:+.0f} ms (" + fmt.format(r["at_acoustic_centre_mm"]) + " at the centre)"
+        return f"never closes ({size})"
+    if fmt.startswith("gap") and abs(lag) > CLOSURE_REACH_MS:
+        return f"never closes ({size}; the nearest closure is the rest, {lag:+.0f} ms)"
+    return f"{lag:+.0f} ms ({size})"
 
 
 def visemes_lag(out: dict) -> str:
