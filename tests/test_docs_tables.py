@@ -142,9 +142,10 @@ def generated():
 
 
 @pytest.mark.parametrize("table", dt.TABLES, ids=lambda t: t.name)
-def test_docs_table_matches_its_command(table, generated):
+def test_docs_table_matches_its_command(table, request):
     if table.slow and not ALL:
         pytest.skip(f"{table.name}: slow commands; FACEMECH_DOCS_ALL=1 or make docs-check")
+    generated = request.getfixturevalue("generated")
     text = (ROOT / table.doc).read_text(encoding="utf-8")
     assert dt.find_tables(text)[table.name].rstrip("\n") == generated[table.name], (
         f"{table.doc}: table {table.name} differs from its command's output; run `make docs`")
