@@ -282,7 +282,7 @@ def dynamics(out: dict) -> str:
     rows = []
     for name, a in coarse.items():
         b = fine[name]
-        rows.append([name,
+        rows.append([name.replace("_", " "),
                      f"{a['rise_ms_at_0.3']:.0f} / {b['rise_ms_at_0.3']:.0f} ms",
                      f"{a['rise_ms_at_1.0']:.0f} / {b['rise_ms_at_1.0']:.0f} ms",
                      f"{a['final_mm_at_1.0']:.1f}", f"{a['pulse_peak_mm']:.1f}",
