@@ -32,7 +32,8 @@ test: $(STAMP) chromium lint
 	MPLBACKEND=Agg $(BIN)/python -m pytest -q
 
 # the numeric tables of docs/*.md, regenerated in place from the commands that produce them
-# (tools/docs_tables.py; about 15 minutes on 2 cores); docs-check only compares (exit 1 if stale)
+# (tools/docs_tables.py; 15-40 minutes on 2 shared cores, Powell's Experiment 1 and
+# benchmarks/realism.py the longest); docs-check only compares (exit 1 if a table is stale)
 docs: $(STAMP)
 	MPLBACKEND=Agg $(BIN)/python tools/docs_tables.py
 
