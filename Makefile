@@ -5,7 +5,7 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 SUDO   := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
-.PHONY: demo test lint bench clean chromium
+.PHONY: demo test lint bench clean chromium docs docs-check
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -26,10 +26,19 @@ demo: $(STAMP)
 	$(BIN)/facemech view demo-output/result.nc -o demo-output/view.html
 
 lint: $(STAMP)
-	$(BIN)/ruff check src tests benchmarks
+	$(BIN)/ruff check src tests benchmarks tools
 
 test: $(STAMP) chromium lint
 	MPLBACKEND=Agg $(BIN)/python -m pytest -q
+
+# the numeric tables of docs/*.md, regenerated in place from the commands that produce them
+# (tools/docs_tables.py; 15-40 minutes on 2 shared cores, Powell's Experiment 1 and
+# benchmarks/realism.py the longest); docs-check only compares (exit 1 if a table is stale)
+docs: $(STAMP)
+	MPLBACKEND=Agg $(BIN)/python tools/docs_tables.py
+
+docs-check: $(STAMP)
+	MPLBACKEND=Agg $(BIN)/python tools/docs_tables.py --check
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/forward.py
