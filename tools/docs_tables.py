@@ -53,7 +53,8 @@ class Run:
 
     ``argv`` starts with ``facemech`` (the command line, run as ``python -m facemech``) or a
     script path relative to the repository; ``{json}`` in it is replaced by a file the command
-    writes, otherwise its stdout is parsed as JSON.
+    writes, ``{dir}`` by a folder it writes (its ``summary.json`` is read), otherwise its stdout
+    is parsed as JSON.
     """
 
     argv: tuple[str, ...]
@@ -63,7 +64,7 @@ class Run:
         """The command as a user would type it."""
         words = [("python " + a if a.endswith(".py") else a) if i == 0 else a
                  for i, a in enumerate(self.argv)]
-        return " ".join(w.replace("{json}", "OUT.json") for w in words)
+        return " ".join(w.replace("{json}", "OUT.json").replace("{dir}", "OUT") for w in words)
 
 
 E1 = ("facemech", "experiment", "pitermann2001-synthetic")
@@ -74,13 +75,17 @@ E3 = ("facemech", "experiment", "pitermann2001-crosstalker")
 RUNS: dict[str, Run] = {  # the longest first: they start first
     "realism": Run(("benchmarks/realism.py",)),
     "e3-anatomical": Run((*E3, "--preset", "anatomical", "--frames", "120", "-o", "{json}")),
-    "e1-powell": Run((*E1, "--preset", "lucero1999", "--method", "powell", "-o", "{json}")),
-    "e1-calibrated": Run((*E1, "--preset", "calibrated", "--method", "lsq", "-o", "{json}")),
+    "e1-powell": Run((*E1, "--preset", "lucero1999", "--method", "powell",
+                          "--no-figures", "-o", "{dir}")),
+    "e1-calibrated": Run((*E1, "--preset", "calibrated", "--method", "lsq",
+                          "--no-figures", "-o", "{dir}")),
     "e3-calibrated": Run((*E3, "--preset", "calibrated", "--frames", "120", "-o", "{json}")),
-    "e1-anatomical": Run((*E1, "--preset", "anatomical", "--method", "lsq", "-o", "{json}")),
+    "e1-anatomical": Run((*E1, "--preset", "anatomical", "--method", "lsq",
+                          "--no-figures", "-o", "{dir}")),
     "visemes": Run(("benchmarks/visemes.py",)),
     "e3-lucero1999": Run((*E3, "--preset", "lucero1999", "--frames", "120", "-o", "{json}")),
-    "e1-lucero1999": Run((*E1, "--preset", "lucero1999", "--method", "lsq", "-o", "{json}")),
+    "e1-lucero1999": Run((*E1, "--preset", "lucero1999", "--method", "lsq",
+                          "--no-figures", "-o", "{dir}")),
 }
 
 
@@ -115,7 +120,9 @@ def run_command(run: Run) -> dict:
     """Run one command and return its JSON output (a RuntimeError naming it if it fails)."""
     with tempfile.TemporaryDirectory(prefix="facemech-docs-") as tmp:
         out = Path(tmp) / "out.json"
-        argv = [str(out) if a == "{json}" else a for a in run.argv]
+        folder = Path(tmp) / "out"
+        argv = [str(out) if a == "{json}" else str(folder) if a == "{dir}" else a
+                for a in run.argv]
         if argv[0] == "facemech":
             argv = [sys.executable, "-m", "facemech", *argv[1:]]
         else:
@@ -124,6 +131,8 @@ def run_command(run: Run) -> dict:
         if proc.returncode != 0:
             raise RuntimeError(f"`{run.shown}` failed ({proc.returncode}):\n"
                                f"{proc.stderr[-2000:]}")
+        if "{dir}" in run.argv:  # a command that writes a folder: its summary.json
+            return json.loads((folder / "summary.json").read_text())
         return json.loads(out.read_text() if "{json}" in run.argv else proc.stdout)
 
 
