@@ -121,7 +121,7 @@ def test_a_results_file_holding_nan_is_refused_on_reading(tmp_path):
     pos[1, 2, 0] = np.nan
     _tiny_results(tmp_path / "nan.nc", pos)
     with pytest.raises(InputError, match=r"nan\.nc: field 'positions': non-finite value at "
-                                         r"index \(1, 2, 0\)"):
+                                         r"frame 1, node 2, axis 0"):
         read_results(tmp_path / "nan.nc")
 
 
@@ -326,3 +326,25 @@ def test_collinear_head_markers_are_refused_before_anything_is_written():
     pos[:, 2] = [0.02, 0.03, 0.09]
     fixed = head_correct(MarkerSet(pos, ("H1", "H2", "H3", "UL"), 60.0), ["H1", "H2", "H3"])
     np.testing.assert_allclose(fixed.markers.positions[:, 3], pos[:, 3], atol=1e-12)
+
+
+@pytest.mark.parametrize("command", [
+    ("markers", "convert", "{in}", "-o", "{in}"),
+    ("markers", "resample", "{in}", "-o", "{in}"),
+    ("markers", "fill-gaps", "{in}", "-o", "{in}"),
+    ("emg", "process", "{emg}", "-o", "{emg}"),
+    ("simulate", "--activity", "{act}", "-o", "{act}"),
+])
+def test_a_command_never_overwrites_its_input(monkeypatch, capsys, tmp_path, command):
+    (tmp_path / "m.trc").write_text(_trc(labels=("A", "B")).replace("1.0\t2.0\t3.0\n",
+                                                                     "1.0\t2.0\t3.0\n", 1))
+    t = np.arange(600) / 1000.0
+    (tmp_path / "e.csv").write_text("time,OOS\n" + "\n".join(f"{x:.4f},{np.sin(50 * x):.4f}"
+                                                             for x in t) + "\n")
+    (tmp_path / "a.csv").write_text("time,OOS\n0,0\n0.5,1\n")
+    files = {"{in}": tmp_path / "m.trc", "{emg}": tmp_path / "e.csv", "{act}": tmp_path / "a.csv"}
+    before = _snapshot(tmp_path)
+    code, _, err = run_cli(monkeypatch, capsys, *[files.get(a, a) for a in command])
+    assert code == 2 and len(err.strip().splitlines()) == 1, err
+    assert "refusing to overwrite an input" in err and "field '-o'" in err
+    assert _snapshot(tmp_path) == before

@@ -410,16 +410,17 @@ def calibrate(gestures: Annotated[list[str] | None, typer.Argument(
 
 
 def main() -> None:
-    """Entry point: run the app; a FacemechError becomes one line on stderr and exit 2."""
+    """Entry point: run the app; a FacemechError becomes one line on stderr and exit 2; SIGINT
+    and SIGTERM remove temporary files and exit 130 and 143 (:mod:`facemech.interrupts`)."""
+    restore = importlib.import_module("facemech.interrupts").install()
     try:
         app()
     except FacemechError as exc:
         err.print(f"facemech: error: {exc.one_line()}", highlight=False, markup=False,
                   soft_wrap=True)
         sys.exit(2)
-    except KeyboardInterrupt:
-        err.print("facemech: interrupted")
-        sys.exit(130)
+    finally:
+        restore()
 
 
 if __name__ == "__main__":

@@ -30,7 +30,17 @@ def handle(signum: int, frame=None) -> None:
         os._exit(EXIT_STATUS.get(signum, 128 + int(signum)))
 
 
-def install() -> None:
-    """Install :func:`handle` for SIGINT and SIGTERM (main thread only)."""
-    for sig in EXIT_STATUS:
-        signal.signal(sig, handle)
+def install():
+    """Install :func:`handle` for SIGINT and SIGTERM; return a function that restores the
+    handlers found. Outside the main thread (where signals cannot be handled) nothing changes."""
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        return lambda: None
+    previous = {sig: signal.signal(sig, handle) for sig in EXIT_STATUS}
+
+    def restore() -> None:
+        for sig, old in previous.items():
+            signal.signal(sig, old)
+
+    return restore

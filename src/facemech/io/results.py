@@ -182,9 +182,10 @@ def read_results(path: str | Path):
     for name in FINITE_VARIABLES:
         if name in ds and not np.all(np.isfinite(ds[name].values)):
             bad = np.argwhere(~np.isfinite(ds[name].values))[0]
-            raise InputError(f"non-finite value at index {tuple(int(i) for i in bad)}: a results "
-                             "file holds finite numbers only (was it edited by hand?)",
-                             source=str(path), field=name)
+            where = ", ".join(f"{'frame' if d == 'time' else d} {int(i)}"
+                              for d, i in zip(ds[name].dims, bad, strict=True))
+            raise InputError(f"non-finite value at {where}: a results file holds finite numbers "
+                             "only (was it edited by hand?)", source=str(path), field=name)
     return with_jaw_shift(ds)
 
 

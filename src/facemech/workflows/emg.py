@@ -94,6 +94,9 @@ def process_emg_file(emg: str | Path, output: str | Path, *, rate: float | None 
     from .outcome import Written
 
     rate = frame_rate(rate)
+    from ..io.atomic import check_output
+
+    check_output(output, [emg, calibration], field="-o")
     res = emg_activity(emg, rate=rate, baseline=baseline, calibration=calibration,
                        calibration_baseline=calibration_baseline)
     write_activity(output, res.time, res.activity, res.channels)

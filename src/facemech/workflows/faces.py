@@ -6,6 +6,9 @@ import json
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+
+from ..plausibility import check_face_size
 from ..progress import StagedProgress
 from .outcome import Written
 
@@ -33,12 +36,15 @@ def build_face_file(surface: str | Path, landmarks: str | Path, output: str | Pa
     """
     from ..geometry.builder import build_face, tissue_options
     from ..geometry.surface_io import read_landmarks, read_surface_with_appearance
+    from ..io.atomic import check_output
 
     surface = Path(surface)
+    check_output(output, [surface, landmarks], field="-o")
     opts = tissue_options(tissue)
     if progress is not None:
         progress("build", 0, 1)
     v, f, look = read_surface_with_appearance(surface, units=units)
+    check_face_size(float(np.ptp(v, axis=0).max()), unit=units, source=str(surface))
     lm = read_landmarks(landmarks, units=units)
     model = build_face(v, f, lm, name=name or surface.stem, source=str(surface), options=opts,
                        appearance=look)

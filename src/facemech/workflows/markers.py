@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
+from ..io.atomic import check_output
 from .outcome import Written
 
 
@@ -109,6 +110,7 @@ def convert_markers(source: str | Path, target: str | Path | None, *, units: str
 
     if target is None:
         raise InputError("give the output file (-o)", field="output")
+    check_output(target, [source], field="-o")
     ms = read_markers(source, units=units)
     write_markers(target, ms, units=out_units)
     return Written(Path(target), ms, f"{ms.n_markers} markers, {ms.n_frames} frames -> {target}")
@@ -130,6 +132,7 @@ def head_correct_file(source: str | Path, output: str | Path, head: str | Sequen
     from ..io.markers import read_markers, write_markers
     from ..kinematics.rigid import head_correct
 
+    check_output(output, [source], field="-o")
     ms = read_markers(source, units=units)
     res = head_correct(ms, names_of(head), reference=reference)
     write_markers(output, res.markers)
@@ -157,6 +160,7 @@ def resample_file(source: str | Path, output: str | Path, *, rate: float | None 
     from ..kinematics.resample import resample
     from .emg import frame_rate
 
+    check_output(output, [source], field="-o")
     ms = read_markers(source, units=units)
     res = resample(ms, frame_rate(rate))
     write_markers(output, res)
@@ -172,6 +176,7 @@ def frame_file(source: str | Path, output: str | Path, *, right: str, left: str,
     from ..io.markers import read_markers, write_markers
     from ..kinematics.frames import to_anatomical_frame
 
+    check_output(output, [source], field="-o")
     ms = read_markers(source, units=units)
     res = to_anatomical_frame(ms, right=right, left=left, front=front, origin=origin,
                               reference=reference)
@@ -193,6 +198,7 @@ def fill_gaps_file(source: str | Path, output: str | Path, *, max_gap: float = 0
     from ..io.markers import read_markers, write_markers
     from ..kinematics.gaps import fill_gaps
 
+    check_output(output, [source], field="-o")
     ms = read_markers(source, units=units)
     res, done, left = fill_gaps(ms, int(round(max_gap * ms.rate)))
     write_markers(output, res)

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
+from ..plausibility import check_jaw_angles
 from ..progress import StagedProgress, stage
 
 
@@ -94,6 +95,8 @@ def jaw_from_csv(path: str | Path, times: np.ndarray) -> np.ndarray:
                          field="jaw_angle")
     if not np.all(np.isfinite(a)):
         raise InputError("empty or NaN values", source=str(path), field="jaw_angle")
+    check_jaw_angles(a, source=str(path),
+                     field="jaw_angle" if "jaw_angle" in cols else "jaw_angle_deg")
     if times[0] < t[0] - 1e-6 or times[-1] > t[-1] + 1e-6:
         raise InputError("the jaw series does not cover the activity's time span",
                          source=str(path), field="time")
@@ -227,6 +230,15 @@ def simulate_files(output: str | Path, controls: Controls, jaw: JawSource = JawS
     prm = get_preset(preset)
     if jaw_kinematics is not None:
         prm = prm.with_(jaw_kinematics=jaw_kinematics)
+    from ..io.atomic import check_output
+
+    movie_path = None if movie is None else (movie.path if hasattr(movie, "path") else movie[0])
+    given = [controls.activity, controls.emg, controls.emg_calibration, jaw.angles, jaw.markers,
+             face if Path(str(face)).suffix else None]
+    check_output(output, given, field="-o")
+    if movie_path is not None:
+        check_output(movie_path, [*given, output], folder=Path(movie_path).suffix == "",
+                     field="video")
     times, act, inputs = read_controls(controls, prm.frame_rate)  # before the slow face
     model = load_face(face, tissue=prm.tissue)
     jaw_angles, jaw_inputs = jaw_series(jaw, model, prm, times)
