@@ -254,11 +254,6 @@ def _o(help: str, *names: str):
     return typer.Option(*names, help=help)
 
 
-def _wf(name: str):  # facemech.workflows.NAME, imported when its command runs: a light CLI
-    from importlib import import_module
-    return import_module(f"{__package__}.workflows.{name}")
-
-
 def _staged(run, **options):
     with _staged_progress() as progress:
         return run(**options, progress=progress)
@@ -290,7 +285,7 @@ def speak(text: Annotated[str | None, typer.Argument(help="what to say (or --aud
           view: ViewOpt = "frontal+profile", size: SizeOpt = "1280x720",
           background: BackgroundOpt = "#2a2c33", aa: AAOpt = 2):
     """Make the face say TEXT (eSpeak NG), or speak in sync with a recorded voice (--audio)."""
-    _say(_wf("speech").speak_report(_staged(_wf("speech").speak, **locals()), output))
+    _say(wf.speech.speak_report(_staged(wf.speech.speak, **locals()), output))
 
 
 @app.command()
@@ -298,7 +293,7 @@ def describe(result: Annotated[Path, typer.Argument(help="results file (.nc)")],
              as_json: Annotated[bool, _o("print JSON", "--json")] = False,
              series: Annotated[bool, _o("with --json: the per-frame mouth measures")] = False):
     """Stimulus parameters of a result: lips, jaw, mouth corners, AV offset, settings."""
-    text = _wf("speech").describe_text(result, as_json=as_json, series=series)
+    text = wf.speech.describe_text(result, as_json=as_json, series=series)
     print(text) if as_json else out.print(text, markup=False, highlight=False)
 
 
@@ -307,7 +302,7 @@ def stimuli(design: Annotated[Path, typer.Argument(help="design table (.csv or .
             output: OutDirOpt, video: VideoOpt = True, view: ViewOpt = "frontal",
             size: SizeOpt = "1280x720", background: BackgroundOpt = "#2a2c33", aa: AAOpt = 2):
     """Make the stimuli of a design table (docs/stimuli.md) as results, WAV, MP4, manifest."""
-    made, failed = _wf("speech").stimuli_report(_staged(_wf("speech").stimuli, **locals()))
+    made, failed = wf.speech.stimuli_report(_staged(wf.speech.stimuli, **locals()))
     _say(failed, True, markup=False, highlight=False, soft_wrap=True)
     _say(made)
     raise typer.Exit(2 if failed else 0)
@@ -323,7 +318,7 @@ def regions(files: Annotated[list[Path], typer.Argument(help="marker files, one 
             test: Annotated[str | None, _o("held-out utterances, e.g. 31-40")] = None,
             method: Annotated[str, _o("qrcp or strong")] = "qrcp"):
     """Independent markers and eigenregions by QR with column pivoting (Lucero & Munhall 2008)."""
-    _say(_wf("regions").report(_wf("regions").regions(**locals()), output))
+    _say(wf.regions.report(wf.regions.regions(**locals()), output))
 
 
 @experiment_app.command("lucero2008")
@@ -332,8 +327,8 @@ def experiment_lucero2008(
         utterances: Annotated[int, _o("utterances in the corpus")] = 40,
         k: Annotated[int, _o("markers of the basis", "-k")] = 10, video: VideoOpt = True):
     """Lucero & Munhall (2008) on the embedded corpus, our numbers beside the paper's."""
-    res = _staged(_wf("experiments").lucero2008, **locals())
-    _say(_wf("experiments").lucero2008_report(res, output))
+    res = _staged(wf.experiments.lucero2008, **locals())
+    _say(wf.experiments.lucero2008_report(res, output))
 
 
 @app.command()
@@ -357,9 +352,9 @@ def invert(markers: Annotated[Path, _o("marker file in the model's frame and fra
            dt: DtOpt = None, units: UnitsOpt = None,
            figure: Annotated[Path | None, _o("PNG of the controls (+-2 SE) and error")] = None):
     """Recover muscle activity and the jaw frame by frame from markers; re-animate the face."""
-    res = _staged(_wf("invert").invert, **locals())
-    _say(_wf("invert").report(res, output, figure))
-    _say(_wf("invert").notes(res), True)
+    res = _staged(wf.invert.invert, **locals())
+    _say(wf.invert.report(res, output, figure))
+    _say(wf.invert.notes(res), True)
 
 
 @app.command()
@@ -368,9 +363,9 @@ def compare(a: Annotated[Path, typer.Argument(help="results or marker file: the 
             markers: Annotated[str | None, _o("comma-separated (default: all shared)")] = None,
             as_json: Annotated[bool, _o("print JSON", "--json")] = False, units: UnitsOpt = None):
     """3-D statistics, per-axis correlations and per-frame errors (RMS, mm) of A against B."""
-    res = _wf("compare").compare_files(a, b, markers=markers, units=units)
+    res = wf.compare.compare_files(a, b, markers=markers, units=units)
     _say([f"warning: {w}" for w in res.warnings], True, markup=False, highlight=False)
-    (print if as_json else out.print)("\n".join(_wf("compare").report(res, as_json=as_json)))
+    (print if as_json else out.print)("\n".join(wf.compare.report(res, as_json=as_json)))
 
 
 @experiment_app.command("pitermann2001-synthetic")
@@ -380,8 +375,8 @@ def experiment_pitermann_synthetic(
         preset: PresetOpt = "anatomical", figures: Annotated[bool, _o("with -o: PNGs")] = True,
         output: Annotated[Path | None, _o("folder: summary.json, PNGs", "-o", "--output")] = None):
     """Pitermann & Munhall (2001) Experiment 1: Tables I, II and the top of Table III."""
-    res = _staged(_wf("experiments").synthetic, **locals())
-    _say(_wf("experiments").synthetic_report(res, output, figures=figures))
+    res = _staged(wf.experiments.synthetic, **locals())
+    _say(wf.experiments.synthetic_report(res, output, figures=figures))
 
 
 @experiment_app.command("pitermann2001-crosstalker")
@@ -390,8 +385,8 @@ def experiment_pitermann_crosstalker(
         preset: PresetOpt = "anatomical",
         output: Annotated[Path | None, _o("JSON file of the table", "-o", "--output")] = None):
     """Experiment 3 analogue: another talker inverted on the default face (Table VI)."""
-    res = _staged(_wf("experiments").crosstalker, **locals())
-    _say(_wf("experiments").crosstalker_report(res, output))
+    res = _staged(wf.experiments.crosstalker, **locals())
+    _say(wf.experiments.crosstalker_report(res, output))
 
 
 @app.command()
@@ -405,8 +400,8 @@ def calibrate(gestures: Annotated[list[str] | None, typer.Argument(
               max_evaluations: Annotated[int, _o("gesture sets simulated at most")] = 30,
               name: Annotated[str | None, _o("preset name (default: the file's)")] = None):
     """Fit the anatomical preset's scales to maximal gestures; write a preset file (--preset)."""
-    res = _staged(_wf("calibrate").calibrate, **locals())
-    _say(_wf("calibrate").report(res, output, builtin=builtin))
+    res = _staged(wf.calibrate.calibrate, **locals())
+    _say(wf.calibrate.report(res, output, builtin=builtin))
 
 
 def main() -> None:

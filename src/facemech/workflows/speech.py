@@ -6,20 +6,10 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-__all__ = ["describe_file", "describe_report", "describe_text", "render_options", "speak",
+from .pictures import render_options
+
+__all__ = ["describe_file", "describe_report", "describe_text", "speak",
            "speak_report", "stimuli", "stimuli_report"]
-
-
-def render_options(view: str = "frontal+profile", size: str = "1280x720",
-                   background: str = "#2a2c33", aa: int = 2):
-    """The movies' :class:`~facemech.viz.video.RenderOptions` from the commands' settings: a
-    view name, ``"WIDTHxHEIGHT"`` in pixels, a background colour, anti-aliasing samples per
-    pixel along each axis (1-4)."""
-    from ..viz.camera import parse_size
-    from ..viz.video import RenderOptions
-
-    return RenderOptions(view=view, size=parse_size(size), background=background,
-                         supersample=aa)
 
 
 def speak(output: str | Path, text: str | None = None, *, video: bool = True,
@@ -28,7 +18,7 @@ def speak(output: str | Path, text: str | None = None, *, video: bool = True,
     """Make the face say ``text``, or speak in sync with a recorded voice, into the folder
     ``output``: :func:`facemech.speech.speak.speak` (its keywords: ``audio``, ``textgrid``,
     ``voice``, ``rate_wpm``, ``word_tier``, ``phone_tier``, ``face``, ``preset``, ``strength``,
-    ``progress``), the MP4 with ``video`` (:func:`render_options` of ``view``, ``size``,
+    ``progress``), the MP4 with ``video`` (:func:`.pictures.render_options` of ``view``, ``size``,
     ``background``, ``aa``). Returns its :class:`~facemech.speech.speak.Spoken`."""
     from ..speech.speak import speak as run
 
@@ -73,7 +63,8 @@ def stimuli(design: str | Path, output: str | Path, *, video: bool = True,
             aa: int = 2, progress=None):
     """Make the stimuli of a design table in the folder ``output``
     (:func:`facemech.speech.design.run_design`); text rows are spoken by :func:`speak` into
-    ``output/items``; the movies' :func:`render_options` are ``view``, ``size``, ``background``
+    ``output/items``; the movies' :func:`.pictures.render_options` are ``view``, ``size``,
+    ``background``
     and ``aa``; ``progress`` is callable(stage, done, total). Returns the
     :class:`~facemech.speech.design.DesignReport`."""
     from ..speech.design import run_design
