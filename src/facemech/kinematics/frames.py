@@ -36,6 +36,9 @@ def basis_from_points(right: np.ndarray, left: np.ndarray, front: np.ndarray) ->
 def to_anatomical_frame(ms: MarkerSet, *, right: str, left: str, front: str,
                         origin: str | None = None, reference: int = 0) -> MarkerSet:
     """Express markers in the anatomical frame of three named markers (see module doc)."""
+    if not 0 <= reference < ms.n_frames:
+        raise InputError(f"reference frame {reference} outside 0..{ms.n_frames - 1}",
+                         source=ms.meta.get("source"), field="reference")
     p = {n: ms.marker(n)[reference] for n in (right, left, front, origin or front)}
     for n, v in p.items():
         if not np.all(np.isfinite(v)):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -21,7 +22,7 @@ def as_interval(value: str | Sequence[float] | None, field: str) -> tuple[float,
     """A time interval (start, stop) in s from a pair, or from text ``"START,STOP"``.
 
     Raises :class:`~facemech.errors.InputError` naming ``field`` for text that is not two
-    numbers, or an interval whose stop is not after its start.
+    finite numbers from 0 s, or an interval whose stop is not after its start.
     """
     if value is None:
         return None
@@ -29,6 +30,8 @@ def as_interval(value: str | Sequence[float] | None, field: str) -> tuple[float,
         a, b = (float(v) for v in (value.split(",") if isinstance(value, str) else value))
     except (TypeError, ValueError):
         raise InputError("expected START,STOP in seconds", field=field) from None
+    if not (math.isfinite(a) and math.isfinite(b) and a >= 0):
+        raise InputError(f"START,STOP must be finite seconds from 0, got {value}", field=field)
     if not b > a:
         raise InputError("STOP must be after START", field=field)
     return a, b

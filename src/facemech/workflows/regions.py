@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+import contextlib
+import math
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -32,23 +34,26 @@ def parse_ranges(text: str | None, n: int, field: str) -> list[int] | None:
 
 
 def parse_length(text: str | None, field: str) -> float | None:
-    """A length such as ``"0.5mm"``, ``"0.05cm"`` or ``"0.0005"`` (metres) in metres; None for
-    None or ``"auto"``. ``field`` names the option in errors."""
+    """A length such as ``"0.5mm"``, ``"0.05cm"`` or ``"0.0005"`` (metres) in metres, finite and in
+    (0, 0.1] m; None for None or ``"auto"``. ``field`` names the option in errors."""
     if text is None or text == "auto":
         return None
     from ..units import LENGTH_TO_M
 
-    t = text.strip().lower()
+    t, value = text.strip().lower(), None
     for unit in sorted(LENGTH_TO_M, key=len, reverse=True):
         if t.endswith(unit):
-            try:
-                return float(t[: -len(unit)]) * LENGTH_TO_M[unit]
-            except ValueError:
-                break
-    try:
-        return float(t)
-    except ValueError:
-        raise InputError(f"not a length: {text!r} (e.g. 0.5mm)", field=field) from None
+            with contextlib.suppress(ValueError):
+                value = float(t[: -len(unit)]) * LENGTH_TO_M[unit]
+            break
+    if value is None:
+        try:
+            value = float(t)
+        except ValueError:
+            raise InputError(f"not a length: {text!r} (e.g. 0.5mm)", field=field) from None
+    if not (math.isfinite(value) and 0 < value <= 0.1):
+        raise InputError(f"{text!r} is not a length between 0 and 100 mm", field=field)
+    return value
 
 
 def read_utterances(files: Sequence[str | Path], *, neutral: str | Path = "first",

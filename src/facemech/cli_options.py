@@ -1,0 +1,193 @@
+"""The command line's options, as data: each option's help (:data:`HELP`), its names where
+they are not ``--the-parameter`` (:data:`NAMES`) and the interval its numbers must lie in
+(:data:`RANGES`), with :func:`check_number`, which :mod:`facemech.cli` applies to every number
+a command is given before it runs. Pure Python: importing it costs nothing."""
+
+from __future__ import annotations
+
+import math
+
+from .errors import InputError
+
+__all__ = ["HELP", "NAMES", "RANGES", "check_number", "help_for"]
+
+_HELP_TABLE = """
+aa: anti-aliasing: samples per pixel and axis
+activity: activity CSV
+as_json: print JSON
+audio: WAV to mux in
+background: '#rrggbb', 'r,g,b' or 'transparent' (PNG)
+baseline: rest interval START,STOP (s)
+bend: lsq weight, mm/unit: --bend, --smooth (0.3), --effort
+bite_block: hold the jaw at its initial pose
+builtin: refit the built-in targets
+calibration: recording of maximal gestures
+calibration_baseline: its rest interval START,STOP (s)
+chin_marker: a jaw marker: its drop gives the jaw
+controls: speech, emg7, all, or listed groups
+design: design table (.csv or .toml)
+dt: Euler step of every evaluation, s (default: the preset's)
+effort: see --bend
+emg: raw EMG (CSV or C3D), 7 channels
+emg_baseline: EMG rest interval START,STOP (s)
+emg_calibration: EMG of maximal gestures
+eps: data precision, e.g. 0.5mm (default: noise)
+face: face .npz, default, default-coarse or default-fine
+figure: PNG of the controls (+-2 SE) and error
+figures: with -o: PNGs
+files: marker files, one per utterance
+fit: scales: force, lips, stiffness, sphincter
+fmt: obj or ply: one mesh per frame in the folder -o
+frames: frames of the gesture sequence
+front: marker in front, on the same plane
+gestures: maximal gestures, each FILE:GROUPS, e.g. smile.c3d:ZYG,LAO,RIS
+head: comma-separated head markers (at least 3)
+integrator: euler, implicit or rosenbrock
+jaw_angle: CSV: time, jaw_angle (rad) or jaw_angle_deg
+jaw_chin: marker file with the chin marker
+jaw_drive: ramp or hold
+jaw_fixed: hold the recorded jaw as given
+jaw_kinematics: hinge or glide (or the preset's)
+jaw_lead: frames the recorded jaw leads the skin
+jaw_second_marker: another: rotation and glide
+k: independent markers (default: <= 10)
+labels: name the markers
+landmarks: landmark CSV: name,x,y,z
+left: marker on the left
+map_file: marker,node CSV (default: closest nodes)
+max_evaluations: model steps per frame (400)
+max_gap: longest gap to fill, s
+measured: measured markers (same names)
+method: lsq (fast) or powell (the seeds')
+name: model name
+neutral: 'first' or a marker file: its first frame
+noise: marker noise for the SEs, mm (or fit)
+noise_mm: Gaussian marker noise, mm
+origin: origin marker (default: --front)
+out_units: unit of the output (default: the input's)
+output: the output (file or folder)
+peak: frame of a peak: a muscle group (e.g. OOS), jaw or motion
+phone_tier: the same, phones
+positive: keep activity >= 0
+preset: anatomical, lucero1999, pitermann2001, calibrated or a preset .json
+rate: rate, Hz (default: the frame rate)
+rate_wpm: words per minute
+reference: reference frame (default: first full)
+report: write the per-frame residuals (JSON)
+result: results file (.nc)
+right: marker on the right
+scale_pair: A,B: scale the markers per axis
+series: with --json: the per-frame mouth measures
+size: frame size WIDTHxHEIGHT, pixels
+smooth: see --bend
+source: input marker file
+strength: scale of the visemes' departure from rest
+substeps: steps per frame (implicit)
+test: held-out utterances, e.g. 31-40
+text: what to say (or --audio)
+textgrid: the recording's Praat TextGrid (MFA)
+time: time of the frame, s
+tissue: anatomical or uniform
+title: page title
+tol: lsq: stop at RMS gains below this, mm
+train: utterances to fit, e.g. 1-30
+units: length unit if the file has none
+utterances: utterances in the corpus
+video: render the MP4
+view: frontal, profile, three-quarter, mouth, frontal+profile
+voice: eSpeak NG voice, e.g. en-us, en-gb, en-us+f3
+window: lsq: frames fitted per frame (2)
+word_tier: TextGrid tier name (default: found by name)
+calibrate.max_evaluations: gesture sets simulated at most
+calibrate.name: preset name (default: the file's)
+calibrate.output: preset file (.json)
+compare.a: results or marker file: the model
+compare.b: results or marker file: the data
+compare.markers: comma-separated (default: all shared)
+demo.output: output folder
+emg_process.output: activity CSV
+experiment_lucero2008.frames: per utterance
+experiment_lucero2008.k: markers of the basis
+experiment_lucero2008.output: output folder
+experiment_pitermann_crosstalker.output: JSON file of the table
+experiment_pitermann_synthetic.method: lsq, powell or both
+experiment_pitermann_synthetic.output: folder: summary.json, PNGs
+export.output: file, or a folder with --format
+export.units: unit of the output
+face_build.output: the face model (.npz)
+face_build.surface: OBJ (+ MTL, texture), PLY or STL
+face_build.units: length unit of both files
+face_export_default.output: folder for face.obj and landmarks.csv
+face_info.face: face file or built-in face
+invert.markers: marker file in the model's frame and frame rate
+invert.output: results file (.nc)
+markers_convert.output: the output marker file (or TARGET)
+markers_convert.target: or -o
+markers_fill_gaps.output: the output marker file (.c3d, .trc or .csv)
+markers_frame.output: the output marker file (.c3d, .trc or .csv)
+markers_frame.reference: frame the axes are taken from
+markers_head_correct.output: the output marker file (.c3d, .trc or .csv)
+markers_resample.output: the output marker file (.c3d, .trc or .csv)
+plot.markers: comma-separated marker names
+plot.output: PNG
+regions.method: qrcp or strong
+regions.output: output folder
+render.output: MP4, or a folder for PNG frames
+simulate.chin_marker: the chin marker
+simulate.dt: explicit Euler step, s
+simulate.jaw_kinematics: hinge or glide
+simulate.jaw_second_marker: a second mandible marker in the --jaw-chin file
+simulate.output: results file (.nc)
+simulate.video: also render an MP4 (or PNG frames into a folder)
+speak.audio: a recorded voice (WAV) to speak with
+speak.output: output folder
+still.markers: draw the model's markers
+still.output: PNG or PDF
+stimuli.output: output folder
+view.markers: measured markers in the model's frame, drawn beside its own
+view.output: HTML page
+"""
+#: parameter -> help; ``command.parameter`` (the command function's name) overrides it there
+HELP: dict[str, str] = dict(line.split(": ", 1) for line in _HELP_TABLE.strip().splitlines())
+
+#: parameter -> its option names, where they differ from ``--the-parameter``
+NAMES: dict[str, tuple[str, ...]] = {
+    "output": ("-o", "--output"), "as_json": ("--json",), "fmt": ("--format",),
+    "rate_wpm": ("--rate",), "noise_mm": ("--noise",), "map_file": ("--map",), "k": ("-k",),
+    "aa": ("--aa",)}
+
+#: parameter -> the interval its value must lie in; NaN and infinities never pass. Units as in
+#: the help: rates Hz, times and steps s, noise and weights mm
+RANGES: dict[str, str] = {
+    "rate": "(0, 1e5]", "dt": "(0, 0.01]", "max_gap": "(0, 3600]", "time": "[0, inf)",
+    "noise": "[0, 100]", "noise_mm": "[0, 100]", "tol": "(0, 100]", "bend": "[0, 1e6]",
+    "smooth": "[0, 1e6]", "effort": "[0, 1e6]", "window": "[1, 1000]", "substeps": "[1, 1e5]",
+    "reference": "[0, inf)", "frames": "[2, 1e6]", "utterances": "[1, 1e4]", "k": "[1, 1000]",
+    "aa": "[1, 4]", "rate_wpm": "[80, 450]", "strength": "[0, 10]", "jaw_lead": "[0, 600]",
+    "max_evaluations": "[1, 1e7]"}
+
+
+def help_for(command: str, parameter: str) -> str | None:
+    """The help of ``parameter`` in the command whose function is named ``command``."""
+    return HELP.get(f"{command}.{parameter}", HELP.get(parameter))
+
+
+def check_number(option: str, value: float, interval: str | None = None) -> None:
+    """Refuse ``value`` unless it is finite and lies in ``interval``.
+
+    Parameters
+    ----------
+    option : the option's name, for the message (e.g. ``--dt``)
+    value : the number given
+    interval : ``"(lo, hi]"`` style, bounds may be ``inf``; None: any finite number
+
+    Raises
+    ------
+    InputError : naming ``option``, the interval and the value
+    """
+    lo, hi = (float(v) for v in interval[1:-1].split(",")) if interval else (-math.inf, math.inf)
+    above = interval is None or (lo < value if interval[0] == "(" else lo <= value)
+    below = interval is None or (value < hi if interval[-1] == ")" else value <= hi)
+    if not (math.isfinite(value) and above and below):
+        within = f" in {interval}" if interval else ""
+        raise InputError(f"must be a finite number{within}, got {value}", source=f"option {option}")
