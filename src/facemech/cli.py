@@ -1,9 +1,6 @@
 """The ``facemech`` command line: each command parses its options, makes one call into the
-library (:mod:`facemech.workflows`) and prints what it did; bad input: one line, exit 2.
-
-:func:`command` turns a plain function's parameters into typer options (no default: an
-argument; ``...``: a required option), their help, names and ranges from
-:mod:`facemech.cli_options`, and checks every number before the command runs."""
+library (:mod:`facemech.workflows`) and prints what it did; bad input: one line, exit 2. Options
+are declared as plain parameters; :func:`command` gives them help, names and ranges."""
 
 import functools
 import importlib
@@ -33,10 +30,13 @@ def _option(fn, p: inspect.Parameter, args: tuple[str, ...]) -> inspect.Paramete
     return p.replace(default=typer.Option(p.default, *opts.NAMES.get(p.name, ()), help=help))
 
 
-def command(group: typer.Typer = app, name: str | None = None, args: tuple[str, ...] = ()):
-    """Register the function as the command ``name`` of ``group``: its parameters become
-    options as :mod:`facemech.cli_options` says (those in ``args`` arguments), and every number
-    is checked before it runs."""
+def command(group: typer.Typer = app, name: str | None = None, args: tuple[str, ...] = (),
+            look: tuple | None = None):
+    """Register the function as the command ``name`` of ``group``. Its parameters become
+    options as :mod:`facemech.cli_options` says (no default: an argument, as are those in
+    ``args``; ``...``: a required option); every number is checked before it runs. ``look``:
+    the defaults of the options ``--view --size --background --aa``, given to the function as
+    one ``render`` (:func:`facemech.workflows.pictures.render_options`)."""
     def register(fn):
         @functools.wraps(fn)
         def run(**kw):
@@ -44,12 +44,19 @@ def command(group: typer.Typer = app, name: str | None = None, args: tuple[str, 
                 if isinstance(value, int | float) and not isinstance(value, bool):
                     name = opts.NAMES.get(key, ("--" + key.replace("_", "-"),))[-1]
                     opts.check_number(name, value, opts.RANGES.get(key))
+            if look:
+                kw["render"] = wf.pictures.render_options(*(kw.pop(k) for k in LOOK))
             return fn(**kw)
         sig = inspect.signature(fn)
-        run.__signature__ = sig.replace(parameters=[_option(fn, p, args)
-                                                    for p in sig.parameters.values()])
+        extra = [inspect.Parameter(k, inspect.Parameter.KEYWORD_ONLY, default=d, annotation=type(
+            d)) for k, d in zip(LOOK, look or (), strict=False)]
+        run.__signature__ = sig.replace(parameters=[_option(fn, p, args) for p in (
+            *sig.parameters.values(), *extra) if p.name != "render"])
         return group.command(name)(run)
     return register
+
+
+LOOK = ("view", "size", "background", "aa")
 
 class _Workflows:
     """``wf.markers`` is :mod:`facemech.workflows.markers`, imported on first use."""
@@ -91,23 +98,16 @@ def _staged(run, **options):
         return run(**options, progress=progress.staged(prog))
 
 
-def _look(view: str, size: str, background: str, aa: int):
-    return wf.pictures.render_options(view, size, background, aa)
-
-
 def _say(lines, note: bool = False, **kw) -> None:  # note: on stderr, "facemech: " first
     for line in lines:
         (err if note else out).print(("facemech: " if note else "") + line, **kw)
 
 
-# ---------------------------------------------------------------------------------------------
-@command()
+@command(look=("frontal+profile", "1280x720", "#2a2c33", 2))
 def demo(output: Path = Path("demo-output"), integrator: str | None = None, video: bool = True,
-         preset: str = "anatomical", view: str = "frontal+profile", size: str = "1280x720",
-         background: str = "#2a2c33", aa: int = 2):
+         preset: str = "anatomical", render=None):
     """Simulate a synthetic utterance on the built-in face; write results, plots and a movie."""
-    out.print(_staged(wf.demo.run, output=output, integrator=integrator, video=video,
-                      preset=preset, render=_look(view, size, background, aa)))
+    out.print(_staged(wf.demo.run, **locals()))
 
 @command(face_app, "build")
 def face_build(surface: Path, landmarks: Path, output: Path = ..., units: str = "mm",
@@ -175,7 +175,7 @@ def markers_fill_gaps(source: Path, output: Path = ..., units: str | None = None
     out.print(res)
     err.print(res.warnings, end="")
 
-@command()
+@command(look=("frontal+profile", "1280x720", "#2a2c33", 2))
 def simulate(
         output: Path = ..., face: str = "default", activity: Path | None = None,
         emg: Path | None = None, units: str | None = None, emg_baseline: str | None = None,
@@ -185,10 +185,9 @@ def simulate(
         jaw_kinematics: str | None = None, preset: str = "anatomical",
         integrator: str | None = None, substeps: int | None = None, dt: float | None = None,
         jaw_drive: str = "ramp", video: Path | None = None, audio: Path | None = None,
-        view: str = "frontal+profile", size: str = "1280x720", background: str = "#2a2c33",
-        aa: int = 2):
+        render=None):
     """Simulate the face driven by muscle activity or EMG and a jaw trajectory."""
-    sim, movie = wf.simulate, video and (video, audio, _look(view, size, background, aa))
+    sim, movie = wf.simulate, video and (video, audio, render)
     out.print(_staged(
         sim.simulate_files, output=output, movie=movie,
         controls=sim.Controls(activity, emg, emg_baseline, emg_calibration),
@@ -196,21 +195,17 @@ def simulate(
         face=face, preset=preset, jaw_kinematics=jaw_kinematics, integrator=integrator,
         substeps=substeps, dt=dt, jaw_drive=jaw_drive))
 
-@command()
-def render(result: Path, output: Path = ..., audio: Path | None = None,
-           view: str = "frontal+profile", size: str = "1280x720", background: str = "#2a2c33",
-           aa: int = 2):
+@command(look=("frontal+profile", "1280x720", "#2a2c33", 2))
+def render(result: Path, output: Path = ..., audio: Path | None = None, render=None):
     """Render a results file to an H.264 MP4 or PNG frames (-o a folder), with eyes and teeth."""
-    out.print(_staged(wf.pictures.render_movie, results=result, movie=(
-        output, audio, _look(view, size, background, aa))))
+    out.print(_staged(wf.pictures.render_movie, results=result, movie=(output, audio, render)))
 
-@command()
+@command(look=("frontal", "1280x1280", "#ffffff", 3))
 def still(result: Path, output: Path = ..., time: float | None = None, peak: str | None = None,
-          markers: bool = False, labels: bool = False, view: str = "frontal",
-          size: str = "1280x1280", background: str = "#ffffff", aa: int = 3):
+          markers: bool = False, labels: bool = False, render=None):
     """A still figure for a paper: one frame at a time or at a gesture's peak (PNG or PDF)."""
     out.print(wf.pictures.still_file(result, output, time=time, peak=peak, markers=markers,
-              labels=labels, options=_look(view, size, background, aa)))
+              labels=labels, options=render))
 
 @command()
 def export(result: Path, output: Path = ..., units: str | None = None, fmt: str | None = None):
@@ -314,6 +309,22 @@ def calibrate(gestures: list[str] | None = None, output: Path = Path("calibrated
     """Fit the anatomical preset's scales to maximal gestures; write a preset file (--preset)."""
     res = _staged(wf.calibrate.calibrate, **locals())
     _say(wf.calibrate.report(res, output, builtin=builtin))
+
+@command()
+def subject(face: str, markers: Path = ..., output: Path = ..., head: str | None = None,
+            frame: str | None = None, landmarks: Path | None = None, units: str | None = None,
+            rest: str = "0,0.5", chin_marker: str | None = None,
+            jaw_second_marker: str | None = None, warp: bool | None = None):
+    """Make a subject folder: a face (built-in, face file or scan) fitted to rest markers."""
+    out.print(_staged(wf.subject.make_subject, **locals()))
+
+@command()
+def analyse(subject: Path, recording: Path, output: Path = ..., units: str | None = None,
+            max_gap: float = 0.1, lowpass: float | None = 12.0, method: str = "lsq",
+            controls: str = "speech", noise: float | None = None, window: int | None = 3,
+            smooth: float | None = 1.0, preset: str = "anatomical", video: bool = False):
+    """A recording against a subject: head motion, frame, gaps, inversion, statistics, movie."""
+    _say(wf.subject.analyse_report(_staged(wf.subject.analyse, **locals())))
 
 
 def main() -> None:

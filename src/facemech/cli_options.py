@@ -146,6 +146,21 @@ still.output: PNG or PDF
 stimuli.output: output folder
 view.markers: measured markers in the model's frame, drawn beside its own
 view.output: HTML page
+subject.face: a built-in face, a face file (.npz), or a scan (OBJ/PLY/STL; --landmarks)
+subject.markers: a recording (C3D, TRC, CSV) holding the face at rest
+subject.output: the subject folder
+frame: RIGHT,LEFT,FRONT markers of an anatomical frame (or 4 named as landmarks)
+rest: START,STOP (s) of rest in --markers
+warp: warp the face onto the rest markers (default: for built-in faces)
+subject.chin_marker: a jaw marker for analyse: its drop gives the jaw
+subject.jaw_second_marker: another jaw marker: rotation and glide
+analyse.subject: a subject folder (facemech subject)
+recording: a recording of the subject's markers (C3D, TRC, CSV), any rate
+analyse.output: the results folder
+lowpass: low-pass cut-off of the recording, Hz
+analyse.window: lsq: frames fitted per frame
+analyse.smooth: lsq: smoothness weight, mm/unit
+analyse.video: also render movie.mp4
 """
 #: parameter -> help; ``command.parameter`` (the command function's name) overrides it there
 HELP: dict[str, str] = dict(line.split(": ", 1) for line in _HELP_TABLE.strip().splitlines())
@@ -164,7 +179,7 @@ RANGES: dict[str, str] = {
     "smooth": "[0, 1e6]", "effort": "[0, 1e6]", "window": "[1, 1000]", "substeps": "[1, 1e5]",
     "reference": "[0, inf)", "frames": "[2, 1e6]", "utterances": "[1, 1e4]", "k": "[1, 1000]",
     "aa": "[1, 4]", "rate_wpm": "[80, 450]", "strength": "[0, 10]", "jaw_lead": "[0, 600]",
-    "max_evaluations": "[1, 1e7]"}
+    "max_evaluations": "[1, 1e7]", "lowpass": "(0, 1000]"}
 
 
 def help_for(command: str, parameter: str) -> str | None:

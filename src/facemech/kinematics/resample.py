@@ -48,6 +48,23 @@ def resample(ms: MarkerSet, rate: float, *, cutoff_fraction: float = 0.8) -> Mar
                      filled=filled, meta={**ms.meta, "resampled_from_hz": ms.rate})
 
 
+def lowpass(ms: MarkerSet, cutoff_hz: float, *, order: int = 4) -> MarkerSet:
+    """Low-pass each valid run of each marker: a Butterworth filter of ``order`` run forwards
+    and backwards (zero phase), cut-off ``cutoff_hz`` Hz (below the Nyquist frequency). Runs
+    too short for the filter's padding are left as they are; gaps stay gaps."""
+    if not 0 < cutoff_hz < 0.5 * ms.rate:
+        raise InputError(f"low-pass cut-off {cutoff_hz:g} Hz must lie in (0, {0.5 * ms.rate:g})"
+                         " Hz, below the Nyquist frequency", field="lowpass")
+    sos = butter(order, cutoff_hz, fs=ms.rate, output="sos")
+    pad = 3 * (2 * len(sos) + 1)  # sosfiltfilt's default padding
+    out = ms.positions.copy()
+    for m in range(ms.n_markers):
+        for a, b in runs(ms.valid[:, m]):
+            if b - a > pad:
+                out[a:b, m] = sosfiltfilt(sos, ms.positions[a:b, m], axis=0)
+    return ms.with_positions(out, meta={**ms.meta, "lowpass_hz": cutoff_hz})
+
+
 #: the default Savitzky-Golay window of derivatives, s (5 samples at 60 Hz and 100 Hz)
 DERIVATIVE_WINDOW_S = 0.05
 

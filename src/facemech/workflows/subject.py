@@ -1,0 +1,395 @@
+"""One path from a recording to results (issue 14): a subject folder made once from a face and a
+rest recording, then any number of recordings analysed against it.
+
+``make_subject`` writes ``SUBJECT/``:
+
+- ``face.npz``: the face (a built-in face warped to the rest markers, or the given face file);
+- ``mapping.csv``: each marker's epidermal node (``marker,node``);
+- ``rest.csv``: the rest markers in the model's frame, as a landmark CSV (``name,x,y,z``, mm);
+- ``subject.json``: the lab -> model similarity, the head markers' model positions, the jaw
+  markers, the fit's residuals;
+- ``subject.png``: the face and its markers, front and side, to check by eye.
+
+``analyse`` takes a recording through head-motion correction, the subject's frame, gap filling
+and resampling, inverts it on the subject's face and writes the results, the comparison
+statistics, the figures and (optionally) the movie into ``OUT/``.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError
+from ..io.atomic import atomic_path, check_output
+from .outcome import Written
+
+__all__ = ["Subject", "analyse", "analyse_report", "make_subject", "read_subject"]
+
+SURFACES = (".obj", ".ply", ".stl")
+#: Hz, the default low-pass of a recording: speech movements lie below it (lip and jaw
+#: kinematics have little energy above 10 Hz; a 12-15 Hz cut-off is usual for marker data)
+LOWPASS_HZ = 12.0
+#: Hz, the low-pass of the head markers before the rigid fits: head motion is slower than
+#: speech, and a fit's rotation error grows with the distance from the head markers
+HEAD_LOWPASS_HZ = 4.0
+
+
+@dataclass(frozen=True)
+class Subject:
+    """A subject folder, read back.
+
+    Attributes
+    ----------
+    folder : the folder
+    lab_to_model : :class:`~facemech.kinematics.alignment.Similarity` of the rest recording
+    mapping : marker -> epidermal node of ``face.npz``
+    head : head-marker names -> (3,) model-frame rest positions, m (empty: no head markers)
+    chin_marker, jaw_second_marker : the jaw markers (None: the jaw is estimated)
+    info : everything ``subject.json`` holds
+    """
+
+    folder: Path
+    lab_to_model: object
+    mapping: dict
+    head: dict
+    chin_marker: str | None
+    jaw_second_marker: str | None
+    info: dict
+
+    @property
+    def face(self) -> Path:
+        return self.folder / "face.npz"
+
+
+def _names(text, field: str) -> tuple[str, ...]:
+    if text is None:
+        return ()
+    out = tuple(n.strip() for n in (text.split(",") if isinstance(text, str) else text)
+                if n.strip())
+    if len(set(out)) != len(out):
+        raise InputError(f"a marker is named twice in {text!r}", field=field)
+    return out
+
+
+def rest_positions(ms, head: tuple[str, ...], interval: tuple[float, float], *,
+                   source: str) -> tuple[np.ndarray, dict]:
+    """Each marker's mean position (markers, 3), m, over the rest ``interval`` (s) of a
+    recording, after head-motion correction when ``head`` names markers."""
+    from ..kinematics.rigid import head_correct
+
+    notes = {}
+    if head:
+        for h in head:
+            if h not in ms.names:
+                raise InputError("head marker not in the recording", source=source, field=h)
+        hc = head_correct(ms, head)
+        ms, notes = hc.markers, {"head_residual_mm": hc.summary()["residual_mm"]}
+    inside = (ms.time >= interval[0] - 1e-9) & (ms.time <= interval[1] + 1e-9)
+    if inside.sum() < 1:
+        raise InputError(f"no frame in the rest interval {interval[0]:g}-{interval[1]:g} s",
+                         source=source, field="rest")
+    rest = np.nanmean(np.where(np.isfinite(ms.positions[inside]), ms.positions[inside], np.nan),
+                      axis=0) if inside.sum() > 1 else ms.positions[inside][0]
+    missing = [n for n, p in zip(ms.names, rest, strict=True) if not np.all(np.isfinite(p))]
+    if missing:
+        raise InputError(f"missing throughout the rest interval: {', '.join(missing)}",
+                         source=source, field=missing[0])
+    return rest, notes
+
+
+def _align(rest: np.ndarray, names: tuple[str, ...], model, frame: tuple[str, ...],
+           skip: tuple[str, ...], source: str):
+    """Lab -> model similarity: by the markers named as the face's sites, else by the
+    anatomical frame and the skin. Returns (similarity, how)."""
+    from ..kinematics.alignment import fit_to_skin, similarity_fit
+    from ..kinematics.frames import basis_from_points
+    from ..solvers.forward import marker_nodes
+
+    site_names, site_nodes = marker_nodes(model)
+    sites = dict(zip(site_names, site_nodes, strict=True))
+    named = [n for n in names if n in sites and n not in skip]
+    if len(named) >= 4:
+        idx = [names.index(n) for n in named]
+        fit = similarity_fit(rest[idx], model.rest_positions[[sites[n] for n in named]])
+        return fit, f"by name ({len(named)} markers named as the face's sites)"
+    if len(frame) != 3:
+        raise InputError("name three markers for the anatomical frame (RIGHT,LEFT,FRONT), or "
+                         "name at least 4 markers as the face's landmarks", source=source,
+                         field="frame")
+    for n in frame:
+        if n not in names:
+            raise InputError("frame marker not in the recording", source=source, field=n)
+    basis = basis_from_points(*(rest[names.index(n)] for n in frame))
+    on_skin = [k for k, n in enumerate(names) if n not in skip]
+    fit = fit_to_skin(rest[on_skin], model.rest_positions[: model.n_surface], basis,
+                      source=source)
+    return fit, f"by the skin (anatomical frame {','.join(frame)}, closest points)"
+
+
+def _map(moved: np.ndarray, names: tuple[str, ...], model, skip: tuple[str, ...], source: str,
+         *, limit: float = 0.010) -> tuple[dict, dict]:
+    """marker -> closest epidermal node (or its named site); refuses a marker farther than
+    ``limit`` (m) from the skin and two markers on one node."""
+    from scipy.spatial import cKDTree
+
+    from ..solvers.forward import marker_nodes
+
+    sites = dict(zip(*marker_nodes(model), strict=True))
+    skin = model.rest_positions[: model.n_surface]
+    d, idx = cKDTree(skin).query(moved)
+    mapping, dist = {}, {}
+    for k, n in enumerate(names):
+        if n in skip:
+            continue
+        node = int(sites[n]) if n in sites else int(idx[k])
+        gap = float(np.linalg.norm(moved[k] - skin[node]))
+        if gap > limit:
+            raise InputError(f"{gap * 1e3:.1f} mm from the skin after alignment (limit "
+                             f"{limit * 1e3:.0f} mm): a head marker (--head), or the wrong unit "
+                             "or frame?", source=source, field=n)
+        twin = next((m for m, v in mapping.items() if v == node), None)
+        if twin is not None:
+            raise InputError(f"on the same node as {twin}: markers closer than the mesh "
+                             "spacing", source=source, field=n)
+        mapping[n], dist[n] = node, gap
+    return mapping, dist
+
+
+def make_subject(face: str | Path, markers: str | Path, output: str | Path, *,
+                 head: str | None = None, frame: str | None = None,
+                 landmarks: str | Path | None = None, units: str | None = None,
+                 rest: str | tuple[float, float] = (0.0, 0.5), chin_marker: str | None = None,
+                 jaw_second_marker: str | None = None, warp: bool | None = None,
+                 progress=None) -> Written:
+    """Make a subject folder from a face and a rest recording.
+
+    Parameters
+    ----------
+    face : a built-in face (``default``...), a face file (.npz) or a scan (OBJ/PLY/STL, with
+        ``landmarks``)
+    markers : a recording (C3D, TRC, CSV) whose ``rest`` interval (s) is the face at rest
+    output : the subject folder
+    head : comma-separated head markers (at least 3; on a headband or the skull, not the skin)
+    frame : ``RIGHT,LEFT,FRONT`` markers of an anatomical frame (see
+        :mod:`facemech.kinematics.frames`); not needed when at least 4 markers are named as the
+        face's landmarks or markers
+    landmarks, units : the scan's landmark CSV; length unit of files that carry none
+    rest : ``"START,STOP"`` seconds of rest in ``markers``
+    chin_marker, jaw_second_marker : jaw markers for :func:`analyse` (None: estimated)
+    warp : warp the face so that its nodes sit on the rest markers (default: for built-in faces)
+    progress : staged callback; stages ``subject`` (0..4 of 4)
+
+    Returns
+    -------
+    Written : ``data`` the :class:`Subject`
+    """
+    from ..geometry.builder import load_face
+    from ..io.markers import read_markers
+    from ..kinematics.mapping import warp_face
+    from ..markerset import MarkerSet
+    from .emg import as_interval
+
+    face_path, out, src = Path(str(face)), Path(output), str(markers)
+    check_output(out, [markers, landmarks, face_path if face_path.exists() else None],
+                 folder=True, field="-o")
+    say = progress or (lambda *a: None)
+    head_names, frame_names = _names(head, "head"), _names(frame, "frame")
+    interval = as_interval(rest, "rest")
+    say("subject", 0, 4)
+    if face_path.suffix.lower() in SURFACES:
+        if landmarks is None:
+            raise InputError("a scan needs its landmarks (--landmarks)", source=str(face),
+                             field="landmarks")
+        from .faces import build_face_file
+        built = build_face_file(face_path, landmarks, out / "scan-face.npz", units=units or "mm")
+        model, warp = built.data, bool(warp)
+    else:
+        model = load_face(face)
+        warp = (not face_path.exists()) if warp is None else warp
+    ms = read_markers(markers, units=units)
+    for n in (chin_marker, jaw_second_marker):
+        if n is not None and n not in ms.names:
+            raise InputError("jaw marker not in the recording", source=src, field=n)
+    rest_m, notes = rest_positions(ms, head_names, interval, source=src)
+    say("subject", 1, 4)
+    fit, how = _align(rest_m, ms.names, model, frame_names, head_names, src)
+    moved = fit(rest_m)
+    mapping, dist = _map(moved, ms.names, model, head_names, src)
+    say("subject", 2, 4)
+    on_skin = [n for n in ms.names if n in mapping]
+    rest_set = MarkerSet(moved[None, [ms.names.index(n) for n in on_skin]], tuple(on_skin), 60.0)
+    if warp:
+        model = warp_face(model, rest_set, mapping)
+    say("subject", 3, 4)
+    model.save(out / "face.npz")
+    (out / "scan-face.npz").unlink(missing_ok=True)
+    with atomic_path(out / "mapping.csv") as tmp:
+        tmp.write_text("marker,node\n" + "".join(f"{n},{v}\n" for n, v in mapping.items()))
+    with atomic_path(out / "rest.csv") as tmp:  # a landmark CSV (name,x,y,z; mm)
+        tmp.write_text("name,x,y,z\n" + "".join(
+            f"{n},{p[0] * 1e3:.4f},{p[1] * 1e3:.4f},{p[2] * 1e3:.4f}\n"
+            for n, p in zip(on_skin, rest_set.positions[0], strict=True)))
+    info = {"face": str(face), "warped": bool(warp), "recording": src,
+            "rest_s": list(interval), "alignment": how, "lab_to_model": fit.as_dict(),
+            "marker_to_skin_mm": {n: round(v * 1e3, 3) for n, v in dist.items()},
+            "head": {h: moved[ms.names.index(h)].tolist() for h in head_names},
+            "chin_marker": chin_marker, "jaw_second_marker": jaw_second_marker, **notes}
+    with atomic_path(out / "subject.json") as tmp:
+        tmp.write_text(json.dumps(info, indent=2))
+    from ..viz.subject import subject_figure
+
+    subject_figure(out / "subject.png", model, moved, ms.names, mapping, head_names)
+    say("subject", 4, 4)
+    subj = read_subject(out)
+    worst = max(dist.values())
+    return Written(out, subj, f"subject of {len(mapping)} markers on {model.name} ({how}; scale "
+                   f"{fit.scale:.3f}, markers {np.median(list(dist.values())) * 1e3:.2f} mm "
+                   f"from the skin, at most {worst * 1e3:.2f} mm; warped: {bool(warp)}) -> {out}/")
+
+
+def read_subject(folder: str | Path) -> Subject:
+    """Read a subject folder written by :func:`make_subject`."""
+    from ..kinematics.alignment import Similarity
+
+    folder = Path(folder)
+    path = folder / "subject.json"
+    if not path.is_file():
+        raise InputError("not a subject folder (no subject.json): make it with "
+                         "`facemech subject`", source=str(folder))
+    try:
+        info = json.loads(path.read_text())
+        mapping = {}
+        for line in (folder / "mapping.csv").read_text().splitlines()[1:]:
+            name, node = line.split(",")
+            mapping[name] = int(node)
+        fit = Similarity.from_dict(info["lab_to_model"])
+    except (OSError, ValueError, KeyError) as exc:
+        raise InputError(f"unreadable subject folder ({exc})", source=str(folder)) from None
+    return Subject(folder, fit, mapping, {k: np.array(v) for k, v in info["head"].items()},
+                   info.get("chin_marker"), info.get("jaw_second_marker"), info)
+
+
+def prepare(subj: Subject, ms, *, max_gap: float, rate: float, source: str,
+            lowpass_hz: float | None = LOWPASS_HZ):
+    """A recording in the subject's model frame: lab -> model, gaps up to ``max_gap`` s filled,
+    low-passed at ``lowpass_hz`` (None: not), head motion removed against the subject's head
+    markers, resampled to ``rate`` Hz, only the mapped markers. Returns (MarkerSet, notes)."""
+    from ..kinematics.gaps import fill_gaps
+    from ..kinematics.resample import lowpass, resample
+    from ..kinematics.rigid import head_correct, rigid_fit
+
+    missing = [n for n in subj.mapping if n not in ms.names]
+    if len(missing) == len(subj.mapping):
+        raise InputError("none of the subject's markers is in the recording", source=source,
+                         field="markers")
+    ms = ms.with_positions(subj.lab_to_model(ms.positions))
+    notes = [f"markers absent from the recording: {', '.join(missing)}"] if missing else []
+    ms, filled, left = fill_gaps(ms, int(round(max_gap * ms.rate)))
+    if filled or left:
+        notes.append(f"gaps: {len(filled)} filled (<= {max_gap:g} s), {len(left)} left")
+    if lowpass_hz is not None and lowpass_hz < 0.5 * ms.rate:
+        ms = lowpass(ms, lowpass_hz)
+        notes.append(f"low-passed at {lowpass_hz:g} Hz (4th-order Butterworth, zero phase)")
+    if subj.head:
+        for h in subj.head:
+            if h not in ms.names:
+                raise InputError("head marker not in the recording", source=source, field=h)
+        cols = [ms.index(h) for h in subj.head]
+        pos = ms.positions.copy()  # the head moves slowly: its markers' noise is cut lower
+        pos[:, cols] = lowpass(ms.select(list(subj.head)), min(HEAD_LOWPASS_HZ,
+                                                               0.4 * ms.rate)).positions
+        hc = head_correct(ms.with_positions(pos), tuple(subj.head))
+        head_now = np.nanmean(hc.markers.positions[:, cols], axis=0)
+        r, t = rigid_fit(head_now, np.array(list(subj.head.values())))
+        ms = hc.markers.with_positions(hc.markers.positions @ r.T + t)
+        res = hc.summary()["residual_mm"]
+        notes.append(f"head motion removed with {', '.join(subj.head)}: residual median "
+                     f"{res['median']:.2f} mm, max {res['max']:.2f} mm")
+    ms = ms.select([n for n in ms.names if n in subj.mapping])
+    if abs(ms.rate - rate) > 1e-6 * rate:
+        notes.append(f"resampled from {ms.rate:g} Hz to {rate:g} Hz")
+        ms = resample(ms, rate)
+    return ms, notes
+
+
+def analyse(subject: str | Path, recording: str | Path, output: str | Path, *,
+            units: str | None = None, max_gap: float = 0.1, lowpass: float | None = LOWPASS_HZ,
+            method: str = "lsq", controls: str = "speech", noise: float | None = None,
+            window: int | None = 3, smooth: float | None = 1.0, preset: str = "anatomical",
+            video: bool = False, progress=None) -> Written:
+    """Analyse a recording against a subject folder into the folder ``output``.
+
+    Writes ``markers.csv`` (the prepared markers: model frame, mm, the model's rate),
+    ``result.nc`` (the inversion and its re-animated face), ``controls.png`` (the inverted
+    controls, +-2 SE), ``comparison.json`` (:func:`facemech.workflows.compare.compare_files` of
+    the re-animation against the markers), ``summary.json`` and, with ``video``,
+    ``movie.mp4``.
+
+    Parameters
+    ----------
+    subject : a folder made by :func:`make_subject`
+    recording : C3D, TRC or CSV of the same markers, in the lab, any rate
+    output : the results folder
+    units : length unit of a recording that carries none
+    max_gap : longest gap filled, s
+    lowpass : Hz, the recording's low-pass cut-off (None: none)
+    method, controls, noise, preset : as :func:`facemech.workflows.invert.invert`
+    window, smooth : the lsq inversion's frames per fit and smoothness weight (mm per unit);
+        the defaults, 3 and 1.0, are longer and stronger than :func:`invert`'s (2, 0.3): a
+        recording is noisy (a twin with 0.1 mm of marker noise recovers every determined
+        muscle with r >= 0.88 with them, RIS and DAO at 0.73 and 0.75 without;
+        docs/recordings.md)
+    video : render ``movie.mp4``
+    progress : staged callback: ``prepare``, ``invert (lsq)``, ``render``
+
+    Returns
+    -------
+    Written : ``data`` a dict of the stages' numbers (as ``summary.json``)
+    """
+    from .. import params as P
+    from ..io.markers import read_markers, write_markers
+    from . import compare, invert
+
+    out, src = Path(output), str(recording)
+    check_output(out, [recording], folder=True, field="-o")
+    subj = read_subject(subject)
+    say = progress or (lambda *a: None)
+    say("prepare", 0, 1)
+    ms, notes = prepare(subj, read_markers(recording, units=units), max_gap=max_gap,
+                        rate=P.preset(preset).frame_rate, source=src, lowpass_hz=lowpass)
+    write_markers(out / "markers.csv", ms, units="mm")
+    say("prepare", 1, 1)
+    res = invert.invert(out / "markers.csv", out / "result.nc", face=subj.face,
+                        map_file=subj.folder / "mapping.csv", method=method, controls=controls,
+                        chin_marker=subj.chin_marker, jaw_second_marker=subj.jaw_second_marker,
+                        noise=noise, preset=preset, units="mm", figure=out / "controls.png",
+                        window=window if method == "lsq" else None,
+                        smooth=smooth if method == "lsq" else None, progress=progress)
+    cmp = compare.compare_files(out / "result.nc", out / "markers.csv")
+    with atomic_path(out / "comparison.json") as tmp:
+        tmp.write_text("\n".join(compare.report(cmp, as_json=True)))
+    if video:
+        from .pictures import render_movie
+
+        render_movie(out / "result.nc", (out / "movie.mp4",), progress=progress)
+    err = res.error_summary()
+    summary = {"subject": str(subject), "recording": src, "frames": len(res.time),
+               "markers": list(ms.names), "notes": notes + list(res.notes),
+               "error_mm": {"median": err["median_mm"], "max": err["max_mm"]},
+               "determined": [n for n, ok in zip(res.control_names, res.identifiable,
+                                                 strict=True) if ok]}
+    with atomic_path(out / "summary.json") as tmp:
+        tmp.write_text(json.dumps(summary, indent=2))
+    return Written(out, summary, f"{summary['frames']} frames of {len(ms.names)} markers "
+                   f"analysed: per-frame error median {err['median_mm']:.3f} mm, max "
+                   f"{err['max_mm']:.3f} mm; determined: {', '.join(summary['determined'])} "
+                   f"-> {out}/")
+
+
+def analyse_report(done: Written) -> list[str]:
+    """What ``facemech analyse`` prints: the notes, then the line."""
+    return [f"  {n}" for n in done.data["notes"]] + [done.line]
