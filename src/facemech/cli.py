@@ -29,12 +29,12 @@ def _option(fn, p: inspect.Parameter, args: tuple[str, ...]) -> inspect.Paramete
         return p.replace(default=typer.Argument(... if empty else p.default, help=help))
     return p.replace(default=typer.Option(p.default, *opts.NAMES.get(p.name, ()), help=help))
 
-
 def command(group: typer.Typer = app, name: str | None = None, args: tuple[str, ...] = (),
             look: tuple | None = None):
     """Register the function as the command ``name`` of ``group``. Its parameters become
     options as :mod:`facemech.cli_options` says (no default: an argument, as are those in
-    ``args``; ``...``: a required option); every number is checked before it runs. ``look``:
+    ``args``; ``...``: a required option); every number is checked before it runs, and what it
+    returns is printed (its ``warnings`` on stderr). ``look``:
     the defaults of the options ``--view --size --background --aa``, given to the function as
     one ``render`` (:func:`facemech.workflows.pictures.render_options`)."""
     def register(fn):
@@ -46,7 +46,9 @@ def command(group: typer.Typer = app, name: str | None = None, args: tuple[str, 
                     opts.check_number(name, value, opts.RANGES.get(key))
             if look:
                 kw["render"] = wf.pictures.render_options(*(kw.pop(k) for k in LOOK))
-            return fn(**kw)
+            if (shown := fn(**kw)) is not None:  # what it wrote, and its warnings
+                out.print(shown)
+                err.print(getattr(shown, "warnings", ""), end="")
         sig = inspect.signature(fn)
         extra = [inspect.Parameter(k, inspect.Parameter.KEYWORD_ONLY, default=d, annotation=type(
             d)) for k, d in zip(LOOK, look or (), strict=False)]
@@ -54,7 +56,6 @@ def command(group: typer.Typer = app, name: str | None = None, args: tuple[str, 
             *sig.parameters.values(), *extra) if p.name != "render"])
         return group.command(name)(run)
     return register
-
 
 LOOK = ("view", "size", "background", "aa")
 
@@ -64,16 +65,13 @@ class _Workflows:
     def __getattr__(self, name: str):
         return importlib.import_module(f"facemech.workflows.{name}")
 
-
 wf, progress = _Workflows(), importlib.import_module("facemech.progress")
 _log: list = []  # the running command's log lines (output not a terminal)
-
 
 def _version(value: bool) -> None:
     if value:
         print(f"facemech {importlib.import_module('facemech._version').__version__}")
         raise typer.Exit()
-
 
 @app.callback()
 def _root(ctx: typer.Context, version: bool = typer.Option(
@@ -82,7 +80,6 @@ def _root(ctx: typer.Context, version: bool = typer.Option(
     if not err.is_terminal:  # log lines, and a heartbeat for the whole command
         _log[:] = [ctx.with_resource(progress.LogProgress(ctx.invoked_subcommand or "facemech"))]
         ctx.call_on_close(_log.clear)
-
 
 def _staged(run, **options):
     """Call ``run(**options, progress=report)``: bars on a terminal, else the command's log
@@ -97,29 +94,32 @@ def _staged(run, **options):
     with shown as prog:
         return run(**options, progress=progress.staged(prog))
 
-
 def _say(lines, note: bool = False, **kw) -> None:  # note: on stderr, "facemech: " first
     for line in lines:
         (err if note else out).print(("facemech: " if note else "") + line, **kw)
-
 
 @command(look=("frontal+profile", "1280x720", "#2a2c33", 2))
 def demo(output: Path = Path("demo-output"), integrator: str | None = None, video: bool = True,
          preset: str = "anatomical", render=None):
     """Simulate a synthetic utterance on the built-in face; write results, plots and a movie."""
-    out.print(_staged(wf.demo.run, **locals()))
+    return _staged(wf.demo.run, **locals())
 
 @command(face_app, "build")
 def face_build(surface: Path, landmarks: Path, output: Path = ..., units: str = "mm",
                name: str | None = None, tissue: str = "anatomical"):
     """Build a three-layer face model from a surface mesh (a textured OBJ or a coloured PLY
     keeps its look) and landmarks."""
-    out.print(_staged(wf.faces.build_face_file, **locals()))
+    return _staged(wf.faces.build_face_file, **locals())
 
 @command(face_app, "info", args=("face",))
 def face_info(face: str = "default", as_json: bool = False, tissue: str | None = None):
     """Counts of a face model: nodes per layer, springs by kind, prisms, muscles, free fascia."""
     out.print(wf.faces.face_info(face, tissue=tissue).text(as_json), markup=False)
+
+@command(face_app, "landmarks")
+def face_landmarks(surface: Path, output: Path = ..., units: str = "mm"):
+    """Place landmarks on a scan from its geometry alone; write the CSV and a picture."""
+    return wf.landmarks.landmarks_file(**locals())
 
 @command(face_app, "export-default")
 def face_export_default(output: Path = ...):
@@ -131,7 +131,7 @@ def emg_process(emg: Path, output: Path = ..., rate: float | None = None,
                 baseline: str | None = None, calibration: Path | None = None,
                 calibration_baseline: str | None = None):
     """Rectify, integrate (17-ms trapezoid), downsample and normalise EMG to activity in [0, 1]."""
-    out.print(wf.emg.process_emg_file(**locals()))
+    return wf.emg.process_emg_file(**locals())
 
 @command(markers_app, "info")
 def markers_info(source: Path, units: str | None = None, as_json: bool = False):
@@ -142,7 +142,7 @@ def markers_info(source: Path, units: str | None = None, as_json: bool = False):
 def markers_convert(source: Path, target: Path | None = None, output: Path | None = None,
                     units: str | None = None, out_units: str | None = None):
     """Convert between C3D, TRC and CSV (read Qualisys TSV and a results file's markers)."""
-    out.print(wf.markers.convert_markers(source, output or target, units=units,
+    return (wf.markers.convert_markers(source, output or target, units=units,
                                          out_units=out_units))
 
 @command(markers_app, "head-correct")
@@ -150,30 +150,26 @@ def markers_head_correct(source: Path, output: Path = ..., units: str | None = N
                          head: str = ..., reference: int | None = None,
                          report: Path | None = None):
     """Remove head motion by a per-frame rigid fit of head markers to a reference frame."""
-    res = wf.markers.head_correct_file(**locals())
-    out.print(res)
-    err.print(res.warnings, end="")
+    return wf.markers.head_correct_file(**locals())
 
 @command(markers_app, "resample")
 def markers_resample(source: Path, output: Path = ..., rate: float | None = None,
                      units: str | None = None):
     """Resample to a new rate with anti-aliasing (gaps stay gaps)."""
-    out.print(wf.markers.resample_file(**locals()))
+    return wf.markers.resample_file(**locals())
 
 @command(markers_app, "frame")
 def markers_frame(source: Path, output: Path = ..., right: str = ..., left: str = ...,
                   front: str = ..., origin: str | None = None, reference: int = 0,
                   units: str | None = None):
     """Express markers in an anatomical frame: +x right->left, +y up, +z forward."""
-    out.print(wf.markers.frame_file(**locals()))
+    return wf.markers.frame_file(**locals())
 
 @command(markers_app, "fill-gaps")
 def markers_fill_gaps(source: Path, output: Path = ..., units: str | None = None,
                       max_gap: float = 0.1):
     """Fill interior gaps up to --max-gap with a cubic spline; filled samples are flagged."""
-    res = wf.markers.fill_gaps_file(**locals())
-    out.print(res)
-    err.print(res.warnings, end="")
+    return wf.markers.fill_gaps_file(**locals())
 
 @command(look=("frontal+profile", "1280x720", "#2a2c33", 2))
 def simulate(
@@ -188,7 +184,7 @@ def simulate(
         render=None):
     """Simulate the face driven by muscle activity or EMG and a jaw trajectory."""
     sim, movie = wf.simulate, video and (video, audio, render)
-    out.print(_staged(
+    return (_staged(
         sim.simulate_files, output=output, movie=movie,
         controls=sim.Controls(activity, emg, emg_baseline, emg_calibration),
         jaw=sim.JawSource(jaw_angle, jaw_chin, chin_marker, jaw_second_marker, units, bite_block),
@@ -198,32 +194,32 @@ def simulate(
 @command(look=("frontal+profile", "1280x720", "#2a2c33", 2))
 def render(result: Path, output: Path = ..., audio: Path | None = None, render=None):
     """Render a results file to an H.264 MP4 or PNG frames (-o a folder), with eyes and teeth."""
-    out.print(_staged(wf.pictures.render_movie, results=result, movie=(output, audio, render)))
+    return _staged(wf.pictures.render_movie, results=result, movie=(output, audio, render))
 
 @command(look=("frontal", "1280x1280", "#ffffff", 3))
 def still(result: Path, output: Path = ..., time: float | None = None, peak: str | None = None,
           markers: bool = False, labels: bool = False, render=None):
     """A still figure for a paper: one frame at a time or at a gesture's peak (PNG or PDF)."""
-    out.print(wf.pictures.still_file(result, output, time=time, peak=peak, markers=markers,
+    return (wf.pictures.still_file(result, output, time=time, peak=peak, markers=markers,
               labels=labels, options=render))
 
 @command()
 def export(result: Path, output: Path = ..., units: str | None = None, fmt: str | None = None):
     """Export a result: animated skin as glTF (.glb), a mesh per frame (OBJ/PLY, -o a folder),
     or markers (.trc, .c3d, .csv). --units: meshes m (default) or mm, markers mm (default)."""
-    out.print(wf.pictures.export_file(result, output, fmt=fmt, units=units))
+    return wf.pictures.export_file(result, output, fmt=fmt, units=units)
 
 @command()
 def plot(result: Path, output: Path = ..., units: str | None = None,
          markers: str = "R03,R05,R07", measured: Path | None = None):
     """Plot displacement and acceleration (vertical, protrusion) of markers, like Figs. 4-6."""
-    out.print(wf.pictures.plot_file(result, output, markers, measured=measured, units=units))
+    return wf.pictures.plot_file(result, output, markers, measured=measured, units=units)
 
 @command()
 def view(result: Path, output: Path = ..., units: str | None = None,
          markers: Path | None = None, title: str | None = None):
     """Write an interactive viewer: one self-contained HTML page (WebGL, works offline)."""
-    out.print(wf.pictures.view_file(result, output, markers=markers, units=units, title=title))
+    return wf.pictures.view_file(result, output, markers=markers, units=units, title=title)
 
 @command(args=("text",))
 def speak(text: str | None = None, output: Path = Path("speak-output"),
@@ -316,7 +312,7 @@ def subject(face: str, markers: Path = ..., output: Path = ..., head: str | None
             rest: str = "0,0.5", chin_marker: str | None = None,
             jaw_second_marker: str | None = None, warp: bool | None = None):
     """Make a subject folder: a face (built-in, face file or scan) fitted to rest markers."""
-    out.print(_staged(wf.subject.make_subject, **locals()))
+    return _staged(wf.subject.make_subject, **locals())
 
 @command()
 def analyse(subject: Path, recording: Path, output: Path = ..., units: str | None = None,
@@ -325,7 +321,6 @@ def analyse(subject: Path, recording: Path, output: Path = ..., units: str | Non
             smooth: float | None = 1.0, preset: str = "anatomical", video: bool = False):
     """A recording against a subject: head motion, frame, gaps, inversion, statistics, movie."""
     _say(wf.subject.analyse_report(_staged(wf.subject.analyse, **locals())))
-
 
 def main() -> None:
     """Entry point: run the app; a FacemechError becomes one line on stderr and exit 2; SIGINT
@@ -339,7 +334,6 @@ def main() -> None:
         sys.exit(2)
     finally:
         restore()
-
 
 if __name__ == "__main__":
     main()

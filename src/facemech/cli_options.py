@@ -146,6 +146,9 @@ still.output: PNG or PDF
 stimuli.output: output folder
 view.markers: measured markers in the model's frame, drawn beside its own
 view.output: HTML page
+face_landmarks.surface: a scan: OBJ, PLY or STL, any orientation
+face_landmarks.output: landmark CSV (name,x,y,z,confidence) and, beside it, a PNG
+face_landmarks.units: length unit of the scan and the CSV
 subject.face: a built-in face, a face file (.npz), or a scan (OBJ/PLY/STL; --landmarks)
 subject.markers: a recording (C3D, TRC, CSV) holding the face at rest
 subject.output: the subject folder

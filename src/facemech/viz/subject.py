@@ -43,3 +43,37 @@ def subject_figure(path: str | Path, model, markers_m: np.ndarray, names, mappin
         ax.set_ylabel("y (up) mm")
     return save_figure(fig, path, f"{model.name}: {len(mapping)} markers on the skin (red), "
                        f"their nodes (rings), head markers (blue)")
+
+
+def landmarks_figure(path: str | Path, vertices: np.ndarray, positions: dict,
+                     confidence: dict, generic_to_scan, *, title: str = "") -> Path:
+    """PNG of a scan (grey points, front and side as the registration found them) with its
+    landmarks coloured by confidence (green 1 to red 0) and named.
+
+    Parameters
+    ----------
+    vertices : (n, 3) the scan, metres; ``positions`` name -> (3,) on it
+    generic_to_scan : the registration's similarity; its inverse turns the scan to the front
+    """
+    from matplotlib import colormaps
+
+    rot = generic_to_scan.rotation
+    to_front = lambda p: (np.asarray(p) - generic_to_scan.translation) @ rot  # noqa: E731
+    v = to_front(vertices) * 1e3
+    names = list(positions)
+    p = to_front(np.array([positions[n] for n in names])) * 1e3
+    colour = colormaps["RdYlGn"](np.array([confidence[n] for n in names]))
+    fig, axes = subplots(1, 2, figsize=(11, 6.2))
+    step = max(1, len(v) // 20000)
+    for ax, (i, j), label in zip(axes, ((0, 1), (2, 1)), ("front: x mm", "side: z mm"),
+                                 strict=True):
+        ax.scatter(v[::step, i], v[::step, j], s=1, c="0.75", lw=0)
+        ax.scatter(p[:, i], p[:, j], s=28, c=colour, edgecolors="k", lw=0.5, zorder=3)
+        if i == 0:
+            for k, n in enumerate(names):
+                ax.annotate(n, p[k, [i, j]], fontsize=6, xytext=(3, 2),
+                            textcoords="offset points")
+        ax.set_aspect("equal")
+        ax.set_xlabel(label)
+        ax.set_ylabel("y mm")
+    return save_figure(fig, path, title)
