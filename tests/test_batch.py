@@ -214,7 +214,7 @@ run_batch(sys.argv[1], sys.argv[2], workers=1, processes=False)
 
 
 def test_killed_batch_resumes_without_redoing_finished_items(tmp_path, client):
-    manifest = corpus(tmp_path, levels=(0.1, 0.2, 0.3, 0.4, 0.5), frames=30)
+    manifest = corpus(tmp_path, levels=(0.1, 0.2, 0.3, 0.4), frames=20)
     out = tmp_path / "out"
     env = {**os.environ, "PYTHONWARNINGS": "ignore"}
     proc = subprocess.Popen([sys.executable, "-c", _RUNNER, str(manifest), str(out)],
@@ -229,7 +229,7 @@ def test_killed_batch_resumes_without_redoing_finished_items(tmp_path, client):
         os.killpg(proc.pid, signal.SIGKILL)  # the batch and its workers, mid-batch
         proc.wait()
     before = mtimes(out)
-    assert 1 <= len(before) < 5
+    assert 1 <= len(before) < 4
     assert not (out / "summary.csv").exists()
     rep = wb.run_batch(manifest, out, client=client)
     status = {o.id: o.status for o in rep.outcomes}
@@ -237,9 +237,9 @@ def test_killed_batch_resumes_without_redoing_finished_items(tmp_path, client):
     assert {i for i, s in status.items() if s == "done"} == set(status) - set(before)
     after = mtimes(out)
     assert all(after[i] == before[i] for i in before)  # nothing done twice
-    assert sorted(after) == [f"s{k}" for k in range(5)]  # nothing lost
+    assert sorted(after) == [f"s{k}" for k in range(4)]  # nothing lost
     assert not [p for p in out.iterdir() if p.name.startswith(".")]  # no partial folders
     levels = [json.loads((out / f"s{k}" / DONE).read_text())["numbers"]["frames"]
               for k in range(5)]
-    assert levels == [30] * 5
+    assert levels == [20] * 4
     assert np.all([r["status"] in ("done", "skipped") for r in summary(out).values()])

@@ -31,6 +31,7 @@ class Outcome:
     status : ``done`` (made now), ``skipped`` (its done-record was up to date), ``failed``, or
         ``not run`` (the batch stopped before it)
     wall_s : seconds the item took to make (for a skipped item: when it was made)
+    cpu_s : CPU seconds of the thread that made it (the same)
     numbers : its key numbers (frames, errors, ...; see :mod:`.jobs`)
     error : the one-line error of a failed item ("" otherwise)
     folder : its output folder (None when failed)
@@ -40,6 +41,7 @@ class Outcome:
     job: str
     status: str
     wall_s: float = 0.0
+    cpu_s: float = 0.0
     numbers: dict = field(default_factory=dict)
     error: str = ""
     folder: Path | None = None
@@ -62,13 +64,14 @@ class Outcome:
     def row(self) -> dict:
         """Its row of the summary table."""
         return {"id": self.id, "job": self.job, "status": self.status,
-                "wall_s": f"{self.wall_s:.3f}", **self.numbers, "error": self.error}
+                "wall_s": f"{self.wall_s:.3f}", "cpu_s": f"{self.cpu_s:.3f}", **self.numbers,
+                "error": self.error}
 
 
 def skipped(item: Item, record: dict, folder: Path) -> Outcome:
     """The outcome of an item whose done-record ``record`` is up to date."""
     return Outcome(item.id, item.job, "skipped", float(record.get("wall_s", 0.0)),
-                   dict(record.get("numbers", {})), "", folder)
+                   float(record.get("cpu_s", 0.0)), dict(record.get("numbers", {})), "", folder)
 
 
 def _one_line(exc: BaseException) -> str:
@@ -101,22 +104,23 @@ def run_item(item: Item, out_dir: str | Path) -> Outcome:
     record = up_to_date(final, item.key)
     if record is not None:
         return skipped(item, record, final)
-    start = time.perf_counter()
+    start, cpu = time.perf_counter(), time.thread_time()
     partial = None
     try:
         partial = new_partial(out_dir, item.id)
         numbers, lines = JOBS[item.job].run(dict(item.options), partial)
         lines = [str(line).replace(str(partial), str(final)) for line in lines]
-        wall = time.perf_counter() - start
+        wall, cpu = time.perf_counter() - start, time.thread_time() - cpu
         write_done(partial, {
             "id": item.id, "job": item.job, "key": item.key, "inputs": item.inputs,
             "settings": item.settings, "options": item.options, "numbers": numbers,
             "report": list(lines), "files": folder_files(partial), "wall_s": round(wall, 3),
+            "cpu_s": round(cpu, 3),
             "finished": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "facemech": __version__})
         commit_folder(partial, final)
     except Exception as exc:  # the item fails, the batch goes on
         if partial is not None:
             shutil.rmtree(partial, ignore_errors=True)
-        return Outcome(item.id, item.job, "failed", time.perf_counter() - start, {},
-                       _one_line(exc), None)
-    return Outcome(item.id, item.job, "done", wall, numbers, "", final)
+        return Outcome(item.id, item.job, "failed", time.perf_counter() - start,
+                       time.thread_time() - cpu, {}, _one_line(exc), None)
+    return Outcome(item.id, item.job, "done", wall, cpu, numbers, "", final)

@@ -26,7 +26,8 @@ DONE = "done.json"
 _PARTIAL, _REPLACED = ".partial-", ".replaced-"
 
 #: the summary's first columns; the items' other key numbers follow, in the order first seen
-SUMMARY_COLUMNS = ("id", "job", "status", "wall_s", "frames", "median_error_mm", "max_error_mm")
+SUMMARY_COLUMNS = ("id", "job", "status", "wall_s", "cpu_s", "frames", "median_error_mm",
+                   "max_error_mm")
 
 
 def read_done(folder: str | Path) -> dict | None:

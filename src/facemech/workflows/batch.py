@@ -93,7 +93,7 @@ def _died(item: Item, exc: BaseException) -> Outcome:
     """A failed outcome for an item whose task ended without a result (a worker killed too
     often, a lost scheduler)."""
     text = " ".join(str(exc).split()) or "no detail"
-    return Outcome(item.id, item.job, "failed", 0.0, {},
+    return Outcome(item.id, item.job, "failed", 0.0, 0.0, {},
                    f"its worker died or the task was lost ({type(exc).__name__}: {text})")
 
 
