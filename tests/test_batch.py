@@ -90,6 +90,13 @@ def test_manifest_errors_name_the_file_row_and_field(tmp_path):
     assert e.field == "id"
     e = _error(tmp_path, '[[item]]\nid = "r"\njob = "regions"\nfiles = "utt*.csv"\n', "m.toml")
     assert e.field == "files" and "no file matches" in e.message
+    with pytest.raises(InputError) as info:
+        wb.run_batch(tmp_path / "m.csv", tmp_path / "out", workers=2, scheduler="tcp://x:1")
+    assert info.value.field == "workers"
+    (tmp_path / "m.csv").write_text("id,job,activity\ns0,simulate,a.csv\n")
+    with pytest.raises(InputError) as info:
+        wb.run_batch(tmp_path / "m.csv", tmp_path / "a.csv", workers=1)  # -o is an input
+    assert info.value.field == "-o" and not (tmp_path / "summary.csv").exists()
     e = _error(tmp_path, '[defaults]\nwindoww = 3\n[[item]]\nid = "a"\njob = "invert"\n',
                "m.toml")
     assert e.field == "defaults.windoww"

@@ -134,10 +134,14 @@ def run_batch(manifest: str | Path, output: str | Path, *, workers: int | None =
     ------
     InputError
         A manifest error (naming the manifest, the row and the field), an output folder that
-        cannot be written, a scheduler that cannot be reached.
+        cannot be written or is an input, a scheduler that cannot be reached, ``workers``
+        given with ``scheduler`` (or ``client``).
     """
     from ..io.atomic import check_output
 
+    if workers is not None and (scheduler is not None or client is not None):
+        raise InputError("give the number of local workers or a scheduler, not both",
+                         field="workers")
     items = read_manifest(manifest)
     out = check_output(output, [manifest, *_all_inputs(items)], folder=True, field="-o")
     out = out.resolve()
