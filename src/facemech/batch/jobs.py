@@ -1,0 +1,175 @@
+"""The job kinds of a batch manifest: their options (names, types, which are input files) and
+the workflow each one calls to fill an item's folder.
+
+Every option is named as the command's option (``jaw-chin`` or ``jaw_chin``); a job's outputs
+are the files its command writes, under fixed names inside the item's folder:
+
+==========  ====================  ===========================================================
+kind        required              outputs
+==========  ====================  ===========================================================
+simulate    ``activity`` or       ``result.nc``
+            ``emg``
+invert      ``markers``           ``result.nc`` (and ``inversion.png`` with ``figure = true``)
+speak       ``text``, or          what ``facemech speak`` writes (``result.nc``, WAV, ...)
+            ``audio`` and
+            ``textgrid``
+stimuli     ``design``            what ``facemech stimuli`` writes
+regions     ``files``             ``summary.json`` and the figures
+==========  ====================  ===========================================================
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+from ..errors import FacemechError, InputError
+
+__all__ = ["JOBS", "Job", "OPTION_KINDS"]
+
+#: value kinds: a file read (hashed), several files, a file or a built-in name (a value with a
+#: suffix is a file), a marker file or "first", text, numbers and yes/no
+OPTION_KINDS = ("path", "paths", "file_or_name", "path_or_first", "str", "int", "float", "bool")
+
+_RENDER = {"view": "str", "size": "str", "background": "str", "aa": "int"}
+
+
+@dataclass(frozen=True)
+class Job:
+    """One job kind.
+
+    Attributes
+    ----------
+    options : option name -> value kind (:data:`OPTION_KINDS`)
+    required : groups of options; each group needs at least one of its options given
+    run : run(options, folder) -> (numbers, report lines): fills ``folder`` (it exists and is
+        empty) and returns the item's key numbers and the lines its command would print
+    more_inputs : more_inputs(options) -> {name: path}: files the job reads that its options
+        name only indirectly (a design table's sounds and results), hashed with the others
+    """
+
+    options: dict
+    required: tuple
+    run: Callable[[dict, Path], tuple[dict, list[str]]]
+    more_inputs: Callable[[dict], dict] | None = None
+
+
+def _simulate(o: dict, folder: Path):
+    from ..workflows.simulate import Controls, JawSource, simulate_files
+
+    keys = ("face", "preset", "jaw_kinematics", "integrator", "substeps", "dt", "jaw_drive")
+    run = simulate_files(
+        folder / "result.nc",
+        Controls(o.get("activity"), o.get("emg"), o.get("emg_baseline"), o.get("emg_calibration")),
+        JawSource(o.get("jaw_angle"), o.get("jaw_chin"), o.get("chin_marker", "R01"),
+                  o.get("jaw_second_marker"), o.get("units"), o.get("bite_block", False)),
+        **{k: o[k] for k in keys if k in o})
+    sim = run.simulation
+    return ({"frames": len(sim.time), "sim_wall_s": round(float(sim.wall_seconds), 3),
+             "real_time_factor": round(float(sim.real_time_factor), 3)},
+            str(run).splitlines())
+
+
+_INVERT_KEYS = ("face", "method", "positive", "controls", "chin_marker", "jaw_second_marker",
+                "jaw_fixed", "jaw_lead", "noise", "window", "tol", "bend", "smooth", "effort",
+                "max_evaluations", "scale_pair", "preset", "jaw_kinematics", "dt", "units")
+
+
+def _invert(o: dict, folder: Path):
+    from ..workflows import invert as wf
+
+    figure = folder / "inversion.png" if o.get("figure") else None
+    out = folder / "result.nc"
+    res = wf.invert(o["markers"], out, map_file=o.get("map"), figure=figure,
+                    **{k: o[k] for k in _INVERT_KEYS if k in o})
+    s = res.error_summary()
+    return ({"frames": len(res.time), "median_error_mm": round(float(s["median_mm"]), 4),
+             "max_error_mm": round(float(s["max_mm"]), 4), "markers": len(res.marker_names)},
+            wf.report(res, out.name, None if figure is None else figure.name) + wf.notes(res))
+
+
+def _speak(o: dict, folder: Path):
+    from ..workflows.speech import speak, speak_report
+
+    keys = ("audio", "textgrid", "voice", "word_tier", "phone_tier", "strength", "face", "preset",
+            "video", *_RENDER)
+    kw = {k: o[k] for k in keys if k in o}
+    if "rate" in o:
+        kw["rate_wpm"] = o["rate"]
+    res = speak(folder, o.get("text"), **kw)
+    return ({"frames": len(res.simulation.time), "phones": len(res.alignment.phones),
+             "duration_s": round(float(res.alignment.duration), 3)},
+            speak_report(res, folder.name))
+
+
+def _stimuli(o: dict, folder: Path):
+    from ..workflows.speech import stimuli, stimuli_report
+
+    rep = stimuli(o["design"], folder, **{k: o[k] for k in ("video", *_RENDER) if k in o})
+    made, failed = stimuli_report(rep)
+    if rep.failed:
+        first = rep.failed[0].one_line()
+        raise FacemechError(f"{len(rep.failed)} of {len(rep.failed) + len(rep.made)} stimuli "
+                            f"failed; first: {first}")
+    return {"stimuli": len(rep.made) + len(rep.skipped)}, made
+
+
+def _design_files(o: dict) -> dict:
+    """The existing files a design table's rows name (results, sounds, dubbed sounds)."""
+    from ..speech.design import read_design
+
+    base = Path(o["design"]).parent
+    found = {}
+    for row in read_design(o["design"]):
+        for col in ("results", "audio", "dub_audio"):
+            if col in row and (base / str(row[col])).is_file():
+                found[f"design:{row['_row']}:{col}"] = base / str(row[col])
+    return found
+
+
+def _regions(o: dict, folder: Path):
+    from ..workflows.regions import regions, report
+
+    keys = ("k", "eps", "neutral", "train", "test", "method", "units")
+    res = regions(o["files"], folder, **{k: o[k] for k in keys if k in o})
+    return ({"utterances": len(o["files"]), "rank": int(res.rank), "k": int(res.k),
+             "eps_mm": round(float(res.eps_mm), 4)}, report(res, folder.name))
+
+
+JOBS: dict[str, Job] = {
+    "simulate": Job(
+        {"activity": "path", "emg": "path", "emg_baseline": "str", "emg_calibration": "path",
+         "jaw_chin": "path", "chin_marker": "str", "jaw_second_marker": "str", "jaw_angle": "path",
+         "bite_block": "bool", "units": "str", "face": "file_or_name", "preset": "file_or_name",
+         "jaw_kinematics": "str", "integrator": "str", "substeps": "int", "dt": "float",
+         "jaw_drive": "str"},
+        (("activity", "emg"),), _simulate),
+    "invert": Job(
+        {"markers": "path", "face": "file_or_name", "map": "path", "preset": "file_or_name",
+         "method": "str", "positive": "bool", "controls": "str", "chin_marker": "str",
+         "jaw_second_marker": "str", "jaw_fixed": "bool", "jaw_lead": "int", "noise": "float",
+         "window": "int", "tol": "float", "bend": "float", "smooth": "float", "effort": "float",
+         "max_evaluations": "int", "scale_pair": "str", "jaw_kinematics": "str", "dt": "float",
+         "units": "str", "figure": "bool"},
+        (("markers",),), _invert),
+    "speak": Job(
+        {"text": "str", "audio": "path", "textgrid": "path", "voice": "str", "rate": "int",
+         "word_tier": "str", "phone_tier": "str", "strength": "float", "face": "file_or_name",
+         "preset": "file_or_name", "video": "bool", **_RENDER},
+        (("text", "audio"),), _speak),
+    "stimuli": Job({"design": "path", "video": "bool", **_RENDER}, (("design",),), _stimuli,
+                   _design_files),
+    "regions": Job(
+        {"files": "paths", "k": "int", "eps": "str", "neutral": "path_or_first", "train": "str",
+         "test": "str", "method": "str", "units": "str"},
+        (("files",),), _regions),
+}
+
+
+def check_kind(job: str, *, source: str, row: int) -> Job:
+    """The :class:`Job` of kind ``job``; an InputError naming ``source`` and ``row`` if none."""
+    if job not in JOBS:
+        raise InputError(f"row {row}: unknown job kind {job!r} (one of {', '.join(JOBS)})",
+                         source=source, field="job")
+    return JOBS[job]
