@@ -321,6 +321,16 @@ def analyse(subject: Path, recording: Path, output: Path = ..., units: str | Non
             smooth: float | None = 1.0, preset: str = "anatomical", video: bool = False):
     """A recording against a subject: head motion, frame, gaps, inversion, statistics, movie."""
     _say(wf.subject.analyse_report(_staged(wf.subject.analyse, **locals())))
+@command()
+def batch(manifest: Path, output: Path = ..., workers: int | None = None,
+          scheduler: str | None = None):
+    """Run a manifest of simulate/invert/speak/stimuli/regions items on dask (docs/batch.md)."""
+    rep = wf.batch.run_batch(manifest, output, workers=workers, scheduler=scheduler, on_item=(
+        lambda o, n, t: _say([f"[{n}/{t}] {o.line()}"], True, markup=False, highlight=False)))
+    made, failed = wf.batch.report(rep)
+    _say(failed, True, markup=False, highlight=False, soft_wrap=True)
+    _say(made)
+    raise typer.Exit(rep.exit_code)
 
 def main() -> None:
     """Entry point: run the app; a FacemechError becomes one line on stderr and exit 2; SIGINT

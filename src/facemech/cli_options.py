@@ -149,6 +149,10 @@ view.output: HTML page
 face_landmarks.surface: a scan: OBJ, PLY or STL, any orientation
 face_landmarks.output: landmark CSV (name,x,y,z,confidence) and, beside it, a PNG
 face_landmarks.units: length unit of the scan and the CSV
+manifest: manifest of items (.csv or .toml)
+batch.output: output folder: one folder per item, summary.csv
+workers: local worker processes (default: one per core)
+scheduler: a dask scheduler, tcp://HOST:8786 (instead of local workers)
 subject.face: a built-in face, a face file (.npz), or a scan (OBJ/PLY/STL; --landmarks)
 subject.markers: a recording (C3D, TRC, CSV) holding the face at rest
 subject.output: the subject folder
@@ -182,7 +186,8 @@ RANGES: dict[str, str] = {
     "smooth": "[0, 1e6]", "effort": "[0, 1e6]", "window": "[1, 1000]", "substeps": "[1, 1e5]",
     "reference": "[0, inf)", "frames": "[2, 1e6]", "utterances": "[1, 1e4]", "k": "[1, 1000]",
     "aa": "[1, 4]", "rate_wpm": "[80, 450]", "strength": "[0, 10]", "jaw_lead": "[0, 600]",
-    "max_evaluations": "[1, 1e7]", "lowpass": "(0, 1000]"}
+    "max_evaluations": "[1, 1e7]", "lowpass": "(0, 1000]",
+    "workers": "[1, 1024]"}
 
 
 def help_for(command: str, parameter: str) -> str | None:
