@@ -335,3 +335,23 @@ def test_2d_and_short_ibug_files_are_refused(tmp_path):
     with pytest.raises(InputError) as exc:
         read_ibug68(tmp_path / "c.ljson")
     one_line(exc, "c.ljson: field 'landmarks'", "2-D")
+
+
+# ---- through the command line (as it is: --units, no --axes yet) ------------------------------
+def test_face_build_command_refuses_in_one_line_and_reads_ibug(generic, tmp_path, monkeypatch,
+                                                               capsys):
+    from conftest import run_cli
+
+    v, f, lm, ref = generic
+    obj, csv = write_scan(tmp_path, v, f, lm, scale=1e2)  # cm, declared mm by default
+    out = tmp_path / "f.npz"
+    code, _, err = run_cli(monkeypatch, capsys, "face", "build", obj, csv, "-o", out)
+    lines = err.strip().splitlines()
+    assert code == 2 and len(lines) == 1 and "Traceback" not in err
+    assert lines[0].startswith(f"facemech: error: {obj}: field 'units'")
+    assert "use --units cm" in lines[0] and not out.exists()
+    write_pts(tmp_path / "lm.pts", generic_ibug68() * 1e-1)  # cm, like the surface
+    code, text, err = run_cli(monkeypatch, capsys, "face", "build", obj, tmp_path / "lm.pts",
+                              "-o", out, "--units", "cm")
+    assert code == 0, err
+    assert f"{ref.n_surface} nodes per layer" in text and out.exists()
