@@ -56,3 +56,38 @@ def scan_face(spacing_deg: float = 2.4, spacing_mm: float = 3.0, seed: int = 0):
         tri = tri[:, ::-1]
     lm = {k: v * 1e-3 for k, v in generic.landmarks().items()}
     return reshape(verts), tri.astype(np.int64), {k: reshape(v) for k, v in lm.items()}
+
+
+# ---- the generic face written as scans come: other units, axes, seams, fragments -------------
+def write_obj(path, vertices, faces, *, uv=None, material=None):
+    """An OBJ of ``vertices`` (written as given: the file's numbers) and 0-based ``faces``.
+
+    With ``uv`` (f, 3, 2) per-corner texture coordinates, one ``v`` line per (vertex, UV) pair
+    as exporters write them: every position on a texture seam appears twice.
+    """
+    with open(path, "w") as fh:
+        if material:
+            fh.write(f"mtllib {material}.mtl\nusemtl skin\n")
+        if uv is None:
+            fh.writelines("v {:.6f} {:.6f} {:.6f}\n".format(*p) for p in vertices)
+            fh.writelines(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in faces)
+            return len(vertices)
+        keys: dict = {}
+        corner = np.zeros(faces.shape, np.int64)
+        for t in range(len(faces)):
+            for k in range(3):
+                key = (int(faces[t, k]), round(float(uv[t, k, 0]), 6),
+                       round(float(uv[t, k, 1]), 6))
+                corner[t, k] = keys.setdefault(key, len(keys))
+        fh.writelines("v {:.6f} {:.6f} {:.6f}\n".format(*vertices[v]) for v, _, _ in keys)
+        fh.writelines(f"vt {u:.6f} {w:.6f}\n" for _, u, w in keys)
+        fh.writelines("f " + " ".join(f"{i}/{i}" for i in tri) + "\n" for tri in corner + 1)
+        return len(keys)
+
+
+def write_landmark_csv(path, landmarks, scale=1e3):
+    """A facemech landmark CSV, the positions (m) times ``scale`` (the file's numbers)."""
+    with open(path, "w") as fh:
+        fh.write("name,x,y,z\n")
+        fh.writelines(f"{n},{p[0] * scale:.6f},{p[1] * scale:.6f},{p[2] * scale:.6f}\n"
+                      for n, p in landmarks.items())

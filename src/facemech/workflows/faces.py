@@ -6,25 +6,30 @@ import json
 from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
-
-from ..plausibility import check_face_size
 from ..progress import StagedProgress
 from .outcome import Written
 
 
 def build_face_file(surface: str | Path, landmarks: str | Path, output: str | Path, *,
-                    units: str = "mm", name: str | None = None, tissue: str = "anatomical",
-                    progress: StagedProgress | None = None):
+                    units: str | None = "mm", axes: str | None = None, name: str | None = None,
+                    tissue: str = "anatomical", progress: StagedProgress | None = None):
     """Build a three-layer face model from a surface mesh and landmarks; save it to ``output``.
+
+    The scan is read and checked by :func:`~facemech.geometry.scan.load_scan`: its unit against
+    its size, its axes from the landmarks, loose fragments dropped, and the landmarks on the
+    skin, unique and with the subject's left on the left.
 
     Parameters
     ----------
     surface : OBJ (with its MTL and texture image beside it), PLY or STL of the face; a textured
         OBJ or a PLY with vertex colours keeps its look in the model
-    landmarks : landmark CSV ``name,x,y,z``
+    landmarks : landmark CSV ``name,x,y,z``, or 68 iBUG points (``.pts``, ``.ljson``, CSV of 68
+        rows ``x,y,z``)
     output : the model file (``.npz``), written atomically
-    units : length unit of both files (``mm``, ``cm`` or ``m``)
+    units : length unit of both files (``m``, ``cm``, ``mm`` or ``um``); None infers it from
+        the scan's size
+    axes : the file's axes for facemech's x (left), y (up), z (forward), e.g. ``"x,z,-y"``; None
+        detects them from the landmarks
     name : model name (default: the surface file's stem)
     tissue : tissue geometry, ``anatomical`` or ``uniform``
     progress : staged callback; reports the stage ``build`` (0 then 1 of 1)
@@ -32,10 +37,11 @@ def build_face_file(surface: str | Path, landmarks: str | Path, output: str | Pa
     Returns
     -------
     Written : ``data`` the :class:`~facemech.geometry.model.FaceModel`; its line gives nodes per
-        layer, springs, prisms, muscles and appearance
+        layer, springs, prisms, muscles and appearance; ``warnings`` the scan's notes
+        ("facemech: note: ..." lines: a unit inferred, axes turned, fragments dropped)
     """
     from ..geometry.builder import build_face, tissue_options
-    from ..geometry.surface_io import read_landmarks, read_surface_with_appearance
+    from ..geometry.scan import load_scan
     from ..io.atomic import check_output
 
     surface = Path(surface)
@@ -43,11 +49,9 @@ def build_face_file(surface: str | Path, landmarks: str | Path, output: str | Pa
     opts = tissue_options(tissue)
     if progress is not None:
         progress("build", 0, 1)
-    v, f, look = read_surface_with_appearance(surface, units=units)
-    check_face_size(float(np.ptp(v, axis=0).max()), unit=units, source=str(surface))
-    lm = read_landmarks(landmarks, units=units)
-    model = build_face(v, f, lm, name=name or surface.stem, source=str(surface), options=opts,
-                       appearance=look)
+    scan = load_scan(surface, landmarks, units=units, axes=axes)
+    model = build_face(scan.vertices, scan.faces, scan.landmarks, name=name or surface.stem,
+                       source=str(surface), options=opts, appearance=scan.appearance)
     model.save(output)
     if progress is not None:
         progress("build", 1, 1)
@@ -55,7 +59,8 @@ def build_face_file(surface: str | Path, landmarks: str | Path, output: str | Pa
     return Written(Path(output), model,
                    f"built {s['name']}: {s['nodes_per_layer']['epidermis']} nodes per layer, "
                    f"{s['springs']} springs, {s['prisms']} prisms, {s['muscles']} muscles, "
-                   f"appearance: {s['appearance']} -> {output}")
+                   f"appearance: {s['appearance']} -> {output}",
+                   "".join(f"facemech: note: {n}\n" for n in scan.notes))
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,158 @@
+"""Scans as they come: loose fragments dropped, closed heads refused, bad triangles named.
+
+A scanner's mesh holds more than the face: specks of hair or background floating near it, a
+closed head, slivers where the reconstruction folded. The builder needs one open sheet of
+reasonable triangles; these steps make it one, or say in one line where it is not. (Texture
+seams, where one position has two texture coordinates, are merged when the surface is read:
+:mod:`surface_io`.)
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from ..errors import InputError
+from .appearance import Appearance
+from .mesh import surface_edges
+
+#: a connected piece of the surface holding less than this share of its area is a fragment
+FRAGMENT_AREA_SHARE = 0.10
+#: triangle quality (4 sqrt(3) area / sum of squared edges: 1 equilateral, 0 degenerate)
+#: below which a triangle is refused
+MIN_TRIANGLE_QUALITY = 0.02
+#: m, the shortest edge accepted (its spring would be stiffer than the time step allows)
+MIN_EDGE_M = 1e-4
+
+
+def triangle_areas(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """Area of every triangle, (f,) in the unit of ``vertices`` squared."""
+    a, b, c = (vertices[faces[:, k]] for k in range(3))
+    return 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
+
+
+def surface_pieces(n_vertices: int, faces: np.ndarray) -> np.ndarray:
+    """The connected piece of every triangle, (f,) ints (triangles sharing a vertex connect)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    e = surface_edges(faces)
+    graph = coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(n_vertices, n_vertices))
+    _, label = connected_components(graph, directed=False)
+    return label[faces[:, 0]]
+
+
+def drop_fragments(vertices: np.ndarray, faces: np.ndarray, appearance: Appearance | None = None,
+                   *, source: str | None = None,
+                   max_share: float = FRAGMENT_AREA_SHARE):
+    """The largest connected piece of a surface; the small others dropped.
+
+    Parameters
+    ----------
+    vertices : (n, 3) metres
+    faces : (f, 3) int triangles
+    appearance : its texture (per corner of ``faces``) or vertex colours, kept with what is kept
+    source : the surface file, for the message
+    max_share : a piece with less than this share of the area is a fragment
+
+    Returns
+    -------
+    vertices, faces, appearance : the kept piece, its vertices renumbered (unused ones dropped)
+    note : a line saying what was dropped ("" when nothing was)
+
+    Raises
+    ------
+    InputError
+        Field ``faces``: a second piece holding at least ``max_share`` of the area (two faces, or
+        a face cut in two: its parts must be joined).
+    """
+    piece = surface_pieces(len(vertices), faces)
+    area = triangle_areas(vertices, faces)
+    total = float(area.sum())
+    by_piece = np.bincount(piece, weights=area)
+    order = np.argsort(by_piece)[::-1]
+    main = int(order[0])
+    n_pieces = int(np.sum(np.bincount(piece) > 0))
+    if n_pieces > 1 and by_piece[order[1]] >= max_share * total:
+        raise InputError(f"the surface is in {n_pieces} pieces and the second holds "
+                         f"{100 * by_piece[order[1]] / total:.0f} % of its area: join them into "
+                         "one sheet (the mouth corners must be connected by the surface)",
+                         source=source, field="faces")
+    keep = piece == main
+    used = np.zeros(len(vertices), bool)
+    used[faces[keep].ravel()] = True
+    note = ""
+    if n_pieces > 1:
+        dropped = total - float(by_piece[main])
+        note = (f"dropped {n_pieces - 1} loose fragment{'s' if n_pieces > 2 else ''} "
+                f"({int(np.sum(~keep))} triangles, {100 * dropped / total:.2g} % of the area)")
+    if keep.all() and used.all():
+        return vertices, faces, appearance, note
+    new = np.cumsum(used) - 1
+    if appearance is not None:
+        appearance = replace(
+            appearance, uv=None if appearance.uv is None else appearance.uv[keep],
+            vertex_colours=(None if appearance.vertex_colours is None
+                            else appearance.vertex_colours[used]))
+    return vertices[used], new[faces[keep]], appearance, note
+
+
+def check_open(faces: np.ndarray, *, source: str | None = None) -> None:
+    """Refuse a closed surface (no boundary edge): a whole or capped head, not a face sheet."""
+    from .mesh import boundary_nodes
+
+    if len(boundary_nodes(faces)) == 0:
+        raise InputError("the surface is closed (a whole or capped head, with no open rim): "
+                         "facemech needs the face as an open sheet, from ear to ear and hairline "
+                         "to under the chin; cut away the back of the head and any caps",
+                         source=source, field="faces")
+
+
+def triangle_quality(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """Quality of every triangle, (f,): 4 sqrt(3) area / sum of squared edges, 1 equilateral."""
+    a, b, c = (vertices[faces[:, k]] for k in range(3))
+    squares = (np.sum((b - a) ** 2, axis=1) + np.sum((c - b) ** 2, axis=1)
+               + np.sum((a - c) ** 2, axis=1))
+    return 4.0 * np.sqrt(3.0) * triangle_areas(vertices, faces) / np.where(squares > 0, squares,
+                                                                            1.0)
+
+
+def check_triangles(vertices: np.ndarray, faces: np.ndarray, landmarks: dict[str, np.ndarray],
+                    *, source: str | None = None, min_quality: float = MIN_TRIANGLE_QUALITY,
+                    min_edge_m: float = MIN_EDGE_M) -> None:
+    """Refuse slivers and very short edges, naming the landmark they are nearest.
+
+    Parameters
+    ----------
+    vertices : (n, 3) metres; faces : (f, 3) int
+    landmarks : name -> (3,) metres, to say where the bad triangles are
+    source : the surface file
+    min_quality, min_edge_m : the limits
+
+    Raises
+    ------
+    InputError
+        Field ``faces``: how many triangles are bad, the worst one's quality or edge, and the
+        landmark nearest it.
+    """
+    q = triangle_quality(vertices, faces)
+    a, b, c = (vertices[faces[:, k]] for k in range(3))
+    shortest = np.min([np.linalg.norm(b - a, axis=1), np.linalg.norm(c - b, axis=1),
+                       np.linalg.norm(a - c, axis=1)], axis=0)
+    bad = (q < min_quality) | (shortest < min_edge_m)
+    if not bad.any():
+        return
+    worst = int(np.argmin(np.where(bad, q, np.inf)))
+    centre = (a[worst] + b[worst] + c[worst]) / 3.0
+    names = list(landmarks)
+    where = ""
+    if names:
+        d = [float(np.linalg.norm(landmarks[n] - centre)) for n in names]
+        k = int(np.argmin(d))
+        where = f" near {names[k]} ({d[k] * 1e3:.0f} mm from it)"
+    raise InputError(f"{int(bad.sum())} degenerate triangle{'s' if bad.sum() > 1 else ''} "
+                     f"(quality below {min_quality:g} or an edge under {min_edge_m * 1e3:g} mm; "
+                     f"worst: quality {q[worst]:.3f}, edge {shortest[worst] * 1e3:.3f} mm)"
+                     f"{where}: remesh or clean that region of the scan", source=source,
+                     field="faces")
