@@ -106,9 +106,9 @@ def demo(output: Path = Path("demo-output"), integrator: str | None = None, vide
 
 @command(face_app, "build")
 def face_build(surface: Path, landmarks: Path, output: Path = ..., units: str = "mm",
-               name: str | None = None, tissue: str = "anatomical"):
+               axes: str | None = None, name: str | None = None, tissue: str = "anatomical"):
     """Build a three-layer face model from a surface mesh (a textured OBJ or a coloured PLY
-    keeps its look) and landmarks."""
+    keeps its look) and landmarks; notes (unit inferred, axes turned) on stderr."""
     return _staged(wf.faces.build_face_file, **locals())
 
 @command(face_app, "info", args=("face",))

@@ -52,7 +52,8 @@ jaw_lead: frames the recorded jaw leads the skin
 jaw_second_marker: another: rotation and glide
 k: independent markers (default: <= 10)
 labels: name the markers
-landmarks: landmark CSV: name,x,y,z
+landmarks: landmark CSV name,x,y,z, or iBUG-68 .pts/.ljson/CSV
+axes: the file's axes for facemech's x,y,z, e.g. --axes=x,z,-y (a z-up scan), --axes=-x,y,z
 left: marker on the left
 map_file: marker,node CSV (default: closest nodes)
 max_evaluations: model steps per frame (400)
@@ -116,7 +117,7 @@ export.output: file, or a folder with --format
 export.units: unit of the output
 face_build.output: the face model (.npz)
 face_build.surface: OBJ (+ MTL, texture), PLY or STL
-face_build.units: length unit of both files
+face_build.units: length unit of both files (mm, cm, m, um), or auto: from the face's size
 face_export_default.output: folder for face.obj and landmarks.csv
 face_info.face: face file or built-in face
 invert.markers: marker file in the model's frame and frame rate

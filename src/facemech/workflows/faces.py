@@ -26,8 +26,8 @@ def build_face_file(surface: str | Path, landmarks: str | Path, output: str | Pa
     landmarks : landmark CSV ``name,x,y,z``, or 68 iBUG points (``.pts``, ``.ljson``, CSV of 68
         rows ``x,y,z``)
     output : the model file (``.npz``), written atomically
-    units : length unit of both files (``m``, ``cm``, ``mm`` or ``um``); None infers it from
-        the scan's size
+    units : length unit of both files (``m``, ``cm``, ``mm`` or ``um``); None or ``auto``
+        infers it from the scan's size
     axes : the file's axes for facemech's x (left), y (up), z (forward), e.g. ``"x,z,-y"``; None
         detects them from the landmarks
     name : model name (default: the surface file's stem)
@@ -49,7 +49,7 @@ def build_face_file(surface: str | Path, landmarks: str | Path, output: str | Pa
     opts = tissue_options(tissue)
     if progress is not None:
         progress("build", 0, 1)
-    scan = load_scan(surface, landmarks, units=units, axes=axes)
+    scan = load_scan(surface, landmarks, units=None if units == "auto" else units, axes=axes)
     model = build_face(scan.vertices, scan.faces, scan.landmarks, name=name or surface.stem,
                        source=str(surface), options=opts, appearance=scan.appearance)
     model.save(output)
