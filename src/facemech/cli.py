@@ -46,7 +46,9 @@ def command(group: typer.Typer = app, name: str | None = None, args: tuple[str, 
                     opts.check_number(name, value, opts.RANGES.get(key))
             if look:
                 kw["render"] = wf.pictures.render_options(*(kw.pop(k) for k in LOOK))
-            if (shown := fn(**kw)) is not None:  # what it wrote, and its warnings
+            if isinstance(shown := fn(**kw), list):  # lines, or what it wrote and warnings
+                _say(shown)
+            elif shown is not None:
                 out.print(shown)
                 err.print(getattr(shown, "warnings", ""), end="")
         sig = inspect.signature(fn)
@@ -61,7 +63,6 @@ LOOK = ("view", "size", "background", "aa")
 
 class _Workflows:
     """``wf.markers`` is :mod:`facemech.workflows.markers`, imported on first use."""
-
     def __getattr__(self, name: str):
         return importlib.import_module(f"facemech.workflows.{name}")
 
@@ -295,7 +296,7 @@ def experiment_pitermann_crosstalker(frames: int = 120, dt: float | None = None,
                                      preset: str = "anatomical", output: Path | None = None):
     """Experiment 3 analogue: another talker inverted on the default face (Table VI)."""
     res = _staged(wf.experiments.crosstalker, **locals())
-    _say(wf.experiments.crosstalker_report(res, output))
+    return wf.experiments.crosstalker_report(res, output)
 
 @command(args=("gestures",))
 def calibrate(gestures: list[str] | None = None, output: Path = Path("calibrated-preset.json"),
@@ -303,8 +304,7 @@ def calibrate(gestures: list[str] | None = None, output: Path = Path("calibrated
               builtin: bool = False, fit: str = "force,lips", max_evaluations: int = 30,
               name: str | None = None):
     """Fit the anatomical preset's scales to maximal gestures; write a preset file (--preset)."""
-    res = _staged(wf.calibrate.calibrate, **locals())
-    _say(wf.calibrate.report(res, output, builtin=builtin))
+    return wf.calibrate.report(_staged(wf.calibrate.calibrate, **locals()), output, builtin=builtin)
 
 @command()
 def subject(face: str, markers: Path = ..., output: Path = ..., head: str | None = None,
@@ -321,6 +321,7 @@ def analyse(subject: Path, recording: Path, output: Path = ..., units: str | Non
             smooth: float | None = 1.0, preset: str = "anatomical", video: bool = False):
     """A recording against a subject: head motion, frame, gaps, inversion, statistics, movie."""
     _say(wf.subject.analyse_report(_staged(wf.subject.analyse, **locals())))
+
 @command()
 def batch(manifest: Path, output: Path = ..., workers: int | None = None,
           scheduler: str | None = None):
@@ -333,8 +334,7 @@ def batch(manifest: Path, output: Path = ..., workers: int | None = None,
     raise typer.Exit(rep.exit_code)
 
 def main() -> None:
-    """Entry point: run the app; a FacemechError becomes one line on stderr and exit 2; SIGINT
-    and SIGTERM remove temporary files and exit 130 and 143 (:mod:`facemech.interrupts`)."""
+    """Run the app: a FacemechError is one line on stderr, exit 2; SIGINT/SIGTERM: 130/143."""
     restore = importlib.import_module("facemech.interrupts").install()
     try:
         app()
