@@ -24,7 +24,8 @@ def reshape(p):
     return out
 
 
-def scan_face(spacing_deg: float = 2.4, spacing_mm: float = 3.0, seed: int = 0):
+def scan_face(spacing_deg: float = 2.4, spacing_mm: float = 3.0, seed: int = 0,
+              lip_points: int = 15):
     """Vertices (m), triangles and landmarks (m) of the scan-like face."""
     rng = np.random.default_rng(seed)
     th = np.arange(-84.0, 84.01, spacing_deg)
@@ -39,7 +40,8 @@ def scan_face(spacing_deg: float = 2.4, spacing_mm: float = 3.0, seed: int = 0):
     # the lip line: the mouth corners' angle and a row of points between them
     w = float(generic._width(generic.Y_STOMION))
     corner = np.degrees(np.arcsin((generic.MOUTH_HALF_WIDTH / w) ** (generic.SUPERELLIPSE_N / 2)))
-    line = np.column_stack([np.linspace(-corner, corner, 15), np.full(15, generic.Y_STOMION)])
+    line = np.column_stack([np.linspace(-corner, corner, lip_points),
+                            np.full(lip_points, generic.Y_STOMION)])
     pts = np.concatenate([pts, line])
     pts[:, 0] = np.clip(pts[:, 0], -84.0, 84.0)
     pts[:, 1] = np.clip(pts[:, 1], generic.Y_BOTTOM, generic.Y_TOP)
