@@ -209,14 +209,9 @@ def simulate_blocks(
     *,
     sink: Callable[[Simulation], None],
     block_frames: int = BLOCK_FRAMES,
-    params: Parameters | None = None,
-    integrator: str | None = None,
-    substeps: int | None = None,
-    dt: float | None = None,
     jaw_drive: str = "ramp",
-    initial_state: State | None = None,
     progress: Callable[[int, int], None] | None = None,
-    source: str | None = None,
+    **options,
 ) -> RunSummary:
     """:func:`simulate`, its frames handed to ``sink`` block by block instead of being held.
 
@@ -226,8 +221,7 @@ def simulate_blocks(
 
     Parameters
     ----------
-    model, activity, jaw_angle, params, integrator, substeps, dt, jaw_drive, initial_state,
-    progress, source : as :func:`simulate`
+    model, activity, jaw_angle, jaw_drive, progress : as :func:`simulate`
     sink : callable(Simulation)
         Called with each block of consecutive frames, in order, as a :class:`Simulation` of
         those frames: ``time`` (block,) s (absolute), ``positions`` (block, n_surface, 3) m,
@@ -235,6 +229,8 @@ def simulate_blocks(
         frames; ``final_state`` the state of its last frame, ``wall_seconds`` the time spent
         so far. The arrays are the sink's to keep.
     block_frames : frames per block (the last block may be shorter)
+    **options : ``params``, ``integrator``, ``substeps``, ``dt``, ``initial_state``,
+        ``source``, as :func:`simulate`
 
     Returns
     -------
@@ -243,9 +239,14 @@ def simulate_blocks(
     if int(block_frames) < 1:
         raise InputError(f"block_frames must be at least 1, got {block_frames}",
                          field="block_frames")
-    run = _setup(model, activity, jaw_angle, params=params, integrator=integrator,
-                 substeps=substeps, dt=dt, jaw_drive=jaw_drive, initial_state=initial_state,
-                 source=source)
+    unknown = set(options) - {"params", "integrator", "substeps", "dt", "initial_state",
+                              "source"}
+    if unknown:
+        raise TypeError(f"simulate_blocks() got unexpected options {sorted(unknown)}")
+    run = _setup(model, activity, jaw_angle, **{"params": None, "integrator": None,
+                                                "substeps": None, "dt": None,
+                                                "initial_state": None, "source": None,
+                                                **options}, jaw_drive=jaw_drive)
     frames = len(run.activity)
     state = run.state
     t0 = _time.perf_counter()
