@@ -144,15 +144,17 @@ def write_results(path: str | Path, sim, inputs: dict[str, str] | None = None,
     return write_dataset(path, to_dataset(sim, inputs, extra))
 
 
+#: the variables of a results file stored compressed (zlib, level 4)
+COMPRESSED_VARIABLES = ("positions", "markers", "activity", "texture_uv", "texture_image",
+                        "muscle_force", "muscle_length", "muscle_velocity", "muscle_activation")
+
+
 def write_dataset(path: str | Path, ds) -> Path:
     """Write a results dataset (as made by :func:`to_dataset`) to NetCDF atomically."""
     for name in ("positions", "markers"):
         if not np.all(np.isfinite(ds[name].values)):
             raise InputError("refusing to write non-finite values", source=str(path), field=name)
-    enc = {v: {"zlib": True, "complevel": 4}
-           for v in ("positions", "markers", "activity", "texture_uv", "texture_image",
-                     "muscle_force", "muscle_length", "muscle_velocity", "muscle_activation")
-           if v in ds}
+    enc = {v: {"zlib": True, "complevel": 4} for v in COMPRESSED_VARIABLES if v in ds}
     with atomic_path(path, suffix=".nc") as tmp:
         ds.to_netcdf(tmp, engine="h5netcdf", encoding=enc)
     return Path(path)

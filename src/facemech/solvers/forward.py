@@ -158,6 +158,148 @@ def simulate(
     -------
     Simulation
     """
+    run = _setup(model, activity, jaw_angle, params=params, integrator=integrator,
+                 substeps=substeps, dt=dt, jaw_drive=jaw_drive, initial_state=initial_state,
+                 source=source)
+    frames = len(run.activity)
+    positions = np.empty((frames, run.model.n_surface, 3))
+    recorder = MuscleRecorder(run.physics, frames)
+    t0 = _time.perf_counter()
+    with single_threaded_blas():
+        state = _run(run.stepper, run.state, run.activity, run.poses, jaw_drive, positions,
+                     run.rest, progress, recorder)
+    return run.block(0, positions, recorder.series(), state, _time.perf_counter() - t0)
+
+
+#: frames per block of :func:`simulate_blocks` (10 s at 60 Hz, about 30 MB)
+BLOCK_FRAMES = 600
+
+
+@dataclass(frozen=True, eq=False)
+class RunSummary:
+    """What :func:`simulate_blocks` returns: the run without its frames (they went to the sink).
+
+    Attributes
+    ----------
+    time : (frames,) s
+    final_state : State
+    integrator : str
+    dt : float, s
+    wall_seconds : float
+    frame_rate : float, Hz
+    """
+
+    time: np.ndarray
+    final_state: State
+    integrator: str
+    dt: float
+    wall_seconds: float
+    frame_rate: float
+
+    @property
+    def real_time_factor(self) -> float:
+        """Simulated seconds per wall-clock second."""
+        return len(self.time) / self.frame_rate / max(self.wall_seconds, 1e-12)
+
+
+def simulate_blocks(
+    model: FaceModel,
+    activity: np.ndarray,
+    jaw_angle: np.ndarray | None = None,
+    *,
+    sink: Callable[[Simulation], None],
+    block_frames: int = BLOCK_FRAMES,
+    jaw_drive: str = "ramp",
+    progress: Callable[[int, int], None] | None = None,
+    **options,
+) -> RunSummary:
+    """:func:`simulate`, its frames handed to ``sink`` block by block instead of being held.
+
+    The frames are the very numbers :func:`simulate` returns (the same steps in the same
+    order); only ``block_frames`` of them are in memory at a time, so memory does not grow with
+    the run's length.
+
+    Parameters
+    ----------
+    model, activity, jaw_angle, jaw_drive, progress : as :func:`simulate`
+    sink : callable(Simulation)
+        Called with each block of consecutive frames, in order, as a :class:`Simulation` of
+        those frames: ``time`` (block,) s (absolute), ``positions`` (block, n_surface, 3) m,
+        ``markers``, ``activity``, ``jaw_angle``, ``jaw_shift``, ``muscles`` of the block's
+        frames; ``final_state`` the state of its last frame, ``wall_seconds`` the time spent
+        so far. The arrays are the sink's to keep.
+    block_frames : frames per block (the last block may be shorter)
+    **options : ``params``, ``integrator``, ``substeps``, ``dt``, ``initial_state``,
+        ``source``, as :func:`simulate`
+
+    Returns
+    -------
+    RunSummary
+    """
+    if int(block_frames) < 1:
+        raise InputError(f"block_frames must be at least 1, got {block_frames}",
+                         field="block_frames")
+    unknown = set(options) - {"params", "integrator", "substeps", "dt", "initial_state",
+                              "source"}
+    if unknown:
+        raise TypeError(f"simulate_blocks() got unexpected options {sorted(unknown)}")
+    run = _setup(model, activity, jaw_angle, **{"params": None, "integrator": None,
+                                                "substeps": None, "dt": None,
+                                                "initial_state": None, "source": None,
+                                                **options}, jaw_drive=jaw_drive)
+    frames = len(run.activity)
+    state = run.state
+    t0 = _time.perf_counter()
+    with single_threaded_blas():
+        for start in range(0, frames, int(block_frames)):
+            m = min(int(block_frames), frames - start)
+            positions = np.empty((m, run.model.n_surface, 3))
+            recorder = MuscleRecorder(run.physics, m)
+            state = _run(run.stepper, state, run.activity, run.poses, jaw_drive, positions,
+                         run.rest, progress, recorder, start=start)
+            sink(run.block(start, positions, recorder.series(), state,
+                           _time.perf_counter() - t0))
+    return RunSummary(time=np.arange(frames) / run.params.frame_rate, final_state=state,
+                      integrator=run.stepper.integrator, dt=run.stepper.dt,
+                      wall_seconds=_time.perf_counter() - t0, frame_rate=run.params.frame_rate)
+
+
+@dataclass(frozen=True, eq=False)
+class _Setup:
+    """A checked run of :func:`simulate` ready to step: its inputs, physics and first state."""
+
+    model: FaceModel
+    params: Parameters
+    physics: Physics
+    stepper: Stepper
+    activity: np.ndarray
+    poses: np.ndarray
+    state: State
+    names: tuple[str, ...]
+    nodes: np.ndarray
+    attrs: dict
+
+    @property
+    def rest(self) -> np.ndarray:
+        return self.model.rest_positions
+
+    def block(self, start: int, positions: np.ndarray, muscles: MuscleSeries, state: State,
+              wall: float) -> Simulation:
+        """The :class:`Simulation` of frames ``start .. start + len(positions) - 1``."""
+        sl = slice(start, start + len(positions))
+        return Simulation(
+            model=self.model, params=self.params,
+            time=np.arange(sl.start, sl.stop) / self.params.frame_rate,
+            positions=positions, markers=positions[:, self.nodes], marker_names=self.names,
+            activity=self.activity[sl], jaw_angle=self.poses[sl, 0].copy(),
+            final_state=state, integrator=self.stepper.integrator, dt=self.stepper.dt,
+            wall_seconds=wall, attrs=dict(self.attrs), jaw_shift=self.poses[sl, 1:].copy(),
+            muscles=muscles)
+
+
+def _setup(model, activity, jaw_angle, *, params, integrator, substeps, dt, jaw_drive,
+           initial_state, source) -> _Setup:
+    """Check the inputs of :func:`simulate` and build its physics, stepper and first state."""
     params = params or default_parameters()
     activity = check_activity(activity, source=source)
     frames = len(activity)
@@ -181,40 +323,26 @@ def simulate(
     stepper = Stepper(physics, integrator=integrator, substeps=substeps, dt=dt,
                       jaw_drive=jaw_drive)
     names, nodes = marker_nodes(model)
-    n = model.n_surface
-    rest = model.rest_positions
-    state = initial_state or State.at_rest(rest, physics.n_muscles, float(poses[0, 0]),
-                                           jaw_shift=poses[0, 1:])
-    positions = np.empty((frames, n, 3))
-    recorder = MuscleRecorder(physics, frames)
-    t0 = _time.perf_counter()
-    with single_threaded_blas():
-        state = _run(stepper, state, activity, poses, jaw_drive, positions, rest, progress,
-                     recorder)
-    wall = _time.perf_counter() - t0
-    return Simulation(
-        model=model, params=params, time=np.arange(frames) / params.frame_rate,
-        positions=positions, markers=positions[:, nodes], marker_names=names,
-        activity=activity, jaw_angle=poses[:, 0].copy(), final_state=state,
-        integrator=stepper.integrator,
-        dt=stepper.dt, wall_seconds=wall,
-        attrs={"steps_per_frame": stepper.n_steps, "jaw_drive": jaw_drive,
-               "jaw_kinematics": (params.jaw_kinematics if jaw_angle.ndim == 1 else "pose")},
-        jaw_shift=poses[:, 1:].copy(),
-        muscles=recorder.series(),
-    )
+    state = initial_state or State.at_rest(model.rest_positions, physics.n_muscles,
+                                           float(poses[0, 0]), jaw_shift=poses[0, 1:])
+    attrs = {"steps_per_frame": stepper.n_steps, "jaw_drive": jaw_drive,
+             "jaw_kinematics": (params.jaw_kinematics if jaw_angle.ndim == 1 else "pose")}
+    return _Setup(model, params, physics, stepper, activity, poses, state, names, nodes, attrs)
 
 
 def _run(stepper, state, activity, poses, jaw_drive, positions, rest, progress,
-         recorder=None):
+         recorder=None, start=0):
     """The frame loop of :func:`simulate`: fills ``positions`` (and the muscle outputs of
-    ``recorder``), returns the last state."""
+    ``recorder``) with frames ``start .. start + len(positions) - 1`` of the run, ``state``
+    being frame ``start``'s; returns the state of the frame after them (the next to fill), or
+    of the run's last frame once it is filled."""
     frames = len(activity)
     n = positions.shape[1]
-    for k in range(frames):
-        positions[k] = state.positions[:n]
+    for i in range(len(positions)):
+        k = start + i
+        positions[i] = state.positions[:n]
         if recorder is not None:
-            recorder.record(k, state)
+            recorder.record(i, state)
         if k == frames - 1:
             break
         target = poses[k] if jaw_drive == "hold" else poses[k + 1]

@@ -177,10 +177,10 @@ def jaw_series(source: JawSource, model, params, times: np.ndarray) -> tuple[np.
 
 @dataclass(frozen=True)
 class SimulationRun:
-    """What :func:`simulate_files` did: the simulation, the results file, the input hashes
-    and the movie written (or None)."""
+    """What :func:`simulate_files` did: the run (its frames went to the file), the results
+    file, the input hashes and the movie written (or None)."""
 
-    simulation: object  # facemech.solvers.forward.Simulation
+    simulation: object  # facemech.solvers.forward.RunSummary (or a Simulation)
     output: Path
     inputs: dict = field(default_factory=dict)
     movie: object | None = None  # outcome.Written
@@ -223,9 +223,7 @@ def simulate_files(output: str | Path, controls: Controls, jaw: JawSource = JawS
     SimulationRun
     """
     from ..geometry.builder import load_face
-    from ..io.results import to_dataset, write_results
     from ..params import preset as get_preset
-    from ..solvers.forward import simulate
 
     prm = get_preset(preset)
     if jaw_kinematics is not None:
@@ -244,13 +242,53 @@ def simulate_files(output: str | Path, controls: Controls, jaw: JawSource = JawS
     jaw_angles, jaw_inputs = jaw_series(jaw, model, prm, times)
     inputs.update(jaw_inputs)
     src = str(controls.activity if controls.activity is not None else controls.emg)
-    sim = simulate(model, act, jaw_angles, params=prm, integrator=integrator, substeps=substeps,
-                   dt=dt, jaw_drive=jaw_drive, source=src,
-                   progress=stage(progress, f"simulate ({integrator or prm.integrator})"))
-    write_results(output, sim, inputs=inputs)
+    run = simulate_to_file(output, model, act, jaw_angles, inputs=inputs, params=prm,
+                           integrator=integrator, substeps=substeps, dt=dt, jaw_drive=jaw_drive,
+                           source=src, progress=stage(progress,
+                                                      f"simulate ({integrator or prm.integrator})"))
     written = None
-    if movie:
+    if movie:  # from the file: the whole run in memory (rendering does not stream)
         from .pictures import render_movie
 
-        written = render_movie(to_dataset(sim), movie, progress=progress)
-    return SimulationRun(sim, Path(output), inputs, written)
+        written = render_movie(output, movie, progress=progress)
+    return SimulationRun(run, Path(output), inputs, written)
+
+
+def simulate_to_file(output: str | Path, model, activity: np.ndarray,
+                     jaw_angle: np.ndarray | None = None, *, inputs: dict | None = None,
+                     block_frames: int | None = None, **options):
+    """Simulate and write the results file as the run goes, a block of frames at a time.
+
+    Memory stays bounded whatever the run's length (a 10-minute utterance at 60 Hz is 36,000
+    frames, about 1.8 GB held whole); the file reads exactly as the one
+    :func:`~facemech.io.results.write_results` writes from :func:`~facemech.solvers.forward.
+    simulate` (same variables, dimensions, attributes and values, bit for bit), ``time`` being
+    an unlimited dimension. It is written atomically: an error or an interruption leaves
+    neither ``output`` nor a temporary file.
+
+    Parameters
+    ----------
+    output : results file (``.nc``)
+    model : FaceModel
+    activity : (frames, 16) array in [0, 1], columns :data:`~facemech.params.MUSCLE_GROUPS`
+    jaw_angle : (frames,) rad or (frames, 3) poses, optional (default: jaw closed)
+    inputs : input name -> file hash, for the results' provenance
+    block_frames : frames held in memory at a time (default
+        :data:`~facemech.solvers.forward.BLOCK_FRAMES`, 600: 10 s, about 30 MB)
+    **options : ``params``, ``integrator``, ``substeps``, ``dt``, ``jaw_drive``,
+        ``initial_state``, ``progress``, ``source``, as :func:`~facemech.solvers.forward.
+        simulate`
+
+    Returns
+    -------
+    RunSummary
+        The run without its frames (:class:`facemech.solvers.forward.RunSummary`): ``time``,
+        ``final_state``, ``integrator``, ``dt``, ``wall_seconds``, ``real_time_factor``.
+    """
+    from ..io.results_stream import stream_results
+    from ..solvers.forward import BLOCK_FRAMES, simulate_blocks
+
+    with stream_results(output, inputs) as sink:
+        return simulate_blocks(model, activity, jaw_angle, sink=sink,
+                               block_frames=BLOCK_FRAMES if block_frames is None else block_frames,
+                               **options)
