@@ -95,3 +95,35 @@ def test_fine_lips_are_left_as_they_are():
     v, f, lm = scan_face(lip_points=25)
     v2, f2, _, note = refine_perioral(v, f, lm)
     assert note == "" and v2.shape == v.shape and np.array_equal(f2, f)
+
+
+def _with_hole(centre, radius):
+    from facemech.geometry.builder import default_surface
+
+    v, f, lm = default_surface()
+    keep = np.linalg.norm(v[f].mean(axis=1) - centre(lm), axis=1) > radius
+    used = np.unique(f[keep])
+    remap = np.full(len(v), -1)
+    remap[used] = np.arange(len(used))
+    return v[used], remap[f[keep]], lm
+
+
+def test_a_mouth_open_in_the_middle_is_refused(tmp_path, monkeypatch, capsys):
+    from conftest import run_cli
+
+    v, f, lm = _with_hole(lambda lm: 0.5 * (lm["upper_lip_center"] + lm["lower_lip_center"]),
+                          0.006)
+    write_obj(tmp_path / "open.obj", v * 1e3, f)
+    write_landmark_csv(tmp_path / "lm.csv", lm)
+    code, _, err = run_cli(monkeypatch, capsys, "face", "build", tmp_path / "open.obj",
+                           tmp_path / "lm.csv", "-o", tmp_path / "f.npz")
+    lines = err.strip().splitlines()
+    assert code == 2 and len(lines) == 1, err
+    assert lines[0].startswith(f"facemech: error: {tmp_path / 'open.obj'}: field 'mouth': "
+                               "the mouth is open in the middle")
+    assert not (tmp_path / "f.npz").exists()
+    # a hole far from the mouth (on the forehead) is not the mouth's business
+    v, f, lm = _with_hole(lambda lm: lm["nasion"] + [0.0, 0.03, 0.0], 0.004)
+    from facemech.geometry.scan_cleanup import check_mouth_closed
+
+    check_mouth_closed(v, f, lm)

@@ -10,7 +10,8 @@ landmarks in metres and facemech's axes, each step refusing in one line what it 
 3. the landmarks: facemech's CSV, or 68 iBUG points (:mod:`ibug`) in the same unit;
 4. loose fragments dropped, a closed head refused (:mod:`scan_cleanup`);
 5. the axes: detected from the landmarks and the scan turned to them, or given (``axes``);
-6. the landmarks on the skin, unique, the left on the left (:mod:`landmark_checks`);
+6. a mouth open in the middle refused; the landmarks on the skin, unique, the left on the left
+   (:mod:`landmark_checks`);
 7. a coarse mouth region refined to the lips' spacing (:mod:`refine`);
 8. no degenerate triangles (:mod:`scan_cleanup`).
 """
@@ -80,7 +81,7 @@ def load_scan(surface: str | Path, landmarks: str | Path, *, units: str | None =
     from .ibug import ibug_to_landmarks, is_ibug_file, read_ibug68
     from .landmark_checks import check_landmarks
     from .refine import refine_perioral
-    from .scan_cleanup import check_open, check_triangles, drop_fragments
+    from .scan_cleanup import check_mouth_closed, check_open, check_triangles, drop_fragments
     from .scan_frame import axes_text, check_axes, check_unit, detect_axes, parse_axes
     from .surface_io import read_landmarks, read_surface_with_appearance
 
@@ -118,6 +119,7 @@ def load_scan(surface: str | Path, landmarks: str | Path, *, units: str | None =
         lm = {k: turn @ v for k, v in lm.items()}
     if axes is not None:
         check_axes(lm, spec=spec, source=lm_src)
+    check_mouth_closed(vertices, faces, lm, source=src)
     check_landmarks(vertices, faces, lm, source=lm_src)
     vertices, faces, look, note = refine_perioral(vertices, faces, lm, look)
     if note:

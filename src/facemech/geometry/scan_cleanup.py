@@ -109,6 +109,39 @@ def check_open(faces: np.ndarray, *, source: str | None = None) -> None:
                          source=source, field="faces")
 
 
+def check_mouth_closed(vertices: np.ndarray, faces: np.ndarray, landmarks: dict, *,
+                       source: str | None = None, reach: float = 0.012) -> None:
+    """Refuse a hole between the lips: a boundary loop other than the rim whose centre lies
+    within ``reach`` (m) of the segment between the mouth corners. The builder cuts the mouth
+    along the lip line of a closed mouth; a mouth open in the middle has none there."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    e = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
+    u, c = np.unique(e, axis=0, return_counts=True)
+    edges = u[c == 1]
+    if len(edges) == 0 or not {"mouth_corner_left", "mouth_corner_right"} <= set(landmarks):
+        return
+    n = len(vertices)
+    graph = coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(n, n))
+    _, label = connected_components(graph, directed=False)
+    loops = label[edges[:, 0]]
+    sizes = np.bincount(loops)
+    p, q = landmarks["mouth_corner_right"], landmarks["mouth_corner_left"]
+    for loop in np.unique(loops):
+        if sizes[loop] == sizes.max():
+            continue  # the rim
+        pts = vertices[np.unique(edges[loops == loop])]
+        centre = pts.mean(axis=0)
+        s = np.clip((centre - p) @ (q - p) / max(float((q - p) @ (q - p)), 1e-12), 0, 1)
+        if np.linalg.norm(centre - (p + s * (q - p))) <= reach:
+            w, h = np.ptp(pts[:, 0]) * 1e3, np.ptp(pts[:, 1]) * 1e3
+            raise InputError(f"the mouth is open in the middle (a hole {w:.0f} mm wide and "
+                             f"{h:.0f} mm high between the lips): the builder needs the lips "
+                             "touching from corner to corner; close the mouth in the scan",
+                             source=source, field="mouth")
+
+
 def triangle_quality(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     """Quality of every triangle, (f,): 4 sqrt(3) area / sum of squared edges, 1 equilateral."""
     a, b, c = (vertices[faces[:, k]] for k in range(3))
