@@ -250,15 +250,30 @@ def test_loose_fragments_are_dropped_with_a_note(generic, tmp_path):
     one_line(exc, "two.obj: field 'faces'", "2 pieces", "50 % of its area")
 
 
-def test_a_closed_head_is_refused(tmp_path, generic):
+def test_a_capped_head_is_cropped_to_the_face_and_a_ball_refused(tmp_path, generic):
     import trimesh
 
-    _, _, lm, _ = generic
+    from facemech.geometry.mesh import boundary_nodes
+
+    v, f, lm, model = generic
+    # the face closed by a cap: every rim edge fanned to a point 300 mm behind the face
+    apex = len(v)
+    directed = np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]])
+    inner = {(int(a), int(b)) for a, b in directed}
+    cap = np.array([[b, a, apex] for a, b in directed if (int(b), int(a)) not in inner])
+    closed = np.concatenate([f, cap])
+    assert len(boundary_nodes(closed)) == 0
+    obj, csv = write_scan(tmp_path, np.vstack([v, [0.0, -0.05, -0.3]]), closed, lm)
+    scan = load_scan(obj, csv)
+    assert any("cropped to the face" in n for n in scan.notes), scan.notes
+    assert_same_scan(scan, v, lm, atol=2e-9)
+    # a ball is not a head: its landmarks lie off whatever is left of it
     ball = trimesh.creation.icosphere(subdivisions=3, radius=0.1)
-    obj, csv = write_scan(tmp_path, np.asarray(ball.vertices), np.asarray(ball.faces), lm)
+    obj, csv = write_scan(tmp_path, np.asarray(ball.vertices), np.asarray(ball.faces), lm,
+                          name="ball")
     with pytest.raises(InputError) as exc:
         load_scan(obj, csv)
-    one_line(exc, "scan.obj: field 'faces'", "closed", "cut away the back of the head")
+    one_line(exc, "ball_lm.csv: field", "from the surface")
 
 
 def test_degenerate_triangles_are_refused_naming_the_region(generic, tmp_path):

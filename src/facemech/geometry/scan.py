@@ -8,8 +8,10 @@ landmarks in metres and facemech's axes, each step refusing in one line what it 
 2. the unit: the declared one must make the scan face-sized, or none is declared and the size
    gives it (:mod:`scan_frame`);
 3. the landmarks: facemech's CSV, or 68 iBUG points (:mod:`ibug`) in the same unit;
-4. loose fragments dropped, a closed head refused (:mod:`scan_cleanup`);
+4. loose fragments dropped (:mod:`scan_cleanup`);
 5. the axes: detected from the landmarks and the scan turned to them, or given (``axes``);
+   then a head cropped to the face (hairline, under the chin, the ears), and a surface still
+   closed refused (:mod:`scan_cleanup`);
 6. a mouth open in the middle refused; the landmarks on the skin, unique, the left on the left
    (:mod:`landmark_checks`);
 7. a coarse mouth region refined to the lips' spacing (:mod:`refine`);
@@ -81,7 +83,13 @@ def load_scan(surface: str | Path, landmarks: str | Path, *, units: str | None =
     from .ibug import ibug_to_landmarks, is_ibug_file, read_ibug68
     from .landmark_checks import check_landmarks
     from .refine import refine_perioral
-    from .scan_cleanup import check_mouth_closed, check_open, check_triangles, drop_fragments
+    from .scan_cleanup import (
+        check_mouth_closed,
+        check_open,
+        check_triangles,
+        crop_to_face,
+        drop_fragments,
+    )
     from .scan_frame import axes_text, check_axes, check_unit, detect_axes, parse_axes
     from .surface_io import read_landmarks, read_surface_with_appearance
 
@@ -96,7 +104,6 @@ def load_scan(surface: str | Path, landmarks: str | Path, *, units: str | None =
     vertices, faces, look, note = drop_fragments(vertices, faces, look, source=src)
     if note:
         notes.append(f"{surface.name}: {note}")
-    check_open(faces, source=src)
     if is_ibug_file(landmarks):
         points = read_ibug68(landmarks, units=unit)
         check_landmark_unit(points, vertices, unit, source=lm_src)
@@ -119,6 +126,10 @@ def load_scan(surface: str | Path, landmarks: str | Path, *, units: str | None =
         lm = {k: turn @ v for k, v in lm.items()}
     if axes is not None:
         check_axes(lm, spec=spec, source=lm_src)
+    vertices, faces, look, note = crop_to_face(vertices, faces, lm, look)
+    if note:
+        notes.append(f"{surface.name}: {note}")
+    check_open(faces, source=src)
     check_mouth_closed(vertices, faces, lm, source=src)
     check_landmarks(vertices, faces, lm, source=lm_src)
     vertices, faces, look, note = refine_perioral(vertices, faces, lm, look)

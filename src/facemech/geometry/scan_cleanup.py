@@ -80,22 +80,64 @@ def drop_fragments(vertices: np.ndarray, faces: np.ndarray, appearance: Appearan
                          "one sheet (the mouth corners must be connected by the surface)",
                          source=source, field="faces")
     keep = piece == main
-    used = np.zeros(len(vertices), bool)
-    used[faces[keep].ravel()] = True
     note = ""
     if n_pieces > 1:
         dropped = total - float(by_piece[main])
         note = (f"dropped {n_pieces - 1} loose fragment{'s' if n_pieces > 2 else ''} "
                 f"({int(np.sum(~keep))} triangles, {100 * dropped / total:.2g} % of the area)")
+    return (*keep_triangles(vertices, faces, appearance, keep), note)
+
+
+def keep_triangles(vertices: np.ndarray, faces: np.ndarray, appearance: Appearance | None,
+                   keep: np.ndarray):
+    """The triangles ``keep`` (bool mask) with their vertices renumbered (unused ones dropped)
+    and their texture coordinates or vertex colours. Returns (vertices, faces, appearance)."""
+    used = np.zeros(len(vertices), bool)
+    used[faces[keep].ravel()] = True
     if keep.all() and used.all():
-        return vertices, faces, appearance, note
+        return vertices, faces, appearance
     new = np.cumsum(used) - 1
     if appearance is not None:
         appearance = replace(
             appearance, uv=None if appearance.uv is None else appearance.uv[keep],
             vertex_colours=(None if appearance.vertex_colours is None
                             else appearance.vertex_colours[used]))
-    return vertices[used], new[faces[keep]], appearance, note
+    return vertices[used], new[faces[keep]], appearance
+
+
+#: m, the face a scan is cropped to: above the higher brow, under the menton, behind the
+#: jaw angles (the built-in face reaches 65, 14 and 35 mm)
+CROP_ABOVE_BROWS, CROP_BELOW_MENTON, CROP_BEHIND_JAW_ANGLES = 0.075, 0.025, 0.045
+
+
+def crop_to_face(vertices: np.ndarray, faces: np.ndarray, landmarks: dict,
+                 appearance: Appearance | None = None):
+    """Crop a head scan (in facemech's axes) to the face: from the hairline (75 mm above the
+    brows) to under the chin (25 mm below the menton), and to the ears (45 mm behind the jaw
+    angles); of what is left, the largest connected piece. A capped or whole head becomes an
+    open face sheet. Returns (vertices, faces, appearance, note); note "" when nothing was
+    cropped."""
+    top = max(landmarks["brow_left"][1], landmarks["brow_right"][1]) + CROP_ABOVE_BROWS
+    bottom = landmarks["menton"][1] - CROP_BELOW_MENTON
+    back = min(landmarks["jaw_angle_left"][2], landmarks["jaw_angle_right"][2]) \
+        - CROP_BEHIND_JAW_ANGLES
+    c = vertices[faces].mean(axis=1)
+    keep = (c[:, 1] <= top) & (c[:, 1] >= bottom) & (c[:, 2] >= back)
+    if keep.all():
+        return vertices, faces, appearance, ""
+    if not keep.any():
+        return vertices, faces, appearance, ""
+    piece = surface_pieces(len(vertices), faces[keep])
+    main = np.argmax(np.bincount(piece))
+    inner = np.flatnonzero(keep)[piece == main]
+    keep = np.zeros(len(faces), bool)
+    keep[inner] = True
+    area = triangle_areas(vertices, faces)
+    share = 100 * float(area[~keep].sum() / area.sum())
+    v, f, look = keep_triangles(vertices, faces, appearance, keep)
+    return v, f, look, (f"cropped to the face (75 mm above the brows, 25 mm under the menton, "
+                        f"45 mm behind the jaw angles): {int(np.sum(~keep))} triangles, "
+                        f"{share:.0f} % of the area, dropped")
 
 
 def check_open(faces: np.ndarray, *, source: str | None = None) -> None:
