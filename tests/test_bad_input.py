@@ -5,7 +5,9 @@ and the folder left exactly as it was (input bytes identical, nothing new, no te
 from __future__ import annotations
 
 import hashlib
+import json
 import math
+import re
 
 import numpy as np
 import pytest
@@ -348,3 +350,203 @@ def test_a_command_never_overwrites_its_input(monkeypatch, capsys, tmp_path, com
     assert code == 2 and len(err.strip().splitlines()) == 1, err
     assert "refusing to overwrite an input" in err and "field '-o'" in err
     assert _snapshot(tmp_path) == before
+
+
+# ---- compare: statistics with gaps -------------------------------------------------------------
+#: mm, three markers at rest: left and right mouth corners and the chin (spans a face's size)
+_REST = np.array([[30.0, 0.0, 100.0], [-30.0, 0.0, 100.0], [0.0, -40.0, 110.0]])
+
+
+def _model_mm(frames: int = 10) -> np.ndarray:
+    """(frames, 3, 3) mm: the markers moving down and up by up to 4 mm."""
+    k = np.arange(frames)[:, None, None]
+    return _REST[None] + np.array([0.0, -4.0, 0.0]) * np.sin(np.pi * k / (frames - 1))
+
+
+def _csv(path, pos_mm, unit: str = "mm", names=("L", "R", "C")):
+    head = "time," + ",".join(f"{n}_{a}" for n in names for a in "xyz")
+    rows = [f"{k / 60:.6f}," + ",".join("" if not np.isfinite(v) else f"{v:.9g}"
+                                        for v in p.reshape(-1)) for k, p in enumerate(pos_mm)]
+    path.write_text(f"# units: {unit}\n{head}\n" + "\n".join(rows) + "\n")
+    return path
+
+
+def _tree(folder):
+    """Every file (its bytes' hash) and folder under ``folder``."""
+    return {str(p.relative_to(folder)): (hashlib.sha256(p.read_bytes()).hexdigest()
+                                         if p.is_file() else "folder")
+            for p in sorted(folder.rglob("*"))}
+
+
+def _one_line_error(monkeypatch, capsys, folder, args, source, field) -> str:
+    """Run ``facemech ARGS``: exit 2, one stderr line naming ``source`` and ``field``, no
+    traceback, and nothing under ``folder`` changed."""
+    before = _tree(folder)
+    code, _, err = run_cli(monkeypatch, capsys, *args)
+    lines = err.strip().splitlines()
+    assert code == 2, err
+    assert len(lines) == 1 and "Traceback" not in err, err
+    assert lines[0].startswith(f"facemech: error: {source}: field '{field}': "), lines[0]
+    assert _tree(folder) == before, "the folder changed"
+    return lines[0]
+
+
+def test_compare_skips_frames_without_data(monkeypatch, capsys, tmp_path):
+    model = _model_mm()
+    data = model + (np.arange(10) + 1.0)[:, None, None] * np.array([1.0, 0.0, 0.0])  # k + 1 mm
+    data[[2, 5]] = np.nan  # two frames without any marker
+    data[7, 2] = np.nan  # the chin missing at frame 7: that frame's error from L and R
+    a, b = _csv(tmp_path / "a.csv", model), _csv(tmp_path / "b.csv", data)
+    code, out, err = run_cli(monkeypatch, capsys, "compare", a, b, "--json")
+    assert code == 0, err
+    res = json.loads(out)
+    hand = np.median([k + 1.0 for k in range(10) if k not in (2, 5)])  # (5 + 7) / 2 = 6 mm
+    assert hand == 6.0
+    assert res["error"]["median_mm"] == pytest.approx(hand, rel=1e-6)
+    assert res["frame_error_mm"]["min"] == pytest.approx(1.0, rel=1e-6)  # never a 0 mm frame
+    assert res["error"]["max_mm"] == pytest.approx(10.0, rel=1e-6)
+    assert (res["frames"], res["frames_skipped"], res["samples_skipped"]) == (10, 2, 1)
+    assert res["missing_markers"] == []
+    for name, m in res["markers"].items():  # an offset along x only: y and z follow exactly
+        assert m["displacement"]["y"] == pytest.approx(1.0, abs=1e-9), name
+        assert m["corr3d_published"] is not None and 0.0 < m["corr3d_published"] < 1.0, name
+    code, out, err = run_cli(monkeypatch, capsys, "compare", a, b)
+    assert code == 0 and "median 6.000, max 10.000" in out
+    assert "2 of 10 frames without data were skipped" in out
+    assert "1 of 24 marker-frames without data were skipped" in out
+    assert "no marker" not in err  # the gaps are in the summary, not a warning
+
+
+def test_compare_leaves_out_a_marker_without_data(monkeypatch, capsys, tmp_path):
+    model = _model_mm()
+    data = model.copy()
+    data[:, 0] += [0.0, 0.0, 3.0]  # L 3 mm forward, R exact: RMS sqrt(9 / 2) mm
+    data[:, 2] = np.nan  # the chin never recorded
+    a, b = _csv(tmp_path / "a.csv", model), _csv(tmp_path / "b.csv", data)
+    code, out, err = run_cli(monkeypatch, capsys, "compare", a, b, "--json")
+    assert code == 0, err
+    res = json.loads(out)
+    assert res["missing_markers"] == ["C"] and sorted(res["markers"]) == ["L", "R"]
+    assert res["error"]["median_mm"] == pytest.approx(np.sqrt(4.5), rel=1e-6)
+    assert (res["frames_skipped"], res["samples_skipped"]) == (0, 0)
+    assert res["markers"]["R"]["corr3d_published"] == pytest.approx(1.0, abs=1e-9)
+    code, out, _ = run_cli(monkeypatch, capsys, "compare", a, b)
+    assert "1 of 3 markers without data in both were left out: C" in out
+    line = _one_line_error(monkeypatch, capsys, tmp_path, ("compare", a, b, "--markers", "C"),
+                           b, "C")
+    assert "no frame has data in both inputs for the marker C (B has no data)" in line
+
+
+def test_compare_refuses_data_without_any_sample(monkeypatch, capsys, tmp_path):
+    a = _csv(tmp_path / "a.csv", _model_mm())
+    b = _csv(tmp_path / "b.csv", np.full((10, 3, 3), np.nan))
+    line = _one_line_error(monkeypatch, capsys, tmp_path, ("compare", a, b), b, "markers")
+    assert "no frame has data in both inputs for any marker (B has no data)" in line
+    line = _one_line_error(monkeypatch, capsys, tmp_path, ("compare", b, a), b, "markers")
+    assert line.endswith("(A has no data)")
+    half = _model_mm()  # data in A's first half only, in B's second half only
+    half[5:] = np.nan
+    other = _model_mm()
+    other[:5] = np.nan
+    a, b = _csv(tmp_path / "h.csv", half), _csv(tmp_path / "o.csv", other)
+    line = _one_line_error(monkeypatch, capsys, tmp_path, ("compare", a, b), b, "markers")
+    assert line.endswith("(A and B have data at different frames)")
+
+
+@pytest.mark.parametrize("scale, label, guess", [(1.0, "m", "mm"), (1e-3, "mm", "m")])
+def test_compare_refuses_a_metre_millimetre_mix_up(monkeypatch, capsys, tmp_path, scale, label,
+                                                   guess):
+    model = _model_mm()[:, 2:]  # one marker: the span check of a marker file does not apply
+    a = _csv(tmp_path / "a.csv", model, names=("C",))
+    b = _csv(tmp_path / "b.csv", model * scale, unit=label, names=("C",))
+    line = _one_line_error(monkeypatch, capsys, tmp_path, ("compare", a, b), b, "units")
+    assert re.search(r"median error [0-9.]+ m(m)? \(more than 50 mm\): are the data in "
+                     f"{guess} labelled as {label}\\?", line), line
+    lab = _csv(tmp_path / "lab.csv", model + 500.0, names=("C",))  # right unit, other origin
+    line = _one_line_error(monkeypatch, capsys, tmp_path, ("compare", a, lab), lab, "units")
+    assert "median error 866 mm" in line and "model's frame" in line
+    near = _csv(tmp_path / "near.csv", model + 20.0, names=("C",))  # 34.6 mm: accepted
+    code, out, _ = run_cli(monkeypatch, capsys, "compare", a, near, "--json")
+    assert code == 0 and json.loads(out)["error"]["median_mm"] == pytest.approx(
+        20.0 * np.sqrt(3), rel=1e-6)
+
+
+# ---- every writing command checks its output before any work -----------------------------------
+_WRITERS = {  # command (the output last, after -o), what the output is: "file" or "folder"
+    "render": (("render", "{r}"), "file"),
+    "still": (("still", "{r}"), "file"),
+    "plot": (("plot", "{r}"), "file"),
+    "view": (("view", "{r}"), "file"),
+    "export": (("export", "{r}"), "file"),
+    "export-obj": (("export", "{r}", "--format", "obj"), "folder"),
+    "invert": (("invert", "--markers", "{m}"), "file"),
+    "regions": (("regions", "{m}"), "folder"),
+    "speak": (("speak", "hello", "--audio", "{w}"), "folder"),
+    "stimuli": (("stimuli", "{d}"), "folder"),
+    "calibrate": (("calibrate", "{m}:OOS"), "file"),
+    "crosstalker": (("experiment", "pitermann2001-crosstalker"), "file"),
+    "synthetic": (("experiment", "pitermann2001-synthetic"), "folder"),
+    "lucero2008": (("experiment", "lucero2008"), "folder"),
+}
+
+
+@pytest.fixture
+def inputs(tmp_path):
+    """Input files (not even valid: the output is checked before any is read), an existing
+    folder and an unrelated file."""
+    files = {"{r}": "r.nc", "{m}": "m.csv", "{w}": "voice.wav", "{d}": "design.csv",
+             "{file}": "notes.txt"}
+    for name in files.values():
+        (tmp_path / name).write_text(f"{name}: left exactly as it was\n")
+    (tmp_path / "taken.json").mkdir()
+    return {k: tmp_path / v for k, v in files.items()} | {"{dir}": tmp_path / "taken.json"}
+
+
+def _args(command, inputs, output, *extra):
+    return [*(inputs.get(a, a) for a in command), *extra, "-o", output]
+
+
+@pytest.mark.parametrize("which", [w for w in _WRITERS if w not in (
+    "crosstalker", "synthetic", "lucero2008", "calibrate")])
+def test_a_writing_command_refuses_its_input_as_output(monkeypatch, capsys, tmp_path, inputs,
+                                                       which):
+    command, _ = _WRITERS[which]
+    given = next(inputs[a] for a in command if a in inputs)
+    line = _one_line_error(monkeypatch, capsys, tmp_path, _args(command, inputs, given), given,
+                           "-o")
+    assert f"the output is the input {given}: refusing to overwrite an input" in line
+
+
+# export takes an existing folder as the folder of a mesh sequence: never in the way
+@pytest.mark.parametrize("which", [w for w in _WRITERS if w != "export"])
+def test_a_writing_command_refuses_a_folder_or_file_in_the_way(monkeypatch, capsys, tmp_path,
+                                                               inputs, which):
+    command, kind = _WRITERS[which]
+    output = inputs["{dir}" if kind == "file" else "{file}"]
+    line = _one_line_error(monkeypatch, capsys, tmp_path, _args(command, inputs, output),
+                           output, "-o")
+    assert (f"a {'folder' if kind == 'file' else 'file'} is in the way of the output "
+            f"{kind}") in line
+
+
+@pytest.mark.parametrize("which", list(_WRITERS))
+def test_a_writing_command_refuses_a_path_through_a_file(monkeypatch, capsys, tmp_path, inputs,
+                                                         which):
+    command, kind = _WRITERS[which]
+    output = inputs["{file}"] / "sub" / ("out" if kind == "folder" else "out.json")
+    line = _one_line_error(monkeypatch, capsys, tmp_path, _args(command, inputs, output),
+                           output, "-o")
+    assert f"the path goes through the file {inputs['{file}']}" in line
+
+
+def test_invert_checks_its_figure_before_the_inversion(monkeypatch, capsys, tmp_path, inputs):
+    m = inputs["{m}"]
+    args = ("invert", "--markers", m, "-o", tmp_path / "r2.nc", "--figure")
+    line = _one_line_error(monkeypatch, capsys, tmp_path, (*args, m), m, "--figure")
+    assert "refusing to overwrite an input" in line
+    line = _one_line_error(monkeypatch, capsys, tmp_path, (*args, tmp_path / "r2.nc"),
+                           tmp_path / "r2.nc", "--figure")
+    assert "the figure and the results file are the same path" in line
+    line = _one_line_error(monkeypatch, capsys, tmp_path, (*args, inputs["{dir}"]),
+                           inputs["{dir}"], "--figure")
+    assert "a folder is in the way" in line

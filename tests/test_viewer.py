@@ -221,7 +221,8 @@ def test_view_cli(result, measured_csv, tmp_path, monkeypatch, capsys):
         ((result, "-o", tmp_path / "c.html", "--markers", nomatch), "no marker name in common"),
         ((result, "-o", tmp_path / "d.html", "--markers", tmp_path / "none.csv"),
          "file not found"),
-        ((result, "-o", result), "must end in .html"),
+        ((result, "-o", result), "refusing to overwrite an input"),  # checked first
+        ((result, "-o", tmp_path / "e.nc"), "must end in .html"),
     ]
     for args, message in cases:
         code, _, err = cli(monkeypatch, capsys, "view", *args)

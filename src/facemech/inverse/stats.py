@@ -10,12 +10,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..errors import InputError
 from ..kinematics.resample import savgol_derivative
 from ..params import Parameters
 
 __all__ = ["Comparison", "MarkerStatistics", "acceleration", "axis_correlations", "centroid",
            "compare", "corr3d", "cross_correlation", "error_summary", "frame_errors", "json_safe",
-           "movement", "std3d", "summary5"]
+           "movement", "runs", "std3d", "summary5"]
 
 #: Hz, the frame rate assumed where none is given: the parameters' (the model's output rate)
 FRAME_RATE = Parameters.frame_rate
@@ -107,27 +108,49 @@ def cross_correlation(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.clip(np.sum(a * b) / den, -1.0, 1.0)) if den > 0 else float("nan")
 
 
+def runs(ok: np.ndarray) -> list[slice]:
+    """The runs of consecutive True samples of a boolean series, as slices."""
+    edges = np.flatnonzero(np.diff(np.concatenate(([0], np.asarray(ok, int), [0]))))
+    return [slice(int(i), int(j)) for i, j in zip(edges[::2], edges[1::2], strict=True)]
+
+
+#: frames of a run of consecutive data that gives an acceleration (a cubic fit needs 5)
+ACCELERATION_MIN_FRAMES = 5
+
+
 def axis_correlations(a: np.ndarray, b: np.ndarray, rate: float = FRAME_RATE) -> dict:
     """Per-axis Pearson correlations of displacement and of acceleration (Savitzky-Golay,
-    0.1-s cubic; left out for fewer than 5 frames).
+    0.1-s cubic), over the frames where both have data.
+
+    The displacements are taken from the first frame with data in both. The acceleration is
+    computed within each run of consecutive frames with data in both (a gap is not bridged)
+    and left out when no run has 5 frames.
 
     Parameters
     ----------
-    a, b : (frames, 3) arrays, same units
+    a, b : (frames, 3) arrays, same units; NaN where missing
     rate : frame rate, Hz
 
     Returns
     -------
-    dict: ``displacement`` (and ``acceleration``) -> {"x", "y", "z"} -> Pearson r
+    dict: ``displacement`` (and ``acceleration``) -> {"x", "y", "z"} -> Pearson r (NaN with
+    fewer than 2 frames in both or a flat series)
     """
-    out = {}
-    for kind in ("displacement", "acceleration"):
-        x, y = a - a[0], b - b[0]
-        if kind == "acceleration":
-            if len(a) < 5:
-                continue
-            x, y = acceleration(x, rate), acceleration(y, rate)
-        out[kind] = {ax: cross_correlation(x[:, i], y[:, i]) for i, ax in enumerate("xyz")}
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    ok = np.all(np.isfinite(a) & np.isfinite(b), axis=-1)
+    if not ok.any():
+        nan = dict.fromkeys("xyz", float("nan"))
+        return {"displacement": nan}
+    first = int(np.argmax(ok))
+    x, y = a[ok] - a[first], b[ok] - b[first]
+    out = {"displacement": {ax: cross_correlation(x[:, i], y[:, i])
+                            for i, ax in enumerate("xyz")}}
+    long = [r for r in runs(ok) if r.stop - r.start >= ACCELERATION_MIN_FRAMES]
+    if long:
+        x = np.concatenate([acceleration(a[r] - a[first], rate) for r in long])
+        y = np.concatenate([acceleration(b[r] - b[first], rate) for r in long])
+        out["acceleration"] = {ax: cross_correlation(x[:, i], y[:, i])
+                               for i, ax in enumerate("xyz")}
     return out
 
 
@@ -159,7 +182,7 @@ ERROR_WARN_RATIO = 5.0
 
 def error_summary(per_frame_m: np.ndarray, rate_hz: float = FRAME_RATE, *,
                   time_s: np.ndarray | None = None, warn_mm: float = ERROR_WARN_MM,
-                  warn_ratio: float = ERROR_WARN_RATIO) -> dict:
+                  warn_ratio: float = ERROR_WARN_RATIO, gaps: bool = True) -> dict:
     """Median and maximum of a per-frame error, with the warnings a summary must show.
 
     Parameters
@@ -172,6 +195,7 @@ def error_summary(per_frame_m: np.ndarray, rate_hz: float = FRAME_RATE, *,
     time_s : (frames,) array, s, optional: the frames' times, in place of k / rate_hz
     warn_mm : warn when the maximum exceeds this (mm)
     warn_ratio : warn when the maximum exceeds this many times the median
+    gaps : warn about the frames without an error (False where the caller reports them)
 
     Returns
     -------
@@ -198,7 +222,7 @@ def error_summary(per_frame_m: np.ndarray, rate_hz: float = FRAME_RATE, *,
         warnings.append(f"{where} is more than {warn_mm:g} mm")
     if big > warn_ratio * med:
         warnings.append(f"{where} is more than {warn_ratio:g} x the median ({med:.3g} mm)")
-    if not ok.all():
+    if gaps and not ok.all():
         warnings.append(f"{int((~ok).sum())} frames have no marker in both and are left out")
     return {"median_mm": med, "max_mm": big, "max_frame": k, "max_time_s": float(t[k]),
             "frames": int(ok.sum()), "summary_mm": summary5(e[ok]), "warnings": warnings}
@@ -210,10 +234,27 @@ def summary5(x: np.ndarray) -> dict:
     return dict(zip(("min", "q1", "median", "q3", "max"), map(float, q), strict=True))
 
 
-def movement(data: np.ndarray) -> float:
-    """Movement amplitude: 2 x RMS over markers of each marker's 3-D standard deviation."""
-    s = np.array([std3d(data[:, m]) for m in range(data.shape[1])])
-    return float(2.0 * np.sqrt(np.mean(s * s)))
+def movement(data: np.ndarray, ok: np.ndarray | None = None) -> float:
+    """Movement amplitude: 2 x RMS over markers of each marker's 3-D standard deviation.
+
+    Parameters
+    ----------
+    data : (frames, markers, 3) array, any length unit; NaN where missing
+    ok : (frames, markers) bool array, optional: the samples to use (default: the finite ones)
+
+    Returns
+    -------
+    float, the unit of ``data``: each marker's deviation over its own frames with data (a marker
+    with fewer than 2 is left out); NaN when no marker has 2.
+    """
+    data = np.asarray(data, float)
+    use = np.all(np.isfinite(data), axis=-1)
+    if ok is not None:
+        use &= ok
+    s = np.array([std3d(data[use[:, m], m]) if use[:, m].sum() >= 2 else np.nan
+                  for m in range(data.shape[1])])
+    s = s[np.isfinite(s)]
+    return float(2.0 * np.sqrt(np.mean(s * s))) if len(s) else float("nan")
 
 
 @dataclass(frozen=True)
@@ -252,6 +293,10 @@ class Comparison:
     error : :func:`error_summary` of the per-frame error (median, maximum, warnings)
     movement_mm : movement amplitude of the data (:func:`movement`), mm
     frames : number of frames
+    frames_skipped : frames without a marker in both (left out of every statistic)
+    samples_skipped : marker-frames without data in both, among the other frames and the
+        markers compared (left out of their frame's error and their marker's statistics)
+    missing_markers : markers without a single frame in both (left out of everything)
     """
 
     markers: dict
@@ -259,17 +304,39 @@ class Comparison:
     error: dict
     movement_mm: float
     frames: int
+    frames_skipped: int = 0
+    samples_skipped: int = 0
+    missing_markers: tuple = ()
 
     @property
     def warnings(self) -> list:
         """The error summary's warnings (str)."""
         return self.error["warnings"]
 
+    @property
+    def gaps(self) -> list:
+        """What was skipped for want of data, one sentence each (empty without gaps)."""
+        n = len(self.markers) + len(self.missing_markers)
+        used = (self.frames - self.frames_skipped) * len(self.markers)
+        out = []
+        if self.frames_skipped:
+            out.append(f"{self.frames_skipped} of {self.frames} frames without data were "
+                       "skipped")
+        if self.samples_skipped:
+            out.append(f"{self.samples_skipped} of {used} marker-frames without data were "
+                       "skipped")
+        if self.missing_markers:
+            out.append(f"{len(self.missing_markers)} of {n} markers without data in both were "
+                       f"left out: {', '.join(self.missing_markers)}")
+        return out
+
     def as_dict(self) -> dict:
         """The statistics as JSON-ready nested dicts (NaN kept: see :func:`json_safe`)."""
         return {"markers": {n: m.as_dict() for n, m in self.markers.items()},
                 "frame_error_mm": self.frame_error_mm, "error": self.error,
-                "movement_mm": self.movement_mm, "frames": self.frames}
+                "movement_mm": self.movement_mm, "frames": self.frames,
+                "frames_skipped": self.frames_skipped, "samples_skipped": self.samples_skipped,
+                "missing_markers": list(self.missing_markers)}
 
 
 def json_safe(obj):
@@ -284,11 +351,16 @@ def json_safe(obj):
 
 
 def compare(a: np.ndarray, b: np.ndarray, names, rate: float = FRAME_RATE) -> Comparison:
-    """All statistics of model ``a`` against data ``b``.
+    """All statistics of model ``a`` against data ``b``, over the samples with data in both.
+
+    A frame without any marker in both is skipped, a marker-frame without data in both is left
+    out of its frame's error and its marker's statistics, and a marker without a single frame
+    in both is left out; the :class:`Comparison` counts each.
 
     Parameters
     ----------
-    a, b : (frames, markers, 3) arrays, metres, the markers ``names`` in that order
+    a, b : (frames, markers, 3) arrays, metres, the markers ``names`` in that order; NaN where
+        missing
     names : marker names
     rate : frame rate, Hz (the times of the warnings, the acceleration's window)
 
@@ -296,14 +368,33 @@ def compare(a: np.ndarray, b: np.ndarray, names, rate: float = FRAME_RATE) -> Co
     -------
     Comparison
         Per-marker 3-D correlations (:func:`corr3d`) and per-axis correlations, the per-frame
-        error's five-number summary and :func:`error_summary`, the movement (mm) and frames.
+        error's five-number summary and :func:`error_summary`, the movement (mm), the frames
+        and what was skipped.
+
+    Raises
+    ------
+    InputError
+        When no marker has a frame with data in both (field: the marker, or ``markers``).
     """
+    names = list(names)
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    both = np.all(np.isfinite(a) & np.isfinite(b), axis=-1)  # (frames, markers)
+    kept = both.any(axis=0)
+    if not kept.any():
+        raise InputError("no frame has data in both inputs" + (
+            f" for the marker {names[0]}" if len(names) == 1 else " for any marker"),
+            field=names[0] if len(names) == 1 else "markers")
+    missing = tuple(n for n, k in zip(names, kept, strict=True) if not k)
+    a, b, both = a[:, kept], b[:, kept], both[:, kept]
     per_marker = {}
-    for m, name in enumerate(names):
+    for m, name in enumerate(n for n, k in zip(names, kept, strict=True) if k):
         ax = axis_correlations(a[:, m], b[:, m], rate)
         per_marker[name] = MarkerStatistics(
             float(corr3d(a[:, m], b[:, m])), float(corr3d(a[:, m], b[:, m], published=False)),
             ax["displacement"], ax.get("acceleration"))
-    summary = error_summary(frame_errors(a, b), rate)
+    summary = error_summary(frame_errors(a, b), rate, gaps=False)
+    frames_with = both.any(axis=1)
     return Comparison(markers=per_marker, frame_error_mm=summary["summary_mm"], error=summary,
-                      movement_mm=movement(b) * 1e3, frames=int(len(a)))
+                      movement_mm=movement(b, both) * 1e3, frames=int(len(a)),
+                      frames_skipped=int((~frames_with).sum()),
+                      samples_skipped=int((~both[frames_with]).sum()), missing_markers=missing)

@@ -60,6 +60,11 @@ def calibrate(gestures: Sequence[str] | None, output: str | Path, *,
     if output.suffix.lower() != ".json":
         raise InputError("the preset file must end in .json", source=str(output),
                          field="output")
+    from ..io.atomic import check_output
+
+    specs = [parse_gesture(spec) for spec in gestures or ()]
+    check_output(output, [*(path for path, _ in specs), map_file,
+                          face if Path(str(face)).suffix else None], field="-o")
     model = load_face(face, tissue=anatomical().tissue)
     step = None if progress is None else (lambda d, n: progress("fit", d, n))
     if builtin:
@@ -67,8 +72,7 @@ def calibrate(gestures: Sequence[str] | None, output: str | Path, *,
         fitted_to = "built-in targets"
     else:
         recs, mapping = [], None
-        for spec in gestures:
-            path, groups = parse_gesture(spec)
+        for path, groups in specs:
             ms = read_markers(path, units=units)
             if mapping is None:
                 mapping = (read_mapping(map_file, ms, model) if map_file is not None

@@ -33,7 +33,10 @@ def run(output: str | Path, *, integrator: str | None = None, video: bool = True
     Written : ``data`` the :class:`facemech.demo.DemoSummary`, its line :func:`summary_text`
     """
     from ..demo import run_demo
+    from ..io.atomic import check_output
 
+    check_output(output, [preset if Path(str(preset)).suffix else None], folder=True,
+                 field="-o")
     s = run_demo(output, integrator=integrator, video=video, preset=preset, progress=progress,
                  render=render)
     return Written(Path(output), s, summary_text(s, output))

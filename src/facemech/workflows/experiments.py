@@ -19,6 +19,16 @@ __all__ = ["crosstalker", "crosstalker_report", "lucero2008", "lucero2008_report
 Progress = Callable[[str, int, int], None]
 
 
+def _check(output: str | Path | None, preset: str | None, *, folder: bool) -> None:
+    """Check the output (if any) before the experiment's minutes of work: never the preset
+    file, and writable (:func:`facemech.io.atomic.check_output`)."""
+    from ..io.atomic import check_output
+
+    if output is not None:
+        check_output(output, [preset if preset and Path(preset).suffix else None],
+                     folder=folder, field="-o")
+
+
 def _face_and_params(preset: str):
     from ..geometry.builder import default_face
     from ..params import preset as get_preset
@@ -51,6 +61,7 @@ def synthetic(output: str | Path | None = None, *, method: str = "lsq", noise_mm
 
     if method not in ("lsq", "powell", "both"):
         raise InputError("method must be lsq, powell or both", field="method")
+    _check(output, preset, folder=True)
     face, prm = _face_and_params(preset)
     res = run_synthetic(face, methods=("lsq", "powell") if method == "both" else (method,),
                         noise=noise_mm * 1e-3, params=prm, dt=dt, progress=progress)
@@ -115,6 +126,7 @@ def crosstalker(output: str | Path | None = None, *, frames: int = 120,
 
     if frames < 8:
         raise InputError("needs at least 8 frames", field="frames")
+    _check(output, preset, folder=False)
     face, prm = _face_and_params(preset)
     res = run_crosstalker(face, frames=frames, params=prm, dt=dt, progress=progress)
     if output is not None:
@@ -157,6 +169,7 @@ def lucero2008(output: str | Path, *, utterances: int = 40, frames: int = 60, k:
     """
     from ..analysis.lucero2008 import draw_lucero2008, run_lucero2008, write
 
+    _check(output, None, folder=True)
     res = run_lucero2008(n_utterances=utterances, frames=frames, k=k, progress=progress)
     res = draw_lucero2008(res, output, video=video, progress=progress)
     write(res, Path(output) / "summary.json")

@@ -5,6 +5,8 @@ from __future__ import annotations
 from collections.abc import Callable
 from pathlib import Path
 
+from ..errors import InputError
+
 __all__ = ["draw", "invert", "notes", "report"]
 
 
@@ -45,8 +47,16 @@ def invert(markers: str | Path, output: str | Path, *, face: str | Path = "defau
     facemech.inverse.result.Inversion
     """
     from ..inverse.workflow import invert_markers
+    from ..io.atomic import check_output
     from ..io.results import file_hash
 
+    inputs = [markers, map_file, face if Path(str(face)).suffix else None]
+    check_output(output, inputs, field="-o")  # before the inversion, which takes minutes
+    if figure is not None:
+        if Path(figure).resolve() == Path(output).resolve():
+            raise InputError("the figure and the results file are the same path",
+                             source=str(figure), field="--figure")
+        check_output(figure, inputs, field="--figure")
     label = f"invert ({method})"
     res = invert_markers(
         markers, face=face, map_file=map_file, units=units, scale_pair=scale_pair,

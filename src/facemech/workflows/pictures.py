@@ -7,6 +7,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from ..io.atomic import check_output
 from ..progress import StagedProgress, stage
 from .outcome import Written
 
@@ -38,10 +39,14 @@ def render_movie(results, movie: Movie | tuple, *, source: str | None = None,
                  progress: StagedProgress | None = None) -> Written:
     """Render a results dataset (or file) to ``movie`` (a :class:`Movie`, or its fields as a
     tuple): an H.264 MP4 or PNG frames, with eyes, teeth and tongue, at the results' frame rate.
-    Reports the stage ``render`` (frames)."""
+    Reports the stage ``render`` (frames). The output is checked first (never an input, and
+    writable: :func:`facemech.io.atomic.check_output`)."""
     from ..viz.video import render_results
 
     movie = movie if isinstance(movie, Movie) else Movie(*movie)
+    given = results if isinstance(results, (str, Path)) else source
+    check_output(movie.path, [given, movie.audio], folder=Path(movie.path).suffix == "",
+                 field="-o")
     if isinstance(results, (str, Path)):
         from ..io.results import read_results
 
@@ -66,6 +71,7 @@ def still_file(result: str | Path, output: str | Path, *, time: float | None = N
     from ..io.results import read_results
     from ..viz.video import still
 
+    check_output(output, [result], field="-o")
     r = still(read_results(result), output, time=time, peak=peak, options=options,
               markers=markers or labels, labels=labels, source=str(result))
     return Written(Path(output), r, f"frame {r['frame']} (t = {r['time']:.3f} s) -> {output}")
@@ -89,6 +95,7 @@ def plot_file(result: str | Path, output: str | Path, markers: str | Sequence[st
     from ..viz.plots import kinematics_figure
     from .markers import names_of, trajectories
 
+    check_output(output, [result, measured], field="-o")
     ms = read_markers(result)
     names = names_of(markers)
     traj = {n: ms.marker(n) for n in names}
@@ -106,6 +113,7 @@ def view_file(result: str | Path, output: str | Path, *, markers: str | Path | N
     one self-contained HTML page (:func:`facemech.viz.viewer.view_file`)."""
     from ..viz.viewer import view_file as write_page
 
+    check_output(output, [result, markers], field="-o")
     path = write_page(result, output, markers=markers, units=units, title=title)
     return Written(path, None, f"viewer -> {path} ({path.stat().st_size / 1e6:.1f} MB)")
 
@@ -117,5 +125,7 @@ def export_file(result: str | Path, output: str | Path, *, fmt: str | None = Non
     markers (``.trc``, ``.c3d``, ``.csv``)."""
     from ..io.export import export_results
 
+    folder = fmt is not None or Path(output).suffix == "" or Path(output).is_dir()
+    check_output(output, [result], folder=folder, field="-o")
     res = export_results(result, output, fmt=fmt, units=units)
     return Written(Path(output), res, res.summary())

@@ -109,7 +109,10 @@ def regions(files: Sequence[str | Path], output: str | Path, *, k: int | None = 
     facemech.analysis.lucero2008.RegionAnalysis, with its figures
     """
     from ..analysis.lucero2008 import analyse, draw, write
+    from ..io.atomic import check_output
 
+    check_output(output, [*files, None if str(neutral) == "first" else neutral], folder=True,
+                 field="-o")
     utts, names, base, rate = read_utterances(files, neutral=neutral, units=units)
     res = analyse(utts, names, k=k, method=method, neutral=base, rate=rate,
                   eps=eps if isinstance(eps, float) else parse_length(eps, "eps"),

@@ -20,8 +20,13 @@ def speak(output: str | Path, text: str | None = None, *, video: bool = True,
     ``voice``, ``rate_wpm``, ``word_tier``, ``phone_tier``, ``face``, ``preset``, ``strength``,
     ``progress``), the MP4 with ``video`` (:func:`.pictures.render_options` of ``view``, ``size``,
     ``background``, ``aa``). Returns its :class:`~facemech.speech.speak.Spoken`."""
+    from ..io.atomic import check_output
     from ..speech.speak import speak as run
 
+    named = [options.get(k) for k in ("face", "preset")]  # built-in names or files
+    check_output(output, [options.get("audio"), options.get("textgrid"),
+                          *(n for n in named if n and Path(str(n)).suffix)],
+                 folder=True, field="-o")
     opts = render_options(view, size, background, aa) if video else None
     return run(output, text, video=video, render_options=opts, **options)
 
@@ -67,9 +72,11 @@ def stimuli(design: str | Path, output: str | Path, *, video: bool = True,
     ``background``
     and ``aa``; ``progress`` is callable(stage, done, total). Returns the
     :class:`~facemech.speech.design.DesignReport`."""
+    from ..io.atomic import check_output
     from ..speech.design import run_design
     from ..speech.speak import text_items
 
+    check_output(output, [design], folder=True, field="-o")
     return run_design(design, output, text_items(Path(output) / "items"),
                       options=render_options(view, size, background, aa), video=video,
                       progress=progress)
