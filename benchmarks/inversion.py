@@ -3,12 +3,12 @@
 1. The default: 3 s of the demo utterance (jaw moving), simulated under the default preset,
    its 37 landmarks and markers inverted with the default method and options (lsq, the jaw
    estimated). Target: at most 15 s per 3 s of speech.
-2. Experiment 1 of Pitermann & Munhall (2001) under ``lucero1999`` by the fast method and by
-   Powell. Powell is run on the first ``--powell-frames`` frames only and its time per frame
-   extrapolated to the whole experiment (said so in the output), so that every mode finishes
-   within minutes.
+2. Experiment 1 of Pitermann & Munhall (2001) under ``lucero1999`` by the methods of
+   ``--methods`` (default: lsq only; Powell is opt-in, ``--methods lsq,powell``). Powell is run
+   on the first ``--powell-frames`` frames only and its time per frame extrapolated to the whole
+   experiment (said so in the output). Each method reports its model frame steps per frame.
 
-Usage: python benchmarks/inversion.py [--seconds 3] [--powell-frames 6] [--skip-powell]
+Usage: python benchmarks/inversion.py [--seconds 3] [--methods lsq[,powell]] [--powell-frames 6]
 """
 
 from __future__ import annotations
@@ -62,14 +62,12 @@ def _group(name: str) -> int:
     return MUSCLE_GROUPS.index(name)
 
 
-def experiment1(face, powell_frames: int, skip_powell: bool) -> dict:
+def experiment1(face, powell_frames: int, methods=("lsq",)) -> dict:
     prm = preset("lucero1999")
     data, truth = synthetic_data(face, params=prm)
     used = {n: face.markers[n] for n in data.names if n.startswith("R")}
     out: dict = {"frames": data.n_frames, "preset": "lucero1999", "methods": {}}
-    for method in ("lsq", "powell"):
-        if method == "powell" and skip_powell:
-            continue
+    for method in methods:
         n = data.n_frames if method == "lsq" else min(powell_frames, data.n_frames)
         part = MarkerSet(data.positions[:n], data.names, 60.0)
         kw = (dict(EXPERIMENT_SETTINGS) if method == "lsq"
@@ -79,13 +77,14 @@ def experiment1(face, powell_frames: int, skip_powell: bool) -> dict:
                      jaw_angle=np.zeros(n), **kw)
         wall = time.perf_counter() - t0
         entry = {"frames_run": n, "wall_s": wall, "steps": int(res.evaluations.sum()),
+                 "steps_per_frame": float(res.evaluations[1:].mean()),
                  "median_frame_error_mm": res.error_summary()["median_mm"]}
         if n < data.n_frames:
             entry["wall_s_extrapolated"] = wall * (data.n_frames - 1) / max(n - 1, 1)
             entry["note"] = (f"run on the first {n} of {data.n_frames} frames; the time is "
                              "extrapolated by frames")
         out["methods"][method] = entry
-    if "powell" in out["methods"]:
+    if "powell" in out["methods"] and "lsq" in out["methods"]:
         p = out["methods"]["powell"]
         out["speedup_lsq_over_powell"] = (p.get("wall_s_extrapolated", p["wall_s"])
                                           / out["methods"]["lsq"]["wall_s"])
@@ -96,15 +95,19 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--seconds", type=float, default=3.0, help="speech to invert, s")
     ap.add_argument("--powell-frames", type=int, default=6)
-    ap.add_argument("--skip-powell", action="store_true")
+    ap.add_argument("--methods", default="lsq",
+                    help="Experiment 1's methods, comma-separated: lsq, powell (slow)")
     args = ap.parse_args()
+    methods = tuple(m.strip() for m in args.methods.split(",") if m.strip())
+    if not methods or set(methods) - {"lsq", "powell"}:
+        ap.error(f"--methods takes lsq and/or powell (got {args.methods!r})")
     warnings.simplefilter("ignore")
     from threadpoolctl import threadpool_limits
 
     face = default_face()
     with threadpool_limits(1):
         out = {"benchmark": "inversion", "default": default_inversion(face, args.seconds),
-               "experiment1": experiment1(face, args.powell_frames, args.skip_powell)}
+               "experiment1": experiment1(face, args.powell_frames, methods)}
     print(json.dumps(out, indent=2))
 
 

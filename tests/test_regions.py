@@ -9,12 +9,14 @@ import pytest
 import scipy.linalg as sla
 
 from facemech import InputError
+from facemech.analysis import regions
 from facemech.analysis.corpus import COPY_SOURCE, COPY_TARGET, embedded_corpus
 from facemech.analysis.lucero2008 import insertion_distances
 from facemech.analysis.regions import (
     IndependentMarkers,
     displacement_matrix,
     noise_floor,
+    pivoted_qr,
     strong_rrqr,
 )
 
@@ -104,7 +106,7 @@ def test_bad_input():
         IndependentMarkers().fit([utts[0], utts[1][:, :14]])
     gap = utts[0].copy()
     gap[5, 2, 1] = np.nan
-    with pytest.raises(InputError, match="gap"):
+    with pytest.raises(InputError, match=r"gap \(marker 2, frame 5\)"):
         IndependentMarkers().fit([gap])
     with pytest.raises(InputError, match="need at least as many"):
         IndependentMarkers().fit([utts[0][:3]])
@@ -131,6 +133,65 @@ def test_embedded_corpus_and_the_copied_marker_artifact(corpus):
     assert names[m.order_[0]] in ("lower_lip_C", "lower_lip_R1", "lower_lip_L1", "chin_C")
     clean = IndependentMarkers().fit(embedded_corpus(10, 30, copied_eyelid=False).utterances)
     assert clean.r_values_[-1] > 0.3e-3  # without the copy no column is redundant
+
+
+def _old_pivoted_qr(a, *, pivoting=True, overwrite_a=False):
+    """The factorisation before the one-thread economical path: scipy's qr(mode="r") of the
+    row-major matrix, the full (rows, N) triangle, then its first N rows."""
+    out = sla.qr(np.ascontiguousarray(a), mode="r", pivoting=pivoting)
+    n = a.shape[1]
+    return out[0][:n], (out[1] if pivoting else np.arange(n))
+
+
+@pytest.mark.parametrize("method", ["qrcp", "strong"])
+def test_one_thread_economical_fit_matches_the_old_path(corpus, monkeypatch, method):
+    utts = corpus.utterances
+    a = displacement_matrix(utts)
+    assert a.flags.f_contiguous and a.shape == (3 * 10 * 30, 57)
+    np.testing.assert_array_equal(a, np.concatenate(
+        [(u - u[0]).reshape(-1, 57, 3).transpose(0, 2, 1).reshape(-1, 57) for u in utts]))
+    r_old, piv_old = _old_pivoted_qr(a)
+    r, piv = pivoted_qr(a)
+    assert r.shape == (57, 57) and np.array_equal(r, np.triu(r))
+    np.testing.assert_array_equal(piv, piv_old)
+    np.testing.assert_allclose(r, r_old, rtol=0, atol=1e-12 * np.abs(r_old).max())
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        new = IndependentMarkers(k=12, method=method).fit(utts)
+        with monkeypatch.context() as mp:  # the fit as it was, computed directly
+            mp.setattr(regions, "pivoted_qr", _old_pivoted_qr)
+            old = IndependentMarkers(k=12, method=method).fit(utts)
+    assert new.rank_ == old.rank_ and new.swaps_ == old.swaps_
+    for name in ("order_", "selected_", "secondary_"):
+        np.testing.assert_array_equal(getattr(new, name), getattr(old, name))
+    scale = np.abs(old.R_).max()
+    np.testing.assert_allclose(new.R_, old.R_, rtol=0, atol=1e-12 * scale)
+    np.testing.assert_allclose(new.coef_, old.coef_, rtol=0, atol=1e-9)  # the eigenregions
+    np.testing.assert_allclose(new.r_values_, old.r_values_, rtol=1e-9, atol=0)
+    assert new.residual_ == pytest.approx(old.residual_, rel=1e-9)
+    np.testing.assert_allclose(np.abs(new.pca(3).components), np.abs(old.pca(3).components),
+                               atol=1e-9)
+
+
+def test_factorisation_runs_on_one_blas_thread(monkeypatch):
+    from threadpoolctl import threadpool_info
+
+    def blas_threads():
+        return {i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"}
+
+    seen = []
+    real_qr = sla.qr
+
+    def spy(*args, **kw):
+        seen.append((blas_threads(), kw.get("mode")))
+        return real_qr(*args, **kw)
+
+    before = blas_threads()
+    monkeypatch.setattr(regions.sla, "qr", spy)
+    utts = latent_utterances(n_utt=3)
+    IndependentMarkers(k=3, eps=1e-9, method="strong").fit(utts)
+    assert seen and all(t == {1} and mode == "raw" for t, mode in seen)
+    assert blas_threads() == before  # restored afterwards
 
 
 def test_first_selected_markers_sit_near_muscle_insertions(corpus, face):

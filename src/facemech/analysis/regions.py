@@ -16,11 +16,18 @@ displacement matrix made of pure measurement noise (standard deviation eps per c
 data's utterance structure and neutral frames), times ``sqrt(1 + ||X||_2^2)`` for the noise that
 the fit carries over from the k noisy independent columns: the markers beyond it move no more,
 independently, than noise would.
+
+Speed: A is stacked in column-major (Fortran) order, the layout LAPACK's geqp3 works in, so the
+factorisation needs no transposed copy (and none at all where A is not needed afterwards); only
+the (N, N) triangle R is kept. The factorisation, the noise Gram matrix and the SVD run with
+BLAS capped at one thread (:func:`one_blas_thread`): on a busy two-core machine the default two
+OpenBLAS threads made the fit of 57 markers x 100,000 samples several times slower.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from contextlib import AbstractContextManager
 from dataclasses import dataclass
 
 import numpy as np
@@ -49,18 +56,22 @@ def displacement_matrix(utterances: Sequence[np.ndarray], neutral: str | np.ndar
             raise InputError(f"utterance {u} has {shape[1]} markers, the first has {n}",
                              source=source, field=f"utterance {u}")
         total += 3 * shape[0]
-    a = np.empty((total, n))
+    a = np.empty((total, n), order="F")  # column-major: geqp3's layout, no copy to factorise
+    xyz = np.dtype((np.void, 3 * a.itemsize))  # one (x, y, z) triple as a single item
     row = 0
     for u, x in enumerate(utterances):
         x = np.asarray(x, float)
         base = x[0] if isinstance(neutral, str) else np.asarray(neutral, float)
-        block = a[row:row + 3 * len(x)].reshape(len(x), 3, n)
-        np.subtract(x.transpose(0, 2, 1), base.T, out=block)  # rows: (sample, axis)
-        row += 3 * len(x)
-        if not np.isfinite(block).all():
-            f, _, m = np.argwhere(~np.isfinite(block))[0]
+        d = np.ascontiguousarray(x - base)  # (frames, markers, 3)
+        if not np.isfinite(d).all():
+            f, m, _ = np.argwhere(~np.isfinite(d))[0]
             raise InputError(f"utterance {u} has a gap (marker {m}, frame {f}): fill or drop it",
                              source=source, field=f"utterance {u}")
+        # column j of the block holds marker j's triples frame by frame: a transpose of
+        # (frames, markers) triples, copied as whole triples
+        block = a.T[:, row:row + 3 * len(x)]  # (markers, 3 frames), rows contiguous
+        block.view(xyz).reshape(n, len(x))[...] = d.view(xyz).reshape(len(x), n).T
+        row += 3 * len(x)
     if a.shape[0] < n:
         raise InputError(f"{a.shape[0]} rows for {n} markers: need at least as many samples x 3 "
                          "as markers", source=source, field="samples")
@@ -84,6 +95,40 @@ def noise_floor(utterances: Sequence[np.ndarray]) -> float:
     return float(1.4826 * np.median(np.abs(d2 - np.median(d2))) / np.sqrt(6.0))
 
 
+def one_blas_thread() -> AbstractContextManager:
+    """A context in which BLAS and LAPACK use one thread (threadpoolctl).
+
+    The region fit's tall factorisation is memory-bound; two OpenBLAS threads on a busy two-core
+    machine made it several times slower than one (see ``benchmarks/regions.py``).
+    """
+    from threadpoolctl import threadpool_limits
+
+    return threadpool_limits(limits=1, user_api="blas")
+
+
+def pivoted_qr(a: np.ndarray, *, pivoting: bool = True,
+               overwrite_a: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """The triangular factor and the column order of ``A P = Q R`` (LAPACK geqp3), on one thread.
+
+    Parameters
+    ----------
+    a : (rows, N) finite matrix, rows >= N; column-major (Fortran) order avoids a copy
+    pivoting : column pivoting (False: the columns in their given order, geqrf)
+    overwrite_a : let LAPACK factorise ``a`` in place (its contents are then lost)
+
+    Returns
+    -------
+    r : (N, N) upper triangular R (Q is never formed; only R's own rows are copied out)
+    perm : (N,) column order P, int
+    """
+    with one_blas_thread():
+        out = sla.qr(a, mode="raw", pivoting=pivoting, overwrite_a=overwrite_a,
+                     check_finite=False)
+    r = out[1]
+    perm = out[2] if pivoting else np.arange(a.shape[1])
+    return r, perm
+
+
 def strong_rrqr(a: np.ndarray, k: int, f: float = 2.0, max_swaps: int = 500):
     """Strong rank-revealing QR (Gu & Eisenstat 1996) for a fixed k.
 
@@ -93,9 +138,8 @@ def strong_rrqr(a: np.ndarray, k: int, f: float = 2.0, max_swaps: int = 500):
 
     Returns (R, perm, swaps).
     """
-    r, perm = sla.qr(a, mode="r", pivoting=True)
+    r, perm = pivoted_qr(a)
     n = a.shape[1]
-    r = r[:n]
     swaps = 0
     if k <= 0 or k >= n:
         return r, perm, swaps
@@ -113,7 +157,7 @@ def strong_rrqr(a: np.ndarray, k: int, f: float = 2.0, max_swaps: int = 500):
             break
         perm = perm.copy()
         perm[i], perm[k + j] = perm[k + j], perm[i]
-        r = sla.qr(a[:, perm], mode="r")[0][:n]
+        r = pivoted_qr(a[:, perm], pivoting=False, overwrite_a=True)[0]
         swaps += 1
     return r, perm, swaps
 
@@ -183,15 +227,19 @@ class IndependentMarkers:
         a = displacement_matrix(utterances, self.neutral)
         n = a.shape[1]
         rows = a.shape[0]
-        r, perm = sla.qr(a, mode="r", pivoting=True)  # LAPACK geqp3; Q is never formed
-        r = r[:n]
+        # LAPACK geqp3 on one thread; Q is never formed; A is factorised in place unless the
+        # strong RRQR needs it again
+        r, perm = pivoted_qr(a, overwrite_a=self.method != "strong")
+        if self.method != "strong":
+            del a
         norm = np.sqrt(rows)
         self.eps_ = float(self.eps if self.eps is not None else noise_floor(utterances))
         # epsilon-rank: smallest k whose residual block R22 is no larger (2-norm) than noise
         # would leave: the same block of a pure-noise displacement matrix of the data's
         # structure, grown by sqrt(1 + ||X||^2) for the noise the fit carries over from the k
         # (noisy) independent columns
-        self.noise_norms_ = _noise_block_norms(utterances, self.neutral, self.eps_) / norm
+        with one_blas_thread():
+            self.noise_norms_ = _noise_block_norms(utterances, self.neutral, self.eps_) / norm
         rank = n
         for kk in range(1, n):
             x = sla.solve_triangular(r[:kk, :kk], r[:kk, kk:], check_finite=False)
@@ -218,7 +266,8 @@ class IndependentMarkers:
         # principal directions of A = Q R P^T are those of R P^T (no SVD of the tall matrix)
         rp = np.empty_like(r)
         rp[:, self.order_] = r
-        self._vt = np.linalg.svd(rp, full_matrices=False)[2]
+        with one_blas_thread():
+            self._vt = np.linalg.svd(rp, full_matrices=False)[2]
         self._set_k(k)
         return self
 
