@@ -98,18 +98,9 @@ def _csv_rows(text: str, path: Path) -> list[dict]:
 
 
 def _toml_rows(text: str, path: Path) -> list[dict]:
-    import tomllib
+    from ..io.tables import toml_tables
 
-    try:
-        doc = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"not a readable TOML file ({exc})", source=str(path)) from None
-    items = doc.get("item")
-    if not isinstance(items, list) or not all(isinstance(i, dict) for i in items):
-        raise InputError("expected [[item]] tables", source=str(path), field="item")
-    defaults = doc.get("defaults", {})
-    if not isinstance(defaults, dict):
-        raise InputError("[defaults] must be a table", source=str(path), field="defaults")
+    items, defaults = toml_tables(text, path, "item")
     known = {_name(o) for job in JOBS.values() for o in job.options}
     for name in defaults:
         if _name(name) not in known:

@@ -81,3 +81,24 @@ def uniform_rate(t: np.ndarray, *, source: str | None = None, field: str = "time
     if np.max(np.abs(d - step)) > 0.01 * step:
         raise InputError("samples are not evenly spaced", source=source, field=field)
     return 1.0 / step
+
+
+def toml_tables(text: str, path: str | Path, table: str) -> tuple[list[dict], dict]:
+    """The ``[[table]]`` entries and the ``[defaults]`` table of a TOML document.
+
+    Raises :class:`InputError` naming ``path`` for unreadable TOML (field none), a missing or
+    malformed ``[[table]]`` list (field ``table``) and ``defaults`` that is not a table.
+    """
+    import tomllib
+
+    try:
+        doc = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"not a readable TOML file ({exc})", source=str(path)) from None
+    items = doc.get(table)
+    if not isinstance(items, list) or not all(isinstance(i, dict) for i in items):
+        raise InputError(f"expected [[{table}]] tables", source=str(path), field=table)
+    defaults = doc.get("defaults", {})
+    if not isinstance(defaults, dict):
+        raise InputError("[defaults] must be a table", source=str(path), field="defaults")
+    return items, defaults

@@ -123,18 +123,13 @@ def _read_csv(path: Path) -> list[dict]:
 
 
 def _read_toml(path: Path) -> list[dict]:
-    import tomllib
+    from ..io.tables import toml_tables
 
     try:
-        doc = tomllib.loads(path.read_text(encoding="utf-8"))
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError as exc:
         raise InputError(f"not a readable TOML file ({exc})", source=str(path)) from None
-    items = doc.get("stimulus")
-    if not isinstance(items, list) or not all(isinstance(i, dict) for i in items):
-        raise InputError("expected [[stimulus]] tables", source=str(path), field="stimulus")
-    defaults = doc.get("defaults", {})
-    if not isinstance(defaults, dict):
-        raise InputError("[defaults] must be a table", source=str(path), field="defaults")
+    items, defaults = toml_tables(text, path, "stimulus")
     return [{**defaults, **item, "_row": k} for k, item in enumerate(items, start=1)]
 
 
