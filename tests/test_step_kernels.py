@@ -37,13 +37,16 @@ def eq9_forces(p, v0, rel0, k_volume, k_shape):
 
 
 def test_volume_about_one_node_equals_the_eight_triangles():
-    """Four triple products about node 0 give the eight-triangle volume and eq. (9)'s forces
-    to 1e-12 relative on random warped prisms."""
+    """Four triple products about node 0 (volume._volume_about_node0) and prism_volume give
+    the eight-triangle volume, and prism_forces eq. (9)'s forces, to 1e-12 relative on random
+    warped prisms."""
     rng = np.random.default_rng(16)
     prisms = random_prisms(rng)
     for p in prisms:
         want = eight_triangle_volume(p)
         assert volume.prism_volume(p) == pytest.approx(want, rel=1e-12)
+        r = (p[1:] - p[0]).reshape(-1)
+        assert volume._volume_about_node0(*r) == pytest.approx(want, rel=1e-12)
         v0 = want * 0.9
         rel0 = p - p.mean(axis=0) + rng.normal(0, 1e-5, (6, 3))
         out = np.empty((6, 3))

@@ -28,16 +28,17 @@ PRISM_TRIANGLES_ALT = np.array(
 def prism_volume(p):
     """Volume (m^3) of a (possibly warped) prism, p of shape (6, 3), by the divergence theorem.
 
-    The quadrilateral sides are split into two triangles each (:data:`PRISM_TRIANGLES`); the
-    result is exact for planar sides and independent of the origin. It is taken about node 0,
-    where the four triangles through that node contribute nothing: four triple products
-    instead of eight (:func:`_volume_about_node0`).
+    The quadrilateral sides are split into two triangles each; the result is exact for planar
+    sides and independent of the origin (it is computed about the element's centre).
+    :func:`_volume_about_node0` gives the same volume to rounding with half the work, but a
+    different rounding moves the seeds' Experiment 1 (docs/inversion.md), so it is not used.
     """
-    return _volume_about_node0(p[1, 0] - p[0, 0], p[1, 1] - p[0, 1], p[1, 2] - p[0, 2],
-                               p[2, 0] - p[0, 0], p[2, 1] - p[0, 1], p[2, 2] - p[0, 2],
-                               p[3, 0] - p[0, 0], p[3, 1] - p[0, 1], p[3, 2] - p[0, 2],
-                               p[4, 0] - p[0, 0], p[4, 1] - p[0, 1], p[4, 2] - p[0, 2],
-                               p[5, 0] - p[0, 0], p[5, 1] - p[0, 1], p[5, 2] - p[0, 2])
+    cx, cy, cz = _centre(p)
+    v = 0.0
+    for t in range(8):
+        _, _, _, ax, ay, az, bx, by, bz, qx, qy, qz = _triangle_about(p, t, cx, cy, cz)
+        v += ax * (by * qz - bz * qy) - ay * (bx * qz - bz * qx) + az * (bx * qy - by * qx)
+    return v / 6.0
 
 
 @nb.njit(cache=True, inline="always")
@@ -271,15 +272,28 @@ def add_prism_forces(pos, nodes, e, rest_volume, rest_rel, k_volume, k_shape, ou
     x3, y3, z3 = pos[u3, 0], pos[u3, 1], pos[u3, 2]
     x4, y4, z4 = pos[u4, 0], pos[u4, 1], pos[u4, 2]
     x5, y5, z5 = pos[u5, 0], pos[u5, 1], pos[u5, 2]
-    v = _volume_about_node0(x1 - x0, y1 - y0, z1 - z0, x2 - x0, y2 - y0, z2 - z0,
-                            x3 - x0, y3 - y0, z3 - z0, x4 - x0, y4 - y0, z4 - z0,
-                            x5 - x0, y5 - y0, z5 - z0)
-    tx, ty, tz = _unit_cross(x1 - x0, y1 - y0, z1 - z0, x2 - x0, y2 - y0, z2 - z0)
-    bx, by, bz = _unit_cross(x4 - x3, y4 - y3, z4 - z3, x5 - x3, y5 - y3, z5 - z3)
-    bx, by, bz = -bx, -by, -bz
     cx = (x0 + x1 + x2 + x3 + x4 + x5) / 6.0
     cy = (y0 + y1 + y2 + y3 + y4 + y5) / 6.0
     cz = (z0 + z1 + z2 + z3 + z4 + z5) / 6.0
+    # prism_volume's eight triangles about the centre, in its order (the same rounding)
+    a0, b0, c0 = x0 - cx, y0 - cy, z0 - cz
+    a1, b1, c1 = x1 - cx, y1 - cy, z1 - cz
+    a2, b2, c2 = x2 - cx, y2 - cy, z2 - cz
+    a3, b3, c3 = x3 - cx, y3 - cy, z3 - cz
+    a4, b4, c4 = x4 - cx, y4 - cy, z4 - cz
+    a5, b5, c5 = x5 - cx, y5 - cy, z5 - cz
+    v = _triple(a0, b0, c0, a1, b1, c1, a2, b2, c2)
+    v += _triple(a3, b3, c3, a5, b5, c5, a4, b4, c4)
+    v += _triple(a0, b0, c0, a3, b3, c3, a4, b4, c4)
+    v += _triple(a0, b0, c0, a4, b4, c4, a1, b1, c1)
+    v += _triple(a1, b1, c1, a4, b4, c4, a5, b5, c5)
+    v += _triple(a1, b1, c1, a5, b5, c5, a2, b2, c2)
+    v += _triple(a2, b2, c2, a5, b5, c5, a3, b3, c3)
+    v += _triple(a2, b2, c2, a3, b3, c3, a0, b0, c0)
+    v = v / 6.0
+    tx, ty, tz = _unit_cross(x1 - x0, y1 - y0, z1 - z0, x2 - x0, y2 - y0, z2 - z0)
+    bx, by, bz = _unit_cross(x4 - x3, y4 - y3, z4 - z3, x5 - x3, y5 - y3, z5 - z3)
+    bx, by, bz = -bx, -by, -bz
     dv = k_volume * (v - rest_volume)
     _add_shape_volume(out, u0, x0, y0, z0, cx, cy, cz, rest_rel, e, 0, dv, tx, ty, tz, k_shape)
     _add_shape_volume(out, u1, x1, y1, z1, cx, cy, cz, rest_rel, e, 1, dv, tx, ty, tz, k_shape)
