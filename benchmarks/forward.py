@@ -6,7 +6,13 @@ mesh counts, each integrator's real-time factor and its largest deviation from t
 explicit Euler (all epidermal nodes and the markers), and one step's force assembly and
 sparse solve.
 
-Usage: python benchmarks/forward.py [--quick]
+First, the explicit step's cost against a bare kernel: one explicit Euler step of the default
+(anatomical) face's full forces (``euler_frame``: springs, prisms, muscles, tethers, contact)
+and a bare numba spring-and-dashpot Euler step over the same nodes and springs, timed
+interleaved in this process (best of the repeats), with their ratio; with ``--threads 1,2`` the
+full step on each thread count, interleaved, and the speed-ups against the first.
+
+Usage: python benchmarks/forward.py [--quick] [--threads 1,2] [--step-only]
 """
 
 from __future__ import annotations
@@ -16,13 +22,91 @@ import json
 import os
 import time
 
-os.environ.setdefault("NUMBA_NUM_THREADS", "1")
+import numba as nb
+import numpy as np
 
-import numpy as np  # noqa: E402
+from facemech import Physics, Stepper, default_face, preset, simulate
+from facemech.demo import utterance
+from facemech.physics.assembly import accumulate_forces, rest_anchors
+from facemech.physics.threads import set_threads
+from facemech.solvers.explicit import EulerSteps, euler_frame
+from facemech.solvers.solver_state import solver_state
 
-from facemech import Physics, Stepper, default_face, preset, simulate  # noqa: E402
-from facemech.demo import utterance  # noqa: E402
-from facemech.physics.assembly import accumulate_forces, rest_anchors  # noqa: E402
+
+@nb.njit(cache=True)
+def bare_euler(spring_i, spring_j, rest, k, damping, inv_mass, dynamic, pos, vel, dt, n_steps):
+    """The reference: n_steps Euler-Cromer steps of linear springs with dashpots alone."""
+    out = np.zeros_like(pos)
+    for _ in range(n_steps):
+        out[:] = 0.0
+        for s in range(spring_i.shape[0]):
+            i = spring_i[s]
+            j = spring_j[s]
+            dx = pos[j, 0] - pos[i, 0]
+            dy = pos[j, 1] - pos[i, 1]
+            dz = pos[j, 2] - pos[i, 2]
+            length = np.sqrt(dx * dx + dy * dy + dz * dz)
+            t = k[s] * (length - rest[s]) / length
+            r = damping[s]
+            fx = t * dx + r * (vel[j, 0] - vel[i, 0])
+            fy = t * dy + r * (vel[j, 1] - vel[i, 1])
+            fz = t * dz + r * (vel[j, 2] - vel[i, 2])
+            out[i, 0] += fx
+            out[i, 1] += fy
+            out[i, 2] += fz
+            out[j, 0] -= fx
+            out[j, 1] -= fy
+            out[j, 2] -= fz
+        for q in range(dynamic.shape[0]):
+            i = dynamic[q]
+            for a in range(3):
+                vel[i, a] += dt * inv_mass[i] * out[i, a]
+                pos[i, a] += dt * vel[i, a]
+
+
+def step_benchmark(threads, repeat=7, n_steps=10) -> dict:
+    """Microseconds per explicit step of the default face's full forces on each thread count
+    and of :func:`bare_euler` (one thread), interleaved; best of ``repeat``."""
+    ph = Physics.build(default_face(), preset("anatomical"))
+    ss = solver_state(ph, 1)
+    f = ss.forces
+    s = f.springs
+    anchors = rest_anchors(ph)
+    rng = np.random.default_rng(0)
+    pos = ph.model.rest_positions + rng.normal(0, 1e-5, ph.model.rest_positions.shape)
+    m = np.full(ph.n_muscles, 0.5)
+    dt = 1e-6  # a short step: the perturbed face stays put, the work per step is the same
+    steps = EulerSteps(n_steps, dt, ss.tau, ss.dynamic, ss.inv_mass)
+
+    def full():
+        euler_frame(f, ss.jaw, steps, pos, np.zeros_like(pos), m, np.zeros_like(m), m, anchors,
+                    np.zeros(3), np.zeros(3))
+
+    def bare():
+        bare_euler(s.i, s.j, s.rest_length, s.k_low, s.damping, ss.inv_mass, ss.dynamic,
+                   pos.copy(), np.zeros_like(pos), dt, n_steps)
+
+    best = {}
+    for _ in range(repeat + 1):  # the first round compiles and warms the caches
+        for n in threads:
+            set_threads(n)
+            t0 = time.perf_counter()
+            full()
+            best[n] = min(best.get(n, np.inf), time.perf_counter() - t0)
+        set_threads(1)
+        t0 = time.perf_counter()
+        bare()
+        best["bare"] = min(best.get("bare", np.inf), time.perf_counter() - t0)
+    us = {k: v / n_steps * 1e6 for k, v in best.items()}
+    report = {"nodes": len(pos), "springs": len(s.i), "prisms": len(f.prisms.nodes),
+              "bare_us_per_step": us["bare"],
+              "full_us_per_step": {str(n): us[n] for n in threads},
+              "full_over_bare": us[threads[0]] / us["bare"], "threads_of_ratio": threads[0],
+              "load_average_1min": os.getloadavg()[0]}
+    if len(threads) > 1:
+        report["speedup_over_threads_" + str(threads[0])] = {
+            str(n): us[threads[0]] / us[n] for n in threads[1:]}
+    return report
 
 
 def timed(fn, repeat=3):
@@ -38,7 +122,15 @@ def timed(fn, repeat=3):
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--quick", action="store_true", help="first 60 frames only, one repeat")
+    ap.add_argument("--threads", default="1", help="thread counts of the step, e.g. 1,2")
+    ap.add_argument("--step-only", action="store_true", help="the step's benchmark alone")
     args = ap.parse_args()
+    threads = [int(n) for n in args.threads.split(",")]
+    step = step_benchmark(threads)
+    set_threads(1)
+    if args.step_only:
+        print(json.dumps({"benchmark": "forward-step", "step": step}, indent=2))
+        return
     t, act, jaw = utterance()
     if args.quick:
         t, act, jaw = t[:60], act[:60], jaw[:60]
@@ -133,6 +225,7 @@ def main() -> None:
                         "euler_step_estimate": force_ms,
                         "rosenbrock_step_estimate": 2 * (force_ms + solve_ms)},
         "threads": 1,
+        "step": step,
     }
     print(json.dumps(report, indent=2))
 

@@ -31,12 +31,10 @@ def _option(fn, p: inspect.Parameter, args: tuple[str, ...]) -> inspect.Paramete
 
 def command(group: typer.Typer = app, name: str | None = None, args: tuple[str, ...] = (),
             look: tuple | None = None):
-    """Register the function as the command ``name`` of ``group``. Its parameters become
-    options as :mod:`facemech.cli_options` says (no default: an argument, as are those in
-    ``args``; ``...``: a required option); every number is checked before it runs, and what it
-    returns is printed (its ``warnings`` on stderr). ``look``:
-    the defaults of the options ``--view --size --background --aa``, given to the function as
-    one ``render`` (:func:`facemech.workflows.pictures.render_options`)."""
+    """Register the function as the command ``name`` of ``group``: parameters become options
+    (:mod:`facemech.cli_options`; no default or in ``args``: arguments; ``...``: required),
+    numbers are checked first, what it returns is printed (``warnings`` on stderr); ``look``:
+    defaults of ``--view --size --background --aa``, passed as one ``render``."""
     def register(fn):
         @functools.wraps(fn)
         def run(**kw):
@@ -76,8 +74,11 @@ def _version(value: bool) -> None:
 
 @app.callback()
 def _root(ctx: typer.Context, version: bool = typer.Option(
-        False, "--version", help="print the version", callback=_version, is_eager=True)) -> None:
+        False, "--version", help="print the version", callback=_version, is_eager=True),
+          threads: int | None = typer.Option(None, help=opts.HELP["threads"])) -> None:
     """Physics and kinematics of the speaking face."""
+    if threads is not None:
+        importlib.import_module("facemech.physics.threads").set_threads(threads)
     if not err.is_terminal:  # log lines, and a heartbeat for the whole command
         _log[:] = [ctx.with_resource(progress.LogProgress(ctx.invoked_subcommand or "facemech"))]
         ctx.call_on_close(_log.clear)
@@ -98,6 +99,11 @@ def _staged(run, **options):
 def _say(lines, note: bool = False, **kw) -> None:  # note: on stderr, "facemech: " first
     for line in lines:
         (err if note else out).print(("facemech: " if note else "") + line, **kw)
+
+def _finish(made: list[str], failed: list[str], code: int):  # a batch's lines, then its status
+    _say(failed, True, markup=False, highlight=False, soft_wrap=True)
+    _say(made)
+    raise typer.Exit(code)
 
 @command(look=("frontal+profile", "1280x720", "#2a2c33", 2))
 def demo(output: Path = Path("demo-output"), integrator: str | None = None, video: bool = True,
@@ -201,8 +207,7 @@ def render(result: Path, output: Path = ..., audio: Path | None = None, render=N
 def still(result: Path, output: Path = ..., time: float | None = None, peak: str | None = None,
           markers: bool = False, labels: bool = False, render=None):
     """A still figure for a paper: one frame at a time or at a gesture's peak (PNG or PDF)."""
-    return (wf.pictures.still_file(result, output, time=time, peak=peak, markers=markers,
-              labels=labels, options=render))
+    return wf.pictures.still_file(**locals())
 
 @command()
 def export(result: Path, output: Path = ..., units: str | None = None, fmt: str | None = None):
@@ -243,9 +248,7 @@ def stimuli(design: Path, output: Path = ..., video: bool = True, view: str = "f
             size: str = "1280x720", background: str = "#2a2c33", aa: int = 2):
     """Make the stimuli of a design table (docs/stimuli.md) as results, WAV, MP4, manifest."""
     made, failed = wf.speech.stimuli_report(_staged(wf.speech.stimuli, **locals()))
-    _say(failed, True, markup=False, highlight=False, soft_wrap=True)
-    _say(made)
-    raise typer.Exit(2 if failed else 0)
+    _finish(made, failed, 2 if failed else 0)
 
 @command()
 def regions(files: list[Path], output: Path = ..., units: str | None = None,
@@ -328,10 +331,7 @@ def batch(manifest: Path, output: Path = ..., workers: int | None = None,
     """Run a manifest of simulate/invert/speak/stimuli/regions items on dask (docs/batch.md)."""
     rep = wf.batch.run_batch(manifest, output, workers=workers, scheduler=scheduler, on_item=(
         lambda o, n, t: _say([f"[{n}/{t}] {o.line()}"], True, markup=False, highlight=False)))
-    made, failed = wf.batch.report(rep)
-    _say(failed, True, markup=False, highlight=False, soft_wrap=True)
-    _say(made)
-    raise typer.Exit(rep.exit_code)
+    _finish(*wf.batch.report(rep), rep.exit_code)
 
 def main() -> None:
     """Run the app: a FacemechError is one line on stderr, exit 2; SIGINT/SIGTERM: 130/143."""

@@ -37,7 +37,8 @@ from .kinds import (
 from .materials import continuum_constants
 from .muscle import hill_force
 from .springs import scaled_stiffness, tension
-from .volume import prism_forces, prism_pressure, rest_geometry
+from .threads import kernel_threads
+from .volume import add_prism_forces, add_prism_pressure, rest_geometry
 
 
 @dataclass(frozen=True, eq=False)
@@ -385,6 +386,106 @@ def bead_muscle_forces(muscles, pos, vel, muscle_force, out):
             out[u, a] += w * fb[b, a]
 
 
+#: springs and prisms below which :func:`accumulate_forces` stays on one thread (a parallel
+#: region costs a few microseconds; the default face has about 47 000 elements)
+PARALLEL_MIN_ELEMENTS = 4096
+
+
+@nb.njit(cache=True, inline="always")
+def element_forces(springs, prisms, pos, vel, s0, s1, e0, e1, out):
+    """Add the forces (N) of springs ``s0:s1`` (eqs. 1-2 and their dashpots, eq. 8) and of
+    prisms ``e0:e1`` (eq. 9, or the continuum's pressure) to ``out`` (nodes, 3).
+
+    Parameters
+    ----------
+    springs : SpringBundle
+    prisms : PrismBundle
+    pos, vel : (nodes, 3) m and m/s
+    s0, s1, e0, e1 : int -- the ranges of springs and prisms
+    out : (nodes, 3) N -- the forces are added to it
+    """
+    spring_i = springs.i
+    spring_j = springs.j
+    spring_rest = springs.rest_length
+    k_low = springs.k_low
+    k_high = springs.k_high
+    biphasic = springs.biphasic
+    damping = springs.damping
+    knee = springs.knee
+    sigma = springs.sigma
+    # springs, eqs. (1)-(2), and damping r (v_j - v_i), eq. (8) second term
+    for s in range(s0, s1):
+        i = spring_i[s]
+        j = spring_j[s]
+        dx = pos[j, 0] - pos[i, 0]
+        dy = pos[j, 1] - pos[i, 1]
+        dz = pos[j, 2] - pos[i, 2]
+        length = np.sqrt(dx * dx + dy * dy + dz * dz)
+        t = tension(length, spring_rest[s], k_low[s], k_high[s], knee, sigma, biphasic[s])
+        t /= length
+        r = damping[s]
+        fx = t * dx + r * (vel[j, 0] - vel[i, 0])
+        fy = t * dy + r * (vel[j, 1] - vel[i, 1])
+        fz = t * dz + r * (vel[j, 2] - vel[i, 2])
+        out[i, 0] += fx
+        out[i, 1] += fy
+        out[i, 2] += fz
+        out[j, 0] -= fx
+        out[j, 1] -= fy
+        out[j, 2] -= fz
+    # prism elements, eq. (9), or the continuum's pressure
+    prism_nodes = prisms.nodes
+    rest_volume = prisms.rest_volume
+    bulk = prisms.bulk
+    k_volume = prisms.k_volume
+    k_shape = prisms.k_shape
+    seeds = k_volume != 0.0 or k_shape != 0.0
+    for e in range(e0, e1):
+        if seeds:
+            add_prism_forces(pos, prism_nodes, e, rest_volume[e], prisms.rest_rel, k_volume,
+                             k_shape, out)
+        if bulk[e] != 0.0:
+            add_prism_pressure(pos, prism_nodes, e, rest_volume[e], bulk[e], out)
+
+
+@nb.njit(cache=True, parallel=True)
+def element_forces_parallel(springs, prisms, pos, vel, n_threads, out):
+    """:func:`element_forces` of all springs and prisms on ``n_threads`` threads, added to
+    ``out`` (nodes, 3) N.
+
+    Thread t takes the t-th of ``n_threads`` equal runs of the springs and of the prisms and
+    adds their forces into an array of its own (the first thread into ``out``); the arrays are
+    then added into ``out`` in thread order. The sums differ from one thread's only in the
+    order of their additions (to rounding), and do not depend on the threads' timing.
+    """
+    n_springs = springs.i.shape[0]
+    n_prisms = prisms.nodes.shape[0]
+    n_nodes = out.shape[0]
+    extra = np.empty((n_threads - 1, n_nodes, 3))
+    for t in nb.prange(n_threads):
+        s0 = n_springs * t // n_threads
+        s1 = n_springs * (t + 1) // n_threads
+        e0 = n_prisms * t // n_threads
+        e1 = n_prisms * (t + 1) // n_threads
+        if t == 0:
+            element_forces(springs, prisms, pos, vel, s0, s1, e0, e1, out)
+        else:
+            mine = extra[t - 1]
+            for i in range(n_nodes):
+                mine[i, 0] = 0.0
+                mine[i, 1] = 0.0
+                mine[i, 2] = 0.0
+            element_forces(springs, prisms, pos, vel, s0, s1, e0, e1, mine)
+    for t in nb.prange(n_threads):
+        i0 = n_nodes * t // n_threads
+        i1 = n_nodes * (t + 1) // n_threads
+        for i in range(i0, i1):
+            for k in range(n_threads - 1):
+                out[i, 0] += extra[k, i, 0]
+                out[i, 1] += extra[k, i, 1]
+                out[i, 2] += extra[k, i, 2]
+
+
 @nb.njit(cache=True)
 def accumulate_forces(forces, pos, vel, muscle_force, anchors, out):
     """Net force (N) on every node: the terms of eq. (8) moved to the right-hand side.
@@ -405,23 +506,6 @@ def accumulate_forces(forces, pos, vel, muscle_force, anchors, out):
     tied node to its anchor (eq. 11) with a one-sided contact with the bone's tangent plane
     there (``bone_k``); ``skull_contact`` switches eq. (10) on.
     """
-    springs = forces.springs
-    spring_i = springs.i
-    spring_j = springs.j
-    spring_rest = springs.rest_length
-    k_low = springs.k_low
-    k_high = springs.k_high
-    biphasic = springs.biphasic
-    damping = springs.damping
-    knee = springs.knee
-    sigma = springs.sigma
-    prisms = forces.prisms
-    prism_nodes = prisms.nodes
-    prism_rest_volume = prisms.rest_volume
-    prism_rest_rel = prisms.rest_rel
-    k_volume = prisms.k_volume
-    k_shape = prisms.k_shape
-    prism_bulk = prisms.bulk
     muscles = forces.muscles
     muscle_kind = muscles.kind
     muscle_origin = muscles.origin
@@ -443,46 +527,19 @@ def accumulate_forces(forces, pos, vel, muscle_force, anchors, out):
     lip_normals = forces.contact.normals
     k_contact = forces.contact.k
     out[:] = 0.0
-    # springs, eqs. (1)-(2), and damping r (v_j - v_i), eq. (8) second term
-    for s in range(spring_i.shape[0]):
-        i = spring_i[s]
-        j = spring_j[s]
-        dx = pos[j, 0] - pos[i, 0]
-        dy = pos[j, 1] - pos[i, 1]
-        dz = pos[j, 2] - pos[i, 2]
-        length = np.sqrt(dx * dx + dy * dy + dz * dz)
-        t = tension(length, spring_rest[s], k_low[s], k_high[s], knee, sigma, biphasic[s])
-        t /= length
-        r = damping[s]
-        fx = t * dx + r * (vel[j, 0] - vel[i, 0])
-        fy = t * dy + r * (vel[j, 1] - vel[i, 1])
-        fz = t * dz + r * (vel[j, 2] - vel[i, 2])
-        out[i, 0] += fx
-        out[i, 1] += fy
-        out[i, 2] += fz
-        out[j, 0] -= fx
-        out[j, 1] -= fy
-        out[j, 2] -= fz
-    # prism elements, eq. (9), or the continuum's pressure
-    p = np.empty((6, 3))
-    q = np.empty((6, 3))
-    seeds_prisms = k_volume != 0.0 or k_shape != 0.0
-    for e in range(prism_nodes.shape[0]):
-        if not seeds_prisms and prism_bulk[e] == 0.0:
-            continue
-        for k in range(6):
-            for a in range(3):
-                p[k, a] = pos[prism_nodes[e, k], a]
-        if seeds_prisms:
-            prism_forces(p, prism_rest_volume[e], prism_rest_rel[e], k_volume, k_shape, q)
-            for k in range(6):
-                for a in range(3):
-                    out[prism_nodes[e, k], a] += q[k, a]
-        if prism_bulk[e] != 0.0:
-            prism_pressure(p, prism_rest_volume[e], prism_bulk[e], q)
-            for k in range(6):
-                for a in range(3):
-                    out[prism_nodes[e, k], a] += q[k, a]
+    # springs, eqs. (1)-(2), their dashpots, and the prisms, eq. (9) or the continuum's
+    # pressure: on the threads numba has (facemech.physics.threads) when the mesh is large
+    n_threads = kernel_threads()
+    n_elements = forces.springs.i.shape[0] + forces.prisms.nodes.shape[0]
+    if n_threads > 1 and n_elements >= PARALLEL_MIN_ELEMENTS:
+        element_forces_parallel(forces.springs, forces.prisms, pos, vel, n_threads, out)
+        for i in range(out.shape[0]):  # prange cannot raise: a collapsed element shows as inf
+            if not (np.isfinite(out[i, 0]) and np.isfinite(out[i, 1])
+                    and np.isfinite(out[i, 2])):
+                raise ZeroDivisionError("a spring or prism collapsed")
+    else:
+        element_forces(forces.springs, forces.prisms, pos, vel, 0, forces.springs.i.shape[0],
+                       0, forces.prisms.nodes.shape[0], out)
     # muscles, eqs. (5)-(7); muscle_force holds the filtered M of eq. (4)
     if muscles.pull == PULL_ALONG_LENGTH:
         bead_muscle_forces(muscles, pos, vel, muscle_force, out)

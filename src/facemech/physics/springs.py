@@ -29,18 +29,20 @@ def tension(length, rest_length, k_low, k_high, knee, sigma, biphasic):
     biphasic springs, so that the tissue stiffens both ways and no element collapses.
     """
     dl = length - rest_length
-    if dl >= 0.0:
-        if biphasic and dl > knee * rest_length:
-            return knee * k_low * rest_length + k_high * (dl - knee * rest_length)
-        return k_low * dl
-    if sigma <= 0.0:
-        if biphasic and dl < -knee * rest_length:
-            return -knee * k_low * rest_length + k_high * (dl + knee * rest_length)
-        return k_low * dl
-    arg = 0.5 * np.pi * sigma * dl / rest_length
-    if arg < -0.4999 * np.pi:
-        arg = -0.4999 * np.pi
-    return k_low * rest_length * np.tan(arg)
+    if sigma > 0.0 and dl < 0.0:
+        arg = 0.5 * np.pi * sigma * dl / rest_length
+        if arg < -0.4999 * np.pi:
+            arg = -0.4999 * np.pi
+        return k_low * rest_length * np.tan(arg)
+    # the linear and biphasic laws as selects rather than branches: a spring's side of the knee
+    # changes from one spring to the next, which a branch predictor cannot follow
+    knee_length = knee * rest_length
+    t = k_low * dl
+    stretched = knee * k_low * rest_length + k_high * (dl - knee_length)
+    compressed = -knee * k_low * rest_length + k_high * (dl + knee_length)
+    t = stretched if biphasic and dl > knee_length else t
+    t = compressed if biphasic and dl < -knee_length else t
+    return t
 
 
 def spring_force(length, rest_length, k_low, k_high=None, *, biphasic=False, knee=0.2,

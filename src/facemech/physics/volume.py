@@ -30,12 +30,32 @@ def prism_volume(p):
 
     The quadrilateral sides are split into two triangles each; the result is exact for planar
     sides and independent of the origin (it is computed about the element's centre).
+    :func:`_volume_about_node0` gives the same volume to rounding with half the work, but a
+    different rounding moves the seeds' Experiment 1 (docs/inversion.md), so it is not used.
     """
     cx, cy, cz = _centre(p)
     v = 0.0
     for t in range(8):
         _, _, _, ax, ay, az, bx, by, bz, qx, qy, qz = _triangle_about(p, t, cx, cy, cz)
         v += ax * (by * qz - bz * qy) - ay * (bx * qz - bz * qx) + az * (bx * qy - by * qx)
+    return v / 6.0
+
+
+@nb.njit(cache=True, inline="always")
+def _triple(ax, ay, az, bx, by, bz, cx, cy, cz):
+    """a . (b x c)."""
+    return ax * (by * cz - bz * cy) - ay * (bx * cz - bz * cx) + az * (bx * cy - by * cx)
+
+
+@nb.njit(cache=True, inline="always")
+def _volume_about_node0(r):
+    """Volume (m^3) of the closed surface :data:`PRISM_TRIANGLES` from ``r`` (5, 3), nodes 1-5
+    relative to node 0 (m): the triangles (3, 5, 4), (1, 4, 5), (1, 5, 2), (2, 5, 3); the other
+    four pass through node 0."""
+    v = _triple(r[2, 0], r[2, 1], r[2, 2], r[4, 0], r[4, 1], r[4, 2], r[3, 0], r[3, 1], r[3, 2])
+    v += _triple(r[0, 0], r[0, 1], r[0, 2], r[3, 0], r[3, 1], r[3, 2], r[4, 0], r[4, 1], r[4, 2])
+    v += _triple(r[0, 0], r[0, 1], r[0, 2], r[4, 0], r[4, 1], r[4, 2], r[1, 0], r[1, 1], r[1, 2])
+    v += _triple(r[1, 0], r[1, 1], r[1, 2], r[4, 0], r[4, 1], r[4, 2], r[2, 0], r[2, 1], r[2, 2])
     return v / 6.0
 
 
@@ -221,3 +241,162 @@ def _volumes(p, symmetric):
     for e in range(p.shape[0]):
         out[e] = symmetric_volume(p[e]) if symmetric else prism_volume(p[e])
     return out
+
+
+@nb.njit(cache=True, inline="always")
+def _unit_cross(ux, uy, uz, wx, wy, wz):
+    """(u x w) / |u x w| (the 1e-300 keeps a degenerate triangle finite)."""
+    nx, ny, nz = uy * wz - uz * wy, uz * wx - ux * wz, ux * wy - uy * wx
+    s = np.sqrt(nx * nx + ny * ny + nz * nz) + 1e-300
+    return nx / s, ny / s, nz / s
+
+
+@nb.njit(cache=True, inline="always")
+def _add_shape_volume(out, u, p, c, rel, e, k, dv, n, k_shape):
+    """Add eq. (9)'s force on node k (global node u, at p = (x, y, z)) of prism e, centre c,
+    face normal n, to ``out``."""
+    out[u, 0] += -dv * n[0] - k_shape * ((p[0] - c[0]) - rel[e, k, 0])
+    out[u, 1] += -dv * n[1] - k_shape * ((p[1] - c[1]) - rel[e, k, 1])
+    out[u, 2] += -dv * n[2] - k_shape * ((p[2] - c[2]) - rel[e, k, 2])
+
+
+@nb.njit(cache=True, inline="always")
+def add_prism_forces(pos, nodes, e, rest_volume, rest_rel, k_volume, k_shape, out):
+    """Add the forces (N) of eq. (9) of prism ``e`` to ``out`` (nodes, 3): :func:`prism_forces`
+    unrolled, reading the six nodes from ``pos`` (nodes, 3) m through ``nodes`` (p, 6) and
+    ``rest_rel`` (p, 6, 3) m, and writing no temporaries (the same numbers to the last bit)."""
+    u0, u1, u2, u3, u4, u5 = nodes[e, 0], nodes[e, 1], nodes[e, 2], nodes[e, 3], nodes[e, 4], \
+        nodes[e, 5]
+    x0, y0, z0 = pos[u0, 0], pos[u0, 1], pos[u0, 2]
+    x1, y1, z1 = pos[u1, 0], pos[u1, 1], pos[u1, 2]
+    x2, y2, z2 = pos[u2, 0], pos[u2, 1], pos[u2, 2]
+    x3, y3, z3 = pos[u3, 0], pos[u3, 1], pos[u3, 2]
+    x4, y4, z4 = pos[u4, 0], pos[u4, 1], pos[u4, 2]
+    x5, y5, z5 = pos[u5, 0], pos[u5, 1], pos[u5, 2]
+    cx = (x0 + x1 + x2 + x3 + x4 + x5) / 6.0
+    cy = (y0 + y1 + y2 + y3 + y4 + y5) / 6.0
+    cz = (z0 + z1 + z2 + z3 + z4 + z5) / 6.0
+    # prism_volume's eight triangles about the centre, in its order (the same rounding)
+    a0, b0, c0 = x0 - cx, y0 - cy, z0 - cz
+    a1, b1, c1 = x1 - cx, y1 - cy, z1 - cz
+    a2, b2, c2 = x2 - cx, y2 - cy, z2 - cz
+    a3, b3, c3 = x3 - cx, y3 - cy, z3 - cz
+    a4, b4, c4 = x4 - cx, y4 - cy, z4 - cz
+    a5, b5, c5 = x5 - cx, y5 - cy, z5 - cz
+    v = _triple(a0, b0, c0, a1, b1, c1, a2, b2, c2)
+    v += _triple(a3, b3, c3, a5, b5, c5, a4, b4, c4)
+    v += _triple(a0, b0, c0, a3, b3, c3, a4, b4, c4)
+    v += _triple(a0, b0, c0, a4, b4, c4, a1, b1, c1)
+    v += _triple(a1, b1, c1, a4, b4, c4, a5, b5, c5)
+    v += _triple(a1, b1, c1, a5, b5, c5, a2, b2, c2)
+    v += _triple(a2, b2, c2, a5, b5, c5, a3, b3, c3)
+    v += _triple(a2, b2, c2, a3, b3, c3, a0, b0, c0)
+    v = v / 6.0
+    tx, ty, tz = _unit_cross(x1 - x0, y1 - y0, z1 - z0, x2 - x0, y2 - y0, z2 - z0)
+    bx, by, bz = _unit_cross(x4 - x3, y4 - y3, z4 - z3, x5 - x3, y5 - y3, z5 - z3)
+    bx, by, bz = -bx, -by, -bz
+    dv = k_volume * (v - rest_volume)
+    c, t, b = (cx, cy, cz), (tx, ty, tz), (bx, by, bz)
+    _add_shape_volume(out, u0, (x0, y0, z0), c, rest_rel, e, 0, dv, t, k_shape)
+    _add_shape_volume(out, u1, (x1, y1, z1), c, rest_rel, e, 1, dv, t, k_shape)
+    _add_shape_volume(out, u2, (x2, y2, z2), c, rest_rel, e, 2, dv, t, k_shape)
+    _add_shape_volume(out, u3, (x3, y3, z3), c, rest_rel, e, 3, dv, b, k_shape)
+    _add_shape_volume(out, u4, (x4, y4, z4), c, rest_rel, e, 4, dv, b, k_shape)
+    _add_shape_volume(out, u5, (x5, y5, z5), c, rest_rel, e, 5, dv, b, k_shape)
+
+
+@nb.njit(cache=True, inline="always")
+def _cross(ax, ay, az, bx, by, bz):
+    return ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
+
+
+@nb.njit(cache=True, inline="always")
+def _quad_terms(ax, ay, az, bx, by, bz, qx, qy, qz, dx, dy, dz):
+    """12 x the volume of side (a, b, c, d) about the centre and the halved n, s x (d - b),
+    s x (c - a) of :func:`_bilinear_volume_gradient` (the same operations in the same order)."""
+    ux, uy, uz = qx - ax, qy - ay, qz - az
+    wx, wy, wz = dx - bx, dy - by, dz - bz
+    nx, ny, nz = uy * wz - uz * wy, uz * wx - ux * wz, ux * wy - uy * wx
+    nx, ny, nz = 0.5 * nx, 0.5 * ny, 0.5 * nz
+    sx, sy, sz = ax + bx + qx + dx, ay + by + qy + dy, az + bz + qz + dz
+    v = sx * nx + sy * ny + sz * nz
+    tx, ty, tz = 0.5 * (sy * wz - sz * wy), 0.5 * (sz * wx - sx * wz), 0.5 * (sx * wy - sy * wx)
+    rx, ry, rz = 0.5 * (sy * uz - sz * uy), 0.5 * (sz * ux - sx * uz), 0.5 * (sx * uy - sy * ux)
+    return v, nx, ny, nz, tx, ty, tz, rx, ry, rz
+
+
+@nb.njit(cache=True, inline="always")
+def add_prism_pressure(pos, nodes, e, rest_volume, bulk_per_volume, out):
+    """Add the volume-preserving pressure (N) of prism ``e`` to ``out`` (nodes, 3):
+    :func:`prism_pressure` unrolled over the two end triangles and three sides of
+    :func:`_bilinear_volume_gradient`, reading the six nodes from ``pos`` (nodes, 3) m through
+    ``nodes`` (p, 6), in registers (the same numbers to the last bit). Returns the volume (m^3).
+    """
+    u0, u1, u2, u3, u4, u5 = nodes[e, 0], nodes[e, 1], nodes[e, 2], nodes[e, 3], nodes[e, 4], \
+        nodes[e, 5]
+    cx = (pos[u0, 0] + pos[u1, 0] + pos[u2, 0] + pos[u3, 0] + pos[u4, 0] + pos[u5, 0]) / 6.0
+    cy = (pos[u0, 1] + pos[u1, 1] + pos[u2, 1] + pos[u3, 1] + pos[u4, 1] + pos[u5, 1]) / 6.0
+    cz = (pos[u0, 2] + pos[u1, 2] + pos[u2, 2] + pos[u3, 2] + pos[u4, 2] + pos[u5, 2]) / 6.0
+    x0, y0, z0 = pos[u0, 0] - cx, pos[u0, 1] - cy, pos[u0, 2] - cz
+    x1, y1, z1 = pos[u1, 0] - cx, pos[u1, 1] - cy, pos[u1, 2] - cz
+    x2, y2, z2 = pos[u2, 0] - cx, pos[u2, 1] - cy, pos[u2, 2] - cz
+    x3, y3, z3 = pos[u3, 0] - cx, pos[u3, 1] - cy, pos[u3, 2] - cz
+    x4, y4, z4 = pos[u4, 0] - cx, pos[u4, 1] - cy, pos[u4, 2] - cz
+    x5, y5, z5 = pos[u5, 0] - cx, pos[u5, 1] - cy, pos[u5, 2] - cz
+    # end triangle (0, 1, 2): a . (b x c) and its gradient, doubled
+    px, py, pz = _cross(x1, y1, z1, x2, y2, z2)
+    v12 = 2.0 * (x0 * px + y0 * py + z0 * pz)
+    g0x, g0y, g0z = 2.0 * px, 2.0 * py, 2.0 * pz
+    g1x, g1y, g1z = 2.0 * (y2 * z0 - z2 * y0), 2.0 * (z2 * x0 - x2 * z0), 2.0 * (x2 * y0 - y2 * x0)
+    g2x, g2y, g2z = 2.0 * (y0 * z1 - z0 * y1), 2.0 * (z0 * x1 - x0 * z1), 2.0 * (x0 * y1 - y0 * x1)
+    # end triangle (3, 5, 4)
+    px, py, pz = _cross(x5, y5, z5, x4, y4, z4)
+    v12 += 2.0 * (x3 * px + y3 * py + z3 * pz)
+    g3x, g3y, g3z = 2.0 * px, 2.0 * py, 2.0 * pz
+    g5x, g5y, g5z = 2.0 * (y4 * z3 - z4 * y3), 2.0 * (z4 * x3 - x4 * z3), 2.0 * (x4 * y3 - y4 * x3)
+    g4x, g4y, g4z = 2.0 * (y3 * z5 - z3 * y5), 2.0 * (z3 * x5 - x3 * z5), 2.0 * (x3 * y5 - y3 * x5)
+    # side (0, 3, 4, 1): a = 0, c = 4 get n -/+ t, b = 3, d = 1 get n -/+ r
+    v, nx, ny, nz, tx, ty, tz, rx, ry, rz = _quad_terms(x0, y0, z0, x3, y3, z3, x4, y4, z4,
+                                                        x1, y1, z1)
+    v12 += v
+    g0x, g0y, g0z = g0x + (nx + tx), g0y + (ny + ty), g0z + (nz + tz)
+    g4x, g4y, g4z = g4x + (nx - tx), g4y + (ny - ty), g4z + (nz - tz)
+    g3x, g3y, g3z = g3x + (nx - rx), g3y + (ny - ry), g3z + (nz - rz)
+    g1x, g1y, g1z = g1x + (nx + rx), g1y + (ny + ry), g1z + (nz + rz)
+    # side (1, 4, 5, 2)
+    v, nx, ny, nz, tx, ty, tz, rx, ry, rz = _quad_terms(x1, y1, z1, x4, y4, z4, x5, y5, z5,
+                                                        x2, y2, z2)
+    v12 += v
+    g1x, g1y, g1z = g1x + (nx + tx), g1y + (ny + ty), g1z + (nz + tz)
+    g5x, g5y, g5z = g5x + (nx - tx), g5y + (ny - ty), g5z + (nz - tz)
+    g4x, g4y, g4z = g4x + (nx - rx), g4y + (ny - ry), g4z + (nz - rz)
+    g2x, g2y, g2z = g2x + (nx + rx), g2y + (ny + ry), g2z + (nz + rz)
+    # side (2, 5, 3, 0)
+    v, nx, ny, nz, tx, ty, tz, rx, ry, rz = _quad_terms(x2, y2, z2, x5, y5, z5, x3, y3, z3,
+                                                        x0, y0, z0)
+    v12 += v
+    g2x, g2y, g2z = g2x + (nx + tx), g2y + (ny + ty), g2z + (nz + tz)
+    g3x, g3y, g3z = g3x + (nx - tx), g3y + (ny - ty), g3z + (nz - tz)
+    g5x, g5y, g5z = g5x + (nx - rx), g5y + (ny - ry), g5z + (nz - rz)
+    g0x, g0y, g0z = g0x + (nx + rx), g0y + (ny + ry), g0z + (nz + rz)
+    vol = v12 / 12.0
+    s = -bulk_per_volume * (vol - rest_volume) / 12.0
+    out[u0, 0] += g0x * s
+    out[u0, 1] += g0y * s
+    out[u0, 2] += g0z * s
+    out[u1, 0] += g1x * s
+    out[u1, 1] += g1y * s
+    out[u1, 2] += g1z * s
+    out[u2, 0] += g2x * s
+    out[u2, 1] += g2y * s
+    out[u2, 2] += g2z * s
+    out[u3, 0] += g3x * s
+    out[u3, 1] += g3y * s
+    out[u3, 2] += g3z * s
+    out[u4, 0] += g4x * s
+    out[u4, 1] += g4y * s
+    out[u4, 2] += g4z * s
+    out[u5, 0] += g5x * s
+    out[u5, 1] += g5y * s
+    out[u5, 2] += g5z * s
+    return vol

@@ -58,11 +58,12 @@ def render_movie(results, movie: Movie | tuple, *, source: str | None = None,
 
 
 def still_file(result: str | Path, output: str | Path, *, time: float | None = None,
-               peak: str | None = None, options=None, markers: bool = False,
+               peak: str | None = None, render=None, markers: bool = False,
                labels: bool = False) -> Written:
     """A still figure (PNG or PDF) of one frame of a results file: at ``time`` (s), at the peak
     of ``peak`` (a muscle group, ``jaw`` or ``motion``), or the first; with the model's markers
-    as dots (``markers``) and their names (``labels``, which implies ``markers``).
+    as dots (``markers``) and their names (``labels``, which implies ``markers``); ``render``
+    the :func:`render_options` (default: theirs).
 
     Returns
     -------
@@ -72,7 +73,7 @@ def still_file(result: str | Path, output: str | Path, *, time: float | None = N
     from ..viz.video import still
 
     check_output(output, [result], field="-o")
-    r = still(read_results(result), output, time=time, peak=peak, options=options,
+    r = still(read_results(result), output, time=time, peak=peak, options=render,
               markers=markers or labels, labels=labels, source=str(result))
     return Written(Path(output), r, f"frame {r['frame']} (t = {r['time']:.3f} s) -> {output}")
 

@@ -1,0 +1,148 @@
+"""The fast forward step (issue 16): the unrolled prism kernels, the volume about one node,
+the selects of the spring law, and the threaded force assembly against one thread."""
+
+import numpy as np
+import pytest
+
+from facemech import preset
+from facemech.errors import InputError
+from facemech.physics import volume
+from facemech.physics.springs import tension
+from facemech.physics.threads import get_threads, set_threads
+
+
+def random_prisms(rng, n=50):
+    """Warped prisms of a few mm, far from the origin."""
+    top = np.array([[0, 0, 0], [2e-3, 0, 0], [0.7e-3, 1.8e-3, 0]], float)
+    base = np.concatenate([top, top + np.array([0.0, 0.0, -4e-3])])
+    return base + rng.normal(0, 4e-4, (n, 6, 3)) + rng.normal(0, 0.05, (n, 1, 3))
+
+
+def eight_triangle_volume(p):
+    """The former formula: the eight triangles of PRISM_TRIANGLES about the centre."""
+    r = p - p.mean(axis=0)
+    t = volume.PRISM_TRIANGLES
+    return np.einsum("ta,ta->", r[t[:, 0]], np.cross(r[t[:, 1]], r[t[:, 2]])) / 6.0
+
+
+def eq9_forces(p, v0, rel0, k_volume, k_shape):
+    """Eq. (9) with the former volume, in numpy."""
+    def unit(n):
+        return n / (np.linalg.norm(n) + 1e-300)
+    top = unit(np.cross(p[1] - p[0], p[2] - p[0]))
+    bottom = unit(np.cross(p[4] - p[3], p[5] - p[3]))
+    normals = np.array([top] * 3 + [-bottom] * 3)
+    dv = k_volume * (eight_triangle_volume(p) - v0)
+    return -dv * normals - k_shape * ((p - p.mean(axis=0)) - rel0)
+
+
+def test_volume_about_one_node_equals_the_eight_triangles():
+    """Four triple products about node 0 (volume._volume_about_node0) and prism_volume give
+    the eight-triangle volume, and prism_forces eq. (9)'s forces, to 1e-12 relative on random
+    warped prisms."""
+    rng = np.random.default_rng(16)
+    prisms = random_prisms(rng)
+    for p in prisms:
+        want = eight_triangle_volume(p)
+        assert volume.prism_volume(p) == pytest.approx(want, rel=1e-12)
+        assert volume._volume_about_node0(p[1:] - p[0]) == pytest.approx(want, rel=1e-12)
+        v0 = want * 0.9
+        rel0 = p - p.mean(axis=0) + rng.normal(0, 1e-5, (6, 3))
+        out = np.empty((6, 3))
+        volume.prism_forces(p, v0, rel0, 4e5, 3.0, out)
+        ref = eq9_forces(p, v0, rel0, 4e5, 3.0)
+        np.testing.assert_allclose(out, ref, rtol=0, atol=1e-12 * np.abs(ref).max())
+
+
+def test_unrolled_prism_kernels_equal_the_array_kernels_to_the_bit():
+    """add_prism_forces and add_prism_pressure, reading the nodes through the element's node
+    list, add exactly what prism_forces and prism_pressure compute on the (6, 3) prism."""
+    rng = np.random.default_rng(17)
+    prisms = random_prisms(rng, 20)
+    pos = prisms.reshape(-1, 3)
+    nodes = rng.permutation(len(pos)).reshape(-1, 6)  # scattered node numbers
+    pos = pos[np.argsort(nodes.reshape(-1))]  # node nodes[e, k] sits at prisms[e, k]
+    rest = np.array([volume.prism_volume(p) for p in prisms]) * 1.1
+    rel = prisms - prisms.mean(axis=1, keepdims=True) + rng.normal(0, 1e-5, prisms.shape)
+    got_f = np.zeros_like(pos)
+    got_p = np.zeros_like(pos)
+    want_f = np.zeros_like(pos)
+    want_p = np.zeros_like(pos)
+    q = np.empty((6, 3))
+    for e in range(len(nodes)):
+        volume.add_prism_forces(pos, nodes, e, rest[e], rel, 4e5, 3.0, got_f)
+        volume.prism_forces(prisms[e], rest[e], rel[e], 4e5, 3.0, q)
+        want_f[nodes[e]] += q
+        vol = volume.add_prism_pressure(pos, nodes, e, rest[e], 2e4 / rest[e], got_p)
+        assert vol == volume.prism_pressure(prisms[e], rest[e], 2e4 / rest[e], q)
+        want_p[nodes[e]] += q
+    assert np.array_equal(got_f, want_f) and np.abs(want_f).max() > 0
+    assert np.array_equal(got_p, want_p) and np.abs(want_p).max() > 0
+
+
+@pytest.mark.parametrize("sigma", [0.0, 0.98])
+def test_spring_law_as_selects(sigma):
+    """The biphasic law both ways (sigma <= 0) and eq. (2) in compression (sigma > 0), at
+    strains on either side of the knee, equal the hand-written law exactly."""
+    l0, k1, k2, knee = 2e-3, 50.0, 400.0, 0.15
+    for strain in (-0.4, -0.15, -0.1, 0.0, 0.1, 0.15, 0.4):
+        dl = strain * l0
+        length = l0 + dl
+        for bi in (False, True):
+            got = tension(length, l0, k1, k2, knee, sigma, bi)
+            d = length - l0
+            if sigma > 0 and d < 0:
+                want = k1 * l0 * np.tan(0.5 * np.pi * sigma * d / l0)
+            elif bi and d > knee * l0:
+                want = knee * k1 * l0 + k2 * (d - knee * l0)
+            elif bi and d < -knee * l0:
+                want = -knee * k1 * l0 + k2 * (d + knee * l0)
+            else:
+                want = k1 * d
+            assert got == want
+
+
+def test_two_threads_give_one_threads_forces_and_frame(face):
+    """The default face's forces, and one explicit frame of it, on two threads equal one
+    thread's within 1e-12 relative (only the order of the additions differs)."""
+    from facemech.physics.assembly import Physics, accumulate_forces, force_bundles, rest_anchors
+    from facemech.solvers.explicit import EulerSteps, euler_frame
+    from facemech.solvers.solver_state import solver_state
+
+    ph = Physics.build(face, preset("anatomical"))
+    b = force_bundles(ph)
+    anchors = rest_anchors(ph)
+    rng = np.random.default_rng(18)
+    pos = ph.model.rest_positions + rng.normal(0, 2e-4, ph.model.rest_positions.shape)
+    vel = rng.normal(0, 1e-2, pos.shape)
+    m = np.full(ph.n_muscles, 0.3)
+    ss = solver_state(ph, 1)
+    steps = EulerSteps(10, 1e-6, ss.tau, ss.dynamic, ss.inv_mass)
+    results = []
+    try:
+        for n in (1, 2):
+            assert set_threads(n) == n and get_threads() == n
+            out = np.empty_like(pos)
+            accumulate_forces(b, pos, vel, m, anchors, out)
+            frame = euler_frame(b, ss.jaw, steps, pos, vel, m, np.zeros_like(m), m, anchors,
+                                np.zeros(3), np.zeros(3))
+            results.append((out, frame[0], frame[1]))
+    finally:
+        set_threads(1)
+    (f1, p1, v1), (f2, p2, v2) = results
+    assert np.abs(f1).max() > 1e-3
+    np.testing.assert_allclose(f2, f1, rtol=0, atol=1e-12 * np.abs(f1).max())
+    np.testing.assert_allclose(p2, p1, rtol=1e-12)
+    np.testing.assert_allclose(v2, v1, rtol=0, atol=1e-12 * np.abs(v1).max())
+    assert np.all(np.isfinite(p1)) and not np.array_equal(p1, pos)
+
+
+def test_set_threads_takes_whole_counts_within_the_pool():
+    with pytest.raises(InputError) as e:
+        set_threads(0)
+    assert e.value.field == "threads"
+    with pytest.raises(InputError):
+        set_threads(1.5)
+    with pytest.raises(InputError):
+        set_threads(10_000)
+    assert set_threads(1) == 1 and get_threads() == 1
