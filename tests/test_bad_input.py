@@ -550,3 +550,66 @@ def test_invert_checks_its_figure_before_the_inversion(monkeypatch, capsys, tmp_
     line = _one_line_error(monkeypatch, capsys, tmp_path, (*args, inputs["{dir}"]),
                            inputs["{dir}"], "--figure")
     assert "a folder is in the way" in line
+
+
+# ---- landmarks and numeric options, through the command line ---------------------------------
+def _face_files(folder, change):
+    """The generic face as OBJ (mm) and a landmark CSV changed by ``change(landmarks_m)``."""
+    from facemech.geometry.builder import default_surface
+
+    v, f, lm = default_surface()
+    with open(folder / "face.obj", "w") as fh:
+        fh.writelines(f"v {x * 1e3:.6f} {y * 1e3:.6f} {z * 1e3:.6f}\n" for x, y, z in v)
+        fh.writelines(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in f)
+    lm = change(dict(lm))
+    with open(folder / "lm.csv", "w") as fh:
+        fh.write("name,x,y,z\n")
+        fh.writelines(f"{n},{p[0] * 1e3:.6f},{p[1] * 1e3:.6f},{p[2] * 1e3:.6f}\n"
+                      for n, p in lm.items())
+    return folder / "face.obj", folder / "lm.csv"
+
+
+def _off_skin(lm):
+    lm["nose_tip"] = lm["nose_tip"] + [0.0, 0.0, 0.1]
+    return lm
+
+
+def _twice(lm):
+    lm["chin"] = lm["menton"] + [0.0, 0.0005, 0.0]
+    return lm
+
+
+def _swapped(lm):
+    lm["mouth_corner_left"], lm["mouth_corner_right"] = (lm["mouth_corner_right"],
+                                                         lm["mouth_corner_left"])
+    return lm
+
+
+@pytest.mark.parametrize("change, field, words", [
+    (_off_skin, "nose_tip", "from the surface"),
+    (_twice, "menton", "'chin' and 'menton'"),
+    (_swapped, "mouth_corner_left", "mouth_corner_right"),
+])
+def test_implausible_landmarks_are_refused(monkeypatch, capsys, tmp_path, change, field, words):
+    surface, landmarks = _face_files(tmp_path, change)
+    line = _one_line_error(monkeypatch, capsys, tmp_path,
+                           ("face", "build", surface, landmarks, "-o", tmp_path / "f.npz"),
+                           landmarks, field)
+    assert words in line, line
+
+
+@pytest.mark.parametrize("args, option", [
+    (("markers", "resample", "m.csv", "-o", "r.csv", "--rate", "nan"), "--rate"),
+    (("simulate", "-o", "r.nc", "--activity", "a.csv", "--dt", "inf"), "--dt"),
+    (("invert", "--markers", "m.csv", "-o", "i.nc", "--noise", "-0.5"), "--noise"),
+    (("render", "r.nc", "-o", "v.mp4", "--aa", "0"), "--aa"),
+])
+def test_numeric_options_are_refused_by_name(monkeypatch, capsys, tmp_path, args, option):
+    (tmp_path / "m.csv").write_text("time,A_x,A_y,A_z\n0,1,2,3\n")
+    before = _tree(tmp_path)
+    monkeypatch.chdir(tmp_path)
+    code, _, err = run_cli(monkeypatch, capsys, *args)
+    lines = err.strip().splitlines()
+    assert code == 2 and len(lines) == 1 and "Traceback" not in err, err
+    assert lines[0].startswith(f"facemech: error: option {option}: must be a finite number")
+    assert _tree(tmp_path) == before

@@ -121,3 +121,22 @@ def test_rest_intervals_are_finite_ordered_seconds(text):
     with pytest.raises(InputError, match="field 'baseline'"):
         as_interval(text, "baseline")
     assert as_interval("0,1.5", "baseline") == (0.0, 1.5)
+
+
+@pytest.mark.parametrize("threads", ["0", "-1", "100000"])
+def test_thread_count_is_checked(monkeypatch, capsys, threads):
+    code, _, err = run_cli(monkeypatch, capsys, "--threads", threads, "face", "info")
+    lines = err.strip().splitlines()
+    assert code == 2 and len(lines) == 1 and "field 'threads'" in lines[0], err
+
+
+def test_thread_count_is_set(monkeypatch, capsys):
+    from facemech.physics import threads
+
+    before = threads.get_threads()
+    try:
+        code, _, err = run_cli(monkeypatch, capsys, "--threads", "1", "face", "info")
+        assert code == 0, err
+        assert threads.get_threads() == 1
+    finally:
+        threads.set_threads(before)
