@@ -457,6 +457,7 @@ def element_forces_parallel(springs, prisms, pos, vel, n_threads, out):
     adds their forces into an array of its own (the first thread into ``out``); the arrays are
     then added into ``out`` in thread order. The sums differ from one thread's only in the
     order of their additions (to rounding), and do not depend on the threads' timing.
+    Returns False when a force is not finite (a collapsed element: ``prange`` cannot raise).
     """
     n_springs = springs.i.shape[0]
     n_prisms = prisms.nodes.shape[0]
@@ -476,6 +477,7 @@ def element_forces_parallel(springs, prisms, pos, vel, n_threads, out):
                 mine[i, 1] = 0.0
                 mine[i, 2] = 0.0
             element_forces(springs, prisms, pos, vel, s0, s1, e0, e1, mine)
+    finite = np.ones(n_threads, np.bool_)
     for t in nb.prange(n_threads):
         i0 = n_nodes * t // n_threads
         i1 = n_nodes * (t + 1) // n_threads
@@ -484,6 +486,10 @@ def element_forces_parallel(springs, prisms, pos, vel, n_threads, out):
                 out[i, 0] += extra[k, i, 0]
                 out[i, 1] += extra[k, i, 1]
                 out[i, 2] += extra[k, i, 2]
+            if not (np.isfinite(out[i, 0]) and np.isfinite(out[i, 1])
+                    and np.isfinite(out[i, 2])):
+                finite[t] = False
+    return finite.all()
 
 
 @nb.njit(cache=True)
@@ -532,11 +538,8 @@ def accumulate_forces(forces, pos, vel, muscle_force, anchors, out):
     n_threads = kernel_threads()
     n_elements = forces.springs.i.shape[0] + forces.prisms.nodes.shape[0]
     if n_threads > 1 and n_elements >= PARALLEL_MIN_ELEMENTS:
-        element_forces_parallel(forces.springs, forces.prisms, pos, vel, n_threads, out)
-        for i in range(out.shape[0]):  # prange cannot raise: a collapsed element shows as inf
-            if not (np.isfinite(out[i, 0]) and np.isfinite(out[i, 1])
-                    and np.isfinite(out[i, 2])):
-                raise ZeroDivisionError("a spring or prism collapsed")
+        if not element_forces_parallel(forces.springs, forces.prisms, pos, vel, n_threads, out):
+            raise ZeroDivisionError("a spring or prism collapsed")  # as on one thread
     else:
         element_forces(forces.springs, forces.prisms, pos, vel, 0, forces.springs.i.shape[0],
                        0, forces.prisms.nodes.shape[0], out)
