@@ -146,3 +146,23 @@ def test_set_threads_takes_whole_counts_within_the_pool():
     with pytest.raises(InputError):
         set_threads(10_000)
     assert set_threads(1) == 1 and get_threads() == 1
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_a_collapsed_spring_raises_on_any_thread_count(face, threads):
+    """Two nodes of a spring at one point: one thread raises ZeroDivisionError, and so does the
+    parallel path (``prange`` cannot raise: its forces are checked after the reduction)."""
+    from facemech.physics.assembly import Physics, accumulate_forces, force_bundles, rest_anchors
+
+    ph = Physics.build(face, preset("anatomical"))
+    b = force_bundles(ph)
+    pos = ph.model.rest_positions.copy()
+    i, j = b.springs.i[0], b.springs.j[0]
+    pos[j] = pos[i]
+    try:
+        assert set_threads(threads) == threads
+        with pytest.raises(ZeroDivisionError):
+            accumulate_forces(b, pos, np.zeros_like(pos), np.zeros(ph.n_muscles),
+                              rest_anchors(ph), np.empty_like(pos))
+    finally:
+        set_threads(1)
