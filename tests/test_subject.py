@@ -11,7 +11,7 @@ import pytest
 from conftest import run_cli
 from facemech import default_face, read_results
 from facemech.geometry.surface_io import read_landmarks
-from facemech.io.markers import write_markers
+from facemech.io.markers import read_markers, write_markers
 from facemech.kinematics.alignment import fit_to_skin, similarity_fit
 from facemech.markerset import MarkerSet
 from facemech.solvers.forward import marker_nodes
@@ -162,3 +162,23 @@ def test_subject_refuses_what_it_cannot_place(twin, tmp_path, monkeypatch, capsy
     assert not (tmp_path / "S").exists()
     line = _refused(monkeypatch, capsys, "analyse", tmp_path, rec["speech"], "-o", tmp_path / "O")
     assert "not a subject folder" in line
+
+
+def test_a_recording_without_some_of_the_subjects_markers(subject, twin, tmp_path, monkeypatch,
+                                                          capsys):
+    out, done = subject
+    _, rec = twin
+    ms = read_markers(rec["speech"], units="mm")
+    gone = [rec["chin"], "M03"]
+    short = ms.select([n for n in ms.names if n not in gone])
+    short = MarkerSet(short.positions[:40], short.names, short.rate, short.time[:40])
+    write_markers(tmp_path / "short.trc", short, units="mm")
+    code, stdout, err = run_cli(monkeypatch, capsys, "analyse", out, tmp_path / "short.trc",
+                                "-o", tmp_path / "O", "--units", "mm")
+    assert code == 0, err
+    absent = next(x for x in stdout.splitlines() if "markers absent from the recording" in x)
+    assert set(absent.split(": ")[1].split(", ")) == set(gone), absent
+    assert f"the chin marker {rec['chin']} is not in the recording" in stdout
+    mapping = (tmp_path / "O" / "mapping.csv").read_text().splitlines()[1:]
+    assert len(mapping) == len(done.data.mapping) - 2
+    assert read_results(tmp_path / "O" / "result.nc").sizes["time"] == 24  # 0.4 s at 60 Hz

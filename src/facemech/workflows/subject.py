@@ -323,7 +323,8 @@ def analyse(subject: str | Path, recording: str | Path, output: str | Path, *,
             video: bool = False, progress=None) -> Written:
     """Analyse a recording against a subject folder into the folder ``output``.
 
-    Writes ``markers.csv`` (the prepared markers: model frame, mm, the model's rate),
+    Writes ``markers.csv`` (the prepared markers: model frame, mm, the model's rate) and its
+    ``mapping.csv`` (the subject's nodes of the markers recorded),
     ``result.nc`` (the inversion and its re-animated face), ``controls.png`` (the inverted
     controls, +-2 SE), ``comparison.json`` (:func:`facemech.workflows.compare.compare_files` of
     the re-animation against the markers), ``summary.json`` and, with ``video``,
@@ -362,10 +363,17 @@ def analyse(subject: str | Path, recording: str | Path, output: str | Path, *,
     ms, notes = prepare(subj, read_markers(recording, units=units), max_gap=max_gap,
                         rate=P.preset(preset).frame_rate, source=src, lowpass_hz=lowpass)
     write_markers(out / "markers.csv", ms, units="mm")
+    with atomic_path(out / "mapping.csv") as tmp:  # the subject's, for the markers recorded
+        tmp.write_text("marker,node\n" + "".join(f"{n},{subj.mapping[n]}\n" for n in ms.names))
+    jaw = [n if n in ms.names else None for n in (subj.chin_marker, subj.jaw_second_marker)]
+    if jaw[0] is None and subj.chin_marker is not None:
+        notes.append(f"the chin marker {subj.chin_marker} is not in the recording: the jaw is "
+                     "estimated")
+        jaw[1] = None
     say("prepare", 1, 1)
     res = invert.invert(out / "markers.csv", out / "result.nc", face=subj.face,
-                        map_file=subj.folder / "mapping.csv", method=method, controls=controls,
-                        chin_marker=subj.chin_marker, jaw_second_marker=subj.jaw_second_marker,
+                        map_file=out / "mapping.csv", method=method, controls=controls,
+                        chin_marker=jaw[0], jaw_second_marker=jaw[1],
                         noise=noise, preset=preset, units="mm", figure=out / "controls.png",
                         window=window if method == "lsq" else None,
                         smooth=smooth if method == "lsq" else None, progress=progress)
