@@ -150,7 +150,7 @@ def test_subject_refuses_what_it_cannot_place(twin, tmp_path, monkeypatch, capsy
     _, rec = twin
     base = ("subject", "default", "--markers", rec["rest"], "-o", tmp_path / "S")
     line = _refused(monkeypatch, capsys, *base, "--head", "H1,H2,H9")
-    assert "field 'H9'" in line and "head marker not in the recording" in line
+    assert "field 'H9'" in line and "fewer than 3 head markers have data (H9 missing)" in line
     line = _refused(monkeypatch, capsys, *base)  # no frame, no landmark names; head on skin?
     assert "field 'frame'" in line
     # without --head the headband's markers are not on the skin: named, with the distance
@@ -178,7 +178,49 @@ def test_a_recording_without_some_of_the_subjects_markers(subject, twin, tmp_pat
     assert code == 0, err
     absent = next(x for x in stdout.splitlines() if "markers absent from the recording" in x)
     assert set(absent.split(": ")[1].split(", ")) == set(gone), absent
-    assert f"the chin marker {rec['chin']} is not in the recording" in stdout
+    assert "the jaw markers are missing or have gaps longer than 0.1 s" in stdout
     mapping = (tmp_path / "O" / "mapping.csv").read_text().splitlines()[1:]
     assert len(mapping) == len(done.data.mapping) - 2
     assert read_results(tmp_path / "O" / "result.nc").sizes["time"] == 24  # 0.4 s at 60 Hz
+
+
+def test_a_rest_recording_as_labs_have_them(twin, tmp_path, monkeypatch, capsys):
+    """A reference marker on the table, a lip marker hidden all through the rest, a head
+    marker lost: the subject is made from what is left, and the notes say so."""
+    _, rec = twin
+    ms = read_markers(rec["rest"], units="mm")
+    pos = ms.positions.copy()
+    pos[:, ms.index("M06")] = np.nan
+    pos[:, ms.index("H4")] = np.nan
+    table = ms.positions[:, :1] + [0.3, 0.0, -0.2]  # 300 mm away
+    rest = MarkerSet(np.concatenate([pos, table], axis=1), (*ms.names, "REF"), ms.rate, ms.time)
+    write_markers(tmp_path / "rest.c3d", rest, units="mm")
+    out = tmp_path / "S[/x]"  # not rich markup
+    code, stdout, err = run_cli(monkeypatch, capsys, "subject", "default", "--markers",
+                                tmp_path / "rest.c3d", "-o", out, "--head", ",".join(rec["head"]),
+                                "--frame", ",".join(rec["frame"]), "--units", "mm")
+    assert code == 0, err
+    assert "head markers without data, left out: H4" in stdout
+    assert "markers without data in the rest interval, left out: M06" in stdout
+    assert "markers not on the face, left out: REF" in stdout
+    assert f"-> {out}/" in stdout
+    mapping = (out / "mapping.csv").read_text()
+    assert "M06" not in mapping and "REF" not in mapping and mapping.count("\n") == 1 + 34
+
+
+def test_analyse_estimates_the_jaw_when_the_chin_marker_has_a_long_gap(subject, twin, tmp_path,
+                                                                        monkeypatch, capsys):
+    out, _ = subject
+    _, rec = twin
+    ms = read_markers(rec["speech"], units="mm")
+    pos = ms.positions[:40].copy()
+    pos[10:40, ms.index(rec["chin"])] = np.nan  # 0.3 s, longer than --max-gap
+    pos[:, ms.index("H2")] = np.nan  # a head marker lost: three remain
+    write_markers(tmp_path / "r.c3d", MarkerSet(pos, ms.names, ms.rate, ms.time[:40]),
+                  units="mm")
+    code, stdout, err = run_cli(monkeypatch, capsys, "analyse", out, tmp_path / "r.c3d", "-o",
+                                tmp_path / "O", "--units", "mm")
+    assert code == 0, err
+    assert "the jaw is estimated" in stdout and "head markers without data, left out: H2" in stdout
+    assert "head motion removed with H1, H3, H4" in stdout
+    assert "jaw" in json.loads((tmp_path / "O" / "summary.json").read_text())["determined"]

@@ -46,8 +46,8 @@ def command(group: typer.Typer = app, name: str | None = None, args: tuple[str, 
                 kw["render"] = wf.pictures.render_options(*(kw.pop(k) for k in LOOK))
             if isinstance(shown := fn(**kw), list):  # lines, or what it wrote and warnings
                 _say(shown)
-            elif shown is not None:
-                out.print(shown)
+            elif shown is not None:  # file names and notes are not markup
+                out.print(shown, markup=False, highlight=False)
                 err.print(getattr(shown, "warnings", ""), end="")
         sig = inspect.signature(fn)
         extra = [inspect.Parameter(k, inspect.Parameter.KEYWORD_ONLY, default=d, annotation=type(
@@ -323,7 +323,7 @@ def analyse(subject: Path, recording: Path, output: Path = ..., units: str | Non
             controls: str = "speech", noise: float | None = None, window: int | None = 3,
             smooth: float | None = 1.0, preset: str = "anatomical", video: bool = False):
     """A recording against a subject: head motion, frame, gaps, inversion, statistics, movie."""
-    _say(wf.subject.analyse_report(_staged(wf.subject.analyse, **locals())))
+    return _staged(wf.subject.analyse, **locals())
 
 @command()
 def batch(manifest: Path, output: Path = ..., workers: int | None = None,

@@ -166,7 +166,7 @@ subject.jaw_second_marker: another jaw marker: rotation and glide
 analyse.subject: a subject folder (facemech subject)
 recording: a recording of the subject's markers (C3D, TRC, CSV), any rate
 analyse.output: the results folder
-lowpass: low-pass cut-off of the recording, Hz
+lowpass: low-pass cut-off of the recording, Hz (0: none)
 analyse.window: lsq: frames fitted per frame
 analyse.smooth: lsq: smoothness weight, mm/unit
 analyse.video: also render movie.mp4
@@ -188,7 +188,7 @@ RANGES: dict[str, str] = {
     "smooth": "[0, 1e6]", "effort": "[0, 1e6]", "window": "[1, 1000]", "substeps": "[1, 1e5]",
     "reference": "[0, inf)", "frames": "[2, 1e6]", "utterances": "[1, 1e4]", "k": "[1, 1000]",
     "aa": "[1, 4]", "rate_wpm": "[80, 450]", "strength": "[0, 10]", "jaw_lead": "[0, 600]",
-    "max_evaluations": "[1, 1e7]", "lowpass": "(0, 1000]",
+    "max_evaluations": "[1, 1e7]", "lowpass": "[0, 1000]",
     "workers": "[1, 1024]"}
 
 

@@ -134,6 +134,8 @@ def auto_landmarks(vertices: np.ndarray, faces: np.ndarray, *,
     from .builder import default_surface
 
     scan = np.asarray(vertices, float)
+    if len(np.asarray(faces)) == 0:
+        raise InputError("a scan needs triangles to be landmarked", source=source, field="faces")
     if scan.ndim != 2 or scan.shape[1] != 3 or len(scan) < 200:
         raise InputError(f"a scan needs at least 200 vertices to be landmarked, got "
                          f"{len(scan)}", source=source, field="vertices")

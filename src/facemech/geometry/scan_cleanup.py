@@ -92,6 +92,8 @@ def keep_triangles(vertices: np.ndarray, faces: np.ndarray, appearance: Appearan
                    keep: np.ndarray):
     """The triangles ``keep`` (bool mask) with their vertices renumbered (unused ones dropped)
     and their texture coordinates or vertex colours. Returns (vertices, faces, appearance)."""
+    if not np.any(keep):
+        raise InputError("no triangle is left", field="faces")
     used = np.zeros(len(vertices), bool)
     used[faces[keep].ravel()] = True
     if keep.all() and used.all():

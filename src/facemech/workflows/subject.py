@@ -27,7 +27,7 @@ from ..errors import InputError
 from ..io.atomic import atomic_path, check_output
 from .outcome import Written
 
-__all__ = ["Subject", "analyse", "analyse_report", "make_subject", "read_subject"]
+__all__ = ["Subject", "analyse", "make_subject", "read_subject", "usable_head"]
 
 SURFACES = (".obj", ".ply", ".stl")
 #: Hz, the default low-pass of a recording: speech movements lie below it (lip and jaw
@@ -36,6 +36,11 @@ LOWPASS_HZ = 12.0
 #: Hz, the low-pass of the head markers before the rigid fits: head motion is slower than
 #: speech, and a fit's rotation error grows with the distance from the head markers
 HEAD_LOWPASS_HZ = 4.0
+#: s, the longest gap of a head marker filled before the rigid fits (the head moves slowly)
+HEAD_GAP_S = 1.0
+#: m, a marker farther than this from the skin after the fit is not on the face (a reference
+#: or body marker) and is left out with a note; nearer than this but over 10 mm is an error
+OFF_FACE = 0.050
 
 
 @dataclass(frozen=True)
@@ -75,30 +80,60 @@ def _names(text, field: str) -> tuple[str, ...]:
     return out
 
 
+def usable_head(ms, head: tuple[str, ...], *, source: str) -> tuple[tuple[str, ...], list]:
+    """The head markers of ``head`` that ``ms`` holds with data (at least 3), and notes on
+    those left out."""
+    have = tuple(h for h in head if h in ms.names and np.isfinite(ms.marker(h)).any())
+    if len(have) < 3:
+        gone = [h for h in head if h not in have]
+        raise InputError(f"fewer than 3 head markers have data ({', '.join(gone)} missing): a "
+                         "rigid fit needs three", source=source, field=gone[0] if gone else
+                         "head")
+    left_out = [h for h in head if h not in have]
+    return have, ([f"head markers without data, left out: {', '.join(left_out)}"]
+                  if left_out else [])
+
+
+def _fill_head(ms, head: tuple[str, ...]):
+    """Gaps of the head markers filled (up to :data:`HEAD_GAP_S`) and low-passed at
+    :data:`HEAD_LOWPASS_HZ`: the head moves slowly, and a frame with fewer than three of them
+    loses every marker in the rigid fit."""
+    from ..kinematics.gaps import fill_gaps
+    from ..kinematics.resample import lowpass
+
+    part, _, _ = fill_gaps(ms.select(list(head)), int(round(HEAD_GAP_S * ms.rate)))
+    if HEAD_LOWPASS_HZ < 0.5 * ms.rate:
+        part = lowpass(part, HEAD_LOWPASS_HZ)
+    pos = ms.positions.copy()
+    pos[:, [ms.index(h) for h in head]] = part.positions
+    return ms.with_positions(pos)
+
+
 def rest_positions(ms, head: tuple[str, ...], interval: tuple[float, float], *,
-                   source: str) -> tuple[np.ndarray, dict]:
+                   source: str) -> tuple[np.ndarray, tuple, dict]:
     """Each marker's mean position (markers, 3), m, over the rest ``interval`` (s) of a
-    recording, after head-motion correction when ``head`` names markers."""
+    recording, after head-motion correction with the ``head`` markers (:func:`usable_head`).
+    Markers without data in the interval are left out. Returns (positions, names, notes)."""
     from ..kinematics.rigid import head_correct
 
-    notes = {}
+    notes: dict = {"notes": []}
     if head:
-        for h in head:
-            if h not in ms.names:
-                raise InputError("head marker not in the recording", source=source, field=h)
-        hc = head_correct(ms, head)
-        ms, notes = hc.markers, {"head_residual_mm": hc.summary()["residual_mm"]}
+        hc = head_correct(_fill_head(ms, head), head)
+        ms, notes["head_residual_mm"] = hc.markers, hc.summary()["residual_mm"]
     inside = (ms.time >= interval[0] - 1e-9) & (ms.time <= interval[1] + 1e-9)
     if inside.sum() < 1:
         raise InputError(f"no frame in the rest interval {interval[0]:g}-{interval[1]:g} s",
                          source=source, field="rest")
-    rest = np.nanmean(np.where(np.isfinite(ms.positions[inside]), ms.positions[inside], np.nan),
-                      axis=0) if inside.sum() > 1 else ms.positions[inside][0]
-    missing = [n for n, p in zip(ms.names, rest, strict=True) if not np.all(np.isfinite(p))]
+    seen = np.isfinite(ms.positions[inside]).all(axis=2)
+    counts = seen.sum(axis=0)
+    rest = np.einsum("fm,fmk->mk", seen, np.where(seen[..., None], ms.positions[inside], 0.0))
+    rest = rest / np.maximum(counts, 1)[:, None]
+    missing = [n for n, c in zip(ms.names, counts, strict=True) if c == 0]
     if missing:
-        raise InputError(f"missing throughout the rest interval: {', '.join(missing)}",
-                         source=source, field=missing[0])
-    return rest, notes
+        notes["notes"].append(
+            f"markers without data in the rest interval, left out: {', '.join(missing)}")
+    keep = [k for k, c in enumerate(counts) if c > 0]
+    return rest[keep], tuple(ms.names[k] for k in keep), notes
 
 
 def _align(rest: np.ndarray, names: tuple[str, ...], model, frame: tuple[str, ...],
@@ -122,18 +157,22 @@ def _align(rest: np.ndarray, names: tuple[str, ...], model, frame: tuple[str, ..
                          field="frame")
     for n in frame:
         if n not in names:
-            raise InputError("frame marker not in the recording", source=source, field=n)
+            raise InputError("frame marker without data at rest", source=source, field=n)
     basis = basis_from_points(*(rest[names.index(n)] for n in frame))
     on_skin = [k for k, n in enumerate(names) if n not in skip]
+    centre = np.median(rest[on_skin], axis=0)  # a reference or body marker far off: not used
+    on_skin = [k for k in on_skin if np.linalg.norm(rest[k] - centre) <= 0.15]
     fit = fit_to_skin(rest[on_skin], model.rest_positions[: model.n_surface], basis,
                       source=source)
     return fit, f"by the skin (anatomical frame {','.join(frame)}, closest points)"
 
 
 def _map(moved: np.ndarray, names: tuple[str, ...], model, skip: tuple[str, ...], source: str,
-         *, limit: float = 0.010) -> tuple[dict, dict]:
-    """marker -> closest epidermal node (or its named site); refuses a marker farther than
-    ``limit`` (m) from the skin and two markers on one node."""
+         *, limit: float = 0.010) -> tuple[dict, dict, list]:
+    """marker -> closest epidermal node (or its named site). A marker more than
+    :data:`OFF_FACE` from the skin is not on the face and is left out (returned in the third
+    item); one farther than ``limit`` (m) but nearer is an error, as are two markers on one
+    node."""
     from scipy.spatial import cKDTree
 
     from ..solvers.forward import marker_nodes
@@ -141,12 +180,15 @@ def _map(moved: np.ndarray, names: tuple[str, ...], model, skip: tuple[str, ...]
     sites = dict(zip(*marker_nodes(model), strict=True))
     skin = model.rest_positions[: model.n_surface]
     d, idx = cKDTree(skin).query(moved)
-    mapping, dist = {}, {}
+    mapping, dist, off = {}, {}, []
     for k, n in enumerate(names):
         if n in skip:
             continue
         node = int(sites[n]) if n in sites else int(idx[k])
         gap = float(np.linalg.norm(moved[k] - skin[node]))
+        if gap > OFF_FACE and n not in sites:
+            off.append(f"{n} ({gap * 1e3:.0f} mm)")
+            continue
         if gap > limit:
             raise InputError(f"{gap * 1e3:.1f} mm from the skin after alignment (limit "
                              f"{limit * 1e3:.0f} mm): a head marker (--head), or the wrong unit "
@@ -156,7 +198,7 @@ def _map(moved: np.ndarray, names: tuple[str, ...], model, skip: tuple[str, ...]
             raise InputError(f"on the same node as {twin}: markers closer than the mesh "
                              "spacing", source=source, field=n)
         mapping[n], dist[n] = node, gap
-    return mapping, dist
+    return mapping, dist, off
 
 
 def make_subject(face: str | Path, markers: str | Path, output: str | Path, *,
@@ -204,29 +246,35 @@ def make_subject(face: str | Path, markers: str | Path, output: str | Path, *,
         if landmarks is None:
             raise InputError("a scan needs its landmarks (--landmarks)", source=str(face),
                              field="landmarks")
+        import tempfile
+
         from .faces import build_face_file
-        built = build_face_file(face_path, landmarks, out / "scan-face.npz", units=units or "mm")
-        model, warp = built.data, bool(warp)
+        with tempfile.TemporaryDirectory() as tmp:  # the scan's unit from its size
+            model = build_face_file(face_path, landmarks, Path(tmp) / "f.npz", units="auto").data
+        warp = bool(warp)
     else:
         model = load_face(face)
         warp = (not face_path.exists()) if warp is None else warp
     ms = read_markers(markers, units=units)
-    for n in (chin_marker, jaw_second_marker):
+    for n in (chin_marker, jaw_second_marker, *frame_names):
         if n is not None and n not in ms.names:
-            raise InputError("jaw marker not in the recording", source=src, field=n)
-    rest_m, notes = rest_positions(ms, head_names, interval, source=src)
+            raise InputError("marker not in the recording", source=src, field=n)
+    head_names, head_notes = usable_head(ms, head_names, source=src) if head_names else ((), [])
+    rest_m, names, notes = rest_positions(ms, head_names, interval, source=src)
+    notes["notes"] = head_notes + notes["notes"]
     say("subject", 1, 4)
-    fit, how = _align(rest_m, ms.names, model, frame_names, head_names, src)
+    fit, how = _align(rest_m, names, model, frame_names, head_names, src)
     moved = fit(rest_m)
-    mapping, dist = _map(moved, ms.names, model, head_names, src)
+    mapping, dist, off = _map(moved, names, model, head_names, src)
+    if off:
+        notes["notes"].append(f"markers not on the face, left out: {', '.join(off)}")
     say("subject", 2, 4)
-    on_skin = [n for n in ms.names if n in mapping]
-    rest_set = MarkerSet(moved[None, [ms.names.index(n) for n in on_skin]], tuple(on_skin), 60.0)
+    on_skin = [n for n in names if n in mapping]
+    rest_set = MarkerSet(moved[None, [names.index(n) for n in on_skin]], tuple(on_skin), 60.0)
     if warp:
         model = warp_face(model, rest_set, mapping)
     say("subject", 3, 4)
     model.save(out / "face.npz")
-    (out / "scan-face.npz").unlink(missing_ok=True)
     with atomic_path(out / "mapping.csv") as tmp:
         tmp.write_text("marker,node\n" + "".join(f"{n},{v}\n" for n, v in mapping.items()))
     with atomic_path(out / "rest.csv") as tmp:  # a landmark CSV (name,x,y,z; mm)
@@ -236,19 +284,20 @@ def make_subject(face: str | Path, markers: str | Path, output: str | Path, *,
     info = {"face": str(face), "warped": bool(warp), "recording": src,
             "rest_s": list(interval), "alignment": how, "lab_to_model": fit.as_dict(),
             "marker_to_skin_mm": {n: round(v * 1e3, 3) for n, v in dist.items()},
-            "head": {h: moved[ms.names.index(h)].tolist() for h in head_names},
+            "head": {h: moved[names.index(h)].tolist() for h in head_names},
             "chin_marker": chin_marker, "jaw_second_marker": jaw_second_marker, **notes}
     with atomic_path(out / "subject.json") as tmp:
         tmp.write_text(json.dumps(info, indent=2))
     from ..viz.subject import subject_figure
 
-    subject_figure(out / "subject.png", model, moved, ms.names, mapping, head_names)
+    subject_figure(out / "subject.png", model, moved, names, mapping, head_names)
     say("subject", 4, 4)
     subj = read_subject(out)
     worst = max(dist.values())
-    return Written(out, subj, f"subject of {len(mapping)} markers on {model.name} ({how}; scale "
-                   f"{fit.scale:.3f}, markers {np.median(list(dist.values())) * 1e3:.2f} mm "
-                   f"from the skin, at most {worst * 1e3:.2f} mm; warped: {bool(warp)}) -> {out}/")
+    line = (f"subject of {len(mapping)} markers on {model.name} ({how}; scale {fit.scale:.3f}, "
+            f"markers {np.median(list(dist.values())) * 1e3:.2f} mm from the skin, at most "
+            f"{worst * 1e3:.2f} mm; warped: {bool(warp)}) -> {out}/")
+    return Written(out, subj, "\n".join([*(f"  {n}" for n in notes["notes"]), line]))
 
 
 def read_subject(folder: str | Path) -> Subject:
@@ -291,25 +340,32 @@ def prepare(subj: Subject, ms, *, max_gap: float, rate: float, source: str,
     ms, filled, left = fill_gaps(ms, int(round(max_gap * ms.rate)))
     if filled or left:
         notes.append(f"gaps: {len(filled)} filled (<= {max_gap:g} s), {len(left)} left")
-    if lowpass_hz is not None and lowpass_hz < 0.5 * ms.rate:
+    if lowpass_hz and lowpass_hz < 0.5 * ms.rate:
         ms = lowpass(ms, lowpass_hz)
         notes.append(f"low-passed at {lowpass_hz:g} Hz (4th-order Butterworth, zero phase)")
+    elif lowpass_hz:
+        notes.append(f"not low-passed: {lowpass_hz:g} Hz is not below the recording's Nyquist "
+                     f"frequency ({0.5 * ms.rate:g} Hz)")
     if subj.head:
-        for h in subj.head:
-            if h not in ms.names:
-                raise InputError("head marker not in the recording", source=source, field=h)
-        cols = [ms.index(h) for h in subj.head]
-        pos = ms.positions.copy()  # the head moves slowly: its markers' noise is cut lower
-        pos[:, cols] = lowpass(ms.select(list(subj.head)), min(HEAD_LOWPASS_HZ,
-                                                               0.4 * ms.rate)).positions
-        hc = head_correct(ms.with_positions(pos), tuple(subj.head))
+        head, left_out = usable_head(ms, tuple(subj.head), source=source)
+        notes += left_out
+        hc = head_correct(_fill_head(ms, head), head)
+        cols = [ms.index(h) for h in head]
         head_now = np.nanmean(hc.markers.positions[:, cols], axis=0)
-        r, t = rigid_fit(head_now, np.array(list(subj.head.values())))
+        r, t = rigid_fit(head_now, np.array([subj.head[h] for h in head]))
         ms = hc.markers.with_positions(hc.markers.positions @ r.T + t)
-        res = hc.summary()["residual_mm"]
-        notes.append(f"head motion removed with {', '.join(subj.head)}: residual median "
-                     f"{res['median']:.2f} mm, max {res['max']:.2f} mm")
+        res = hc.summary()
+        notes.append(f"head motion removed with {', '.join(head)}: residual median "
+                     f"{res['residual_mm']['median']:.2f} mm, max "
+                     f"{res['residual_mm']['max']:.2f} mm")
+        if res["unfixed_frames"]:
+            notes.append(f"{len(res['unfixed_frames'])} frames without three head markers "
+                         "have no markers")
     ms = ms.select([n for n in ms.names if n in subj.mapping])
+    empty = [n for n in ms.names if not np.isfinite(ms.marker(n)).any()]
+    if empty:
+        notes.append(f"markers without data, left out: {', '.join(empty)}")
+        ms = ms.select([n for n in ms.names if n not in empty])
     if abs(ms.rate - rate) > 1e-6 * rate:
         notes.append(f"resampled from {ms.rate:g} Hz to {rate:g} Hz")
         ms = resample(ms, rate)
@@ -365,11 +421,12 @@ def analyse(subject: str | Path, recording: str | Path, output: str | Path, *,
     write_markers(out / "markers.csv", ms, units="mm")
     with atomic_path(out / "mapping.csv") as tmp:  # the subject's, for the markers recorded
         tmp.write_text("marker,node\n" + "".join(f"{n},{subj.mapping[n]}\n" for n in ms.names))
-    jaw = [n if n in ms.names else None for n in (subj.chin_marker, subj.jaw_second_marker)]
-    if jaw[0] is None and subj.chin_marker is not None:
-        notes.append(f"the chin marker {subj.chin_marker} is not in the recording: the jaw is "
-                     "estimated")
-        jaw[1] = None
+    jaw = [n if n in ms.names and np.isfinite(ms.marker(n)).all() else None
+           for n in (subj.chin_marker, subj.jaw_second_marker)]
+    if subj.chin_marker is not None and None in jaw[: 2 if subj.jaw_second_marker else 1]:
+        notes.append(f"the jaw markers are missing or have gaps longer than {max_gap:g} s in "
+                     "the recording: the jaw is estimated")
+        jaw = [None, None]
     say("prepare", 1, 1)
     res = invert.invert(out / "markers.csv", out / "result.nc", face=subj.face,
                         map_file=out / "mapping.csv", method=method, controls=controls,
@@ -392,12 +449,7 @@ def analyse(subject: str | Path, recording: str | Path, output: str | Path, *,
                                                  strict=True) if ok]}
     with atomic_path(out / "summary.json") as tmp:
         tmp.write_text(json.dumps(summary, indent=2))
-    return Written(out, summary, f"{summary['frames']} frames of {len(ms.names)} markers "
-                   f"analysed: per-frame error median {err['median_mm']:.3f} mm, max "
-                   f"{err['max_mm']:.3f} mm; determined: {', '.join(summary['determined'])} "
-                   f"-> {out}/")
-
-
-def analyse_report(done: Written) -> list[str]:
-    """What ``facemech analyse`` prints: the notes, then the line."""
-    return [f"  {n}" for n in done.data["notes"]] + [done.line]
+    line = (f"{summary['frames']} frames of {len(ms.names)} markers analysed: per-frame error "
+            f"median {err['median_mm']:.3f} mm, max {err['max_mm']:.3f} mm; determined: "
+            f"{', '.join(summary['determined'])} -> {out}/")
+    return Written(out, summary, "\n".join([*(f"  {n}" for n in summary["notes"]), line]))
