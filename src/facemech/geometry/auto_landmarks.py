@@ -29,7 +29,7 @@ from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
 from ..errors import InputError
-from ..kinematics.alignment import Similarity, similarity_fit
+from ..kinematics.alignment import Similarity, closest_point_fit
 
 __all__ = ["AutoLandmarks", "auto_landmarks", "surface_points"]
 
@@ -54,21 +54,6 @@ class AutoLandmarks:
     confidence: dict
     generic_to_scan: Similarity
     rms: float
-
-
-def _similarity_icp(src: np.ndarray, tree: cKDTree, dst: np.ndarray, fit: Similarity,
-                    iterations: int) -> Similarity:
-    """Closest-point iterations with a free scale; a step that would leave
-    :data:`SCALE_RANGE` ends them (the fit so far is returned)."""
-    for _ in range(iterations):
-        _, idx = tree.query(fit(src))
-        new = similarity_fit(src, dst[idx])
-        if not SCALE_RANGE[0] <= new.scale <= SCALE_RANGE[1]:
-            return fit
-        if abs(new.rms - fit.rms) < 1e-9:
-            return new
-        fit = new
-    return fit
 
 
 def _affine_icp(points: np.ndarray, extra: np.ndarray, tree: cKDTree, dst: np.ndarray,
@@ -150,9 +135,11 @@ def auto_landmarks(vertices: np.ndarray, faces: np.ndarray, *,
     few, sparse_tree = sample[::4], cKDTree(sparse)
     starts = _starts(sample, scan)
     first = [float(np.mean(sparse_tree.query(s(few))[0] ** 2)) for s in starts]
-    coarse = [_similarity_icp(few, sparse_tree, sparse, starts[k], 15)
+    coarse = [closest_point_fit(few, sparse_tree, sparse, starts[k], 15,
+                                scale_range=SCALE_RANGE, tol=1e-9)
               for k in np.argsort(first)[:16]]
-    fit = _similarity_icp(sample, tree, scan, min(coarse, key=lambda f: f.rms), 80)
+    fit = closest_point_fit(sample, tree, scan, min(coarse, key=lambda f: f.rms), 80,
+                            scale_range=SCALE_RANGE, tol=1e-9)
     # step 2: an affine fit (a face wider or longer than the generic one), then smoothed
     # thin-plate-spline refinement of the placed generic face
     names = list(glm)

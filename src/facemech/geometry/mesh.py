@@ -19,11 +19,15 @@ def surface_edges(faces: np.ndarray) -> np.ndarray:
     return np.unique(np.sort(_corner_pairs(faces), axis=1), axis=0)
 
 
+def boundary_edges(faces: np.ndarray) -> np.ndarray:
+    """The edges only one triangle has (the mesh's holes and rim), (b, 2), each sorted."""
+    u, c = np.unique(np.sort(_corner_pairs(faces), axis=1), axis=0, return_counts=True)
+    return u[c == 1]
+
+
 def boundary_nodes(faces: np.ndarray) -> np.ndarray:
     """Sorted nodes on an edge that only one triangle has (the mesh's holes and rim)."""
-    e = np.sort(_corner_pairs(faces), axis=1)
-    u, c = np.unique(e, axis=0, return_counts=True)
-    return np.unique(u[c == 1])
+    return np.unique(boundary_edges(faces))
 
 
 def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:

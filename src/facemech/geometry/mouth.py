@@ -117,6 +117,14 @@ def stomion(landmarks: dict[str, np.ndarray]) -> np.ndarray:
                          0.5 * (landmarks["upper_lip_center"] + landmarks["lower_lip_center"]))
 
 
+def distance_to_corner_line(points: np.ndarray, landmarks: dict[str, np.ndarray]) -> np.ndarray:
+    """Distance (m) of ``points`` (..., 3) to the segment between the mouth-corner landmarks."""
+    p, q = landmarks["mouth_corner_right"], landmarks["mouth_corner_left"]
+    pts = np.asarray(points, float)
+    s = np.clip((pts - p) @ (q - p) / max(float((q - p) @ (q - p)), 1e-12), 0.0, 1.0)
+    return np.linalg.norm(pts - (p + s[..., None] * (q - p)), axis=-1)
+
+
 def mouth_corners(vertices: np.ndarray, faces: np.ndarray, landmarks: dict[str, np.ndarray],
                   source: str | None = None) -> tuple[int, int]:
     """The (right, left) mouth-corner nodes: nearest the landmarks, off the mesh's holes."""

@@ -89,10 +89,9 @@ def split_faces(vertices: np.ndarray, faces: np.ndarray, red: np.ndarray, appear
 
 
 def _near_mouth(vertices, faces, landmarks, radius):
-    c = vertices[faces].mean(axis=1)
-    p, q = landmarks["mouth_corner_right"], landmarks["mouth_corner_left"]
-    s = np.clip((c - p) @ (q - p) / max(float((q - p) @ (q - p)), 1e-12), 0.0, 1.0)
-    return np.linalg.norm(c - (p + s[:, None] * (q - p)), axis=1) <= radius
+    from .mouth import distance_to_corner_line
+
+    return distance_to_corner_line(vertices[faces].mean(axis=1), landmarks) <= radius
 
 
 def lip_spacing(vertices: np.ndarray, faces: np.ndarray, landmarks: dict) -> float:

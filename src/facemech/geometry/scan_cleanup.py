@@ -161,9 +161,10 @@ def check_mouth_closed(vertices: np.ndarray, faces: np.ndarray, landmarks: dict,
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
 
-    e = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
-    u, c = np.unique(e, axis=0, return_counts=True)
-    edges = u[c == 1]
+    from .mesh import boundary_edges
+    from .mouth import distance_to_corner_line
+
+    edges = boundary_edges(faces)
     if len(edges) == 0 or not {"mouth_corner_left", "mouth_corner_right"} <= set(landmarks):
         return
     n = len(vertices)
@@ -171,14 +172,11 @@ def check_mouth_closed(vertices: np.ndarray, faces: np.ndarray, landmarks: dict,
     _, label = connected_components(graph, directed=False)
     loops = label[edges[:, 0]]
     sizes = np.bincount(loops)
-    p, q = landmarks["mouth_corner_right"], landmarks["mouth_corner_left"]
     for loop in np.unique(loops):
         if sizes[loop] == sizes.max():
             continue  # the rim
         pts = vertices[np.unique(edges[loops == loop])]
-        centre = pts.mean(axis=0)
-        s = np.clip((centre - p) @ (q - p) / max(float((q - p) @ (q - p)), 1e-12), 0, 1)
-        if np.linalg.norm(centre - (p + s * (q - p))) <= reach:
+        if distance_to_corner_line(pts.mean(axis=0), landmarks) <= reach:
             w, h = np.ptp(pts[:, 0]) * 1e3, np.ptp(pts[:, 1]) * 1e3
             raise InputError(f"the mouth is open in the middle (a hole {w:.0f} mm wide and "
                              f"{h:.0f} mm high between the lips): the builder needs the lips "

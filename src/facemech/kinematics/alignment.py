@@ -19,7 +19,7 @@ from scipy.spatial import cKDTree
 
 from ..errors import InputError
 
-__all__ = ["Similarity", "fit_to_skin", "similarity_fit"]
+__all__ = ["Similarity", "closest_point_fit", "fit_to_skin", "similarity_fit"]
 
 OUTLIER_M = 0.003  #: m, markers farther from the skin are left out of the final fit
 PITCHES_DEG = (-45.0, -30.0, -15.0, 0.0, 15.0, 30.0, 45.0)  #: the frame's pitches tried
@@ -72,15 +72,25 @@ def similarity_fit(source: np.ndarray, target: np.ndarray, *,
     return Similarity(c, r, t, rms)
 
 
-def _icp(points: np.ndarray, tree: cKDTree, skin: np.ndarray, start: Similarity,
-         iterations: int) -> Similarity:
-    """Rigid closest-point iterations (a free scale would shrink the markers into the skin's
-    concavities: closest points are biased inward)."""
+def closest_point_fit(points: np.ndarray, tree: cKDTree, targets: np.ndarray,
+                      start: Similarity, iterations: int, *,
+                      scale_range: tuple[float, float] | None = None,
+                      tol: float = 1e-8) -> Similarity:
+    """Closest-point iterations (Besl & McKay 1992): ``points`` (n, 3) moved by the fit onto
+    their nearest ``targets`` (``tree`` is their KD-tree), refitted until the RMS changes by
+    less than ``tol`` (m).
+
+    ``scale_range`` None: rigid (scale kept at the start's; on a skin, a free scale would shrink
+    the markers into its concavities, closest points being biased inward). Else the scale is
+    free, and a step that would leave the range ends the iterations (the fit so far returned).
+    """
     fit = start
     for _ in range(iterations):
         _, idx = tree.query(fit(points))
-        new = similarity_fit(points, skin[idx], with_scale=False)
-        if abs(new.rms - fit.rms) < 1e-8:
+        new = similarity_fit(points, targets[idx], with_scale=scale_range is not None)
+        if scale_range is not None and not scale_range[0] <= new.scale <= scale_range[1]:
+            return fit
+        if abs(new.rms - fit.rms) < tol:
             return new
         fit = new
     return fit
@@ -121,14 +131,14 @@ def fit_to_skin(points: np.ndarray, skin: np.ndarray, rotation: np.ndarray, *,
     starts = [Similarity(1.0, r, c - r @ pts.mean(axis=0), np.inf)
               for r in (_pitch(a) @ rotation for a in np.deg2rad(PITCHES_DEG)) for c in centres]
     first = [float(np.mean(tree.query(s(pts))[0] ** 2)) for s in starts]
-    refined = [_icp(pts, tree, skin, starts[k], 8) for k in np.argsort(first)[:24]]
-    fit = _icp(pts, tree, skin, min(refined, key=lambda f: f.rms), iterations)
+    refined = [closest_point_fit(pts, tree, skin, starts[k], 8) for k in np.argsort(first)[:24]]
+    fit = closest_point_fit(pts, tree, skin, min(refined, key=lambda f: f.rms), iterations)
     while len(pts) > 6:  # markers off the skin leave the fit one at a time, the farthest first
         d = tree.query(fit(pts))[0]
         if d.max() <= OUTLIER_M:
             break
         pts = np.delete(pts, np.argmax(d), axis=0)
-        fit = _icp(pts, tree, skin, fit, iterations)
+        fit = closest_point_fit(pts, tree, skin, fit, iterations)
     return fit
 
 
