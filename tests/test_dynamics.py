@@ -31,8 +31,9 @@ def network(n_nodes, springs_ij, rest, k, *, damping, biphasic=None, tied=(), ti
     tied = np.asarray(tied, np.int64)
     t_rest = rest[tied] if tied_rest is None else np.asarray(tied_rest, float)
     forces = ForceBundles(
-        springs=SpringBundle(i=i, j=j, rest_length=l0, k_low=k, k_high=10 * k, biphasic=bip,
-                             damping=np.full(len(i), float(damping)), knee=0.2, sigma=0.98),
+        springs=SpringBundle.make(i=i, j=j, rest_length=l0, k_low=k, k_high=10 * k, biphasic=bip,
+                                  damping=np.full(len(i), float(damping)), knee=0.2,
+                                  sigma=0.98),
         prisms=PrismBundle.empty(),
         muscles=MuscleBundle.empty(),
         restoration=RestorationBundle(nodes=tied, skull=tied + n_nodes,

@@ -1,5 +1,6 @@
-"""The fast forward step (issue 16): the unrolled prism kernels, the volume about one node,
-the selects of the spring law, and the threaded force assembly against one thread."""
+"""The fast forward step (issue 16): the unrolled prism kernels, the pressure in vector blocks,
+the volume about one node, the spring law with its knee as a length, and the threaded force
+assembly against one thread."""
 
 import numpy as np
 import pytest
@@ -7,7 +8,7 @@ import pytest
 from facemech import preset
 from facemech.errors import InputError
 from facemech.physics import volume
-from facemech.physics.springs import tension
+from facemech.physics.springs import tension, tension_at
 from facemech.physics.threads import get_threads, set_threads
 
 
@@ -80,16 +81,64 @@ def test_unrolled_prism_kernels_equal_the_array_kernels_to_the_bit():
     assert np.array_equal(got_p, want_p) and np.abs(want_p).max() > 0
 
 
+@pytest.mark.parametrize("n", [1, 63, 64, 65, 200])
+def test_pressure_in_blocks_equals_one_prism_at_a_time_to_the_bit(n):
+    """add_pressure_blocks (gathered into blocks of 64, computed in vector instructions) adds
+    exactly what add_prism_pressure adds prism by prism, in the prisms' order, for counts below,
+    at and across a block's end, and over a sub-range; a prism of bulk 0 adds nothing."""
+    rng = np.random.default_rng(19)
+    prisms = random_prisms(rng, n)
+    pos = prisms.reshape(-1, 3)[rng.permutation(6 * n)]
+    # prisms sharing nodes: each prism takes six of the scattered nodes, some twice over
+    nodes = rng.integers(0, len(pos), (n, 6))
+    nodes[:, :3] = np.arange(3 * n).reshape(n, 3) % len(pos)
+    rest = np.abs(rng.normal(1e-8, 2e-9, n))
+    bulk = 2e4 / rest
+    bulk[3::7] = 0.0
+    want = np.zeros_like(pos)
+    for e in range(n):
+        volume.add_prism_pressure(pos, nodes, e, rest[e], bulk[e], want)
+    got = np.zeros_like(pos)
+    block = (np.empty((18, volume.PRESSURE_BLOCK)), np.empty((18, volume.PRESSURE_BLOCK)))
+    volume_blocks(pos, nodes, rest, bulk, 0, n, *block, got)
+    assert np.array_equal(got, want) and np.abs(want).max() > 0
+    lone = np.zeros_like(pos)
+    volume_blocks(pos, nodes, rest, np.zeros(n), 0, n, *block, lone)
+    assert not lone.any()
+    if n > 2:
+        part_want = np.zeros_like(pos)
+        for e in range(1, n - 1):
+            volume.add_prism_pressure(pos, nodes, e, rest[e], bulk[e], part_want)
+        part = np.zeros_like(pos)
+        volume_blocks(pos, nodes, rest, bulk, 1, n - 1, *block, part)
+        assert np.array_equal(part, part_want)
+
+
+def volume_blocks(*args):
+    """add_pressure_blocks compiled on its own (it is inlined into the force kernels)."""
+    import numba as nb
+
+    global _blocks
+    if "_blocks" not in globals():
+        _blocks = nb.njit(error_model="numpy")(
+            lambda pos, nodes, rest, bulk, e0, e1, c, f, out: volume.add_pressure_blocks(
+                pos, nodes, rest, bulk, e0, e1, c, f, out))
+    _blocks(*args)
+
+
 @pytest.mark.parametrize("sigma", [0.0, 0.98])
-def test_spring_law_as_selects(sigma):
+def test_spring_law_with_its_knee_as_a_length(sigma):
     """The biphasic law both ways (sigma <= 0) and eq. (2) in compression (sigma > 0), at
-    strains on either side of the knee, equal the hand-written law exactly."""
+    strains on either side of the knee, equal the hand-written law exactly; so does
+    tension_at with the knee as a length (inf for a linear spring)."""
     l0, k1, k2, knee = 2e-3, 50.0, 400.0, 0.15
     for strain in (-0.4, -0.15, -0.1, 0.0, 0.1, 0.15, 0.4):
         dl = strain * l0
         length = l0 + dl
         for bi in (False, True):
             got = tension(length, l0, k1, k2, knee, sigma, bi)
+            assert got == tension_at(length, l0, k1, k2, knee, knee * l0 if bi else np.inf,
+                                     sigma)
             d = length - l0
             if sigma > 0 and d < 0:
                 want = k1 * l0 * np.tan(0.5 * np.pi * sigma * d / l0)

@@ -36,9 +36,15 @@ from .kinds import (
 )
 from .materials import continuum_constants
 from .muscle import hill_force
-from .springs import scaled_stiffness, tension
+from .springs import scaled_stiffness, tension_at
 from .threads import kernel_threads
-from .volume import add_prism_forces, add_prism_pressure, rest_geometry
+from .volume import (
+    PRESSURE_BLOCK,
+    add_pressure_blocks,
+    add_prism_forces,
+    add_prism_pressure,
+    rest_geometry,
+)
 
 
 @dataclass(frozen=True, eq=False)
@@ -392,28 +398,19 @@ PARALLEL_MIN_ELEMENTS = 4096
 
 
 @nb.njit(cache=True, inline="always")
-def element_forces(springs, prisms, pos, vel, s0, s1, e0, e1, out):
-    """Add the forces (N) of springs ``s0:s1`` (eqs. 1-2 and their dashpots, eq. 8) and of
-    prisms ``e0:e1`` (eq. 9, or the continuum's pressure) to ``out`` (nodes, 3).
-
-    Parameters
-    ----------
-    springs : SpringBundle
-    prisms : PrismBundle
-    pos, vel : (nodes, 3) m and m/s
-    s0, s1, e0, e1 : int -- the ranges of springs and prisms
-    out : (nodes, 3) N -- the forces are added to it
-    """
+def spring_forces(springs, pos, vel, s0, s1, sigma, out):
+    """Add the forces (N) of springs ``s0:s1`` (eqs. 1-2 and their dashpots, eq. 8), with the
+    compression law's ``sigma``, to ``out`` (nodes, 3); False when a spring has no length (see
+    :func:`element_forces`)."""
     spring_i = springs.i
     spring_j = springs.j
     spring_rest = springs.rest_length
     k_low = springs.k_low
     k_high = springs.k_high
-    biphasic = springs.biphasic
+    knee_length = springs.knee_length
     damping = springs.damping
     knee = springs.knee
-    sigma = springs.sigma
-    # springs, eqs. (1)-(2), and damping r (v_j - v_i), eq. (8) second term
+    ok = True
     for s in range(s0, s1):
         i = spring_i[s]
         j = spring_j[s]
@@ -421,7 +418,8 @@ def element_forces(springs, prisms, pos, vel, s0, s1, e0, e1, out):
         dy = pos[j, 1] - pos[i, 1]
         dz = pos[j, 2] - pos[i, 2]
         length = np.sqrt(dx * dx + dy * dy + dz * dz)
-        t = tension(length, spring_rest[s], k_low[s], k_high[s], knee, sigma, biphasic[s])
+        ok &= length > 0.0
+        t = tension_at(length, spring_rest[s], k_low[s], k_high[s], knee, knee_length[s], sigma)
         t /= length
         r = damping[s]
         fx = t * dx + r * (vel[j, 0] - vel[i, 0])
@@ -433,22 +431,54 @@ def element_forces(springs, prisms, pos, vel, s0, s1, e0, e1, out):
         out[j, 0] -= fx
         out[j, 1] -= fy
         out[j, 2] -= fz
+    return ok
+
+
+@nb.njit(cache=True, inline="always")
+def element_forces(springs, prisms, pos, vel, s0, s1, e0, e1, out):
+    """Add the forces (N) of springs ``s0:s1`` (eqs. 1-2 and their dashpots, eq. 8) and of
+    prisms ``e0:e1`` (eq. 9, or the continuum's pressure) to ``out`` (nodes, 3).
+
+    Parameters
+    ----------
+    springs : SpringBundle
+    prisms : PrismBundle
+    pos, vel : (nodes, 3) m and m/s
+    s0, s1, e0, e1 : int -- the ranges of springs and prisms
+    out : (nodes, 3) N -- the forces are added to it
+
+    Returns
+    -------
+    bool -- False when a spring has no length (its two nodes at one point, or not finite): its
+        force is then not finite (the kernels compile with numpy's error model, without a test
+        of every division; the callers raise)
+    """
+    # springs, eqs. (1)-(2), and damping r (v_j - v_i), eq. (8) second term; the continuum's
+    # loop compiled without eq. (2)'s test (sigma a constant)
+    if springs.sigma > 0.0:
+        ok = spring_forces(springs, pos, vel, s0, s1, springs.sigma, out)
+    else:
+        ok = spring_forces(springs, pos, vel, s0, s1, 0.0, out)
     # prism elements, eq. (9), or the continuum's pressure
     prism_nodes = prisms.nodes
     rest_volume = prisms.rest_volume
     bulk = prisms.bulk
     k_volume = prisms.k_volume
     k_shape = prisms.k_shape
-    seeds = k_volume != 0.0 or k_shape != 0.0
-    for e in range(e0, e1):
-        if seeds:
+    if k_volume != 0.0 or k_shape != 0.0:  # the seeds' eq. (9), and a pressure if any
+        for e in range(e0, e1):
             add_prism_forces(pos, prism_nodes, e, rest_volume[e], prisms.rest_rel, k_volume,
                              k_shape, out)
-        if bulk[e] != 0.0:
-            add_prism_pressure(pos, prism_nodes, e, rest_volume[e], bulk[e], out)
+            if bulk[e] != 0.0:
+                add_prism_pressure(pos, prism_nodes, e, rest_volume[e], bulk[e], out)
+    else:  # the continuum's pressure alone (0 where a prism's bulk is 0), in vector blocks
+        coords = np.empty((18, PRESSURE_BLOCK))
+        add_pressure_blocks(pos, prism_nodes, rest_volume, bulk, e0, e1, coords,
+                            np.empty((18, PRESSURE_BLOCK)), out)
+    return ok
 
 
-@nb.njit(cache=True, parallel=True)
+@nb.njit(cache=True, parallel=True, error_model="numpy")
 def element_forces_parallel(springs, prisms, pos, vel, n_threads, out):
     """:func:`element_forces` of all springs and prisms on ``n_threads`` threads, added to
     ``out`` (nodes, 3) N.
@@ -457,42 +487,33 @@ def element_forces_parallel(springs, prisms, pos, vel, n_threads, out):
     adds their forces into an array of its own (the first thread into ``out``); the arrays are
     then added into ``out`` in thread order. The sums differ from one thread's only in the
     order of their additions (to rounding), and do not depend on the threads' timing.
-    Returns False when a force is not finite (a collapsed element: ``prange`` cannot raise).
+    Returns False as :func:`element_forces` does (``prange`` cannot raise: the caller does).
     """
     n_springs = springs.i.shape[0]
     n_prisms = prisms.nodes.shape[0]
     n_nodes = out.shape[0]
     extra = np.empty((n_threads - 1, n_nodes, 3))
+    ok = np.ones(n_threads, np.bool_)
     for t in nb.prange(n_threads):
         s0 = n_springs * t // n_threads
         s1 = n_springs * (t + 1) // n_threads
         e0 = n_prisms * t // n_threads
         e1 = n_prisms * (t + 1) // n_threads
         if t == 0:
-            element_forces(springs, prisms, pos, vel, s0, s1, e0, e1, out)
+            ok[t] = element_forces(springs, prisms, pos, vel, s0, s1, e0, e1, out)
         else:
             mine = extra[t - 1]
-            for i in range(n_nodes):
-                mine[i, 0] = 0.0
-                mine[i, 1] = 0.0
-                mine[i, 2] = 0.0
-            element_forces(springs, prisms, pos, vel, s0, s1, e0, e1, mine)
-    finite = np.ones(n_threads, np.bool_)
+            mine[:] = 0.0
+            ok[t] = element_forces(springs, prisms, pos, vel, s0, s1, e0, e1, mine)
     for t in nb.prange(n_threads):
         i0 = n_nodes * t // n_threads
         i1 = n_nodes * (t + 1) // n_threads
-        for i in range(i0, i1):
-            for k in range(n_threads - 1):
-                out[i, 0] += extra[k, i, 0]
-                out[i, 1] += extra[k, i, 1]
-                out[i, 2] += extra[k, i, 2]
-            if not (np.isfinite(out[i, 0]) and np.isfinite(out[i, 1])
-                    and np.isfinite(out[i, 2])):
-                finite[t] = False
-    return finite.all()
+        for k in range(n_threads - 1):
+            out[i0:i1] += extra[k, i0:i1]
+    return ok.all()
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def accumulate_forces(forces, pos, vel, muscle_force, anchors, out):
     """Net force (N) on every node: the terms of eq. (8) moved to the right-hand side.
 
@@ -538,11 +559,12 @@ def accumulate_forces(forces, pos, vel, muscle_force, anchors, out):
     n_threads = kernel_threads()
     n_elements = forces.springs.i.shape[0] + forces.prisms.nodes.shape[0]
     if n_threads > 1 and n_elements >= PARALLEL_MIN_ELEMENTS:
-        if not element_forces_parallel(forces.springs, forces.prisms, pos, vel, n_threads, out):
-            raise ZeroDivisionError("a spring or prism collapsed")  # as on one thread
+        ok = element_forces_parallel(forces.springs, forces.prisms, pos, vel, n_threads, out)
     else:
-        element_forces(forces.springs, forces.prisms, pos, vel, 0, forces.springs.i.shape[0],
-                       0, forces.prisms.nodes.shape[0], out)
+        ok = element_forces(forces.springs, forces.prisms, pos, vel, 0,
+                            forces.springs.i.shape[0], 0, forces.prisms.nodes.shape[0], out)
+    if not ok:
+        raise ZeroDivisionError("a spring collapsed: its two nodes met")
     # muscles, eqs. (5)-(7); muscle_force holds the filtered M of eq. (4)
     if muscles.pull == PULL_ALONG_LENGTH:
         bead_muscle_forces(muscles, pos, vel, muscle_force, out)
@@ -633,7 +655,7 @@ def force_bundles(ph: Physics) -> ForceBundles:
     """
     p = ph.params
     return ForceBundles(
-        springs=SpringBundle(
+        springs=SpringBundle.make(
             i=ph.spring_i, j=ph.spring_j, rest_length=ph.spring_rest, k_low=ph.spring_k_low,
             k_high=ph.spring_k_high, biphasic=ph.spring_biphasic, damping=ph.spring_damping,
             knee=p.biphasic_knee, sigma=p.sigma),

@@ -34,6 +34,8 @@ class SpringBundle(NamedTuple):
     damping : (s,) N s/m -- dashpot on the whole relative velocity of the ends
     knee : float -- strain at the knee of the biphasic law
     sigma : float -- the compression law's sigma (eq. 2); <= 0: mirror of eq. (1) (continuum)
+    knee_length : (s,) m -- ``knee * rest_length`` of a biphasic spring, ``inf`` of a linear one
+        (:meth:`make` fills it)
     """
 
     i: np.ndarray
@@ -45,6 +47,15 @@ class SpringBundle(NamedTuple):
     damping: np.ndarray
     knee: float
     sigma: float
+    knee_length: np.ndarray
+
+    @classmethod
+    def make(cls, i, j, rest_length, k_low, k_high, biphasic, damping, knee, sigma):
+        """The bundle of these springs, with the knee of each as a length."""
+        biphasic = np.asarray(biphasic, bool)
+        knee_length = np.where(biphasic, knee * np.asarray(rest_length, float), np.inf)
+        return cls(i, j, rest_length, k_low, k_high, biphasic, damping, float(knee),
+                   float(sigma), knee_length)
 
 
 class PrismBundle(NamedTuple):

@@ -28,21 +28,31 @@ def tension(length, rest_length, k_low, k_high, knee, sigma, biphasic):
     ``k dl`` in compression, stiffening to ``k_high`` beyond ``knee`` of compression for
     biphasic springs, so that the tissue stiffens both ways and no element collapses.
     """
+    return tension_at(length, rest_length, k_low, k_high, knee,
+                      knee * rest_length if biphasic else np.inf, sigma)
+
+
+@nb.njit(cache=True, inline="always")
+def tension_at(length, rest_length, k_low, k_high, knee, knee_length, sigma):
+    """:func:`tension` with the spring's knee as a length: ``knee_length`` (m) is ``knee *
+    rest_length`` for a biphasic spring and ``inf`` for a linear one (the force kernels keep it
+    per spring, :attr:`~facemech.physics.bundles.SpringBundle.knee_length`).
+
+    Beyond the knee is rare, and comes in whole regions of the face at a time: a branch the
+    processor predicts well. (Computing all three laws and selecting cost a quarter of the spring
+    loop; the numbers are the same.)
+    """
     dl = length - rest_length
     if sigma > 0.0 and dl < 0.0:
         arg = 0.5 * np.pi * sigma * dl / rest_length
         if arg < -0.4999 * np.pi:
             arg = -0.4999 * np.pi
         return k_low * rest_length * np.tan(arg)
-    # the linear and biphasic laws as selects rather than branches: a spring's side of the knee
-    # changes from one spring to the next, which a branch predictor cannot follow
-    knee_length = knee * rest_length
-    t = k_low * dl
-    stretched = knee * k_low * rest_length + k_high * (dl - knee_length)
-    compressed = -knee * k_low * rest_length + k_high * (dl + knee_length)
-    t = stretched if biphasic and dl > knee_length else t
-    t = compressed if biphasic and dl < -knee_length else t
-    return t
+    if abs(dl) > knee_length:
+        if dl > knee_length:
+            return knee * k_low * rest_length + k_high * (dl - knee_length)
+        return -knee * k_low * rest_length + k_high * (dl + knee_length)
+    return k_low * dl
 
 
 def spring_force(length, rest_length, k_low, k_high=None, *, biphasic=False, knee=0.2,
