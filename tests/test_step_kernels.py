@@ -215,3 +215,91 @@ def test_a_collapsed_spring_raises_on_any_thread_count(face, threads):
                               rest_anchors(ph), np.empty_like(pos))
     finally:
         set_threads(1)
+
+
+def test_slabs_of_one_parity_share_no_node_and_hold_every_element_once(face):
+    """The default face in 2 x threads slabs across the face: every spring and prism once,
+    slabs of one parity without a common node, the work about even, left to right."""
+    from facemech.physics.assembly import Physics, force_bundles
+    from facemech.physics.slabs import slab_bundles
+
+    ph = Physics.build(face, preset("anatomical"))
+    b = force_bundles(ph)
+    rest = ph.model.rest_positions
+    for threads in (2, 3, 4):
+        sl = slab_bundles(b.springs, b.prisms, rest, threads)
+        sp, pp = sl.spring_ptr, sl.prism_ptr
+        assert len(sp) == len(pp) == 2 * threads + 1
+        pairs = {tuple(x) for x in np.stack([b.springs.i, b.springs.j], 1)}
+        assert {tuple(x) for x in np.stack([sl.springs.i, sl.springs.j], 1)} == pairs
+        assert len(sl.springs.i) == len(b.springs.i)
+        assert sorted(map(tuple, sl.prisms.nodes)) == sorted(map(tuple, b.prisms.nodes))
+        nodes = [np.unique(np.concatenate([sl.springs.i[sp[k]:sp[k + 1]],
+                                           sl.springs.j[sp[k]:sp[k + 1]],
+                                           sl.prisms.nodes[pp[k]:pp[k + 1]].ravel()]))
+                 for k in range(2 * threads)]
+        for a in range(2 * threads):
+            for c in range(a + 2, 2 * threads, 2):
+                assert not np.intersect1d(nodes[a], nodes[c]).size, (threads, a, c)
+        work = np.diff(sp) + 3.0 * np.diff(pp)
+        assert work.max() < 1.05 * work.min()
+        mid_x = [rest[n, 0].mean() for n in nodes]
+        assert np.all(np.diff(mid_x) > 0)
+
+
+def test_slab_forces_do_not_depend_on_the_thread_count(face):
+    """The slabs' forces on one thread and on two are the same to the bit (each node's
+    additions in the order the slabs fix), and equal the element order's within 1e-15."""
+    from facemech.physics.assembly import (
+        Physics,
+        element_forces_one_thread,
+        force_bundles,
+        slab_forces,
+    )
+
+    ph = Physics.build(face, preset("anatomical"))
+    b = force_bundles(ph)
+    sl = b.slabs
+    assert len(sl.spring_ptr) > 2
+    rng = np.random.default_rng(21)
+    pos = ph.model.rest_positions + rng.normal(0, 2e-4, ph.model.rest_positions.shape)
+    vel = rng.normal(0, 1e-2, pos.shape)
+    got = []
+    try:
+        for n in (1, 2):
+            set_threads(n)
+            out = np.zeros_like(pos)
+            assert slab_forces(sl.springs, sl.prisms, sl.spring_ptr, sl.prism_ptr, pos, vel, out)
+            got.append(out)
+    finally:
+        set_threads(1)
+    assert np.array_equal(got[0], got[1])
+    ref = np.zeros_like(pos)
+    assert element_forces_one_thread(b.springs, b.prisms, pos, vel, ref)
+    np.testing.assert_allclose(got[0], ref, rtol=0, atol=1e-15 * np.abs(ref).max() * 10)
+
+
+def test_default_threads_are_the_idle_cores_or_the_environments():
+    from facemech.physics.threads import available_cores, default_threads
+
+    cores = available_cores()
+    assert default_threads({}, load=0.0) == cores
+    assert default_threads({}, load=cores + 3.0) == 1
+    assert default_threads({}, load=cores - 0.6) == 1
+    assert default_threads({"FACEMECH_THREADS": "1"}, load=0.0) == 1
+    for bad in ("0", "two", "-1", "1.5", "100000"):
+        with pytest.raises(InputError) as e:
+            default_threads({"FACEMECH_THREADS": bad})
+        assert e.value.field == "FACEMECH_THREADS"
+
+
+def test_a_wrong_facemech_threads_is_one_line_and_status_2(monkeypatch, capsys):
+    from conftest import run_cli
+
+    monkeypatch.setenv("FACEMECH_THREADS", "lots")
+    try:
+        code, out, err = run_cli(monkeypatch, capsys, "face", "info")
+    finally:
+        set_threads(1)
+    assert code == 2 and out == ""
+    assert err.count("\n") == 1 and "FACEMECH_THREADS" in err and "'lots'" in err

@@ -77,8 +77,7 @@ def _root(ctx: typer.Context, version: bool = typer.Option(
         False, "--version", help="print the version", callback=_version, is_eager=True),
           threads: int | None = typer.Option(None, help=opts.HELP["threads"])) -> None:
     """Physics and kinematics of the speaking face."""
-    if threads is not None:
-        importlib.import_module("facemech.physics.threads").set_threads(threads)
+    importlib.import_module("facemech.physics.threads").set_threads(threads)  # None: default
     if not err.is_terminal:  # log lines, and a heartbeat for the whole command
         _log[:] = [ctx.with_resource(progress.LogProgress(ctx.invoked_subcommand or "facemech"))]
         ctx.call_on_close(_log.clear)

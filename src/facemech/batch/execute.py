@@ -7,6 +7,7 @@ input or any exception): the :class:`Outcome` says ``failed`` with the error's o
 
 from __future__ import annotations
 
+import importlib
 import shutil
 import time
 import traceback
@@ -107,6 +108,8 @@ def run_item(item: Item, out_dir: str | Path) -> Outcome:
     start, cpu = time.perf_counter(), time.thread_time()
     partial = None
     try:
+        # one core per item: the workers are the parallelism (docs/batch.md)
+        importlib.import_module("facemech.physics.threads").set_threads(1)
         partial = new_partial(out_dir, item.id)
         numbers, lines = JOBS[item.job].run(dict(item.options), partial)
         lines = [str(line).replace(str(partial), str(final)) for line in lines]

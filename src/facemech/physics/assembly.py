@@ -36,6 +36,7 @@ from .kinds import (
 )
 from .materials import continuum_constants
 from .muscle import hill_force
+from .slabs import slab_bundles
 from .springs import scaled_stiffness, tension_at
 from .threads import kernel_threads
 from .volume import (
@@ -478,38 +479,32 @@ def element_forces(springs, prisms, pos, vel, s0, s1, e0, e1, out):
     return ok
 
 
-@nb.njit(cache=True, parallel=True, error_model="numpy")
-def element_forces_parallel(springs, prisms, pos, vel, n_threads, out):
-    """:func:`element_forces` of all springs and prisms on ``n_threads`` threads, added to
-    ``out`` (nodes, 3) N.
+@nb.njit(cache=True, error_model="numpy")
+def element_forces_one_thread(springs, prisms, pos, vel, out):
+    """:func:`element_forces` of all springs and prisms, in their order, added to ``out``
+    (nodes, 3) N; False as :func:`element_forces` (for tests and benchmarks)."""
+    return element_forces(springs, prisms, pos, vel, 0, springs.i.shape[0], 0,
+                          prisms.nodes.shape[0], out)
 
-    Thread t takes the t-th of ``n_threads`` equal runs of the springs and of the prisms and
-    adds their forces into an array of its own (the first thread into ``out``); the arrays are
-    then added into ``out`` in thread order. The sums differ from one thread's only in the
-    order of their additions (to rounding), and do not depend on the threads' timing.
+
+@nb.njit(cache=True, parallel=True, error_model="numpy")
+def slab_forces(springs, prisms, spring_ptr, prism_ptr, pos, vel, out):
+    """:func:`element_forces` of all springs and prisms, slab by slab on numba's threads, added
+    to ``out`` (nodes, 3) N: first the even slabs, each thread adding into ``out`` directly
+    (they share no node), then the odd ones (:mod:`facemech.physics.slabs`). The arguments
+    are a :class:`~facemech.physics.bundles.SlabBundle`'s fields.
+
     Returns False as :func:`element_forces` does (``prange`` cannot raise: the caller does).
     """
-    n_springs = springs.i.shape[0]
-    n_prisms = prisms.nodes.shape[0]
-    n_nodes = out.shape[0]
-    extra = np.empty((n_threads - 1, n_nodes, 3))
-    ok = np.ones(n_threads, np.bool_)
-    for t in nb.prange(n_threads):
-        s0 = n_springs * t // n_threads
-        s1 = n_springs * (t + 1) // n_threads
-        e0 = n_prisms * t // n_threads
-        e1 = n_prisms * (t + 1) // n_threads
-        if t == 0:
-            ok[t] = element_forces(springs, prisms, pos, vel, s0, s1, e0, e1, out)
-        else:
-            mine = extra[t - 1]
-            mine[:] = 0.0
-            ok[t] = element_forces(springs, prisms, pos, vel, s0, s1, e0, e1, mine)
-    for t in nb.prange(n_threads):
-        i0 = n_nodes * t // n_threads
-        i1 = n_nodes * (t + 1) // n_threads
-        for k in range(n_threads - 1):
-            out[i0:i1] += extra[k, i0:i1]
+    sp = spring_ptr
+    pp = prism_ptr
+    pairs = (sp.shape[0] - 1) // 2
+    ok = np.ones(2 * pairs, np.bool_)
+    for parity in range(2):
+        for q in nb.prange(pairs):
+            k = 2 * q + parity
+            ok[k] = element_forces(springs, prisms, pos, vel, sp[k], sp[k + 1], pp[k],
+                                   pp[k + 1], out)
     return ok.all()
 
 
@@ -556,10 +551,10 @@ def accumulate_forces(forces, pos, vel, muscle_force, anchors, out):
     out[:] = 0.0
     # springs, eqs. (1)-(2), their dashpots, and the prisms, eq. (9) or the continuum's
     # pressure: on the threads numba has (facemech.physics.threads) when the mesh is large
-    n_threads = kernel_threads()
-    n_elements = forces.springs.i.shape[0] + forces.prisms.nodes.shape[0]
-    if n_threads > 1 and n_elements >= PARALLEL_MIN_ELEMENTS:
-        ok = element_forces_parallel(forces.springs, forces.prisms, pos, vel, n_threads, out)
+    if kernel_threads() > 1 and forces.slabs.spring_ptr.shape[0] > 1:
+        slabs = forces.slabs
+        ok = slab_forces(slabs.springs, slabs.prisms, slabs.spring_ptr, slabs.prism_ptr, pos,
+                         vel, out)
     else:
         ok = element_forces(forces.springs, forces.prisms, pos, vel, 0,
                             forces.springs.i.shape[0], 0, forces.prisms.nodes.shape[0], out)
@@ -654,7 +649,7 @@ def force_bundles(ph: Physics) -> ForceBundles:
     ForceBundles
     """
     p = ph.params
-    return ForceBundles(
+    bundles = ForceBundles(
         springs=SpringBundle.make(
             i=ph.spring_i, j=ph.spring_j, rest_length=ph.spring_rest, k_low=ph.spring_k_low,
             k_high=ph.spring_k_high, biphasic=ph.spring_biphasic, damping=ph.spring_damping,
@@ -669,6 +664,11 @@ def force_bundles(ph: Physics) -> ForceBundles:
         contact=ContactBundle(pairs=ph.model.lip_pairs, normals=ph.model.lip_normals,
                               k=ph.contact_k),
     )
+    if len(ph.spring_i) + len(ph.prism_nodes) < PARALLEL_MIN_ELEMENTS:
+        return bundles
+    return bundles._replace(slabs=slab_bundles(bundles.springs, bundles.prisms,
+                                               ph.model.rest_positions,
+                                               nb.config.NUMBA_NUM_THREADS))
 
 
 def muscle_bundle(ph: Physics) -> MuscleBundle:

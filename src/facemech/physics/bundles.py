@@ -180,14 +180,41 @@ class ContactBundle(NamedTuple):
         return cls(np.zeros((0, 2), np.int64), np.zeros((0, 3)), np.zeros(0))
 
 
+class SlabBundle(NamedTuple):
+    """The springs and prisms again, sorted into slabs across the face for the threads
+    (:func:`facemech.physics.slabs.slab_bundles`): slabs of one parity share no node.
+
+    Attributes
+    ----------
+    springs : SpringBundle -- slab by slab; slab ``k`` is ``spring_ptr[k]:spring_ptr[k + 1]``
+    prisms : PrismBundle -- slab by slab, likewise with ``prism_ptr``
+    spring_ptr, prism_ptr : (slabs + 1,) int64 -- an even count of slabs; none: one thread
+    """
+
+    springs: SpringBundle
+    prisms: PrismBundle
+    spring_ptr: np.ndarray
+    prism_ptr: np.ndarray
+
+    @classmethod
+    def empty(cls) -> SlabBundle:
+        """No slabs: the forces are assembled on one thread."""
+        springs = SpringBundle.make(np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0),
+                                    np.zeros(0), np.zeros(0), np.zeros(0, bool), np.zeros(0),
+                                    0.0, 0.0)
+        return cls(springs, PrismBundle.empty(), np.zeros(1, np.int64), np.zeros(1, np.int64))
+
+
 class ForceBundles(NamedTuple):
-    """Every constant argument of :func:`~facemech.physics.assembly.accumulate_forces`."""
+    """Every constant argument of :func:`~facemech.physics.assembly.accumulate_forces`;
+    ``slabs`` (none by default) lets it use several threads."""
 
     springs: SpringBundle
     prisms: PrismBundle
     muscles: MuscleBundle
     restoration: RestorationBundle
     contact: ContactBundle
+    slabs: SlabBundle = SlabBundle.empty()
 
 
 class Anchors(NamedTuple):

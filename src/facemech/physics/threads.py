@@ -1,12 +1,15 @@
 """How many threads the force kernels use.
 
 :func:`~facemech.physics.assembly.accumulate_forces` spreads the springs and prisms of a large
-mesh over numba's threads (``prange``, one array of forces per thread, added in thread order),
-so a step's forces depend on the thread count only in the order of their additions (to
-rounding, about 1e-16 relative). :func:`set_threads` sets that count for the calling thread;
-a process starts on one (numba's default would be every core); ``set_threads()``
-with no argument takes the cores this process may run on. The compiled kernels read it at every call
-(:func:`kernel_threads`), so it may change between steps.
+mesh over numba's threads in slabs across the face (:mod:`facemech.physics.slabs`): on two or
+more threads the forces are the same to the bit whatever the count, and differ from one
+thread's only by the order of their additions (about 1e-16 relative). :func:`set_threads` sets
+the count for the calling thread; the kernels read it at every call (:func:`kernel_threads`),
+so it may change between steps.
+
+A process starts on :func:`default_threads`: the cores it may run on that are idle, at least
+one (``FACEMECH_THREADS`` in the environment sets it instead). On a machine busy with other
+work, threads that wait for each other at every step cost far more than they save.
 """
 
 from __future__ import annotations
@@ -31,14 +34,47 @@ def available_cores() -> int:
     return max(1, min(cores, nb.config.NUMBA_NUM_THREADS))
 
 
+def default_threads(environ=None, load=None) -> int:
+    """The thread count a process starts on: ``FACEMECH_THREADS`` where set, else the cores
+    available (:func:`available_cores`) less those busy with other work (the 1-minute load
+    average, rounded), at least 1.
+
+    Parameters
+    ----------
+    environ : mapping, optional -- the environment (default ``os.environ``)
+    load : float, optional -- the load average (default ``os.getloadavg()[0]``)
+
+    Raises
+    ------
+    InputError
+        ``FACEMECH_THREADS`` is not a whole number from 1 to ``NUMBA_NUM_THREADS``
+        (``field="FACEMECH_THREADS"``).
+    """
+    environ = os.environ if environ is None else environ
+    limit = nb.config.NUMBA_NUM_THREADS
+    text = environ.get("FACEMECH_THREADS", "").strip()
+    if text:
+        if not text.isdigit() or not 1 <= int(text) <= limit:
+            raise InputError(f"FACEMECH_THREADS must be a whole number from 1 to {limit} "
+                             f"(got {text!r})", field="FACEMECH_THREADS")
+        return int(text)
+    cores = available_cores()
+    if load is None:
+        try:
+            load = os.getloadavg()[0]
+        except OSError:  # no load average here
+            load = 0.0
+    return max(1, min(cores, cores - int(round(load))))
+
+
 def set_threads(n: int | None = None) -> int:
     """Set the threads the force kernels use (``numba.set_num_threads``).
 
     Parameters
     ----------
     n : int, optional
-        1 to ``NUMBA_NUM_THREADS`` (numba's pool, fixed when numba starts); default: the cores
-        available (:func:`available_cores`).
+        1 to ``NUMBA_NUM_THREADS`` (numba's pool, fixed when numba starts); default:
+        :func:`default_threads` (the idle cores, or ``FACEMECH_THREADS``).
 
     Returns
     -------
@@ -51,7 +87,7 @@ def set_threads(n: int | None = None) -> int:
     """
     limit = nb.config.NUMBA_NUM_THREADS
     if n is None:
-        n = available_cores()
+        n = default_threads()
     if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= limit:
         raise InputError(f"threads must be a whole number from 1 to {limit} (got {n!r}); "
                          "NUMBA_NUM_THREADS sets the largest", field="threads")
@@ -86,10 +122,12 @@ def kernel_threads():
 
 
 # start numba's threads now: that registers the symbol the kernels read (a kernel loaded from
-# numba's cache is not compiled, so nothing else would). facemech starts on one thread: on a
-# machine busy with other work, threads that wait for each other cost far more than they save
-# (benchmarks/forward.py --threads; docs/performance.md)
+# numba's cache is not compiled, so nothing else would); then the idle cores
 nb.get_num_threads()
-nb.set_num_threads(1)
+try:
+    nb.set_num_threads(default_threads())
+except InputError:  # a wrong FACEMECH_THREADS: one thread, and the error where it is asked
+    nb.set_num_threads(1)
 
-__all__ = ["set_threads", "get_threads", "available_cores", "kernel_threads"]
+__all__ = ["set_threads", "get_threads", "available_cores", "default_threads",
+           "kernel_threads"]

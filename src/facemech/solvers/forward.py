@@ -18,6 +18,7 @@ from ..geometry.builder import FaceModel
 from ..params import MUSCLE_GROUPS, Parameters, default_parameters
 from ..physics.assembly import Physics
 from ..physics.muscle_outputs import MuscleRecorder, MuscleSeries
+from ..physics.threads import get_threads
 from .state import State
 from .step import Stepper
 
@@ -326,6 +327,7 @@ def _setup(model, activity, jaw_angle, *, params, integrator, substeps, dt, jaw_
     state = initial_state or State.at_rest(model.rest_positions, physics.n_muscles,
                                            float(poses[0, 0]), jaw_shift=poses[0, 1:])
     attrs = {"steps_per_frame": stepper.n_steps, "jaw_drive": jaw_drive,
+             "force_threads": get_threads(),
              "jaw_kinematics": (params.jaw_kinematics if jaw_angle.ndim == 1 else "pose")}
     return _Setup(model, params, physics, stepper, activity, poses, state, names, nodes, attrs)
 

@@ -1,0 +1,95 @@
+"""Slabs of the mesh for thread-parallel force assembly without locks or per-thread copies.
+
+The springs and prisms are sorted into ``2 P`` slabs across the face (by the x of their rest
+centroid, left to right, with equal work in each) for a pool of ``P`` threads. Slabs of one
+parity (0, 2, 4, ... or 1, 3, 5, ...) share no node, which is checked: the threads take the
+even slabs together, each adding its forces straight into the one array of forces, then the
+odd slabs. Each node's forces are then added in an order fixed by the mesh (its even slab's
+elements, then its odd slab's, each in the slab's order), whatever the thread count: the
+forces on 2, 3 or more threads are the same to the bit, and differ from one thread's (the
+elements in their own order) only by the rounding of the additions' order (about 1e-16
+relative). Each thread works on a band of the face, whose nodes stay in its core's cache.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .bundles import PrismBundle, SlabBundle, SpringBundle
+
+#: relative cost of a prism and a spring in the force kernel (measured in
+#: benchmarks/forward.py: the seeds' eq. (9) prism costs more than the continuum's pressure)
+PRISM_COST = {"seeds": 6.0, "continuum": 3.0}
+
+
+def _element_slabs(centre_x: np.ndarray, cost: np.ndarray, n_slabs: int) -> np.ndarray:
+    """Slab (0 to n_slabs - 1) of each element: cuts at equal shares of the summed cost, in
+    the order of the centroids' x."""
+    order = np.argsort(centre_x, kind="stable")
+    share = np.cumsum(cost[order]) / cost.sum()
+    slab = np.empty(len(centre_x), np.int64)
+    slab[order] = np.minimum((share * n_slabs - 1e-9).astype(np.int64), n_slabs - 1)
+    return slab
+
+
+def _disjoint_by_parity(slab_nodes: list[np.ndarray]) -> bool:
+    """Whether slabs of one parity share no node."""
+    for parity in (0, 1):
+        seen = np.concatenate([np.unique(n) for n in slab_nodes[parity::2]])
+        if len(np.unique(seen)) != len(seen):
+            return False
+    return True
+
+
+def slab_bundles(springs: SpringBundle, prisms: PrismBundle, rest: np.ndarray,
+                 threads: int) -> SlabBundle:
+    """The springs and prisms sorted into ``2 threads`` slabs (fewer where elements are too
+    wide for that many), or :meth:`SlabBundle.empty` where even two threads' slabs would
+    share nodes.
+
+    Parameters
+    ----------
+    springs, prisms : the mesh's, as :func:`~facemech.physics.assembly.force_bundles` makes them
+    rest : (nodes, 3) m -- rest positions
+    threads : int -- the most threads the slabs are for
+
+    Returns
+    -------
+    SlabBundle -- the elements regrouped slab by slab (within a slab by their lowest node), with
+        ``spring_ptr`` and ``prism_ptr`` (slabs + 1,) the start of each slab
+    """
+    n_s, n_p = len(springs.i), len(prisms.nodes)
+    if threads < 2 or n_s + n_p == 0:
+        return SlabBundle.empty()
+    centre = np.concatenate([(rest[springs.i, 0] + rest[springs.j, 0]) / 2,
+                             rest[prisms.nodes, 0].mean(axis=1)])
+    kind = "seeds" if prisms.k_volume != 0.0 or prisms.k_shape != 0.0 else "continuum"
+    cost = np.concatenate([np.ones(n_s), np.full(n_p, PRISM_COST[kind])])
+    for t in range(threads, 1, -1):
+        n_slabs = 2 * t
+        slab = _element_slabs(centre, cost, n_slabs)
+        s_slab, p_slab = slab[:n_s], slab[n_s:]
+        slab_nodes = [np.concatenate([springs.i[s_slab == k], springs.j[s_slab == k],
+                                      prisms.nodes[p_slab == k].ravel()])
+                      for k in range(n_slabs)]
+        if _disjoint_by_parity(slab_nodes):
+            return _regroup(springs, prisms, s_slab, p_slab, n_slabs)
+    return SlabBundle.empty()
+
+
+def _regroup(springs: SpringBundle, prisms: PrismBundle, s_slab: np.ndarray,
+             p_slab: np.ndarray, n_slabs: int) -> SlabBundle:
+    # slab by slab, and in a slab by the lower node (the nodes read in memory order)
+    s_order = np.lexsort((np.minimum(springs.i, springs.j), s_slab))
+    p_order = np.lexsort((prisms.nodes.min(axis=1), p_slab))
+    s_ptr = np.searchsorted(s_slab[s_order], np.arange(n_slabs + 1)).astype(np.int64)
+    p_ptr = np.searchsorted(p_slab[p_order], np.arange(n_slabs + 1)).astype(np.int64)
+    sp = springs._replace(**{f: getattr(springs, f)[s_order]
+                             for f in ("i", "j", "rest_length", "k_low", "k_high", "biphasic",
+                                       "damping", "knee_length")})
+    pr = prisms._replace(nodes=prisms.nodes[p_order], rest_volume=prisms.rest_volume[p_order],
+                         rest_rel=prisms.rest_rel[p_order], bulk=prisms.bulk[p_order])
+    return SlabBundle(springs=sp, prisms=pr, spring_ptr=s_ptr, prism_ptr=p_ptr)
+
+
+__all__ = ["slab_bundles", "PRISM_COST"]
