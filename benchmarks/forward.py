@@ -9,10 +9,12 @@ sparse solve.
 First, the explicit step's cost against a bare kernel: one explicit Euler step of the default
 (anatomical) face's full forces (``euler_frame``: springs, prisms, muscles, tethers, contact)
 and a bare numba spring-and-dashpot Euler step over the same nodes and springs, timed
-interleaved in this process (best of the repeats), with their ratio; with ``--threads 1,2`` the
-full step on each thread count, interleaved, and the speed-ups against the first.
+interleaved in this process (best of the repeats, frames of 50 steps), with their ratio and
+where one thread's step goes (springs, prisms, the rest); with ``--threads 1,2`` the full step
+on each thread count, interleaved, and the speed-ups against the first; ``--preset lucero1999``
+the same for the seeds' tissue.
 
-Usage: python benchmarks/forward.py [--quick] [--threads 1,2] [--step-only]
+Usage: python benchmarks/forward.py [--quick] [--threads 1,2] [--step-only] [--preset P]
 """
 
 from __future__ import annotations
@@ -27,7 +29,8 @@ import numpy as np
 
 from facemech import Physics, Stepper, default_face, preset, simulate
 from facemech.demo import utterance
-from facemech.physics.assembly import accumulate_forces, rest_anchors
+from facemech.physics.assembly import accumulate_forces, element_forces_one_thread, rest_anchors
+from facemech.physics.bundles import PrismBundle, SlabBundle
 from facemech.physics.threads import set_threads
 from facemech.solvers.explicit import EulerSteps, euler_frame
 from facemech.solvers.solver_state import solver_state
@@ -64,10 +67,12 @@ def bare_euler(spring_i, spring_j, rest, k, damping, inv_mass, dynamic, pos, vel
                 pos[i, a] += dt * vel[i, a]
 
 
-def step_benchmark(threads, repeat=7, n_steps=10) -> dict:
+def step_benchmark(threads, repeat=15, n_steps=50, preset_name="anatomical") -> dict:
     """Microseconds per explicit step of the default face's full forces on each thread count
-    and of :func:`bare_euler` (one thread), interleaved; best of ``repeat``."""
-    ph = Physics.build(default_face(), preset("anatomical"))
+    and of :func:`bare_euler` (one thread), interleaved; best of ``repeat`` frames of
+    ``n_steps`` steps (the paper's frame: 50). With where one thread's step goes: the springs,
+    the prisms, and the rest (muscles, tethers, contact, the Euler-Cromer update)."""
+    ph = Physics.build(default_face(), preset(preset_name))
     ss = solver_state(ph, 1)
     f = ss.forces
     s = f.springs
@@ -77,6 +82,9 @@ def step_benchmark(threads, repeat=7, n_steps=10) -> dict:
     m = np.full(ph.n_muscles, 0.5)
     dt = 1e-6  # a short step: the perturbed face stays put, the work per step is the same
     steps = EulerSteps(n_steps, dt, ss.tau, ss.dynamic, ss.inv_mass)
+    out = np.zeros_like(pos)
+    no_prisms = PrismBundle.empty()
+    no_springs = SlabBundle.empty().springs
 
     def full():
         euler_frame(f, ss.jaw, steps, pos, np.zeros_like(pos), m, np.zeros_like(m), m, anchors,
@@ -86,26 +94,38 @@ def step_benchmark(threads, repeat=7, n_steps=10) -> dict:
         bare_euler(s.i, s.j, s.rest_length, s.k_low, s.damping, ss.inv_mass, ss.dynamic,
                    pos.copy(), np.zeros_like(pos), dt, n_steps)
 
+    def springs():
+        for _ in range(n_steps):
+            out[:] = 0.0
+            element_forces_one_thread(s, no_prisms, pos, pos, out)
+
+    def prisms():
+        for _ in range(n_steps):
+            out[:] = 0.0
+            element_forces_one_thread(no_springs, f.prisms, pos, pos, out)
+
+    runs = {**{n: full for n in threads}, "bare": bare, "springs": springs, "prisms": prisms}
     best = {}
     for _ in range(repeat + 1):  # the first round compiles and warms the caches
-        for n in threads:
-            set_threads(n)
+        for key, run in runs.items():
+            set_threads(key if isinstance(key, int) else 1)
             t0 = time.perf_counter()
-            full()
-            best[n] = min(best.get(n, np.inf), time.perf_counter() - t0)
-        set_threads(1)
-        t0 = time.perf_counter()
-        bare()
-        best["bare"] = min(best.get("bare", np.inf), time.perf_counter() - t0)
+            run()
+            best[key] = min(best.get(key, np.inf), time.perf_counter() - t0)
+    set_threads(1)
     us = {k: v / n_steps * 1e6 for k, v in best.items()}
-    report = {"nodes": len(pos), "springs": len(s.i), "prisms": len(f.prisms.nodes),
+    full_1 = us[threads[0]]
+    report = {"preset": preset_name, "nodes": len(pos), "springs": len(s.i),
+              "prisms": len(f.prisms.nodes), "steps_per_frame": n_steps,
               "bare_us_per_step": us["bare"],
               "full_us_per_step": {str(n): us[n] for n in threads},
-              "full_over_bare": us[threads[0]] / us["bare"], "threads_of_ratio": threads[0],
+              "full_over_bare": full_1 / us["bare"], "threads_of_ratio": threads[0],
+              "parts_us_per_step": {"springs": us["springs"], "prisms": us["prisms"],
+                                    "rest": full_1 - us["springs"] - us["prisms"]},
               "load_average_1min": os.getloadavg()[0]}
     if len(threads) > 1:
         report["speedup_over_threads_" + str(threads[0])] = {
-            str(n): us[threads[0]] / us[n] for n in threads[1:]}
+            str(n): full_1 / us[n] for n in threads[1:]}
     return report
 
 
@@ -124,9 +144,11 @@ def main() -> None:
     ap.add_argument("--quick", action="store_true", help="first 60 frames only, one repeat")
     ap.add_argument("--threads", default="1", help="thread counts of the step, e.g. 1,2")
     ap.add_argument("--step-only", action="store_true", help="the step's benchmark alone")
+    ap.add_argument("--preset", default="anatomical", help="the step's preset (default the "
+                    "default, anatomical; lucero1999: the seeds')")
     args = ap.parse_args()
     threads = [int(n) for n in args.threads.split(",")]
-    step = step_benchmark(threads)
+    step = step_benchmark(threads, preset_name=args.preset)
     set_threads(1)
     if args.step_only:
         print(json.dumps({"benchmark": "forward-step", "step": step}, indent=2))

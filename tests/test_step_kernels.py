@@ -269,7 +269,8 @@ def test_slab_forces_do_not_depend_on_the_thread_count(face):
         for n in (1, 2):
             set_threads(n)
             out = np.zeros_like(pos)
-            assert slab_forces(sl.springs, sl.prisms, sl.spring_ptr, sl.prism_ptr, pos, vel, out)
+            assert slab_forces(sl.springs, sl.prisms, sl.spring_ptr, sl.prism_ptr, sl.nodes,
+                               sl.node_ptr, pos, vel, out)
             got.append(out)
     finally:
         set_threads(1)

@@ -487,12 +487,20 @@ def element_forces_one_thread(springs, prisms, pos, vel, out):
                           prisms.nodes.shape[0], out)
 
 
+@nb.njit(cache=True, error_model="numpy")
+def element_range(springs, prisms, pos, vel, s0, s1, e0, e1, out):
+    """:func:`element_forces` compiled on its own, for the threads of :func:`slab_forces` (a
+    call, not inlined into the parallel loop's body, where it compiles 10 % slower)."""
+    return element_forces(springs, prisms, pos, vel, s0, s1, e0, e1, out)
+
+
 @nb.njit(cache=True, parallel=True, error_model="numpy")
-def slab_forces(springs, prisms, spring_ptr, prism_ptr, pos, vel, out):
+def slab_forces(springs, prisms, spring_ptr, prism_ptr, nodes, node_ptr, pos, vel, out):
     """:func:`element_forces` of all springs and prisms, slab by slab on numba's threads, added
-    to ``out`` (nodes, 3) N: first the even slabs, each thread adding into ``out`` directly
-    (they share no node), then the odd ones (:mod:`facemech.physics.slabs`). The arguments
-    are a :class:`~facemech.physics.bundles.SlabBundle`'s fields.
+    into ``out`` (nodes, 3) N: each thread zeroes its band's forces, then the threads take
+    the even slabs, each adding into ``out`` directly (they share no node), then the odd ones
+    (:mod:`facemech.physics.slabs`). The arguments are a
+    :class:`~facemech.physics.bundles.SlabBundle`'s fields.
 
     Returns False as :func:`element_forces` does (``prange`` cannot raise: the caller does).
     """
@@ -500,11 +508,17 @@ def slab_forces(springs, prisms, spring_ptr, prism_ptr, pos, vel, out):
     pp = prism_ptr
     pairs = (sp.shape[0] - 1) // 2
     ok = np.ones(2 * pairs, np.bool_)
+    for q in nb.prange(pairs):
+        for k in range(node_ptr[q], node_ptr[q + 1]):
+            u = nodes[k]
+            out[u, 0] = 0.0
+            out[u, 1] = 0.0
+            out[u, 2] = 0.0
     for parity in range(2):
         for q in nb.prange(pairs):
             k = 2 * q + parity
-            ok[k] = element_forces(springs, prisms, pos, vel, sp[k], sp[k + 1], pp[k],
-                                   pp[k + 1], out)
+            ok[k] = element_range(springs, prisms, pos, vel, sp[k], sp[k + 1], pp[k],
+                                  pp[k + 1], out)
     return ok.all()
 
 
@@ -548,14 +562,14 @@ def accumulate_forces(forces, pos, vel, muscle_force, anchors, out):
     lip_pairs = forces.contact.pairs
     lip_normals = forces.contact.normals
     k_contact = forces.contact.k
-    out[:] = 0.0
     # springs, eqs. (1)-(2), their dashpots, and the prisms, eq. (9) or the continuum's
     # pressure: on the threads numba has (facemech.physics.threads) when the mesh is large
     if kernel_threads() > 1 and forces.slabs.spring_ptr.shape[0] > 1:
         slabs = forces.slabs
-        ok = slab_forces(slabs.springs, slabs.prisms, slabs.spring_ptr, slabs.prism_ptr, pos,
-                         vel, out)
+        ok = slab_forces(slabs.springs, slabs.prisms, slabs.spring_ptr, slabs.prism_ptr,
+                         slabs.nodes, slabs.node_ptr, pos, vel, out)
     else:
+        out[:] = 0.0
         ok = element_forces(forces.springs, forces.prisms, pos, vel, 0,
                             forces.springs.i.shape[0], 0, forces.prisms.nodes.shape[0], out)
     if not ok:
@@ -668,7 +682,7 @@ def force_bundles(ph: Physics) -> ForceBundles:
         return bundles
     return bundles._replace(slabs=slab_bundles(bundles.springs, bundles.prisms,
                                                ph.model.rest_positions,
-                                               nb.config.NUMBA_NUM_THREADS))
+                                               nb.config.NUMBA_NUM_THREADS, ph.dynamic))
 
 
 def muscle_bundle(ph: Physics) -> MuscleBundle:

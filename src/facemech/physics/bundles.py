@@ -189,12 +189,22 @@ class SlabBundle(NamedTuple):
     springs : SpringBundle -- slab by slab; slab ``k`` is ``spring_ptr[k]:spring_ptr[k + 1]``
     prisms : PrismBundle -- slab by slab, likewise with ``prism_ptr``
     spring_ptr, prism_ptr : (slabs + 1,) int64 -- an even count of slabs; none: one thread
+    nodes : (n,) int64 -- every node, in bands across the face (band ``q``, where slabs ``2q``
+        and ``2q + 1`` lie, is ``nodes[node_ptr[q]:node_ptr[q + 1]]``): a thread zeroes the
+        forces of its band, and the explicit step moves its band's nodes, in its core's cache
+    node_ptr : (slabs / 2 + 1,) int64
+    dynamic : (d,) int64 -- the nodes that move under forces, in the same bands
+    dynamic_ptr : (slabs / 2 + 1,) int64
     """
 
     springs: SpringBundle
     prisms: PrismBundle
     spring_ptr: np.ndarray
     prism_ptr: np.ndarray
+    nodes: np.ndarray
+    node_ptr: np.ndarray
+    dynamic: np.ndarray
+    dynamic_ptr: np.ndarray
 
     @classmethod
     def empty(cls) -> SlabBundle:
@@ -202,7 +212,9 @@ class SlabBundle(NamedTuple):
         springs = SpringBundle.make(np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0),
                                     np.zeros(0), np.zeros(0), np.zeros(0, bool), np.zeros(0),
                                     0.0, 0.0)
-        return cls(springs, PrismBundle.empty(), np.zeros(1, np.int64), np.zeros(1, np.int64))
+        none = np.zeros(0, np.int64)
+        one = np.zeros(1, np.int64)
+        return cls(springs, PrismBundle.empty(), one, one, none, one, none, one)
 
 
 class ForceBundles(NamedTuple):

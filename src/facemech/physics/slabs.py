@@ -42,7 +42,7 @@ def _disjoint_by_parity(slab_nodes: list[np.ndarray]) -> bool:
 
 
 def slab_bundles(springs: SpringBundle, prisms: PrismBundle, rest: np.ndarray,
-                 threads: int) -> SlabBundle:
+                 threads: int, dynamic: np.ndarray | None = None) -> SlabBundle:
     """The springs and prisms sorted into ``2 threads`` slabs (fewer where elements are too
     wide for that many), or :meth:`SlabBundle.empty` where even two threads' slabs would
     share nodes.
@@ -52,11 +52,13 @@ def slab_bundles(springs: SpringBundle, prisms: PrismBundle, rest: np.ndarray,
     springs, prisms : the mesh's, as :func:`~facemech.physics.assembly.force_bundles` makes them
     rest : (nodes, 3) m -- rest positions
     threads : int -- the most threads the slabs are for
+    dynamic : (d,) int, optional -- the nodes that move under forces (default: all)
 
     Returns
     -------
-    SlabBundle -- the elements regrouped slab by slab (within a slab by their lowest node), with
-        ``spring_ptr`` and ``prism_ptr`` (slabs + 1,) the start of each slab
+    SlabBundle -- the elements regrouped slab by slab (springs by their lower node), with
+        ``spring_ptr`` and ``prism_ptr`` (slabs + 1,) the start of each slab, and the nodes in
+        bands, one for each pair of slabs (cut at the x of the odd slabs' ends)
     """
     n_s, n_p = len(springs.i), len(prisms.nodes)
     if threads < 2 or n_s + n_p == 0:
@@ -73,15 +75,33 @@ def slab_bundles(springs: SpringBundle, prisms: PrismBundle, rest: np.ndarray,
                                       prisms.nodes[p_slab == k].ravel()])
                       for k in range(n_slabs)]
         if _disjoint_by_parity(slab_nodes):
-            return _regroup(springs, prisms, s_slab, p_slab, n_slabs)
+            cuts = [rest[n, 0].max() for n in slab_nodes[1:-1:2]]  # the odd slabs' right ends
+            return _regroup(springs, prisms, s_slab, p_slab, n_slabs)._replace(
+                **_bands(rest[:, 0], cuts, dynamic))
     return SlabBundle.empty()
+
+
+def _bands(x: np.ndarray, cuts: list[float], dynamic: np.ndarray | None) -> dict:
+    """Every node and the dynamic ones in bands between ``cuts`` (m, ascending), each band in
+    the nodes' order."""
+    band = np.searchsorted(np.asarray(cuts), x, side="left")
+    n_bands = len(cuts) + 1
+    nodes = np.argsort(band, kind="stable").astype(np.int64)
+    dynamic = nodes if dynamic is None else np.asarray(dynamic, np.int64)
+    dynamic = dynamic[np.argsort(band[dynamic], kind="stable")]
+    return {"nodes": nodes,
+            "node_ptr": np.searchsorted(band[nodes], np.arange(n_bands + 1)).astype(np.int64),
+            "dynamic": dynamic,
+            "dynamic_ptr": np.searchsorted(band[dynamic],
+                                           np.arange(n_bands + 1)).astype(np.int64)}
 
 
 def _regroup(springs: SpringBundle, prisms: PrismBundle, s_slab: np.ndarray,
              p_slab: np.ndarray, n_slabs: int) -> SlabBundle:
-    # slab by slab, and in a slab by the lower node (the nodes read in memory order)
+    # slab by slab; in a slab the springs by their lower node (read in memory order), the
+    # prisms in their own order (faster than by node: measured)
     s_order = np.lexsort((np.minimum(springs.i, springs.j), s_slab))
-    p_order = np.lexsort((prisms.nodes.min(axis=1), p_slab))
+    p_order = np.argsort(p_slab, kind="stable")
     s_ptr = np.searchsorted(s_slab[s_order], np.arange(n_slabs + 1)).astype(np.int64)
     p_ptr = np.searchsorted(p_slab[p_order], np.arange(n_slabs + 1)).astype(np.int64)
     sp = springs._replace(**{f: getattr(springs, f)[s_order]
@@ -89,7 +109,9 @@ def _regroup(springs: SpringBundle, prisms: PrismBundle, s_slab: np.ndarray,
                                        "damping", "knee_length")})
     pr = prisms._replace(nodes=prisms.nodes[p_order], rest_volume=prisms.rest_volume[p_order],
                          rest_rel=prisms.rest_rel[p_order], bulk=prisms.bulk[p_order])
-    return SlabBundle(springs=sp, prisms=pr, spring_ptr=s_ptr, prism_ptr=p_ptr)
+    none, one = np.zeros(0, np.int64), np.zeros(1, np.int64)
+    return SlabBundle(springs=sp, prisms=pr, spring_ptr=s_ptr, prism_ptr=p_ptr, nodes=none,
+                      node_ptr=one, dynamic=none, dynamic_ptr=one)
 
 
 __all__ = ["slab_bundles", "PRISM_COST"]

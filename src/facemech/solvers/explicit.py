@@ -17,6 +17,7 @@ import numpy as np
 from ..errors import InputError, SimulationBlowUp
 from ..physics.assembly import Physics, accumulate_forces, rest_anchors
 from ..physics.muscle import activation_euler
+from ..physics.threads import kernel_threads
 from .mandible import place_jaw, set_jaw_nodes
 from .solver_state import SolverState, finish_frame, solver_state, start_frame
 from .state import Controls, State
@@ -39,6 +40,25 @@ class EulerSteps(NamedTuple):
     tau: float
     dynamic: np.ndarray
     inv_mass: np.ndarray
+
+
+@nb.njit(cache=True, inline="always")
+def euler_cromer(nodes, q0, q1, inv_mass, dt, out, pos, vel):
+    """One Euler-Cromer update of ``nodes[q0:q1]``: the velocity from the forces ``out``
+    (nodes, 3) N, then the position from the new velocity."""
+    for q in range(q0, q1):
+        i = nodes[q]
+        for a in range(3):
+            vel[i, a] += dt * inv_mass[i] * out[i, a]
+            pos[i, a] += dt * vel[i, a]
+
+
+@nb.njit(cache=True, parallel=True)
+def band_update(nodes, ptr, inv_mass, dt, out, pos, vel):
+    """:func:`euler_cromer` of the bands of ``nodes`` (band q is ``ptr[q]:ptr[q + 1]``) on
+    numba's threads: the same numbers, each node's in its band's thread."""
+    for q in nb.prange(ptr.shape[0] - 1):
+        euler_cromer(nodes, ptr[q], ptr[q + 1], inv_mass, dt, out, pos, vel)
 
 
 @nb.njit(cache=True)
@@ -71,17 +91,18 @@ def euler_frame(forces, jaw, steps, pos, vel, m_force, m_rate, m_steady, anchors
     dynamic = steps.dynamic
     inv_mass = steps.inv_mass
     moving = jaw_rate[0] != 0.0 or jaw_rate[1] != 0.0 or jaw_rate[2] != 0.0
+    slabs = forces.slabs
+    banded = kernel_threads() > 1 and slabs.dynamic_ptr.shape[0] > 2
     for step in range(steps.n_steps):
         if moving:
             jaw_pos, jaw_vel, anchors = place_jaw(jaw, jaw_start + jaw_rate * (step * dt),
                                                   jaw_rate)
             set_jaw_nodes(jaw, jaw_pos, jaw_vel, pos, vel)
         accumulate_forces(forces, pos, vel, m_force, anchors, out)
-        for q in range(dynamic.shape[0]):
-            i = dynamic[q]
-            for a in range(3):
-                vel[i, a] += dt * inv_mass[i] * out[i, a]
-                pos[i, a] += dt * vel[i, a]
+        if banded:  # each thread moves the nodes of its band of the face
+            band_update(slabs.dynamic, slabs.dynamic_ptr, inv_mass, dt, out, pos, vel)
+        else:
+            euler_cromer(dynamic, 0, dynamic.shape[0], inv_mass, dt, out, pos, vel)
         for m in range(m_force.shape[0]):
             m_force[m], m_rate[m] = activation_euler(m_force[m], m_rate[m], m_steady[m],
                                                      steps.tau, dt)
