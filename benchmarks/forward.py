@@ -15,6 +15,7 @@ on each thread count, interleaved, and the speed-ups against the first; ``--pres
 the same for the seeds' tissue.
 
 Usage: python benchmarks/forward.py [--quick] [--threads 1,2] [--step-only] [--preset P]
+       [--repeat N]
 """
 
 from __future__ import annotations
@@ -144,11 +145,12 @@ def main() -> None:
     ap.add_argument("--quick", action="store_true", help="first 60 frames only, one repeat")
     ap.add_argument("--threads", default="1", help="thread counts of the step, e.g. 1,2")
     ap.add_argument("--step-only", action="store_true", help="the step's benchmark alone")
+    ap.add_argument("--repeat", type=int, default=15, help="frames timed, best taken")
     ap.add_argument("--preset", default="anatomical", help="the step's preset (default the "
                     "default, anatomical; lucero1999: the seeds')")
     args = ap.parse_args()
     threads = [int(n) for n in args.threads.split(",")]
-    step = step_benchmark(threads, preset_name=args.preset)
+    step = step_benchmark(threads, repeat=args.repeat, preset_name=args.preset)
     set_threads(1)
     if args.step_only:
         print(json.dumps({"benchmark": "forward-step", "step": step}, indent=2))

@@ -280,14 +280,12 @@ def test_slab_forces_do_not_depend_on_the_thread_count(face):
     np.testing.assert_allclose(got[0], ref, rtol=0, atol=1e-15 * np.abs(ref).max() * 10)
 
 
-def test_default_threads_are_the_idle_cores_or_the_environments():
+def test_default_threads_are_the_cores_available_or_the_environments():
     from facemech.physics.threads import available_cores, default_threads
 
-    cores = available_cores()
-    assert default_threads({}, load=0.0) == cores
-    assert default_threads({}, load=cores + 3.0) == 1
-    assert default_threads({}, load=cores - 0.6) == 1
-    assert default_threads({"FACEMECH_THREADS": "1"}, load=0.0) == 1
+    assert default_threads({}) == available_cores() >= 1
+    assert default_threads({"FACEMECH_THREADS": "1"}) == 1
+    assert default_threads({"FACEMECH_THREADS": " 1 "}) == 1
     for bad in ("0", "two", "-1", "1.5", "100000"):
         with pytest.raises(InputError) as e:
             default_threads({"FACEMECH_THREADS": bad})

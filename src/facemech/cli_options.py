@@ -154,7 +154,7 @@ manifest: manifest of items (.csv or .toml)
 batch.output: output folder: one folder per item, summary.csv
 workers: local worker processes (default: one per core)
 scheduler: a dask scheduler, tcp://HOST:8786 (instead of local workers)
-threads: force-kernel threads (default: the idle cores, or FACEMECH_THREADS; docs/performance.md)
+threads: force-kernel threads (default: the cores available, or FACEMECH_THREADS; see docs)
 subject.face: a built-in face, a face file (.npz), or a scan (OBJ/PLY/STL; --landmarks)
 subject.markers: a recording (C3D, TRC, CSV) holding the face at rest
 subject.output: the subject folder

@@ -7,9 +7,9 @@ thread's only by the order of their additions (about 1e-16 relative). :func:`set
 the count for the calling thread; the kernels read it at every call (:func:`kernel_threads`),
 so it may change between steps.
 
-A process starts on :func:`default_threads`: the cores it may run on that are idle, at least
-one (``FACEMECH_THREADS`` in the environment sets it instead). On a machine busy with other
-work, threads that wait for each other at every step cost far more than they save.
+A process starts on :func:`default_threads`: the cores it may run on (``FACEMECH_THREADS`` in
+the environment sets it instead). On a machine busy with other work, threads that wait for
+each other at every step cost more than they save: set one there.
 """
 
 from __future__ import annotations
@@ -34,15 +34,14 @@ def available_cores() -> int:
     return max(1, min(cores, nb.config.NUMBA_NUM_THREADS))
 
 
-def default_threads(environ=None, load=None) -> int:
+def default_threads(environ=None) -> int:
     """The thread count a process starts on: ``FACEMECH_THREADS`` where set, else the cores
-    available (:func:`available_cores`) less those busy with other work (the 1-minute load
-    average, rounded), at least 1.
+    available (:func:`available_cores`). Not the machine's load: a script run twice on one
+    machine runs on the same count, and gives the same numbers to the bit.
 
     Parameters
     ----------
     environ : mapping, optional -- the environment (default ``os.environ``)
-    load : float, optional -- the load average (default ``os.getloadavg()[0]``)
 
     Raises
     ------
@@ -58,13 +57,7 @@ def default_threads(environ=None, load=None) -> int:
             raise InputError(f"FACEMECH_THREADS must be a whole number from 1 to {limit} "
                              f"(got {text!r})", field="FACEMECH_THREADS")
         return int(text)
-    cores = available_cores()
-    if load is None:
-        try:
-            load = os.getloadavg()[0]
-        except OSError:  # no load average here
-            load = 0.0
-    return max(1, min(cores, cores - int(round(load))))
+    return available_cores()
 
 
 def set_threads(n: int | None = None) -> int:
@@ -74,7 +67,7 @@ def set_threads(n: int | None = None) -> int:
     ----------
     n : int, optional
         1 to ``NUMBA_NUM_THREADS`` (numba's pool, fixed when numba starts); default:
-        :func:`default_threads` (the idle cores, or ``FACEMECH_THREADS``).
+        :func:`default_threads` (the cores available, or ``FACEMECH_THREADS``).
 
     Returns
     -------
@@ -122,7 +115,7 @@ def kernel_threads():
 
 
 # start numba's threads now: that registers the symbol the kernels read (a kernel loaded from
-# numba's cache is not compiled, so nothing else would); then the idle cores
+# numba's cache is not compiled, so nothing else would); then the default count
 nb.get_num_threads()
 try:
     nb.set_num_threads(default_threads())
