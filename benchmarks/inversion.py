@@ -7,6 +7,8 @@
    ``--methods`` (default: lsq only; Powell is opt-in, ``--methods lsq,powell``). Powell is run
    on the first ``--powell-frames`` frames only and its time per frame extrapolated to the whole
    experiment (said so in the output). Each method reports its model frame steps per frame.
+3. Experiment 1 under the default preset (``anatomical``), least squares, both constraints:
+   the case where a frame takes several trial rolls (frame steps per frame and errors).
 
 Usage: python benchmarks/inversion.py [--seconds 3] [--methods lsq[,powell]] [--powell-frames 6]
 """
@@ -91,6 +93,24 @@ def experiment1(face, powell_frames: int, methods=("lsq",)) -> dict:
     return out
 
 
+def experiment1_default(face) -> dict:
+    """Experiment 1 under the default preset by least squares, with and without the positive
+    constraint: frame steps per frame and the median / max per-frame error (mm)."""
+    from facemech.inverse.experiments import run_synthetic
+
+    prm = preset("anatomical")
+    t0 = time.perf_counter()
+    res = run_synthetic(face, methods=("lsq",), params=prm)
+    out: dict = {"preset": "anatomical", "frames": res.frames,
+                 "wall_s": time.perf_counter() - t0, "runs": {}}
+    for label, run in res.runs.items():
+        out["runs"][label] = {"steps": run.evaluations,
+                              "steps_per_frame": run.evaluations / (res.frames - 1),
+                              "median_frame_error_mm": run.frame_error_mm["median"],
+                              "max_frame_error_mm": run.frame_error_mm["max"]}
+    return out
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--seconds", type=float, default=3.0, help="speech to invert, s")
@@ -107,7 +127,8 @@ def main() -> None:
     face = default_face()
     with threadpool_limits(1):
         out = {"benchmark": "inversion", "default": default_inversion(face, args.seconds),
-               "experiment1": experiment1(face, args.powell_frames, methods)}
+               "experiment1": experiment1(face, args.powell_frames, methods),
+               "experiment1_anatomical": experiment1_default(face)}
     print(json.dumps(out, indent=2))
 
 
