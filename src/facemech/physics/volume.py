@@ -326,15 +326,16 @@ def _quad_terms(ax, ay, az, bx, by, bz, qx, qy, qz, dx, dy, dz):
 
 
 @nb.njit(cache=True, inline="always")
-def pressure_terms(x0, y0, z0, x1, y1, z1, x2, y2, z2, x3, y3, z3, x4, y4, z4, x5, y5, z5,
-                   rest_volume, bulk_per_volume):
-    """The volume-preserving pressure of one prism from its six nodes' coordinates (m):
-    :func:`prism_pressure` unrolled over the two end triangles and three sides of
-    :func:`_bilinear_volume_gradient`, in registers (the same numbers to the last bit).
+def pressure_terms(xyz, rest_volume, bulk_per_volume):
+    """The volume-preserving pressure of one prism from its six nodes' coordinates ``xyz`` (a
+    tuple of 18, m: node 0's x, y, z, then node 1's, ...): :func:`prism_pressure` unrolled
+    over the two end triangles and three sides of :func:`_bilinear_volume_gradient`, in
+    registers (the same numbers to the last bit).
 
-    Returns the 18 force components (N; node 0's x, y, z, then node 1's, ...) and the volume
-    (m^3). A prism with ``bulk_per_volume`` 0 has no pressure: its forces are exactly 0.
+    Returns the 18 force components (N, in the same order) and the volume (m^3). A prism with
+    ``bulk_per_volume`` 0 has no pressure: its forces are exactly 0.
     """
+    x0, y0, z0, x1, y1, z1, x2, y2, z2, x3, y3, z3, x4, y4, z4, x5, y5, z5 = xyz
     cx = (x0 + x1 + x2 + x3 + x4 + x5) / 6.0
     cy = (y0 + y1 + y2 + y3 + y4 + y5) / 6.0
     cz = (z0 + z1 + z2 + z3 + z4 + z5) / 6.0
@@ -395,12 +396,12 @@ def add_prism_pressure(pos, nodes, e, rest_volume, bulk_per_volume, out):
     Returns the volume (m^3).
     """
     u = nodes[e]
-    f = pressure_terms(pos[u[0], 0], pos[u[0], 1], pos[u[0], 2],
-                       pos[u[1], 0], pos[u[1], 1], pos[u[1], 2],
-                       pos[u[2], 0], pos[u[2], 1], pos[u[2], 2],
-                       pos[u[3], 0], pos[u[3], 1], pos[u[3], 2],
-                       pos[u[4], 0], pos[u[4], 1], pos[u[4], 2],
-                       pos[u[5], 0], pos[u[5], 1], pos[u[5], 2], rest_volume, bulk_per_volume)
+    f = pressure_terms((pos[u[0], 0], pos[u[0], 1], pos[u[0], 2],
+                        pos[u[1], 0], pos[u[1], 1], pos[u[1], 2],
+                        pos[u[2], 0], pos[u[2], 1], pos[u[2], 2],
+                        pos[u[3], 0], pos[u[3], 1], pos[u[3], 2],
+                        pos[u[4], 0], pos[u[4], 1], pos[u[4], 2],
+                        pos[u[5], 0], pos[u[5], 1], pos[u[5], 2]), rest_volume, bulk_per_volume)
     for c in range(6):
         out[u[c], 0] += f[3 * c]
         out[u[c], 1] += f[3 * c + 1]
@@ -443,9 +444,9 @@ def add_pressure_blocks(pos, nodes, rest_volume, bulk, e0, e1, coords, forces, o
                 coords[3 * c + 2, q] = pos[u, 2]
         for q in range(n):
             c = coords
-            f = pressure_terms(c[0, q], c[1, q], c[2, q], c[3, q], c[4, q], c[5, q], c[6, q],
-                               c[7, q], c[8, q], c[9, q], c[10, q], c[11, q], c[12, q],
-                               c[13, q], c[14, q], c[15, q], c[16, q], c[17, q],
+            f = pressure_terms((c[0, q], c[1, q], c[2, q], c[3, q], c[4, q], c[5, q],
+                                c[6, q], c[7, q], c[8, q], c[9, q], c[10, q], c[11, q],
+                                c[12, q], c[13, q], c[14, q], c[15, q], c[16, q], c[17, q]),
                                rest_volume[b0 + q], bulk[b0 + q])
             forces[0, q], forces[1, q], forces[2, q] = f[0], f[1], f[2]
             forces[3, q], forces[4, q], forces[5, q] = f[3], f[4], f[5]
