@@ -11,7 +11,8 @@ First, the explicit step's cost against a bare kernel: one explicit Euler step o
 and a bare numba spring-and-dashpot Euler step over the same nodes and springs, timed
 interleaved in this process (best of the repeats, frames of 50 steps), with their ratio and
 where one thread's step goes (springs, prisms, the rest); with ``--threads 1,2`` the full step
-on each thread count, interleaved, and the speed-ups against the first; ``--preset lucero1999``
+and the force assembly alone (``accumulate_forces``) on each thread count, interleaved, and
+their speed-ups against the first; ``--preset lucero1999``
 the same for the seeds' tissue.
 
 Usage: python benchmarks/forward.py [--quick] [--threads 1,2] [--step-only] [--preset P]
@@ -68,6 +69,13 @@ def bare_euler(spring_i, spring_j, rest, k, damping, inv_mass, dynamic, pos, vel
                 pos[i, a] += dt * vel[i, a]
 
 
+@nb.njit(cache=True)
+def assembly_steps(forces, pos, vel, m, anchors, out, n_steps):
+    """The force assembly alone, ``n_steps`` times (no Python between the calls)."""
+    for _ in range(n_steps):
+        accumulate_forces(forces, pos, vel, m, anchors, out)
+
+
 def step_benchmark(threads, repeat=15, n_steps=50, preset_name="anatomical") -> dict:
     """Microseconds per explicit step of the default face's full forces on each thread count
     and of :func:`bare_euler` (one thread), interleaved; best of ``repeat`` frames of
@@ -105,11 +113,18 @@ def step_benchmark(threads, repeat=15, n_steps=50, preset_name="anatomical") -> 
             out[:] = 0.0
             element_forces_one_thread(no_springs, f.prisms, pos, pos, out)
 
-    runs = {**{n: full for n in threads}, "bare": bare, "springs": springs, "prisms": prisms}
+    vel = np.zeros_like(pos)
+
+    def assembly():
+        assembly_steps(f, pos, vel, m, anchors, out, n_steps)
+
+    runs = {**{n: full for n in threads}, **{("assembly", n): assembly for n in threads},
+            "bare": bare, "springs": springs, "prisms": prisms}
     best = {}
     for _ in range(repeat + 1):  # the first round compiles and warms the caches
         for key, run in runs.items():
-            set_threads(key if isinstance(key, int) else 1)
+            set_threads(key if isinstance(key, int) else key[1] if isinstance(key, tuple)
+                        else 1)
             t0 = time.perf_counter()
             run()
             best[key] = min(best.get(key, np.inf), time.perf_counter() - t0)
@@ -124,9 +139,12 @@ def step_benchmark(threads, repeat=15, n_steps=50, preset_name="anatomical") -> 
               "parts_us_per_step": {"springs": us["springs"], "prisms": us["prisms"],
                                     "rest": full_1 - us["springs"] - us["prisms"]},
               "load_average_1min": os.getloadavg()[0]}
+    report["assembly_us_per_step"] = {str(n): us[("assembly", n)] for n in threads}
     if len(threads) > 1:
         report["speedup_over_threads_" + str(threads[0])] = {
             str(n): full_1 / us[n] for n in threads[1:]}
+        report["assembly_speedup_over_threads_" + str(threads[0])] = {
+            str(n): us[("assembly", threads[0])] / us[("assembly", n)] for n in threads[1:]}
     return report
 
 

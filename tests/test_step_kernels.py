@@ -241,6 +241,12 @@ def test_slabs_of_one_parity_share_no_node_and_hold_every_element_once(face):
         for a in range(2 * threads):
             for c in range(a + 2, 2 * threads, 2):
                 assert not np.intersect1d(nodes[a], nodes[c]).size, (threads, a, c)
+        zero = [sl.zero[sl.zero_ptr[q]:sl.zero_ptr[q + 1]] for q in range(threads)]
+        assert np.array_equal(np.sort(sl.zero), np.arange(len(rest)))  # each node once
+        for q in range(threads):  # nobody zeroes a node another thread's even slab adds to
+            for p in range(threads):
+                if p != q:
+                    assert not np.intersect1d(zero[q], nodes[2 * p]).size
         work = np.diff(sp) + 3.0 * np.diff(pp)
         assert work.max() < 1.05 * work.min()
         mid_x = [rest[n, 0].mean() for n in nodes]
@@ -269,8 +275,9 @@ def test_slab_forces_do_not_depend_on_the_thread_count(face):
         for n in (1, 2):
             set_threads(n)
             out = np.zeros_like(pos)
-            assert slab_forces(sl.springs, sl.prisms, sl.spring_ptr, sl.prism_ptr, sl.nodes,
-                               sl.node_ptr, pos, vel, out)
+            out = np.full_like(pos, np.nan)  # every node's forces zeroed first
+            assert slab_forces(sl.springs, sl.prisms, sl.spring_ptr, sl.prism_ptr, sl.zero,
+                               sl.zero_ptr, pos, vel, out)
             got.append(out)
     finally:
         set_threads(1)

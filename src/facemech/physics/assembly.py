@@ -495,11 +495,11 @@ def element_range(springs, prisms, pos, vel, s0, s1, e0, e1, out):
 
 
 @nb.njit(cache=True, parallel=True, error_model="numpy")
-def slab_forces(springs, prisms, spring_ptr, prism_ptr, nodes, node_ptr, pos, vel, out):
-    """:func:`element_forces` of all springs and prisms, slab by slab on numba's threads, added
-    into ``out`` (nodes, 3) N: each thread zeroes its band's forces, then the threads take
-    the even slabs, each adding into ``out`` directly (they share no node), then the odd ones
-    (:mod:`facemech.physics.slabs`). The arguments are a
+def slab_forces(springs, prisms, spring_ptr, prism_ptr, zero, zero_ptr, pos, vel, out):
+    """:func:`element_forces` of all springs and prisms, slab by slab on numba's threads, into
+    ``out`` (nodes, 3) N: the threads take the even slabs, each first zeroing the forces of its
+    share of the nodes (``zero``) and then adding into ``out`` directly (even slabs share no
+    node), then the odd ones (:mod:`facemech.physics.slabs`). The arguments are a
     :class:`~facemech.physics.bundles.SlabBundle`'s fields.
 
     Returns False as :func:`element_forces` does (``prange`` cannot raise: the caller does).
@@ -509,16 +509,18 @@ def slab_forces(springs, prisms, spring_ptr, prism_ptr, nodes, node_ptr, pos, ve
     pairs = (sp.shape[0] - 1) // 2
     ok = np.ones(2 * pairs, np.bool_)
     for q in nb.prange(pairs):
-        for k in range(node_ptr[q], node_ptr[q + 1]):
-            u = nodes[k]
+        for k in range(zero_ptr[q], zero_ptr[q + 1]):
+            u = zero[k]
             out[u, 0] = 0.0
             out[u, 1] = 0.0
             out[u, 2] = 0.0
-    for parity in range(2):
-        for q in nb.prange(pairs):
-            k = 2 * q + parity
-            ok[k] = element_range(springs, prisms, pos, vel, sp[k], sp[k + 1], pp[k],
-                                  pp[k + 1], out)
+        k = 2 * q
+        ok[k] = element_range(springs, prisms, pos, vel, sp[k], sp[k + 1], pp[k], pp[k + 1],
+                              out)
+    for q in nb.prange(pairs):
+        k = 2 * q + 1
+        ok[k] = element_range(springs, prisms, pos, vel, sp[k], sp[k + 1], pp[k], pp[k + 1],
+                              out)
     return ok.all()
 
 
@@ -567,7 +569,7 @@ def accumulate_forces(forces, pos, vel, muscle_force, anchors, out):
     if kernel_threads() > 1 and forces.slabs.spring_ptr.shape[0] > 1:
         slabs = forces.slabs
         ok = slab_forces(slabs.springs, slabs.prisms, slabs.spring_ptr, slabs.prism_ptr,
-                         slabs.nodes, slabs.node_ptr, pos, vel, out)
+                         slabs.zero, slabs.zero_ptr, pos, vel, out)
     else:
         out[:] = 0.0
         ok = element_forces(forces.springs, forces.prisms, pos, vel, 0,

@@ -189,11 +189,12 @@ class SlabBundle(NamedTuple):
     springs : SpringBundle -- slab by slab; slab ``k`` is ``spring_ptr[k]:spring_ptr[k + 1]``
     prisms : PrismBundle -- slab by slab, likewise with ``prism_ptr``
     spring_ptr, prism_ptr : (slabs + 1,) int64 -- an even count of slabs; none: one thread
-    nodes : (n,) int64 -- every node, in bands across the face (band ``q``, where slabs ``2q``
-        and ``2q + 1`` lie, is ``nodes[node_ptr[q]:node_ptr[q + 1]]``): a thread zeroes the
-        forces of its band, and the explicit step moves its band's nodes, in its core's cache
-    node_ptr : (slabs / 2 + 1,) int64
-    dynamic : (d,) int64 -- the nodes that move under forces, in the same bands
+    zero : (n,) int64 -- every node once: ``zero[zero_ptr[q]:zero_ptr[q + 1]]`` are those whose
+        forces the thread of slabs ``2q`` and ``2q + 1`` zeroes before it takes slab ``2q``
+    zero_ptr : (slabs / 2 + 1,) int64
+    dynamic : (d,) int64 -- the nodes that move under forces, in bands across the face (band
+        ``q`` where slabs ``2q`` and ``2q + 1`` lie): the explicit step moves each band's
+        nodes on its slabs' thread, in that core's cache
     dynamic_ptr : (slabs / 2 + 1,) int64
     """
 
@@ -201,8 +202,8 @@ class SlabBundle(NamedTuple):
     prisms: PrismBundle
     spring_ptr: np.ndarray
     prism_ptr: np.ndarray
-    nodes: np.ndarray
-    node_ptr: np.ndarray
+    zero: np.ndarray
+    zero_ptr: np.ndarray
     dynamic: np.ndarray
     dynamic_ptr: np.ndarray
 

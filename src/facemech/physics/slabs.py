@@ -57,8 +57,9 @@ def slab_bundles(springs: SpringBundle, prisms: PrismBundle, rest: np.ndarray,
     Returns
     -------
     SlabBundle -- the elements regrouped slab by slab (springs by their lower node), with
-        ``spring_ptr`` and ``prism_ptr`` (slabs + 1,) the start of each slab, and the nodes in
-        bands, one for each pair of slabs (cut at the x of the odd slabs' ends)
+        ``spring_ptr`` and ``prism_ptr`` (slabs + 1,) the start of each slab, the nodes each
+        pair's thread zeroes, and the dynamic nodes in bands, one for each pair of slabs (cut
+        at the x of the odd slabs' ends)
     """
     n_s, n_p = len(springs.i), len(prisms.nodes)
     if threads < 2 or n_s + n_p == 0:
@@ -77,21 +78,38 @@ def slab_bundles(springs: SpringBundle, prisms: PrismBundle, rest: np.ndarray,
         if _disjoint_by_parity(slab_nodes):
             cuts = [rest[n, 0].max() for n in slab_nodes[1:-1:2]]  # the odd slabs' right ends
             return _regroup(springs, prisms, s_slab, p_slab, n_slabs)._replace(
-                **_bands(rest[:, 0], cuts, dynamic))
+                **_bands(rest[:, 0], cuts, dynamic), **_zeroing(slab_nodes, len(rest)))
     return SlabBundle.empty()
 
 
+def _zeroing(slab_nodes: list[np.ndarray], n_nodes: int) -> dict:
+    """The nodes whose forces the thread of each pair of slabs zeroes before it takes its even
+    slab: the even slab's nodes, and the odd slab's that no even slab has (the nodes of no
+    slab with the first pair). No thread zeroes a node that another adds to meanwhile, and
+    every node is zeroed once."""
+    even = np.zeros(n_nodes, bool)
+    for n in slab_nodes[0::2]:
+        even[n] = True
+    lists = []
+    for q in range(len(slab_nodes) // 2):
+        odd = np.unique(slab_nodes[2 * q + 1])
+        lists.append(np.union1d(slab_nodes[2 * q], odd[~even[odd]]))
+    touched = np.zeros(n_nodes, bool)
+    for n in lists:
+        touched[n] = True
+    lists[0] = np.union1d(lists[0], np.flatnonzero(~touched))
+    return {"zero": np.concatenate(lists).astype(np.int64),
+            "zero_ptr": np.cumsum([0] + [len(n) for n in lists]).astype(np.int64)}
+
+
 def _bands(x: np.ndarray, cuts: list[float], dynamic: np.ndarray | None) -> dict:
-    """Every node and the dynamic ones in bands between ``cuts`` (m, ascending), each band in
-    the nodes' order."""
+    """The dynamic nodes in bands between ``cuts`` (m, ascending), each band in the nodes'
+    order."""
     band = np.searchsorted(np.asarray(cuts), x, side="left")
     n_bands = len(cuts) + 1
-    nodes = np.argsort(band, kind="stable").astype(np.int64)
-    dynamic = nodes if dynamic is None else np.asarray(dynamic, np.int64)
-    dynamic = dynamic[np.argsort(band[dynamic], kind="stable")]
-    return {"nodes": nodes,
-            "node_ptr": np.searchsorted(band[nodes], np.arange(n_bands + 1)).astype(np.int64),
-            "dynamic": dynamic,
+    dynamic = np.arange(len(x)) if dynamic is None else np.asarray(dynamic, np.int64)
+    dynamic = dynamic[np.argsort(band[dynamic], kind="stable")].astype(np.int64)
+    return {"dynamic": dynamic,
             "dynamic_ptr": np.searchsorted(band[dynamic],
                                            np.arange(n_bands + 1)).astype(np.int64)}
 
@@ -110,8 +128,8 @@ def _regroup(springs: SpringBundle, prisms: PrismBundle, s_slab: np.ndarray,
     pr = prisms._replace(nodes=prisms.nodes[p_order], rest_volume=prisms.rest_volume[p_order],
                          rest_rel=prisms.rest_rel[p_order], bulk=prisms.bulk[p_order])
     none, one = np.zeros(0, np.int64), np.zeros(1, np.int64)
-    return SlabBundle(springs=sp, prisms=pr, spring_ptr=s_ptr, prism_ptr=p_ptr, nodes=none,
-                      node_ptr=one, dynamic=none, dynamic_ptr=one)
+    return SlabBundle(springs=sp, prisms=pr, spring_ptr=s_ptr, prism_ptr=p_ptr, zero=none,
+                      zero_ptr=one, dynamic=none, dynamic_ptr=one)
 
 
 __all__ = ["slab_bundles", "PRISM_COST"]
