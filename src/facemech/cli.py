@@ -77,7 +77,8 @@ def _root(ctx: typer.Context, version: bool = typer.Option(
         False, "--version", help="print the version", callback=_version, is_eager=True),
           threads: int | None = typer.Option(None, help=opts.HELP["threads"])) -> None:
     """Physics and kinematics of the speaking face."""
-    importlib.import_module("facemech.physics.threads").set_threads(threads)  # None: default
+    if threads is not None or "FACEMECH_THREADS" in importlib.import_module("os").environ:
+        importlib.import_module("facemech.physics.threads").set_threads(threads)  # numba's
     if not err.is_terminal:  # log lines, and a heartbeat for the whole command
         _log[:] = [ctx.with_resource(progress.LogProgress(ctx.invoked_subcommand or "facemech"))]
         ctx.call_on_close(_log.clear)
