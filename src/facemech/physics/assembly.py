@@ -419,7 +419,7 @@ def spring_forces(springs, pos, vel, s0, s1, sigma, out):
         dy = pos[j, 1] - pos[i, 1]
         dz = pos[j, 2] - pos[i, 2]
         length = np.sqrt(dx * dx + dy * dy + dz * dz)
-        ok &= length > 0.0
+        ok &= length != 0.0  # (not finite: left to the solvers' checks, as before)
         t = tension_at(length, spring_rest[s], k_low[s], k_high[s], knee, knee_length[s], sigma)
         t /= length
         r = damping[s]
@@ -450,9 +450,9 @@ def element_forces(springs, prisms, pos, vel, s0, s1, e0, e1, out):
 
     Returns
     -------
-    bool -- False when a spring has no length (its two nodes at one point, or not finite): its
-        force is then not finite (the kernels compile with numpy's error model, without a test
-        of every division; the callers raise)
+    bool -- False when a spring has no length (its two nodes at one point): its force is then
+        not finite (the kernels compile with numpy's error model, without a test of every
+        division; the callers raise ZeroDivisionError, as the division did before)
     """
     # springs, eqs. (1)-(2), and damping r (v_j - v_i), eq. (8) second term; the continuum's
     # loop compiled without eq. (2)'s test (sigma a constant)
