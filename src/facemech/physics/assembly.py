@@ -473,9 +473,8 @@ def element_forces(springs, prisms, pos, vel, s0, s1, e0, e1, out):
             if bulk[e] != 0.0:
                 add_prism_pressure(pos, prism_nodes, e, rest_volume[e], bulk[e], out)
     else:  # the continuum's pressure alone (0 where a prism's bulk is 0), in vector blocks
-        coords = np.empty((18, PRESSURE_BLOCK))
-        add_pressure_blocks(pos, prism_nodes, rest_volume, bulk, e0, e1, coords,
-                            np.empty((18, PRESSURE_BLOCK)), out)
+        add_pressure_blocks(pos, prism_nodes, rest_volume, bulk, e0, e1,
+                            np.empty((18, PRESSURE_BLOCK)), np.empty((18, PRESSURE_BLOCK)), out)
     return ok
 
 

@@ -77,8 +77,9 @@ def slab_bundles(springs: SpringBundle, prisms: PrismBundle, rest: np.ndarray,
                       for k in range(n_slabs)]
         if _disjoint_by_parity(slab_nodes):
             cuts = [rest[n, 0].max() for n in slab_nodes[1:-1:2]]  # the odd slabs' right ends
-            return _regroup(springs, prisms, s_slab, p_slab, n_slabs)._replace(
-                **_bands(rest[:, 0], cuts, dynamic), **_zeroing(slab_nodes, len(rest)))
+            return SlabBundle(**_regroup(springs, prisms, s_slab, p_slab, n_slabs),
+                              **_bands(rest[:, 0], cuts, dynamic),
+                              **_zeroing(slab_nodes, len(rest)))
     return SlabBundle.empty()
 
 
@@ -115,7 +116,8 @@ def _bands(x: np.ndarray, cuts: list[float], dynamic: np.ndarray | None) -> dict
 
 
 def _regroup(springs: SpringBundle, prisms: PrismBundle, s_slab: np.ndarray,
-             p_slab: np.ndarray, n_slabs: int) -> SlabBundle:
+             p_slab: np.ndarray, n_slabs: int) -> dict:
+    """The springs and prisms slab by slab, and where each slab starts."""
     # slab by slab; in a slab the springs by their lower node (read in memory order), the
     # prisms in their own order (faster than by node: measured)
     s_order = np.lexsort((np.minimum(springs.i, springs.j), s_slab))
@@ -127,9 +129,7 @@ def _regroup(springs: SpringBundle, prisms: PrismBundle, s_slab: np.ndarray,
                                        "damping", "knee_length")})
     pr = prisms._replace(nodes=prisms.nodes[p_order], rest_volume=prisms.rest_volume[p_order],
                          rest_rel=prisms.rest_rel[p_order], bulk=prisms.bulk[p_order])
-    none, one = np.zeros(0, np.int64), np.zeros(1, np.int64)
-    return SlabBundle(springs=sp, prisms=pr, spring_ptr=s_ptr, prism_ptr=p_ptr, zero=none,
-                      zero_ptr=one, dynamic=none, dynamic_ptr=one)
+    return {"springs": sp, "prisms": pr, "spring_ptr": s_ptr, "prism_ptr": p_ptr}
 
 
 __all__ = ["slab_bundles", "PRISM_COST"]
