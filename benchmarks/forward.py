@@ -12,7 +12,9 @@ and a bare numba spring-and-dashpot Euler step over the same nodes and springs, 
 interleaved in this process (best of the repeats, frames of 50 steps), with their ratio and
 where one thread's step goes (springs, prisms, the rest); with ``--threads 1,2`` the full step
 and the force assembly alone (``accumulate_forces``) on each thread count, interleaved, and
-their speed-ups against the first; ``--preset lucero1999``
+their speed-ups against the first, beside the machine's ceiling (``machine_ceiling_speedup``:
+n independent bare kernels side by side against one; below n when other work holds the
+cores, so that a speed-up is read against it); ``--preset lucero1999``
 the same for the seeds' tissue.
 
 Usage: python benchmarks/forward.py [--quick] [--threads 1,2] [--step-only] [--preset P]
@@ -69,6 +71,17 @@ def bare_euler(spring_i, spring_j, rest, k, damping, inv_mass, dynamic, pos, vel
                 pos[i, a] += dt * vel[i, a]
 
 
+@nb.njit(cache=True, parallel=True)
+def bare_side_by_side(spring_i, spring_j, rest, k, damping, inv_mass, dynamic, pos, vel, dt,
+                      n_steps):
+    """:func:`bare_euler` on ``len(pos)`` independent copies of the face at once, one a thread:
+    no shared data, no waiting, so its throughput against one copy is the most that this
+    machine's cores give at the moment (the ceiling of any thread speed-up)."""
+    for c in nb.prange(pos.shape[0]):
+        bare_euler(spring_i, spring_j, rest, k, damping, inv_mass, dynamic, pos[c], vel[c], dt,
+                   n_steps)
+
+
 @nb.njit(cache=True)
 def assembly_steps(forces, pos, vel, m, anchors, out, n_steps):
     """The force assembly alone, ``n_steps`` times (no Python between the calls)."""
@@ -118,7 +131,15 @@ def step_benchmark(threads, repeat=15, n_steps=50, preset_name="anatomical") -> 
     def assembly():
         assembly_steps(f, pos, vel, m, anchors, out, n_steps)
 
+    def side_by_side(n):
+        def run():
+            bare_side_by_side(s.i, s.j, s.rest_length, s.k_low, s.damping, ss.inv_mass,
+                              ss.dynamic, np.repeat(pos[None], n, 0),
+                              np.zeros((n,) + pos.shape), dt, n_steps)
+        return run
+
     runs = {**{n: full for n in threads}, **{("assembly", n): assembly for n in threads},
+            **{("ceiling", n): side_by_side(n) for n in threads[1:]},
             "bare": bare, "springs": springs, "prisms": prisms}
     best = {}
     for _ in range(repeat + 1):  # the first round compiles and warms the caches
@@ -145,6 +166,9 @@ def step_benchmark(threads, repeat=15, n_steps=50, preset_name="anatomical") -> 
             str(n): full_1 / us[n] for n in threads[1:]}
         report["assembly_speedup_over_threads_" + str(threads[0])] = {
             str(n): us[("assembly", threads[0])] / us[("assembly", n)] for n in threads[1:]}
+        # n bare copies side by side against one: what the machine's cores gave in this run
+        report["machine_ceiling_speedup"] = {
+            str(n): n * us["bare"] / us[("ceiling", n)] for n in threads[1:]}
     return report
 
 

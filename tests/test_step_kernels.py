@@ -219,15 +219,16 @@ def test_a_collapsed_spring_raises_on_any_thread_count(face, threads):
 
 def test_slabs_of_one_parity_share_no_node_and_hold_every_element_once(face):
     """The default face in 2 x threads slabs across the face: every spring and prism once,
-    slabs of one parity without a common node, the work about even, left to right."""
+    slabs of one parity without a common node, the work about even, in order along the axis
+    (top to bottom, the built-in face's node order, by default; left to right across x)."""
     from facemech.physics.assembly import Physics, force_bundles
     from facemech.physics.slabs import slab_bundles
 
     ph = Physics.build(face, preset("anatomical"))
     b = force_bundles(ph)
     rest = ph.model.rest_positions
-    for threads in (2, 3, 4):
-        sl = slab_bundles(b.springs, b.prisms, rest, threads)
+    for threads, axis in ((2, None), (3, None), (4, None), (2, "x"), (3, "x")):
+        sl = slab_bundles(b.springs, b.prisms, rest, threads, axis=axis)
         sp, pp = sl.spring_ptr, sl.prism_ptr
         assert len(sp) == len(pp) == 2 * threads + 1
         pairs = {tuple(x) for x in np.stack([b.springs.i, b.springs.j], 1)}
@@ -249,8 +250,31 @@ def test_slabs_of_one_parity_share_no_node_and_hold_every_element_once(face):
                     assert not np.intersect1d(zero[q], nodes[2 * p]).size
         work = np.diff(sp) + 3.0 * np.diff(pp)
         assert work.max() < 1.05 * work.min()
-        mid_x = [rest[n, 0].mean() for n in nodes]
-        assert np.all(np.diff(mid_x) > 0)
+        col, sign = (0, 1) if axis == "x" else (1, -1)
+        mid = [sign * rest[n, col].mean() for n in nodes]
+        assert np.all(np.diff(mid) > 0)
+
+
+def test_slabs_are_cut_across_the_axis_the_nodes_are_numbered_along(face):
+    """The built-in face numbers its nodes row by row from the hairline down: its slabs are cut
+    across y, where the two threads' slabs share almost no 128-byte block of the forces (and
+    across x, where every row is cut, many). The same mesh numbered column by column, left to
+    right, is cut across x."""
+    from facemech.physics.assembly import Physics, force_bundles
+    from facemech.physics.slabs import slab_axis
+
+    ph = Physics.build(face, preset("anatomical"))
+    b = force_bundles(ph)
+    rest = ph.model.rest_positions
+    assert slab_axis(b.springs, b.prisms, rest) == "y"
+    n = ph.model.n_surface
+    layer = np.arange(len(rest)) // n
+    order = np.lexsort((-rest[:, 1], np.round(rest[:, 0], 3), layer))  # column by column
+    new = np.empty(len(rest), np.int64)
+    new[order] = np.arange(len(rest))
+    springs = b.springs._replace(i=new[b.springs.i], j=new[b.springs.j])
+    prisms = b.prisms._replace(nodes=new[b.prisms.nodes])
+    assert slab_axis(springs, prisms, rest[order]) == "x"
 
 
 def test_slab_forces_do_not_depend_on_the_thread_count(face):
