@@ -1,8 +1,9 @@
 """Batch benchmark (prints JSON): a corpus of short inversions run by ``facemech batch`` on a
 local dask cluster of 2 worker processes against 1.
 
-Six synthetic utterances (``--frames`` frames each, windows of the demo's controls, simulated
-on the built-in face from rest) are written as marker CSVs with a manifest of ``invert`` items.
+Six synthetic utterances (``--frames`` frames each, by default 120: 2 s, a sentence; windows of
+the demo's controls, simulated on the built-in face from rest) are written as marker CSVs with
+a manifest of ``invert`` items.
 The batch is run twice into fresh folders, with 1 and with 2 workers; each wall time includes
 the cluster's start and the workers' imports, as a user sees it. ``speedup`` is the 1-worker
 wall time over the 2-worker one (target >= 1.7 on 2 free cores). ``cpu_share`` is the items'
@@ -10,7 +11,7 @@ CPU seconds over wall seconds times workers: near 1 when each worker had a core 
 below 1 the machine was shared (compare ``load_average_before`` with ``cores``) and the
 speedup measures the other load more than the batch.
 
-Usage: python benchmarks/batch.py [--utterances 6] [--frames 30] [--keep DIR]
+Usage: python benchmarks/batch.py [--utterances 6] [--frames 120] [--keep DIR]
 """
 
 from __future__ import annotations
@@ -65,7 +66,7 @@ def timed_batch(manifest: Path, out: Path, workers: int) -> dict:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--utterances", type=int, default=6)
-    ap.add_argument("--frames", type=int, default=30)
+    ap.add_argument("--frames", type=int, default=120, help="frames of each utterance (60 Hz)")
     ap.add_argument("--keep", type=Path, default=None, help="work in this folder and keep it")
     args = ap.parse_args()
     with tempfile.TemporaryDirectory(prefix="facemech-batch-bench-") as tmp:

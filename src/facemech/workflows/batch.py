@@ -64,6 +64,18 @@ def _all_inputs(items: list[Item]) -> list[str]:
     return paths
 
 
+def _input_bytes(item: Item) -> int:
+    """The summed size (bytes) of an item's input files: the estimate of its work by which the
+    largest items are sent first (a missing file counts 0; the item then fails by itself)."""
+    total = 0
+    for path in _all_inputs([item]):
+        try:
+            total += os.path.getsize(path)
+        except OSError:
+            pass
+    return total
+
+
 def _connect(workers: int | None, scheduler: str | None, processes: bool, n_jobs: int):
     """A dask Client and its description: the scheduler at ``scheduler``, else a new
     LocalCluster (``workers`` processes, one thread each; default one per core, at most one
@@ -83,8 +95,14 @@ def _connect(workers: int | None, scheduler: str | None, processes: bool, n_jobs
     n = workers if workers is not None else min(n_jobs, os.cpu_count() or 1)
     if n < 1:
         raise InputError(f"workers must be at least 1 (got {n})", field="workers")
-    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=processes,
-                           dashboard_address=":0", silence_logs=logging.ERROR)
+    import dask
+
+    # one item at a time on each worker, the next one handed to whichever worker is free
+    # first (dask's default, 1.1, gives a one-thread worker a second item to hold: at the end
+    # of a batch one worker may sit idle while another has two to do)
+    with dask.config.set({"distributed.scheduler.worker-saturation": 1.0}):
+        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=processes,
+                               dashboard_address=":0", silence_logs=logging.ERROR)
     kind = "processes" if processes else "threads"
     return Client(cluster), cluster, f"a local cluster of {n} worker {kind}"
 
@@ -192,8 +210,13 @@ def _run_on_dask(todo: list[Item], out: Path, finished: Callable[[Outcome], None
         where = f"the client's cluster ({client.scheduler.address})"
     try:
         run_id = uuid.uuid4().hex[:8]
+        # the largest inputs first (sent first, and dask's priority: higher runs first; ties
+        # in the manifest's order), so that no long item starts last while the other workers
+        # sit idle
+        size = {item.id: _input_bytes(item) for item in todo}
         futures = {client.submit(run_item, item, str(out), key=f"facemech-{item.id}-{run_id}",
-                                 pure=False): item for item in todo}
+                                 pure=False, priority=size[item.id]): item
+                   for item in sorted(todo, key=lambda i: size[i.id], reverse=True)}
         for fut in as_completed(futures):
             item = futures[fut]
             try:
