@@ -18,7 +18,7 @@ cores, so that a speed-up is read against it); ``--preset lucero1999``
 the same for the seeds' tissue.
 
 Usage: python benchmarks/forward.py [--quick] [--threads 1,2] [--step-only] [--preset P]
-       [--repeat N]
+       [--repeat N] [--face FACE.npz]
 """
 
 from __future__ import annotations
@@ -31,10 +31,11 @@ import time
 import numba as nb
 import numpy as np
 
-from facemech import Physics, Stepper, default_face, preset, simulate
+from facemech import Physics, Stepper, default_face, load_face, preset, simulate
 from facemech.demo import utterance
 from facemech.physics.assembly import accumulate_forces, element_forces_one_thread, rest_anchors
 from facemech.physics.bundles import PrismBundle, SlabBundle
+from facemech.physics.slabs import slab_axis
 from facemech.physics.threads import set_threads
 from facemech.solvers.explicit import EulerSteps, euler_frame
 from facemech.solvers.solver_state import solver_state
@@ -89,12 +90,13 @@ def assembly_steps(forces, pos, vel, m, anchors, out, n_steps):
         accumulate_forces(forces, pos, vel, m, anchors, out)
 
 
-def step_benchmark(threads, repeat=15, n_steps=50, preset_name="anatomical") -> dict:
+def step_benchmark(threads, repeat=15, n_steps=50, preset_name="anatomical",
+                   face_spec=None) -> dict:
     """Microseconds per explicit step of the default face's full forces on each thread count
     and of :func:`bare_euler` (one thread), interleaved; best of ``repeat`` frames of
     ``n_steps`` steps (the paper's frame: 50). With where one thread's step goes: the springs,
     the prisms, and the rest (muscles, tethers, contact, the Euler-Cromer update)."""
-    ph = Physics.build(default_face(), preset(preset_name))
+    ph = Physics.build(load_face(face_spec), preset(preset_name))
     ss = solver_state(ph, 1)
     f = ss.forces
     s = f.springs
@@ -152,7 +154,9 @@ def step_benchmark(threads, repeat=15, n_steps=50, preset_name="anatomical") -> 
     set_threads(1)
     us = {k: v / n_steps * 1e6 for k, v in best.items()}
     full_1 = us[threads[0]]
-    report = {"preset": preset_name, "nodes": len(pos), "springs": len(s.i),
+    report = {"preset": preset_name, "face": face_spec or "default", "nodes": len(pos),
+              "springs": len(s.i), "slabs": len(f.slabs.spring_ptr) - 1,
+              "slab_axis": slab_axis(s, f.prisms, ph.model.rest_positions),
               "prisms": len(f.prisms.nodes), "steps_per_frame": n_steps,
               "bare_us_per_step": us["bare"],
               "full_us_per_step": {str(n): us[n] for n in threads},
@@ -190,9 +194,12 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=15, help="frames timed, best taken")
     ap.add_argument("--preset", default="anatomical", help="the step's preset (default the "
                     "default, anatomical; lucero1999: the seeds')")
+    ap.add_argument("--face", default=None, help="the step's face: a built-in name or a .npz "
+                    "of face build (default: the built-in face)")
     args = ap.parse_args()
     threads = [int(n) for n in args.threads.split(",")]
-    step = step_benchmark(threads, repeat=args.repeat, preset_name=args.preset)
+    step = step_benchmark(threads, repeat=args.repeat, preset_name=args.preset,
+                          face_spec=args.face)
     set_threads(1)
     if args.step_only:
         print(json.dumps({"benchmark": "forward-step", "step": step}, indent=2))

@@ -15,7 +15,9 @@ landmarks in metres and facemech's axes, each step refusing in one line what it 
 6. a mouth open in the middle refused; the landmarks on the skin, unique, the left on the left
    (:mod:`landmark_checks`);
 7. a coarse mouth region refined to the lips' spacing (:mod:`refine`);
-8. no degenerate triangles (:mod:`scan_cleanup`).
+8. no degenerate triangles (:mod:`scan_cleanup`);
+9. the vertices numbered from the top of the face down, as the force kernel's threads read
+   them fastest (:mod:`scan_order`).
 """
 
 from __future__ import annotations
@@ -91,6 +93,7 @@ def load_scan(surface: str | Path, landmarks: str | Path, *, units: str | None =
         drop_fragments,
     )
     from .scan_frame import axes_text, check_axes, check_unit, detect_axes, parse_axes
+    from .scan_order import top_down
     from .surface_io import read_landmarks, read_surface_with_appearance
 
     surface, landmarks = Path(surface), Path(landmarks)
@@ -136,6 +139,7 @@ def load_scan(surface: str | Path, landmarks: str | Path, *, units: str | None =
     if note:
         notes.append(f"{surface.name}: {note}")
     check_triangles(vertices, faces, lm, source=src)
+    vertices, faces, look = top_down(vertices, faces, look)
     return Scan(vertices, faces, lm, look, unit, spec, notes)
 
 

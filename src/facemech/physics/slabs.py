@@ -45,8 +45,7 @@ def _element_slabs(centre_x: np.ndarray, cost: np.ndarray, n_slabs: int) -> np.n
 AXES = {"x": (0, 1.0), "y": (1, -1.0)}
 def slab_axis(springs: SpringBundle, prisms: PrismBundle, rest: np.ndarray) -> str:
     """The axis to cut slabs across: of x and y, the one where two threads' slabs interleave
-    least in memory (the fewest changes from one thread's nodes to the other's, in the nodes'
-    order, over both phases; ties: y).
+    least in memory (:func:`interleaving`; ties: y).
 
     Parameters
     ----------
@@ -57,17 +56,25 @@ def slab_axis(springs: SpringBundle, prisms: PrismBundle, rest: np.ndarray) -> s
     -------
     str -- ``"x"`` or ``"y"``
     """
-    changes = {}
-    for name in ("y", "x"):
-        slab = _element_slabs(_centres(springs, prisms, rest, name),
-                              _costs(springs, prisms), 4)
-        nodes = [np.unique(n) for n in _slab_nodes(springs, prisms, slab, 4)]
-        changes[name] = 0
-        for a in (0, 1):  # slabs a and a + 2 run side by side
-            owner = np.concatenate([np.zeros(len(nodes[a]), int), np.ones(len(nodes[a + 2]), int)])
-            owner = owner[np.argsort(np.concatenate([nodes[a], nodes[a + 2]]), kind="stable")]
-            changes[name] += int(np.count_nonzero(np.diff(owner)))
+    changes = {name: interleaving(springs, prisms, rest, name) for name in ("y", "x")}
     return min(changes, key=changes.get)
+
+
+def interleaving(springs: SpringBundle, prisms: PrismBundle, rest: np.ndarray,
+                 axis: str) -> int:
+    """How often, in the nodes' order, two threads' slabs across ``axis`` change from one
+    thread's nodes to the other's: slabs 0 and 2 side by side, then 1 and 3 (4 slabs, both
+    phases summed). A few per layer where the mesh numbers its nodes along ``axis``; hundreds
+    where it numbers them across it, thousands where in no order.
+    """
+    slab = _element_slabs(_centres(springs, prisms, rest, axis), _costs(springs, prisms), 4)
+    nodes = [np.unique(n) for n in _slab_nodes(springs, prisms, slab, 4)]
+    changes = 0
+    for a in (0, 1):  # slabs a and a + 2 run side by side
+        owner = np.concatenate([np.zeros(len(nodes[a]), int), np.ones(len(nodes[a + 2]), int)])
+        owner = owner[np.argsort(np.concatenate([nodes[a], nodes[a + 2]]), kind="stable")]
+        changes += int(np.count_nonzero(np.diff(owner)))
+    return changes
 
 
 def _centres(springs: SpringBundle, prisms: PrismBundle, rest: np.ndarray,
@@ -198,4 +205,4 @@ def _regroup(springs: SpringBundle, prisms: PrismBundle, s_slab: np.ndarray,
     return {"springs": sp, "prisms": pr, "spring_ptr": s_ptr, "prism_ptr": p_ptr}
 
 
-__all__ = ["slab_bundles", "slab_axis", "PRISM_COST", "AXES"]
+__all__ = ["slab_bundles", "slab_axis", "interleaving", "PRISM_COST", "AXES"]
