@@ -31,18 +31,20 @@ from .bundles import PrismBundle, SlabBundle, SpringBundle
 PRISM_COST = {"seeds": 6.0, "continuum": 3.0}
 
 
-def _element_slabs(centre_x: np.ndarray, cost: np.ndarray, n_slabs: int) -> np.ndarray:
+def _element_slabs(centre: np.ndarray, cost: np.ndarray, n_slabs: int) -> np.ndarray:
     """Slab (0 to n_slabs - 1) of each element: cuts at equal shares of the summed cost, in
-    the order of the centroids' x."""
-    order = np.argsort(centre_x, kind="stable")
+    the order of the centroids along the axis (``centre``)."""
+    order = np.argsort(centre, kind="stable")
     share = np.cumsum(cost[order]) / cost.sum()
-    slab = np.empty(len(centre_x), np.int64)
+    slab = np.empty(len(centre), np.int64)
     slab[order] = np.minimum((share * n_slabs - 1e-9).astype(np.int64), n_slabs - 1)
     return slab
 
 
 #: the axes a face may be cut across: x (the subject's left) and y (down the face)
 AXES = {"x": (0, 1.0), "y": (1, -1.0)}
+
+
 def slab_axis(springs: SpringBundle, prisms: PrismBundle, rest: np.ndarray) -> str:
     """The axis to cut slabs across: of x and y, the one where two threads' slabs interleave
     least in memory (:func:`interleaving`; ties: y).
