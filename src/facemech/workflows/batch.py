@@ -79,7 +79,8 @@ def _input_bytes(item: Item) -> int:
 def _connect(workers: int | None, scheduler: str | None, processes: bool, n_jobs: int):
     """A dask Client and its description: the scheduler at ``scheduler``, else a new
     LocalCluster (``workers`` processes, one thread each; default one per core, at most one
-    per item)."""
+    per item). Not dask's default client: a batch leaves the caller's dask settings (and any
+    client of theirs) as they were."""
     try:
         from distributed import Client, LocalCluster
     except ImportError:
@@ -87,7 +88,7 @@ def _connect(workers: int | None, scheduler: str | None, processes: bool, n_jobs
                          "'facemech[batch]'", field="scheduler") from None
     if scheduler is not None:
         try:
-            client = Client(scheduler, timeout="20s")
+            client = Client(scheduler, timeout="20s", set_as_default=False)
         except (OSError, TimeoutError, ValueError) as exc:
             raise InputError(f"cannot reach the dask scheduler ({exc})", source=scheduler,
                              field="scheduler") from None
@@ -104,7 +105,8 @@ def _connect(workers: int | None, scheduler: str | None, processes: bool, n_jobs
         cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=processes,
                                dashboard_address=":0", silence_logs=logging.ERROR)
     kind = "processes" if processes else "threads"
-    return Client(cluster), cluster, f"a local cluster of {n} worker {kind}"
+    return (Client(cluster, set_as_default=False), cluster,
+            f"a local cluster of {n} worker {kind}")
 
 
 def _died(item: Item, exc: BaseException) -> Outcome:
@@ -217,7 +219,7 @@ def _run_on_dask(todo: list[Item], out: Path, finished: Callable[[Outcome], None
         futures = {client.submit(run_item, item, str(out), key=f"facemech-{item.id}-{run_id}",
                                  pure=False, priority=size[item.id]): item
                    for item in sorted(todo, key=lambda i: size[i.id], reverse=True)}
-        for fut in as_completed(futures):
+        for fut in as_completed(futures, loop=client.loop):
             item = futures[fut]
             try:
                 outcome = fut.result()
