@@ -3,11 +3,14 @@ the force kernels run on one thread."""
 
 from __future__ import annotations
 
+import atexit
 import os
+import shutil
 import sys
 import tempfile
 
 _CACHE = tempfile.mkdtemp(prefix="facemech-test-cache-")
+atexit.register(shutil.rmtree, _CACHE, ignore_errors=True)  # not left in /tmp after the run
 os.environ.setdefault("MPLCONFIGDIR", _CACHE)
 os.environ.setdefault("XDG_CACHE_HOME", _CACHE)
 os.environ.setdefault("MPLBACKEND", "Agg")
