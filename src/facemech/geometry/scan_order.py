@@ -6,7 +6,7 @@ kernel reads the nodes in it: on two threads (:mod:`facemech.physics.slabs`) eac
 a band of the face, and when the nodes of the two bands alternate in memory the cores fetch each
 other's lines at every step. Measured on the built-in face's surface exported as a scan
 (``benchmarks/forward.py --face``): with its vertices shuffled, two threads took 552 µs a step
-against 444 on one (0.8x); numbered top-down, 241 against 412 (1.71x), as the built-in face.
+against 444 on one (0.8x); numbered top-down, 247 against 415 (1.68x), as the built-in face.
 
 Numbering the vertices by height (descending y, ties in the file's order) makes every
 horizontal band of the face one run of consecutive nodes in each layer. The geometry, the
