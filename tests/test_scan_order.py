@@ -36,7 +36,7 @@ def triangles(v, f):
 
 
 def test_top_down_numbers_by_height_and_keeps_the_triangles_and_colours():
-    v, f, _, perm = shuffled_surface()
+    v, f, _, _ = shuffled_surface()
     colours = np.random.default_rng(0).integers(0, 256, (len(v), 3)).astype(np.uint8)
     look = Appearance(vertex_colours=colours, source="scan.ply")
     v2, f2, look2 = top_down(v, f, look)
@@ -52,7 +52,7 @@ def test_top_down_numbers_by_height_and_keeps_the_triangles_and_colours():
 def test_a_shuffled_scan_is_read_top_down_and_its_threads_bands_stay_apart(tmp_path):
     """The generic surface with its vertices shuffled, read as a scan: its two threads' bands
     change places in memory a few times per layer, as the built-in face's (10), not the
-    shuffled order's thousands; the face built is the generic one, node for node in height."""
+    shuffled order's thousands."""
     v, f, lm, _ = shuffled_surface()
     write_obj(tmp_path / "scan.obj", v * 1e3, f)
     write_landmark_csv(tmp_path / "lm.csv", lm)
