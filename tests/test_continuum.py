@@ -140,7 +140,7 @@ def test_bead_jacobian_matches_finite_differences():
     muscles = MuscleBundle(kind=kind, origin=origin, offset=offset, ptr=ptr, nodes=nodes,
                            weights=weights, bead=bead, bead_start=bead_start, rest_length=rest,
                            k_passive=k_passive, pull=MusclePull.ALONG_LENGTH.value, f1=p.f1,
-                           f2=p.f2, f3=p.f3, f4=p.f4)
+                           f2=p.f2, f3=p.f3, f4=np.full(2, p.f4))
 
     def forces(q, u):
         out = np.zeros_like(q)

@@ -53,19 +53,33 @@ def hand_kinematics(physics, pos, vel):
 
 
 def hand_tension(params, groups, m_filtered, length, rest, velocity):
-    """F = M fl(l) [f1 + f2 atan(f3 + f4 dl/dt)] + [k_m (l - l0)]^+ (eqs. 5-7)."""
+    """F = M fl(l) [f1 + f2 atan(f3 + f4 dl/dt)] + [k_m (l - l0)]^+ (eqs. 5-7), with f4 the
+    preset's or, under an intrinsic speed, (f3 - x_half) / (v_half l0) per muscle."""
     p = params
+    f4 = p.f4
+    if p.fv_vmax > 0:
+        x_half = np.tan(((p.f1 + p.f2 * np.arctan(p.f3)) / 2 - p.f1) / p.f2)
+        a = p.fv_curvature
+        f4 = (p.f3 - x_half) / (a / (2 * a + 1) * p.fv_vmax * rest)
     fl = np.exp(-np.abs(((length / rest) ** 2.3 - 1.0) / 1.26) ** 1.62)
     k_m = np.array([p.passive_stiffness(g) for g in groups])
-    active = m_filtered * fl * (p.f1 + p.f2 * np.arctan(p.f3 + p.f4 * velocity))
+    active = m_filtered * fl * (p.f1 + p.f2 * np.arctan(p.f3 + f4 * velocity))
     return active + np.maximum(k_m * (length - rest), 0.0)
 
 
-@pytest.fixture(scope="module", params=["anatomical", "lucero1999"])
+#: the anatomical preset with the intrinsic-speed force-velocity law and the lips' measured
+#: activation dynamics (Ito et al. 2004: 6.1 Hz, damping ratio 0.7): per-muscle f4, an
+#: underdamped filter
+FIBRE_DYNAMICS = {"fv_vmax": 20.0, "tau_activation": 1 / (2 * np.pi * 6.1),
+                  "activation_damping": 0.7}
+
+
+@pytest.fixture(scope="module", params=["anatomical", "lucero1999", "fibre-dynamics"])
 def constant_run(request, face, seeds_face):
     """ZYG (linear) and OOS (sphincter) at 0.6 from frame 0, an implicit integrator (which
     integrates the filter of eq. 4 exactly)."""
-    prm = preset(request.param)
+    prm = (preset("anatomical").with_(**FIBRE_DYNAMICS) if request.param == "fibre-dynamics"
+           else preset(request.param))
     model = face if prm.tissue != "uniform" else seeds_face
     sim = simulate(model, activity(FRAMES, ZYG=LEVEL, OOS=LEVEL), params=prm,
                    integrator="implicit")
@@ -84,12 +98,16 @@ def test_outputs_match_the_equations_by_hand(constant_run):
     # eq. (3)-(4): the step response of the filter from rest, M_bar = k_f S E
     area = np.array([prm.instance_area(n, g) for n, g in zip(names, groups, strict=True)])
     level = np.where(np.isin(groups, ["ZYG", "OOS"]), LEVEL, 0.0)
-    m_hand = activation_response(st.time, prm.k_force * area * level, prm.tau_activation)
+    m_hand = activation_response(st.time, prm.k_force * area * level, prm.tau_activation,
+                                 prm.activation_damping)
     np.testing.assert_allclose(mus.activation[k], m_hand, rtol=1e-9, atol=1e-15)
     np.testing.assert_array_equal(mus.activation[k], st.muscle_force)
     np.testing.assert_allclose(mus.normalised_activation[k], level
                                * (1 - (1 + st.time / prm.tau_activation)
-                                  * np.exp(-st.time / prm.tau_activation)), rtol=1e-9)
+                                  * np.exp(-st.time / prm.tau_activation))
+                               if prm.activation_damping == 1.0 else
+                               activation_response(st.time, level, prm.tau_activation,
+                                                   prm.activation_damping), rtol=1e-9)
     # lengths and velocities from the nodes of the stored state
     length, rate = hand_kinematics(ph, st.positions, st.velocities)
     np.testing.assert_allclose(mus.length[k], length, rtol=1e-12)

@@ -94,6 +94,11 @@ class Parameters:
     f2: float = 0.5  # eq. (6)
     f3: float = 0.43  # eq. (6)
     f4: float = 0.2 / CM  # s/m, eq. (6) (0.2 s/cm)
+    # fibre lengths per second: when > 0, each muscle's f4 of eq. (6) comes from this intrinsic
+    # speed and its fibre length (physics/muscle.py: fibre_f4) instead of ``f4``; 0: the seeds'
+    fv_vmax: float = 0.0
+    fv_curvature: float = 0.25  # a/F0 of Hill's hyperbola that places eq. (6)'s half force
+    activation_damping: float = 1.0  # damping ratio of eq. (4)'s filter (1: the seeds')
     k_passive_per_cm2: float = 17300 * DYNE / CM  # N/m per cm^2 of area (17 300 dyne/cm)
     k_volume: float = 1000 * DYNE / CM**3  # N/m^3, k_e1 of eq. (9) (1000 dyne/cm^3)
     k_shape: float = 2000 * DYNE / CM  # N/m, k_e2 of eq. (9) (2000 dyne/cm)
@@ -139,6 +144,8 @@ class Parameters:
 
     def __post_init__(self):
         check_jaw_kinematics(self.jaw_kinematics, self.glide_rate, self.glide_slope)
+        check_muscle_dynamics(self.fv_vmax, self.fv_curvature, self.tau_activation,
+                              self.activation_damping)
 
     @property
     def is_continuum(self) -> bool:
@@ -194,6 +201,36 @@ def check_jaw_kinematics(kinematics, rate, slope, *, source: str | None = None) 
     if not (_is_number(slope) and -np.pi / 2 <= slope <= np.pi / 2):
         raise InputError(f"glide slope must be between -90 and 90 degrees (got {slope!r} rad)",
                          source=source, field="glide_slope")
+
+
+#: the muscle-dynamics entries of a preset file's ``muscle`` block: key -> (Parameters field,
+#: factor from the file's unit to SI)
+MUSCLE_DYNAMICS_KEYS = MappingProxyType({
+    "fv_vmax_fibre_lengths_per_s": ("fv_vmax", 1.0),
+    "fv_curvature": ("fv_curvature", 1.0),
+    "activation_tau_ms": ("tau_activation", 1e-3),
+    "activation_damping": ("activation_damping", 1.0),
+})
+
+
+def check_muscle_dynamics(vmax, curvature, tau, zeta, *, source: str | None = None) -> None:
+    """Validate the force-velocity and activation constants: InputError naming the field.
+
+    ``vmax`` (fibre lengths per second, 0 for the seeds' absolute f4) in [0, 100];
+    ``curvature`` (a/F0 of Hill's hyperbola) in (0, 10]; ``tau`` (s) in (0, 1];
+    ``zeta`` (damping ratio of eq. 4) in (0, 1].
+    """
+    checks = (("fv_vmax", vmax, 0.0, 100.0, True, "fibre lengths per second"),
+              ("fv_curvature", curvature, 0.0, 10.0, False, ""),
+              ("tau_activation", tau, 0.0, 1.0, False, "s"),
+              ("activation_damping", zeta, 0.0, 1.0, False, ""))
+    for name, v, lo, hi, closed, unit in checks:
+        ok = _is_number(v) and (lo <= v if closed else lo < v) and v <= hi
+        if not ok:
+            low = "[" if closed else "("
+            raise InputError(f"{name} must be a number in {low}{lo:g}, {hi:g}]"
+                             f"{' ' + unit if unit else ''} (got {v!r})", source=source,
+                             field=name)
 
 
 def preset(name: str) -> Parameters:
@@ -326,7 +363,40 @@ def read_preset(path) -> Parameters:
         msg = exc.message if isinstance(exc, InputError) else "scales must be numbers"
         raise InputError(msg, source=str(path), field=getattr(exc, "field", "scales")) from None
     return p.with_(name=str(data.get("name", path.stem)),
-                   **_read_jaw(data.get("jaw"), p, str(path)))
+                   **_read_jaw(data.get("jaw"), p, str(path)),
+                   **_read_muscle(data.get("muscle"), p, str(path)))
+
+
+def _read_muscle(block, base: Parameters, source: str) -> dict:
+    """The muscle dynamics of a preset file's ``muscle`` block (absent: the base preset's):
+    ``fv_vmax_fibre_lengths_per_s``, ``fv_curvature``, ``activation_tau_ms``,
+    ``activation_damping`` (:data:`MUSCLE_DYNAMICS_KEYS`)."""
+    if block is None:
+        return {}
+    if not isinstance(block, dict):
+        raise InputError("muscle must be an object", source=source, field="muscle")
+    unknown = set(block) - set(MUSCLE_DYNAMICS_KEYS)
+    if unknown:
+        raise InputError(f"unknown muscle entry {sorted(unknown)[0]!r} (expected "
+                         f"{', '.join(MUSCLE_DYNAMICS_KEYS)})", source=source,
+                         field="muscle." + sorted(unknown)[0])
+    out = {}
+    for key, v in block.items():
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
+            raise InputError(f"{key} must be a number (got {v!r})", source=source,
+                             field="muscle." + key)
+        name, scale = MUSCLE_DYNAMICS_KEYS[key]
+        out[name] = float(v) * scale
+    values = {"fv_vmax": base.fv_vmax, "fv_curvature": base.fv_curvature,
+              "tau_activation": base.tau_activation,
+              "activation_damping": base.activation_damping, **out}
+    try:
+        check_muscle_dynamics(values["fv_vmax"], values["fv_curvature"],
+                              values["tau_activation"], values["activation_damping"])
+    except InputError as exc:
+        key = next(k for k, (f, _) in MUSCLE_DYNAMICS_KEYS.items() if f == exc.field)
+        raise InputError(exc.message, source=source, field="muscle." + key) from None
+    return out
 
 
 def _read_jaw(jaw, base: Parameters, source: str) -> dict:

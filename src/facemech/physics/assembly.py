@@ -35,7 +35,7 @@ from .kinds import (
     SpringKind,
 )
 from .materials import continuum_constants
-from .muscle import hill_force
+from .muscle import fibre_f4, hill_force
 from .slabs import slab_bundles
 from .springs import scaled_stiffness, tension_at
 from .threads import kernel_threads
@@ -362,7 +362,7 @@ def bead_muscle_forces(muscles, pos, vel, muscle_force, out):
         length, rate = muscle_length_rate(muscles, m, pos, vel, bp, bv)
         if kind[m] == SPHINCTER:
             tf = hill_force(muscle_force[m], length, rest_length[m], rate, k_passive[m],
-                            f1, f2, f3, f4)
+                            f1, f2, f3, f4[m])
             for b in range(b0, b1 - 1):
                 dx = bp[b + 1, 0] - bp[b, 0]
                 dy = bp[b + 1, 1] - bp[b, 1]
@@ -380,7 +380,7 @@ def bead_muscle_forces(muscles, pos, vel, muscle_force, out):
             dy = bp[b0, 1] - pos[o, 1] - offset[m, 1]
             dz = bp[b0, 2] - pos[o, 2] - offset[m, 2]
             tf = hill_force(muscle_force[m], length, rest_length[m], rate, k_passive[m],
-                            f1, f2, f3, f4)
+                            f1, f2, f3, f4[m])
             s = tf / length
             fb[b0, 0] -= s * dx
             fb[b0, 1] -= s * dy
@@ -586,7 +586,7 @@ def accumulate_forces(forces, pos, vel, muscle_force, anchors, out):
         length, rate = muscle_length_rate(muscles, m, pos, vel, pos, vel)
         if muscle_kind[m] == SPHINCTER:  # sphincter path: tension along the chain of nodes
             tf = hill_force(muscle_force[m], length, muscle_rest[m], rate, muscle_k_passive[m],
-                            f1, f2, f3, f4)
+                            f1, f2, f3, f4[m])
             for k in range(a0, a1 - 1):
                 u = muscle_nodes[k]
                 w = muscle_nodes[k + 1]
@@ -603,7 +603,7 @@ def accumulate_forces(forces, pos, vel, muscle_force, anchors, out):
         else:  # linear muscle: insertion nodes pulled towards the origin on the skull
             o = muscle_origin[m]
             tf = hill_force(muscle_force[m], length, muscle_rest[m], rate, muscle_k_passive[m],
-                            f1, f2, f3, f4)
+                            f1, f2, f3, f4[m])
             for k in range(a0, a1):
                 u = muscle_nodes[k]
                 dx = pos[o, 0] - pos[u, 0]
@@ -688,6 +688,17 @@ def force_bundles(ph: Physics) -> ForceBundles:
                                                nb.config.NUMBA_NUM_THREADS, ph.dynamic))
 
 
+def muscle_f4(p: Parameters, rest_length: np.ndarray) -> np.ndarray:
+    """The velocity scale f4 of eq. (6) of each muscle instance, s/m: the preset's one value
+    (the seeds', 20 s/m) or, when the preset gives an intrinsic speed ``fv_vmax`` (fibre lengths
+    per second), one from each muscle's fibre length (its rest length,
+    :func:`facemech.physics.muscle.fibre_f4`)."""
+    rest_length = np.asarray(rest_length, float)
+    if p.fv_vmax <= 0.0:
+        return np.full(rest_length.shape, float(p.f4))
+    return fibre_f4(rest_length, p.fv_vmax, p.fv_curvature, p.f1, p.f2, p.f3)
+
+
 def muscle_bundle(ph: Physics) -> MuscleBundle:
     """The muscle instances of a model and its preset's Hill constants, as the kernels read
     them."""
@@ -696,7 +707,7 @@ def muscle_bundle(ph: Physics) -> MuscleBundle:
         kind=ph.muscle_kind, origin=ph.muscle_origin, offset=ph.muscle_offset, ptr=ph.muscle_ptr,
         nodes=ph.muscle_nodes, weights=ph.muscle_weights, bead=ph.muscle_bead,
         bead_start=ph.bead_start, rest_length=ph.muscle_rest, k_passive=ph.muscle_k_passive,
-        pull=ph.muscle_pull, f1=p.f1, f2=p.f2, f3=p.f3, f4=p.f4)
+        pull=ph.muscle_pull, f1=p.f1, f2=p.f2, f3=p.f3, f4=muscle_f4(p, ph.muscle_rest))
 
 
 def rest_anchors(ph: Physics) -> Anchors:

@@ -103,7 +103,8 @@ class MuscleBundle(NamedTuple):
     rest_length : (m,) m
     k_passive : (m,) N/m -- passive stiffness k_m of eq. (7)
     pull : int -- :class:`~facemech.physics.kinds.MusclePull`
-    f1, f2, f3, f4 : float -- the force-velocity constants of eq. (6) (f4 in s/m)
+    f1, f2, f3 : float -- the force-velocity constants of eq. (6)
+    f4 : (m,) s/m -- eq. (6)'s velocity scale of each muscle (the seeds': one value for all)
     """
 
     kind: np.ndarray
@@ -120,16 +121,16 @@ class MuscleBundle(NamedTuple):
     f1: float
     f2: float
     f3: float
-    f4: float
+    f4: np.ndarray
 
     @classmethod
     def empty(cls, f1: float = 0.82, f2: float = 0.5, f3: float = 0.43,
-              f4: float = 20.0) -> MuscleBundle:
+              ) -> MuscleBundle:
         """No muscles (a bare spring network)."""
         none_i = np.zeros(0, np.int64)
         return cls(none_i, none_i, np.zeros((0, 3)), np.zeros(1, np.int64), none_i, np.zeros(0),
                    none_i, np.zeros(1, np.int64), np.zeros(0), np.zeros(0), PULL_TOWARDS_ORIGIN,
-                   f1, f2, f3, f4)
+                   f1, f2, f3, np.zeros(0))
 
 
 class RestorationBundle(NamedTuple):

@@ -35,9 +35,10 @@ def hill_force(m_filtered, length, rest_length, velocity, k_passive, f1, f2, f3,
 
 
 @nb.njit(cache=True, inline="always")
-def activation_euler(m, m_rate, m_steady, tau, dt):
-    """One explicit Euler step of tau^2 M'' + 2 tau M' + M = M_bar (eq. 4)."""
-    m_acc = (m_steady - m - 2.0 * tau * m_rate) / (tau * tau)
+def activation_euler(m, m_rate, m_steady, tau, dt, zeta=1.0):
+    """One explicit Euler step of tau^2 M'' + 2 zeta tau M' + M = M_bar (eq. 4; the seeds'
+    filter is critically damped, ``zeta = 1``)."""
+    m_acc = (m_steady - m - 2.0 * zeta * tau * m_rate) / (tau * tau)
     return m + dt * m_rate, m_rate + dt * m_acc
 
 
@@ -52,7 +53,59 @@ def activation_exact(m, m_rate, m_steady, tau, dt):
     return m_steady + e, rate
 
 
-def activation_response(t, m_steady, tau):
-    """Step response of eq. (4) from rest: M(t) = M_bar [1 - (1 + t/tau) exp(-t/tau)]."""
+@nb.njit(cache=True, inline="always")
+def activation_exact_damped(m, m_rate, m_steady, tau, zeta, dt):
+    """Exact solution over ``dt`` of ``tau^2 M'' + 2 zeta tau M' + M = M_bar`` for a constant
+    M_bar, damping ratio ``0 < zeta <= 1`` (eq. 4 with a measured damping ratio; ``zeta = 1`` is
+    :func:`activation_exact`, to the bit).
+
+    With ``w = 1/tau``, ``s = zeta w`` and ``wd = w sqrt(1 - zeta^2)``, the error ``e = M - M_bar``
+    and the rate ``r`` evolve as ``e(t) = exp(-s t) [e0 cos wd t + (r0 + s e0) / wd sin wd t]``
+    and ``r(t) = exp(-s t) [r0 cos wd t - (w^2 e0 + s r0) / wd sin wd t]``.
+    """
+    if zeta >= 1.0:
+        return activation_exact(m, m_rate, m_steady, tau, dt)
+    w = 1.0 / tau
+    s = zeta * w
+    wd = w * np.sqrt(1.0 - zeta * zeta)
+    e0 = m - m_steady
+    decay = np.exp(-s * dt)
+    c = np.cos(wd * dt)
+    sn = np.sin(wd * dt)
+    e = decay * (e0 * c + (m_rate + s * e0) / wd * sn)
+    rate = decay * (m_rate * c - (w * w * e0 + s * m_rate) / wd * sn)
+    return m_steady + e, rate
+
+
+def activation_response(t, m_steady, tau, zeta=1.0):
+    """Step response of eq. (4) from rest: ``M(t) = M_bar [1 - (1 + t/tau) exp(-t/tau)]`` when
+    critically damped (``zeta = 1``, the seeds'); for ``zeta < 1``
+    ``M_bar [1 - exp(-s t) (cos wd t + s / wd sin wd t)]`` (``s = zeta / tau``,
+    ``wd = sqrt(1 - zeta^2) / tau``)."""
     t = np.asarray(t, float)
-    return m_steady * (1.0 - (1.0 + t / tau) * np.exp(-t / tau))
+    if zeta >= 1.0:
+        return m_steady * (1.0 - (1.0 + t / tau) * np.exp(-t / tau))
+    s = zeta / tau
+    wd = np.sqrt(1.0 - zeta * zeta) / tau
+    return m_steady * (1.0 - np.exp(-s * t) * (np.cos(wd * t) + s / wd * np.sin(wd * t)))
+
+
+def half_force_argument(f1: float, f2: float, f3: float) -> float:
+    """``x`` with ``f1 + f2 atan(x)`` half of ``f1 + f2 atan(f3)`` (eq. 6; -0.716 for the
+    seeds' constants: with f4 = 20 s/m, ``f3 + f4 v`` reaches it at v = -57 mm/s)."""
+    return float(np.tan(((f1 + f2 * np.arctan(f3)) / 2.0 - f1) / f2))
+
+
+def hill_half_speed(curvature: float) -> float:
+    """Shortening speed, as a share of Vmax, at which Hill's (1938) hyperbola
+    ``F/F0 = (1 - v/Vmax) / (1 + v / (a Vmax))`` gives half the isometric force:
+    ``a / (2 a + 1)`` (1/6 for the common curvature a = 0.25)."""
+    return curvature / (2.0 * curvature + 1.0)
+
+
+def fibre_f4(rest_length, vmax, curvature, f1, f2, f3):
+    """Per-muscle f4 of eq. (6), s/m, for an intrinsic speed ``vmax`` (fibre lengths per
+    second): eq. (6) halves the force at the speed at which Hill's hyperbola of curvature
+    ``curvature`` does, ``hill_half_speed(a) x vmax x l0`` (``l0`` the fibre length, m)."""
+    v_half = hill_half_speed(curvature) * vmax * np.asarray(rest_length, float)
+    return (f3 - half_force_argument(f1, f2, f3)) / v_half

@@ -21,7 +21,7 @@ import numba as nb
 import numpy as np
 
 from ..params import MUSCLE_GROUPS
-from .assembly import Physics, muscle_bundle, muscle_lengths
+from .assembly import Physics, muscle_bundle, muscle_f4, muscle_lengths
 from .muscle import hill_force
 
 #: the quantities of :class:`MuscleSeries` as (attribute, results variable, units, long name)
@@ -37,7 +37,7 @@ OUTPUT_VARIABLES = (
 def _tensions(m_filtered, length, rate, rest_length, k_passive, f1, f2, f3, f4, out):
     for m in range(length.shape[0]):
         out[m] = hill_force(m_filtered[m], length[m], rest_length[m], rate[m], k_passive[m],
-                            f1, f2, f3, f4)
+                            f1, f2, f3, f4[m])
 
 
 @dataclass(frozen=True)
@@ -80,7 +80,8 @@ def muscle_outputs(physics: Physics, positions: np.ndarray, velocities: np.ndarr
     act = np.ascontiguousarray(activation, float)
     length, rate = muscle_lengths(muscle_bundle(ph), pos, vel)
     force = np.empty(ph.n_muscles)
-    _tensions(act, length, rate, ph.muscle_rest, ph.muscle_k_passive, p.f1, p.f2, p.f3, p.f4,
+    _tensions(act, length, rate, ph.muscle_rest, ph.muscle_k_passive, p.f1, p.f2, p.f3,
+              muscle_f4(p, ph.muscle_rest),
               force)
     return MuscleOutputs(force, length, rate, act.copy())
 

@@ -33,6 +33,7 @@ class EulerSteps(NamedTuple):
     tau : float, s -- the activation filter's time constant (eq. 4)
     dynamic : (d,) int64 -- the nodes that move under forces
     inv_mass : (nodes,) 1/kg
+    zeta : float -- the damping ratio of the activation filter (eq. 4; 1 in the seeds)
     """
 
     n_steps: int
@@ -40,6 +41,7 @@ class EulerSteps(NamedTuple):
     tau: float
     dynamic: np.ndarray
     inv_mass: np.ndarray
+    zeta: float = 1.0
 
 
 @nb.njit(cache=True, inline="always")
@@ -105,7 +107,7 @@ def euler_frame(forces, jaw, steps, pos, vel, m_force, m_rate, m_steady, anchors
             euler_cromer(dynamic, 0, dynamic.shape[0], inv_mass, dt, out, pos, vel)
         for m in range(m_force.shape[0]):
             m_force[m], m_rate[m] = activation_euler(m_force[m], m_rate[m], m_steady[m],
-                                                     steps.tau, dt)
+                                                     steps.tau, dt, steps.zeta)
     return pos, vel, m_force, m_rate
 
 
@@ -156,7 +158,7 @@ class ExplicitEuler:
         """``state`` advanced by one frame under ``controls`` (a new :class:`State`)."""
         ss = solver_state
         f = start_frame(ss, state, controls)
-        steps = EulerSteps(ss.n_steps, ss.step, ss.tau, ss.dynamic, ss.inv_mass)
+        steps = EulerSteps(ss.n_steps, ss.step, ss.tau, ss.dynamic, ss.inv_mass, ss.zeta)
         try:
             pos, vel, m_force, m_rate = euler_frame(
                 ss.forces, ss.jaw, steps, f.positions, f.velocities, f.muscle_force,
@@ -176,7 +178,7 @@ def _warm_up(ss: SolverState, physics: Physics) -> None:
     pos = physics.model.rest_positions.copy()
     m = np.zeros(len(ss.muscle_group))
     anchors = rest_anchors(physics)
-    steps = EulerSteps(0, ss.step, ss.tau, ss.dynamic, ss.inv_mass)
+    steps = EulerSteps(0, ss.step, ss.tau, ss.dynamic, ss.inv_mass, ss.zeta)
     euler_frame(ss.forces, ss.jaw, steps, pos, np.zeros_like(pos), m, m, m, anchors,
                 np.zeros(3), np.zeros(3))
     accumulate_forces(ss.forces, pos, np.zeros_like(pos), m, anchors, np.zeros_like(pos))

@@ -197,13 +197,13 @@ def _warm_up(ss: SolverState, physics: Physics) -> None:
     m = np.zeros(len(ss.muscle_group))
     place_jaw_into(ss.jaw, np.zeros(3), np.zeros(3), pos, vel)
     accumulate_forces(ss.forces, pos, vel, m, rest_anchors(physics), np.zeros_like(pos))
-    filter_exact(m, m, m, ss.tau, ss.step)
+    filter_exact(m, m, m, ss.tau, ss.step, ss.zeta)
     ss.system.linearise(pos, vel, m + 1.0, m)
 
 
 def _frame_force_bound(ss: SolverState, m_force, m_rate, m_steady):
     """The larger of each muscle's filtered force now and at the frame's end (eq. 4)."""
-    end, _ = filter_exact(m_force, m_rate, m_steady, ss.tau, ss.frame_duration)
+    end, _ = filter_exact(m_force, m_rate, m_steady, ss.tau, ss.frame_duration, ss.zeta)
     return np.maximum(m_force, end)
 
 
@@ -247,7 +247,7 @@ class LinearImplicitEuler:
             rhs = h * (out[dyn] - h * system.apply_stiffness(v0, jac))
             vel[dyn] = v0 + system.solve(rhs, jac, h)
             pos[dyn] += h * vel[dyn]
-            m_force, m_rate = filter_exact(m_force, m_rate, m_steady, ss.tau, h)
+            m_force, m_rate = filter_exact(m_force, m_rate, m_steady, ss.tau, h, ss.zeta)
         return finish_frame(ss, state, controls, pos, vel, m_force, m_rate, f.jaw_rate)
 
 
@@ -293,7 +293,7 @@ class Rosenbrock2:
             k1x, k1v = _ros2_stage(ss, v0, out[dyn] * inv_m, jac)
             pos[dyn] = x0 + h * k1x
             vel[dyn] = v0 + h * k1v
-            m_force, m_rate = filter_exact(m_force, m_rate, m_steady, ss.tau, h)
+            m_force, m_rate = filter_exact(m_force, m_rate, m_steady, ss.tau, h, ss.zeta)
             anchors = place_jaw_into(ss.jaw, f.jaw_start + f.jaw_rate * ((step + 1) * h),
                                      f.jaw_rate, pos, vel)
             accumulate_forces(ss.forces, pos, vel, m_force, anchors, out)

@@ -102,7 +102,7 @@ def bead_jacobian(muscles, bp, bv, pos, vel, m_force, active):
                 for a in range(3):
                     rate += units[s, a] * (bv[b + 1, a] - bv[b, a])
             t, dl, dv = hill_derivatives(m_force[m], length, rest_length[m], rate, k_passive[m],
-                                         f1, f2, f3, f4)
+                                         f1, f2, f3, f4[m])
             # gradient of the path length at each bead
             grad = np.zeros((b1 - b0, 3))
             for s in range(nseg):
@@ -139,7 +139,7 @@ def bead_jacobian(muscles, bp, bv, pos, vel, m_force, active):
                 d[a] /= length
                 rate += d[a] * (bv[b0, a] - vel[o, a])
             t, dl, dv = hill_derivatives(m_force[m], length, rest_length[m], rate, k_passive[m],
-                                         f1, f2, f3, f4)
+                                         f1, f2, f3, f4[m])
             g = t / length
             for a in range(3):
                 for c in range(3):

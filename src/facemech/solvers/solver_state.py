@@ -20,7 +20,7 @@ import numpy as np
 
 from ..physics.assembly import Physics, force_bundles
 from ..physics.bundles import Anchors, ForceBundles
-from ..physics.muscle import activation_exact
+from ..physics.muscle import activation_exact_damped
 from .mandible import JawBundle, jaw_bundle, place_jaw, set_jaw_nodes
 from .state import Controls, State
 
@@ -47,6 +47,7 @@ class SolverState:
     step : float, s -- ``frame_duration / n_steps``
     system : ImplicitSystem or None -- the implicit methods' factorised constant matrix and
         the muscles' Jacobian (:mod:`facemech.solvers.implicit`); None for explicit Euler
+    zeta : float -- the damping ratio of the activation filter (eq. 4; 1 in the seeds)
     """
 
     forces: ForceBundles
@@ -60,6 +61,7 @@ class SolverState:
     n_steps: int
     step: float
     system: ImplicitSystem | None = None
+    zeta: float = 1.0
 
     def steady_force(self, activity: np.ndarray) -> np.ndarray:
         """M_bar (muscles,) N of each instance from group activity (16,) in [0, 1] (eq. 3)."""
@@ -75,7 +77,8 @@ def solver_state(physics: Physics, n_steps: int,
         forces=force_bundles(physics), jaw=jaw_bundle(physics), dynamic=physics.dynamic,
         inv_mass=physics.inv_mass, muscle_group=physics.muscle_group,
         max_force=p.k_force * physics.muscle_area, tau=p.tau_activation,
-        frame_duration=frame, n_steps=int(n_steps), step=frame / n_steps, system=system)
+        frame_duration=frame, n_steps=int(n_steps), step=frame / n_steps, system=system,
+        zeta=float(p.activation_damping))
 
 
 @dataclass(frozen=True, eq=False)
@@ -134,13 +137,14 @@ def finish_frame(ss: SolverState, state: State, controls: Controls, pos: np.ndar
 
 
 @nb.njit(cache=True)
-def filter_exact(m_force, m_rate, m_steady, tau, dt):
-    """The activation filter of eq. (4) advanced exactly by ``dt`` s from (M, dM/dt) (muscles,)
-    towards ``m_steady`` (N): new arrays ``(M, dM/dt)``."""
+def filter_exact(m_force, m_rate, m_steady, tau, dt, zeta=1.0):
+    """The activation filter of eq. (4) (damping ratio ``zeta``) advanced exactly by ``dt`` s
+    from (M, dM/dt) (muscles,) towards ``m_steady`` (N): new arrays ``(M, dM/dt)``."""
     force = np.empty_like(m_force)
     rate = np.empty_like(m_rate)
     for m in range(m_force.shape[0]):
-        force[m], rate[m] = activation_exact(m_force[m], m_rate[m], m_steady[m], tau, dt)
+        force[m], rate[m] = activation_exact_damped(m_force[m], m_rate[m], m_steady[m], tau,
+                                                       zeta, dt)
     return force, rate
 
 

@@ -1,0 +1,92 @@
+"""How fast the lips move under a step of full activity, for the default preset and for the
+speed laws of issue 27 (an intrinsic-speed force-velocity law, the lips' measured activation
+dynamics, more implicit steps): 10-90 % rise time, peak speed and creep after 300 ms.
+
+Prints JSON. ``python benchmarks/speed.py [--face default] [--seconds 1.5]``. Each variant runs
+the six perioral gestures of docs/model.md's dynamics table; the creep is how far the landmark
+still moves between 300 ms after the step's 90 % point and the end, as a share of the amplitude
+(the issue's limit: 5 %).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+
+import numpy as np
+
+#: (groups, landmark, axis) of each gesture, as in benchmarks/realism.py's dynamics table
+GESTURES = ((("ZYG",), "mouth_corner_right", 1), (("LLS",), "upper_lip_center", 1),
+            (("DLI",), "lower_lip_center", 1), (("MEN",), "chin", 1),
+            (("OOS", "OOI"), "mouth_corner_right", 0), (("DAO",), "mouth_corner_right", 1))
+
+#: Ito, Murano & Gomi (2004, J Appl Physiol 96:2318): the lips' force response to a stimulus,
+#: 6.1 Hz natural frequency and damping ratio 0.7
+ITO = {"tau_activation": 1.0 / (2.0 * np.pi * 6.1), "activation_damping": 0.7}
+
+VARIANTS = {
+    "default": {},
+    "fibre_vmax10": {"fv_vmax": 10.0, **ITO},
+    "fibre_vmax20": {"fv_vmax": 20.0, **ITO},
+    "fibre_vmax20_12_steps": {"fv_vmax": 20.0, **ITO, "substeps": 12},
+    "no_force_velocity": {"f4": 0.0},
+}
+
+
+def measure(face, params, groups, landmark, axis, seconds):
+    """Rise (s), peak speed (m/s), amplitude (m) and creep (share) of one gesture."""
+    from facemech.params import MUSCLE_GROUPS
+    from facemech.solvers.forward import simulate
+
+    frames = int(round(seconds * params.frame_rate)) + 1
+    act = np.zeros((frames, len(MUSCLE_GROUPS)))
+    for g in groups:
+        act[:, MUSCLE_GROUPS.index(g)] = 1.0
+    sim = simulate(face, act, params=params)
+    x = sim.positions[:, face.landmarks[landmark], axis]
+    y = np.abs(x - x[0])
+    t = np.arange(frames) / params.frame_rate
+    mono = np.maximum.accumulate(y)
+    t10 = np.interp(0.1 * y[-1], mono, t)
+    t90 = np.interp(0.9 * y[-1], mono, t)
+    settled = np.interp(t90 + 0.3, t, y)
+    return {"rise_ms": round(1e3 * (t90 - t10), 1),
+            "peak_speed_mm_s": round(1e3 * float(np.max(np.abs(np.diff(x)))) * params.frame_rate,
+                                     1),
+            "amplitude_mm": round(1e3 * float(y[-1]), 2),
+            "creep_after_300ms": round(float((y[-1] - settled) / y[-1]), 3)}
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--face", default="default")
+    ap.add_argument("--seconds", type=float, default=1.5)
+    ap.add_argument("--variants", default=",".join(VARIANTS))
+    args = ap.parse_args(argv)
+    from threadpoolctl import threadpool_limits
+
+    from facemech import default_face
+    from facemech.params import preset
+
+    face = default_face(args.face)
+    out = {"face": args.face, "seconds": args.seconds, "variants": {}}
+    with threadpool_limits(1):
+        for name in args.variants.split(","):
+            p = preset("anatomical").with_(**VARIANTS[name])
+            rows = {}
+            t0 = time.perf_counter()
+            for groups, landmark, axis in GESTURES:
+                rows["+".join(groups)] = measure(face, p, groups, landmark, axis, args.seconds)
+                print(f"{name} {'+'.join(groups)} {rows['+'.join(groups)]}", file=sys.stderr,
+                      flush=True)
+            out["variants"][name] = {"changes": {k: float(v) for k, v in VARIANTS[name].items()},
+                                     "wall_s": round(time.perf_counter() - t0, 1),
+                                     "gestures": rows}
+    print(json.dumps(out, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
