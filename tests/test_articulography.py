@@ -364,6 +364,10 @@ def _bad_cases(tmp_path):
                                              np.zeros(N), t_back).read_bytes(), "time"),
         "est ascii row short": ("o.ema", _ascii_short(tmp_path), "columns"),
         "mocha plain wrong column count": ("p.ema", "1 2 3 4 5\n1 2 3 4 5\n", "columns"),
+        "est coil without its y": ("q.ema", mocha.replace(b"Channel_7 ul_y", b"Channel_7 ul_q"),
+                                   "ul_x"),
+        "est NumFrames 0": ("r.ema", mocha.replace(b"NumFrames 40", b"NumFrames 0"),
+                            "NumFrames"),
     }
     for p in tmp_path.glob("tmp*"):
         p.unlink()
@@ -380,7 +384,8 @@ BAD = ["txy wrong column count", "txy only missing codes", "txy time going back"
        "txy rate of 0", "est truncated binary body", "est body too long",
        "est NumChannels not a number", "est no header end", "est bad byte order",
        "est bad data type", "est not a track", "est only breaks", "est time not increasing",
-       "est rate of 0", "est ascii row short", "mocha plain wrong column count"]
+       "est rate of 0", "est ascii row short", "mocha plain wrong column count",
+       "est coil without its y", "est NumFrames 0"]
 
 
 @pytest.mark.parametrize("case", BAD)
