@@ -423,3 +423,11 @@ def test_invert_refuses_a_bad_txy_before_any_work(monkeypatch, capsys, tmp_path)
     assert code == 2 and len(errors) == 1 and "Traceback" not in err, err
     assert "field 'data'" in errors[0] and str(tmp_path / name) in errors[0]
     assert _snapshot(tmp_path) == before
+
+
+@pytest.mark.parametrize("name", ["junk.ema", "junk.txy"])
+def test_binary_junk_is_refused(monkeypatch, capsys, tmp_path, name):
+    (tmp_path / name).write_bytes(bytes(range(256)) * 8)
+    code, _, err = run_cli(monkeypatch, capsys, "markers", "info", tmp_path / name)
+    assert code == 2 and len(err.strip().splitlines()) == 1, err
+    assert "binary data where a text" in err and str(tmp_path / name) in err
