@@ -58,6 +58,7 @@ and ``meta["axes"]`` says which decided. A 3-D file's lateral axis keeps the fra
 from __future__ import annotations
 
 import re
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -288,35 +289,34 @@ XRMB = _Layout("XRMB", "x", +1, "y", +1)
 
 def _sign(coords: np.ndarray, names: list[str], roles: dict, a_roles, b_roles, paired: bool,
           evidence: float):
-    """(sign, separation in m, which sensors) from medians of role groups a minus b, or None."""
+    """Which way group a lies from group b along one file axis, from medians over the frames.
+
+    Parameters
+    ----------
+    coords : (frames, sensors) one file coordinate, m
+    a_roles, b_roles : the roles of the two groups
+    paired : compare the first sensor of each group frame by frame (else all of each group)
+    evidence : m, the smallest separation that decides
+
+    Returns
+    -------
+    (sign, separation in m, name of a, name of b), or None without both groups or evidence
+    """
     a = [k for k, n in enumerate(names) if roles[n] in a_roles]
     b = [k for k, n in enumerate(names) if roles[n] in b_roles]
     if not a or not b:
         return None
-    with np.errstate(invalid="ignore"), _quiet():
+    with warnings.catch_warnings():  # a sensor without data is not an error here
+        warnings.simplefilter("ignore", RuntimeWarning)
         if paired:
             d = float(np.nanmedian(coords[:, a[0]] - coords[:, b[0]]))
         else:
             d = float(np.nanmedian(coords[:, a])) - float(np.nanmedian(coords[:, b]))
     if not np.isfinite(d) or abs(d) < evidence:
         return None
-    return (1 if d > 0 else -1), abs(d), (names[a[0]] if paired else "lips",
-                                          names[b[0]] if paired else "+".join(names[k]
-                                                                              for k in b))
-
-
-class _quiet:
-    """Silence numpy's all-NaN warnings inside a block (a lost sensor is not an error)."""
-
-    def __enter__(self):
-        import warnings
-
-        self._w = warnings.catch_warnings()
-        self._w.__enter__()
-        warnings.simplefilter("ignore", RuntimeWarning)
-
-    def __exit__(self, *exc):
-        return self._w.__exit__(*exc)
+    if paired:
+        return (1 if d > 0 else -1), abs(d), names[a[0]], names[b[0]]
+    return (1 if d > 0 else -1), abs(d), "lips", "+".join(names[k] for k in b)
 
 
 def _orient(layout: _Layout, fb: np.ndarray, vert: np.ndarray, names: list[str],
@@ -330,7 +330,7 @@ def _orient(layout: _Layout, fb: np.ndarray, vert: np.ndarray, names: list[str],
     else:
         f_sign = front[0]
         f_how = (f"the lips lie {front[1] * 1e3:.0f} mm toward "
-                 f"{'+' if f_sign > 0 else '-'}{layout.front_back} of {front[2][1]}")
+                 f"{'+' if f_sign > 0 else '-'}{layout.front_back} of {front[3]}")
         if f_sign != layout.front_sign:
             notes.append(f"front-back axis opposite to {layout.name}'s documented convention "
                          f"(decided by the sensors: {f_how})")
@@ -342,8 +342,8 @@ def _orient(layout: _Layout, fb: np.ndarray, vert: np.ndarray, names: list[str],
         u_sign, u_how = layout.up_sign, f"{layout.name}'s documented convention"
     else:
         u_sign = up[0]
-        u_how = (f"{up[2][0]} lies {up[1] * 1e3:.0f} mm toward "
-                 f"{'+' if u_sign > 0 else '-'}{layout.vertical} of {up[2][1]}")
+        u_how = (f"{up[2]} lies {up[1] * 1e3:.0f} mm toward "
+                 f"{'+' if u_sign > 0 else '-'}{layout.vertical} of {up[3]}")
         if u_sign != layout.up_sign:
             notes.append(f"vertical axis opposite to {layout.name}'s documented convention "
                          f"(decided by the sensors: {u_how})")
