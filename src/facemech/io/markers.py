@@ -1,6 +1,9 @@
 """Marker files: wide CSV (read/write), Qualisys TSV (read), and dispatch over all formats.
 
 A facemech results file (``.nc``) also reads as a marker file: its model markers (read only).
+Articulography reads too (:mod:`facemech.io.articulography`): EMA as EST track files (``.ema``,
+``.est``, or any file starting with ``EST_File``) or MOCHA-TIMIT's plain layout (``.ema``), and
+X-ray microbeam pellets (``.txy``).
 
 Wide CSV: a comment line ``# units: mm`` (or m, cm), a header ``time, NAME_x, NAME_y, NAME_z,
 ...`` and one row per frame; empty cells are missing samples; an optional ``# filled:`` comment
@@ -20,7 +23,8 @@ from ..units import length_scale
 from .atomic import atomic_path
 from .tables import read_table, uniform_rate
 
-FORMATS = {".csv": "csv", ".trc": "trc", ".c3d": "c3d", ".tsv": "tsv", ".nc": "results"}
+FORMATS = {".csv": "csv", ".trc": "trc", ".c3d": "c3d", ".tsv": "tsv", ".nc": "results",
+           ".ema": "ema", ".est": "ema", ".txy": "txy"}
 
 
 def read_marker_csv(path: str | Path, *, units: str | None = None) -> MarkerSet:
@@ -125,13 +129,19 @@ def read_qualisys_tsv(path: str | Path, *, units: str | None = None) -> MarkerSe
 
 
 def read_markers(path: str | Path, *, units: str | None = None) -> MarkerSet:
-    """Read any supported marker file (CSV, TRC, C3D, Qualisys TSV), positions in metres.
+    """Read any supported marker file (CSV, TRC, C3D, Qualisys TSV, EMA, XRMB), in metres.
 
     A results file (``.nc``) gives the model's markers at the results' frame rate (``units`` is
-    not needed: results are in metres).
+    not needed: results are in metres). EMA and X-ray microbeam files come in the model's axes
+    with their sensors' roles in ``meta["roles"]`` (:mod:`facemech.io.articulography`); a file
+    of any other suffix that starts with ``EST_File`` reads as EMA.
     """
     path = Path(path)
     fmt = FORMATS.get(path.suffix.lower())
+    if fmt is None:
+        from .articulography import is_est
+
+        fmt = "ema" if is_est(path) else None
     if fmt is None:
         raise InputError(f"unknown marker format {path.suffix!r} (expected "
                          f"{', '.join(FORMATS)})", source=str(path))
@@ -189,6 +199,10 @@ def check_span(ms: MarkerSet, *, source: str | Path | None = None) -> MarkerSet:
 
 
 def _read(path: Path, fmt: str, units: str | None) -> MarkerSet:
+    if fmt in ("ema", "txy"):
+        from .articulography import read_ema, read_xrmb_txy
+
+        return (read_ema if fmt == "ema" else read_xrmb_txy)(path, units=units)
     if fmt == "csv":
         return read_marker_csv(path, units=units)
     if fmt == "tsv":
