@@ -183,7 +183,8 @@ def simulate(
         output: Path = ..., face: str = "default", activity: Path | None = None,
         emg: Path | None = None, units: str | None = None, emg_baseline: str | None = None,
         emg_calibration: Path | None = None, jaw_chin: Path | None = None,
-        chin_marker: str = "R01", jaw_second_marker: str | None = None,
+        chin_marker: str | None = None, jaw_second_marker: str | None = None,
+        jaw_incisor: str | None = None, jaw_molar: str | None = None,
         jaw_angle: Path | None = None, bite_block: bool = False,
         jaw_kinematics: str | None = None, preset: str = "anatomical",
         integrator: str | None = None, substeps: int | None = None, dt: float | None = None,
@@ -194,7 +195,8 @@ def simulate(
     return (_staged(
         sim.simulate_files, output=output, movie=movie,
         controls=sim.Controls(activity, emg, emg_baseline, emg_calibration),
-        jaw=sim.JawSource(jaw_angle, jaw_chin, chin_marker, jaw_second_marker, units, bite_block),
+        jaw=sim.JawSource(jaw_angle, jaw_chin, chin_marker, jaw_second_marker, units, bite_block,
+                          jaw_incisor, jaw_molar),
         face=face, preset=preset, jaw_kinematics=jaw_kinematics, integrator=integrator,
         substeps=substeps, dt=dt, jaw_drive=jaw_drive))
 
@@ -266,8 +268,9 @@ def experiment_lucero2008(output: Path = Path("lucero2008"), frames: int = 60,
 @command()
 def invert(markers: Path = ..., output: Path = ..., face: str = "default",
            map_file: Path | None = None, preset: str = "anatomical", method: str = "lsq",
-           positive: bool = True, controls: str = "speech", chin_marker: str | None = None,
-           jaw_second_marker: str | None = None, jaw_fixed: bool = False, jaw_lead: int = 2,
+           positive: bool = True, controls: str | None = None, chin_marker: str | None = None,
+           jaw_second_marker: str | None = None, jaw_incisor: str | None = None,
+           jaw_molar: str | None = None, jaw_fixed: bool = False, jaw_lead: int | None = None,
            noise: float | None = None, window: int | None = None, tol: float | None = None,
            bend: float | None = None, smooth: float | None = None, effort: float | None = None,
            max_evaluations: int | None = None, scale_pair: str | None = None,
