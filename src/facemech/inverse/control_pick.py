@@ -15,7 +15,9 @@ markers most, then at each step the one that adds the most motion the controls a
 cannot make; ``|R_kk|`` is that new motion (mm per unit). Controls are taken in that order
 while ``|R_kk|`` is at least :data:`MIN_NEW_MOTION_MM` (the identifiability threshold of
 :mod:`~facemech.inverse.uncertainty`: at 0.1 mm of marker noise such a control is fixed to a
-tenth of full activity), and no more than there are coordinates.
+tenth of full activity), and no more than there are coordinates. An estimated jaw that moves
+the markers at least that much is taken first, whatever the muscles could mimic of it: it is
+the largest mover of the face in speech, and the inversion never leaves it silently at rest.
 
 The pick depends on the markers' places and the model, not on the recording: every utterance
 of one sensor layout is inverted with the same controls. For two lip points it takes, for each
@@ -141,16 +143,28 @@ def pick_controls(face, params, nodes, candidates, *, estimate_jaw: bool,
          if responses is None else np.asarray(responses, float))
     s = s.reshape(len(nodes), 3, len(cols))[:, list(axes)].reshape(-1, len(cols))
     coords = s.shape[0]
-    _, r, perm = sla.qr(s, mode="economic", pivoting=True)
+    first: list[int] = []
+    rest = s
+    jaw = len(names)
+    if estimate_jaw and np.linalg.norm(s[:, jaw]) >= MIN_NEW_MOTION_MM:
+        # the jaw first, whatever the muscles could mimic of it: it moves the face most in
+        # speech, and a jaw held at rest would be a silent error (see inverse.invert)
+        first = [jaw]
+        u = s[:, jaw] / np.linalg.norm(s[:, jaw])
+        rest = s - np.outer(u, u @ s)
+    muscles = np.arange(len(names))
+    _, r, perm = sla.qr(rest[:, muscles], mode="economic", pivoting=True)
     diag = np.abs(np.diag(r))
-    k = int(min(coords, np.sum(diag >= MIN_NEW_MOTION_MM)))
-    if k == 0:
+    k = int(min(coords - len(first), np.sum(diag >= MIN_NEW_MOTION_MM)))
+    if k + len(first) == 0:
         raise InputError(f"the markers move less than {MIN_NEW_MOTION_MM:.0f} mm per unit of "
                          "every control: nothing to invert", field="markers")
-    kept = [int(j) for j in perm[:k]]
-    new = {cols[j]: float(diag[i]) for i, j in enumerate(kept)}
+    kept = first + [int(muscles[j]) for j in perm[:k]]
+    new = {cols[j]: float(diag[i]) for i, j in enumerate(kept[len(first):])}
+    if first:
+        new["jaw"] = float(np.linalg.norm(s[:, jaw]))
     q, _ = np.linalg.qr(s[:, kept])
-    for j in perm[k:]:
+    for j in (j for j in range(len(cols)) if j not in kept):
         new[cols[j]] = float(np.linalg.norm(s[:, j] - q @ (q.T @ s[:, j])))
     return ControlPick(muscles=tuple(c for j, c in enumerate(names) if j in kept),
                        jaw=estimate_jaw and len(names) in kept,
