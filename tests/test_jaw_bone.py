@@ -10,7 +10,7 @@ from facemech import MUSCLE_GROUPS
 from facemech.errors import InputError
 from facemech.inverse.control_pick import MIN_NEW_MOTION_MM, pick_controls
 from facemech.inverse.invert import SPEECH_CONTROLS
-from facemech.inverse.workflow import invert_markers
+from facemech.inverse.workflow import _at_frame_rate, invert_markers
 from facemech.io.markers import write_markers
 from facemech.io.results import read_results
 from facemech.kinematics.roles import bone_points, marker_roles
@@ -151,6 +151,13 @@ def test_roles_choose_the_bone_points_and_are_checked():
     with pytest.raises(InputError) as exc:
         bone_points(ema_set(pos, {**roles, "TT": "lower_incisor"}))
     assert exc.value.field == "TT"
+    # articulography comes at its own rate (here 200 Hz) and is resampled to the model's
+    fast = MarkerSet(np.zeros((41, 5, 3)), tuple(roles), 200.0, meta={"roles": roles})
+    at60, note = _at_frame_rate(fast, 60.0)
+    assert at60.rate == 60.0 and at60.n_frames == 13 and marker_roles(at60) == roles
+    assert note == ["articulography at 200 Hz resampled to 60 Hz (low-passed, cubic spline)"]
+    plain = MarkerSet(np.zeros((41, 5, 3)), tuple(roles), 200.0)
+    assert _at_frame_rate(plain, 60.0) == (plain, [])  # other data must come at the rate
     with pytest.raises(InputError):
         wsim.JawSource(markers="m.csv", chin_marker="R01", incisor="LI")
     with pytest.raises(InputError) as exc:

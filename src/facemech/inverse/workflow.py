@@ -56,8 +56,8 @@ def invert_markers(
     Parameters
     ----------
     markers : marker file (or a :class:`~facemech.markerset.MarkerSet`) in the model's frame, at
-        the preset's frame rate; articulography (``meta["roles"]``) in its own frame: its lips
-        are laid on the face's vermilion points
+        the preset's frame rate; articulography (``meta["roles"]``) in its own frame and at its
+        own rate: its lips are laid on the face's vermilion points, and it is resampled
     face : face file or built-in face name
     map_file : marker,node CSV (default: the closest nodes; articulography's lips: their
         vermilion points)
@@ -108,6 +108,7 @@ def invert_markers(
         prm = prm.with_(jaw_kinematics=jaw_kinematics)
     ms = markers if isinstance(markers, MarkerSet) else read_markers(markers, units=units)
     src = ms.meta.get("source") or str(markers)
+    ms, resampled = _at_frame_rate(ms, prm.frame_rate)
     incisor, molar, by_role = bone_points(ms, incisor=jaw_incisor, molar=jaw_molar,
                                           skin_jaw=chin_marker)
     if jaw_fixed and chin_marker is None and incisor is None:
@@ -116,6 +117,7 @@ def invert_markers(
     model = load_face(face, tissue=prm.tissue)
     midsagittal = is_midsagittal(ms)
     skin, mapping, notes = _skin_markers(ms, model, map_file, (incisor, molar), midsagittal)
+    notes = resampled + notes
     if scale_pair is not None:
         a, _, b = scale_pair.partition(",")
         skin = scale_adapt(skin, model, mapping, (a.strip(), b.strip())).markers
@@ -129,6 +131,19 @@ def invert_markers(
                  jaw_angle=jaw, estimate_jaw=estimate, jaw_source=jaw_source, params=prm,
                  dt=dt, noise_mm=noise, progress=progress)
     return replace(res, notes=[*res.notes, *notes, *([pick_note] if pick_note else [])])
+
+
+def _at_frame_rate(ms, rate):
+    """(the set at the model's frame ``rate``, a note if it was resampled): articulography
+    (sensors with roles, recorded at 100-500 Hz) is resampled with anti-aliasing
+    (:func:`facemech.kinematics.resample.resample`); other data must come at the rate."""
+    from ..kinematics.resample import resample
+    from ..kinematics.roles import marker_roles
+
+    if abs(ms.rate - rate) <= 1e-3 * rate or not marker_roles(ms):
+        return ms, []
+    return resample(ms, rate), [f"articulography at {ms.rate:g} Hz resampled to {rate:g} Hz "
+                                "(low-passed, cubic spline)"]
 
 
 def _skin_markers(ms, model, map_file, bone, midsagittal):
