@@ -10,10 +10,10 @@ from facemech import MUSCLE_GROUPS
 from facemech.errors import InputError
 from facemech.inverse.control_pick import MIN_NEW_MOTION_MM, pick_controls
 from facemech.inverse.invert import SPEECH_CONTROLS
-from facemech.inverse.workflow import _at_frame_rate, invert_markers
+from facemech.inverse.workflow import _at_frame_rate, _bone_gaps_filled, invert_markers
 from facemech.io.markers import write_markers
 from facemech.io.results import read_results
-from facemech.kinematics.roles import bone_points, marker_roles
+from facemech.kinematics.roles import bone_points, marker_roles, on_sites
 from facemech.markerset import MarkerSet
 from facemech.params import preset
 from facemech.solvers.forward import simulate
@@ -122,11 +122,11 @@ def test_bad_bone_points_name_the_field(face):
 
 def ema_set(positions, roles, **meta):
     """A MarkerSet as an articulography reader returns it (60 Hz, roles, midsagittal)."""
-    return MarkerSet(positions, tuple(roles), 60.0,
+    return MarkerSet(np.array(positions), tuple(roles), 60.0,
                      meta={"roles": roles, "midsagittal": True, "source": "s.ema", **meta})
 
 
-def test_roles_choose_the_bone_points_and_are_checked():
+def test_roles_choose_the_bone_points_and_are_checked(face):
     pos = np.zeros((3, 5, 3))
     pos[:, :, 1:] = np.arange(10).reshape(5, 2) * 0.01
     roles = {"UL": "upper_lip", "LL": "lower_lip", "LI": "lower_incisor", "MM": "molar",
@@ -151,6 +151,26 @@ def test_roles_choose_the_bone_points_and_are_checked():
     with pytest.raises(InputError) as exc:
         bone_points(ema_set(pos, {**roles, "TT": "lower_incisor"}))
     assert exc.value.field == "TT"
+    # a bone point's short gaps are filled (a file written to fill them would lose the roles)
+    moving = pos + np.linspace(0, 0.001, 3)[:, None, None]
+    long = np.concatenate([moving] * 6)  # 18 frames
+    holed = long.copy()
+    holed[5:8, 2] = np.nan  # LI: 3 frames, 50 ms
+    got, note = _bone_gaps_filled(ema_set(holed, roles), ("LI", "MM"), True)
+    assert got.valid.all() and got.filled[5:8, 2].all() and not got.filled[:, 3].any()
+    assert note == ["filled 1 gaps of the jaw's bone points (3 frames, each at most 0.1 s) by "
+                    "a cubic spline"]
+    holed[5:13, 2] = np.nan  # 8 frames, 133 ms: left for the drive to refuse
+    assert not _bone_gaps_filled(ema_set(holed, roles), ("LI", "MM"), True)[0].valid.all()
+    # a lip that starts in a gap is laid on its site by its first present sample
+    late = long.copy()
+    late[:2, 0] = np.nan
+    on = on_sites(ema_set(late, roles), face, {"UL": 7})
+    np.testing.assert_allclose(on.positions[2:, 0] - on.positions[2, 0], late[2:, 0] - late[2, 0])
+    np.testing.assert_allclose(on.positions[2, 0], face.rest_positions[7])
+    with pytest.raises(InputError) as exc:
+        on_sites(ema_set(np.full_like(late, np.nan), roles), face, {"UL": 7})
+    assert exc.value.field == "UL"
     # articulography comes at its own rate (here 200 Hz) and is resampled to the model's
     fast = MarkerSet(np.zeros((41, 5, 3)), tuple(roles), 200.0, meta={"roles": roles})
     at60, note = _at_frame_rate(fast, 60.0)

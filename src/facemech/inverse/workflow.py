@@ -26,6 +26,8 @@ __all__ = ["SKIN_JAW_LEAD", "invert_markers"]
 #: frames by which a skin jaw marker's drive is moved earlier by default (33 ms at 60 Hz, the
 #: seeds' lead); a bone point's drive has none
 SKIN_JAW_LEAD = 2
+#: s, the longest interior gap of an articulograph's bone point filled before the jaw's drive
+MAX_BONE_GAP_S = 0.1
 
 
 def invert_markers(
@@ -111,13 +113,14 @@ def invert_markers(
     ms, resampled = _at_frame_rate(ms, prm.frame_rate)
     incisor, molar, by_role = bone_points(ms, incisor=jaw_incisor, molar=jaw_molar,
                                           skin_jaw=chin_marker)
+    ms, filled = _bone_gaps_filled(ms, (incisor, molar), by_role)
     if jaw_fixed and chin_marker is None and incisor is None:
         raise InputError("--jaw-fixed needs a jaw recording (--chin-marker or --jaw-incisor)",
                          field="jaw-fixed")
     model = load_face(face, tissue=prm.tissue)
     midsagittal = is_midsagittal(ms)
     skin, mapping, notes = _skin_markers(ms, model, map_file, (incisor, molar), midsagittal)
-    notes = resampled + notes
+    notes = resampled + filled + notes
     if scale_pair is not None:
         a, _, b = scale_pair.partition(",")
         skin = scale_adapt(skin, model, mapping, (a.strip(), b.strip())).markers
@@ -146,6 +149,26 @@ def _at_frame_rate(ms, rate):
                                 "(low-passed, cubic spline)"]
 
 
+def _bone_gaps_filled(ms, bone, by_role):
+    """(the set, a note): articulography's bone points (found by role) with their interior gaps
+    of at most :data:`MAX_BONE_GAP_S` filled by a cubic spline (the drive needs every frame;
+    a file written to fill them would lose the roles). Others are left for the drive to refuse."""
+    from ..kinematics.gaps import fill_gaps
+
+    names = [n for n in bone if n is not None]
+    if not by_role or not names or ms.valid[:, [ms.index(n) for n in names]].all():
+        return ms, []
+    part, done, _ = fill_gaps(ms.select(names), int(MAX_BONE_GAP_S * ms.rate))
+    pos, flags = np.array(ms.positions), np.array(ms.filled)
+    for j, n in enumerate(names):
+        pos[:, ms.index(n)], flags[:, ms.index(n)] = part.positions[:, j], part.filled[:, j]
+    if not done:
+        return ms, []
+    return ms.with_positions(pos, filled=flags), [
+        f"filled {len(done)} gaps of the jaw's bone points ({sum(g.length for g in done)} "
+        f"frames, each at most {MAX_BONE_GAP_S:g} s) by a cubic spline"]
+
+
 def _skin_markers(ms, model, map_file, bone, midsagittal):
     """(the skin markers in the model's frame, name -> node, notes): bone points left out;
     articulography's lips on the face's vermilion points, by their displacements."""
@@ -170,9 +193,9 @@ def _skin_markers(ms, model, map_file, bone, midsagittal):
                             and map_file is None else "") for n in names)
         unused = [f"{n} ({roles.get(n, 'no role')})" for n in ms.names
                   if n not in mapping and n not in bone]
+        jaw = f"bone points {', '.join(bone)} drive the jaw" if bone else "no bone point"
         notes.append(f"articulography: {lips}, each laid on its point by its displacement from "
-                     f"the first frame; bone points {', '.join(bone) or 'none'} drive the jaw; "
-                     f"kept but not used: {', '.join(unused) or 'none'}")
+                     f"its first sample; {jaw}; kept but not used: {', '.join(unused) or 'none'}")
     else:
         rest = ms.select([n for n in ms.names if n not in bone])
         mapping = (read_mapping(map_file, ms, model) if map_file is not None

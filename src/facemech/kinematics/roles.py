@@ -117,24 +117,24 @@ def lip_markers(ms: MarkerSet, model) -> dict[str, int]:
 
 
 def on_sites(ms: MarkerSet, model, mapping: dict[str, int]) -> MarkerSet:
-    """The set with each mapped marker moved so that its first sample lies on its node at rest:
-    its displacements (m) are kept, its place in the articulograph's frame is not."""
+    """The set with each mapped marker moved so that its first sample (its first present one,
+    if the recording starts in a gap) lies on its node at rest: its displacements (m) are kept,
+    its place in the articulograph's frame is not."""
     pos = np.array(ms.positions)
     rest = model.rest_positions
     for j, name in enumerate(ms.names):
         if name not in mapping:
             continue
-        first = _first_sample(ms, j)
-        pos[:, j] += rest[mapping[name]] - first
+        pos[:, j] += rest[mapping[name]] - _first_sample(ms, j)
     return ms.with_positions(pos)
 
 
 def _first_sample(ms: MarkerSet, j: int) -> np.ndarray:
-    p = ms.positions[0, j]
-    if not np.all(np.isfinite(p)):
-        raise InputError("missing in the first frame, which is taken as rest",
-                         source=ms.meta.get("source"), field=ms.names[j])
-    return p
+    ok = np.nonzero(np.all(np.isfinite(ms.positions[:, j]), axis=1))[0]
+    if len(ok) == 0:
+        raise InputError("no sample in the whole recording", source=ms.meta.get("source"),
+                         field=ms.names[j])
+    return ms.positions[ok[0], j]
 
 
 def pinned_x(ms: MarkerSet, model, mapping: dict[str, int]) -> MarkerSet:
