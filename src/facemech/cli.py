@@ -183,18 +183,18 @@ def simulate(
         output: Path = ..., face: str = "default", activity: Path | None = None,
         emg: Path | None = None, units: str | None = None, emg_baseline: str | None = None,
         emg_calibration: Path | None = None, jaw_chin: Path | None = None,
-        chin_marker: str = "R01", jaw_second_marker: str | None = None,
-        jaw_angle: Path | None = None, bite_block: bool = False,
-        jaw_kinematics: str | None = None, preset: str = "anatomical",
+        chin_marker: str | None = None, jaw_second_marker: str | None = None,
+        jaw_incisor: str | None = None, jaw_molar: str | None = None, jaw_angle: Path | None = None,
+        bite_block: bool = False, jaw_kinematics: str | None = None, preset: str = "anatomical",
         integrator: str | None = None, substeps: int | None = None, dt: float | None = None,
-        jaw_drive: str = "ramp", video: Path | None = None, audio: Path | None = None,
-        render=None):
+        jaw_drive: str = "ramp", video: Path | None = None, audio: Path | None = None, render=None):
     """Simulate the face driven by muscle activity or EMG and a jaw trajectory."""
     sim, movie = wf.simulate, video and (video, audio, render)
     return (_staged(
         sim.simulate_files, output=output, movie=movie,
         controls=sim.Controls(activity, emg, emg_baseline, emg_calibration),
-        jaw=sim.JawSource(jaw_angle, jaw_chin, chin_marker, jaw_second_marker, units, bite_block),
+        jaw=sim.JawSource(jaw_angle, jaw_chin, chin_marker, jaw_second_marker, units, bite_block,
+                          jaw_incisor, jaw_molar),
         face=face, preset=preset, jaw_kinematics=jaw_kinematics, integrator=integrator,
         substeps=substeps, dt=dt, jaw_drive=jaw_drive))
 
@@ -264,15 +264,15 @@ def experiment_lucero2008(output: Path = Path("lucero2008"), frames: int = 60,
     _say(wf.experiments.lucero2008_report(_staged(wf.experiments.lucero2008, **locals()), output))
 
 @command()
-def invert(markers: Path = ..., output: Path = ..., face: str = "default",
-           map_file: Path | None = None, preset: str = "anatomical", method: str = "lsq",
-           positive: bool = True, controls: str = "speech", chin_marker: str | None = None,
-           jaw_second_marker: str | None = None, jaw_fixed: bool = False, jaw_lead: int = 2,
+def invert(markers: Path = ..., output: Path = ..., face: str = "default", method: str = "lsq",
+           map_file: Path | None = None, preset: str = "anatomical", figure: Path | None = None,
+           positive: bool = True, controls: str | None = None, chin_marker: str | None = None,
+           jaw_second_marker: str | None = None, jaw_incisor: str | None = None,
+           jaw_molar: str | None = None, jaw_fixed: bool = False, jaw_lead: int | None = None,
            noise: float | None = None, window: int | None = None, tol: float | None = None,
            bend: float | None = None, smooth: float | None = None, effort: float | None = None,
            max_evaluations: int | None = None, scale_pair: str | None = None,
-           jaw_kinematics: str | None = None, dt: float | None = None, units: str | None = None,
-           figure: Path | None = None):
+           jaw_kinematics: str | None = None, dt: float | None = None, units: str | None = None):
     """Recover muscle activity and the jaw frame by frame from markers; re-animate the face."""
     res = _staged(wf.invert.invert, **locals())
     _say(wf.invert.report(res, output, figure))

@@ -24,7 +24,7 @@ builtin: refit the built-in targets
 calibration: recording of maximal gestures
 calibration_baseline: its rest interval START,STOP (s)
 chin_marker: a jaw marker: its drop gives the jaw
-controls: speech, emg7, all, or listed groups
+controls: speech, emg7, all, or listed groups (default: speech, or what the markers determine)
 design: design table (.csv or .toml)
 dt: Euler step of every evaluation, s (default: the preset's)
 effort: see --bend
@@ -44,11 +44,13 @@ gestures: maximal gestures, each FILE:GROUPS, e.g. smile.c3d:ZYG,LAO,RIS
 head: comma-separated head markers (at least 3)
 integrator: euler, implicit or rosenbrock
 jaw_angle: CSV: time, jaw_angle (rad) or jaw_angle_deg
-jaw_chin: marker file with the chin marker
+jaw_chin: marker file with the jaw's markers (chin, or incisor and molar)
+jaw_incisor: lower-incisor sensor: a bone point that drives the jaw, not skin
+jaw_molar: a molar pellet on the mandible, with --jaw-incisor
 jaw_drive: ramp or hold
 jaw_fixed: hold the recorded jaw as given
 jaw_kinematics: hinge or glide (or the preset's)
-jaw_lead: frames the recorded jaw leads the skin
+jaw_lead: frames the recorded jaw leads the skin (default: skin 2, bone 0)
 jaw_second_marker: another: rotation and glide
 k: independent markers (default: <= 10)
 labels: name the markers
@@ -134,7 +136,9 @@ plot.output: PNG
 regions.method: qrcp or strong
 regions.output: output folder
 render.output: MP4, or a folder for PNG frames
-simulate.chin_marker: the chin marker
+simulate.chin_marker: the chin marker (default R01)
+simulate.jaw_incisor: lower-incisor sensor in --jaw-chin (default: its role)
+simulate.jaw_molar: a molar pellet in --jaw-chin, with --jaw-incisor
 simulate.dt: explicit Euler step, s
 simulate.jaw_kinematics: hinge or glide
 simulate.jaw_second_marker: a second mandible marker in the --jaw-chin file

@@ -62,8 +62,9 @@ def _simulate(o: dict, folder: Path):
     run = simulate_files(
         folder / "result.nc",
         Controls(o.get("activity"), o.get("emg"), o.get("emg_baseline"), o.get("emg_calibration")),
-        JawSource(o.get("jaw_angle"), o.get("jaw_chin"), o.get("chin_marker", "R01"),
-                  o.get("jaw_second_marker"), o.get("units"), o.get("bite_block", False)),
+        JawSource(o.get("jaw_angle"), o.get("jaw_chin"), o.get("chin_marker"),
+                  o.get("jaw_second_marker"), o.get("units"), o.get("bite_block", False),
+                  o.get("jaw_incisor"), o.get("jaw_molar")),
         **{k: o[k] for k in keys if k in o})
     sim = run.simulation
     return ({"frames": len(sim.time), "sim_wall_s": round(float(sim.wall_seconds), 3),
@@ -72,7 +73,8 @@ def _simulate(o: dict, folder: Path):
 
 
 _INVERT_KEYS = ("face", "method", "positive", "controls", "chin_marker", "jaw_second_marker",
-                "jaw_fixed", "jaw_lead", "noise", "window", "tol", "bend", "smooth", "effort",
+                "jaw_incisor", "jaw_molar", "jaw_fixed", "jaw_lead", "noise", "window", "tol",
+                "bend", "smooth", "effort",
                 "max_evaluations", "scale_pair", "preset", "jaw_kinematics", "dt", "units")
 
 
@@ -141,6 +143,7 @@ JOBS: dict[str, Job] = {
     "simulate": Job(
         {"activity": "path", "emg": "path", "emg_baseline": "str", "emg_calibration": "path",
          "jaw_chin": "path", "chin_marker": "str", "jaw_second_marker": "str", "jaw_angle": "path",
+         "jaw_incisor": "str", "jaw_molar": "str",
          "bite_block": "bool", "units": "str", "face": "file_or_name", "preset": "file_or_name",
          "jaw_kinematics": "str", "integrator": "str", "substeps": "int", "dt": "float",
          "jaw_drive": "str"},
@@ -148,7 +151,8 @@ JOBS: dict[str, Job] = {
     "invert": Job(
         {"markers": "path", "face": "file_or_name", "map": "path", "preset": "file_or_name",
          "method": "str", "positive": "bool", "controls": "str", "chin_marker": "str",
-         "jaw_second_marker": "str", "jaw_fixed": "bool", "jaw_lead": "int", "noise": "float",
+         "jaw_second_marker": "str", "jaw_incisor": "str", "jaw_molar": "str",
+         "jaw_fixed": "bool", "jaw_lead": "int", "noise": "float",
          "window": "int", "tol": "float", "bend": "float", "smooth": "float", "effort": "float",
          "max_evaluations": "int", "scale_pair": "str", "jaw_kinematics": "str", "dt": "float",
          "units": "str", "figure": "bool"},

@@ -1,19 +1,37 @@
 """Inversion of a marker file, as the ``invert`` command runs it: read, map, adapt, drive the
-jaw, invert. Kept apart from the command line so that scripts run the same steps."""
+jaw, choose the controls, invert. Kept apart from the command line so that scripts run the same
+steps.
+
+Markers are skin markers unless they are named (or, from articulography, given the role) of a
+point on the mandible: a lower-incisor sensor and, optionally, a molar pellet. Those drive the
+jaw (:mod:`facemech.solvers.jaw_bone`) and stay out of the skin's cost. Articulography's lip
+sensors are laid on the face's midsagittal vermilion points (:mod:`facemech.kinematics.roles`),
+and midsagittal data are fitted in y and z only.
+"""
 
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 
+import numpy as np
+
 from ..errors import InputError
+from ..markerset import MarkerSet
 from .result import Inversion
 
-__all__ = ["invert_markers"]
+__all__ = ["SKIN_JAW_LEAD", "invert_markers"]
+
+#: frames by which a skin jaw marker's drive is moved earlier by default (33 ms at 60 Hz, the
+#: seeds' lead); a bone point's drive has none
+SKIN_JAW_LEAD = 2
+#: s, the longest interior gap of an articulograph's bone point filled before the jaw's drive
+MAX_BONE_GAP_S = 0.1
 
 
 def invert_markers(
-    markers: str | Path,
+    markers: str | Path | MarkerSet,
     *,
     face: str | Path = "default",
     map_file: str | Path | None = None,
@@ -23,11 +41,13 @@ def invert_markers(
     jaw_kinematics: str | None = None,
     method: str = "lsq",
     positive: bool = True,
-    controls: str = "speech",
+    controls: str | None = None,
     chin_marker: str | None = None,
     jaw_second_marker: str | None = None,
+    jaw_incisor: str | None = None,
+    jaw_molar: str | None = None,
     jaw_fixed: bool = False,
-    jaw_lead: int = 2,
+    jaw_lead: int | None = None,
     noise: float | None = None,
     dt: float | None = None,
     options: dict | None = None,
@@ -37,18 +57,29 @@ def invert_markers(
 
     Parameters
     ----------
-    markers : marker file in the model's frame, at the preset's frame rate
+    markers : marker file (or a :class:`~facemech.markerset.MarkerSet`) in the model's frame, at
+        the preset's frame rate; articulography (``meta["roles"]``) in its own frame and at its
+        own rate: its lips are laid on the face's vermilion points, and it is resampled
     face : face file or built-in face name
-    map_file : marker,node CSV (default: the closest nodes)
+    map_file : marker,node CSV (default: the closest nodes; articulography's lips: their
+        vermilion points)
     units : length unit of a marker file that carries none
     scale_pair : "A,B": adapt the markers by per-axis scaling from two markers far apart
     preset : the parameter preset; ``jaw_kinematics`` ("hinge" or "glide") overrides its
     method, positive : "lsq" or "powell"; activity kept >= 0
-    controls : "speech", "emg7", "all" or comma-separated groups
-    chin_marker : a jaw recording: its vertical drop gives the jaw angle, ``jaw_lead`` frames
-        early, estimated further with the muscles unless ``jaw_fixed``
-    jaw_second_marker : a second point on the mandible: the two markers' planar rigid motion
-        drives the jaw's three degrees of freedom, held as given
+    controls : "speech", "emg7", "all" or comma-separated groups, an error if the markers give
+        fewer coordinates than that; None (default): "speech", or the part of it the markers
+        determine when they give fewer coordinates (:mod:`facemech.inverse.control_pick`)
+    chin_marker : a skin jaw marker: its vertical drop gives the jaw angle, ``jaw_lead``
+        frames early, estimated further with the muscles unless ``jaw_fixed``
+    jaw_second_marker : a second point on the mandible with ``chin_marker``: the two markers'
+        planar rigid motion drives the jaw's three degrees of freedom, held as given
+    jaw_incisor, jaw_molar : a lower-incisor sensor and a molar pellet, points on the bone
+        (default: the sensors of roles ``lower_incisor`` and ``molar``, when there is no
+        ``chin_marker``): they give the jaw's angle, glide and protrusion, held as given, and
+        are not compared with the skin
+    jaw_lead : frames by which the jaw drive is moved earlier (None: 2 for a skin marker, 0
+        for bone points)
     noise : marker noise for the standard errors, mm (None: from the residuals)
     dt : explicit Euler step of every evaluation, s (None: the preset's fast step)
     options : the method's options (None: not given; an option of the other method is an
@@ -58,56 +89,198 @@ def invert_markers(
     Returns
     -------
     Inversion
+        Its notes also say how articulography roles were used and which controls were held.
     """
     from .. import params as P
     from ..geometry.builder import load_face
     from ..io.markers import read_markers
-    from ..kinematics.mapping import closest_nodes, read_mapping, scale_adapt
-    from ..solvers.jaw import jaw_angles_from_marker, jaw_poses_from_points
+    from ..kinematics.mapping import scale_adapt
+    from ..kinematics.roles import bone_points, is_midsagittal
     from .invert import invert
     from .methods import method_from_options
 
-    src = str(markers)
     solver = method_from_options(method, **(options or {}))
     if jaw_second_marker is not None and chin_marker is None:
         raise InputError("--jaw-second-marker needs --chin-marker (the first jaw marker)",
                          field="jaw-second-marker")
-    if jaw_fixed and chin_marker is None:
-        raise InputError("--jaw-fixed needs a jaw recording (--chin-marker)", field="jaw-fixed")
-    if jaw_lead < 0:
+    if jaw_lead is not None and jaw_lead < 0:
         raise InputError(f"jaw lead must be >= 0 frames (got {jaw_lead})", field="jaw-lead")
     prm = P.preset(preset)
     if jaw_kinematics is not None:
         prm = prm.with_(jaw_kinematics=jaw_kinematics)
+    ms = markers if isinstance(markers, MarkerSet) else read_markers(markers, units=units)
+    src = ms.meta.get("source") or str(markers)
+    ms, resampled = _at_frame_rate(ms, prm.frame_rate)
+    incisor, molar, by_role = bone_points(ms, incisor=jaw_incisor, molar=jaw_molar,
+                                          skin_jaw=chin_marker)
+    ms, filled = _bone_gaps_filled(ms, (incisor, molar), by_role)
+    if jaw_fixed and chin_marker is None and incisor is None:
+        raise InputError("--jaw-fixed needs a jaw recording (--chin-marker or --jaw-incisor)",
+                         field="jaw-fixed")
     model = load_face(face, tissue=prm.tissue)
-    ms = read_markers(markers, units=units)
-    mapping = (read_mapping(map_file, ms, model) if map_file is not None
-               else closest_nodes(ms, model))
+    midsagittal = is_midsagittal(ms)
+    skin, mapping, notes = _skin_markers(ms, model, map_file, (incisor, molar), midsagittal)
+    notes = resampled + filled + notes
     if scale_pair is not None:
         a, _, b = scale_pair.partition(",")
-        ms = scale_adapt(ms, model, mapping, (a.strip(), b.strip())).markers
-    jaw = None
-    if jaw_second_marker is not None:
-        for name in (chin_marker, jaw_second_marker):
+        skin = scale_adapt(skin, model, mapping, (a.strip(), b.strip())).markers
+    lead = jaw_lead if jaw_lead is not None else (0 if incisor is not None else SKIN_JAW_LEAD)
+    jaw, jaw_source = _jaw_drive(ms, model, prm, mapping, src, lead, chin_marker,
+                                 jaw_second_marker, incisor, molar, by_role)
+    estimate = None if jaw is None else (not jaw_fixed and jaw.ndim == 1)
+    ctrl, jaw, estimate, jaw_source, pick_note = _controls(
+        controls, model, prm, skin, mapping, jaw, estimate, jaw_source, midsagittal, dt, src)
+    res = invert(model, skin, mapping, method=solver, positive=positive, controls=ctrl,
+                 jaw_angle=jaw, estimate_jaw=estimate, jaw_source=jaw_source, params=prm,
+                 dt=dt, noise_mm=noise, progress=progress)
+    return replace(res, notes=[*res.notes, *notes, *([pick_note] if pick_note else [])])
+
+
+def _at_frame_rate(ms, rate):
+    """(the set at the model's frame ``rate``, a note if it was resampled): articulography
+    (sensors with roles, recorded at 100-500 Hz) is resampled with anti-aliasing
+    (:func:`facemech.kinematics.resample.resample`); other data must come at the rate."""
+    from ..kinematics.resample import resample
+    from ..kinematics.roles import marker_roles
+
+    if abs(ms.rate - rate) <= 1e-3 * rate or not marker_roles(ms):
+        return ms, []
+    return resample(ms, rate), [f"articulography at {ms.rate:g} Hz resampled to {rate:g} Hz "
+                                "(low-passed, cubic spline)"]
+
+
+def _bone_gaps_filled(ms, bone, by_role):
+    """(the set, a note): articulography's bone points (found by role) with their interior gaps
+    of at most :data:`MAX_BONE_GAP_S` filled by a cubic spline (the drive needs every frame;
+    a file written to fill them would lose the roles). Others are left for the drive to refuse."""
+    from ..kinematics.gaps import fill_gaps
+
+    names = [n for n in bone if n is not None]
+    if not by_role or not names or ms.valid[:, [ms.index(n) for n in names]].all():
+        return ms, []
+    part, done, _ = fill_gaps(ms.select(names), int(MAX_BONE_GAP_S * ms.rate))
+    pos, flags = np.array(ms.positions), np.array(ms.filled)
+    for j, n in enumerate(names):
+        pos[:, ms.index(n)], flags[:, ms.index(n)] = part.positions[:, j], part.filled[:, j]
+    if not done:
+        return ms, []
+    return ms.with_positions(pos, filled=flags), [
+        f"filled {len(done)} gaps of the jaw's bone points ({sum(g.length for g in done)} "
+        f"frames, each at most {MAX_BONE_GAP_S:g} s) by a cubic spline"]
+
+
+def _skin_markers(ms, model, map_file, bone, midsagittal):
+    """(the skin markers in the model's frame, name -> node, notes): bone points left out;
+    articulography's lips on the face's vermilion points, by their displacements."""
+    from ..kinematics.mapping import closest_nodes, read_mapping
+    from ..kinematics.roles import LIP_SITES, lip_markers, marker_roles, on_sites, pinned_x
+
+    src = ms.meta.get("source")
+    roles = marker_roles(ms)
+    bone = [n for n in bone if n is not None]
+    notes = []
+    if roles:
+        mapping = (read_mapping(map_file, ms, model) if map_file is not None
+                   else lip_markers(ms, model))
+        mapping = {n: v for n, v in mapping.items() if n not in bone}
+        if not mapping:
+            raise InputError("no sensor has the role upper_lip or lower_lip (nor a node in "
+                             "--map): nothing on the skin to fit", source=src, field="roles")
+        names = [n for n in ms.names if n in mapping]
+        skin = on_sites(ms.select(names), model, mapping)
+        lips = ", ".join(f"{n} ({roles.get(n, 'mapped')}) -> node {mapping[n]}"
+                         + (f" ({LIP_SITES[roles[n]]})" if roles.get(n) in LIP_SITES
+                            and map_file is None else "") for n in names)
+        unused = [f"{n} ({roles.get(n, 'no role')})" for n in ms.names
+                  if n not in mapping and n not in bone]
+        jaw = f"bone points {', '.join(bone)} drive the jaw" if bone else "no bone point"
+        notes.append(f"articulography: {lips}, each laid on its point by its displacement from "
+                     f"its first sample; {jaw}; kept but not used: {', '.join(unused) or 'none'}")
+    else:
+        rest = ms.select([n for n in ms.names if n not in bone])
+        mapping = (read_mapping(map_file, ms, model) if map_file is not None
+                   else closest_nodes(rest, model))
+        mapping = {n: v for n, v in mapping.items() if n not in bone}
+        skin = rest
+    if midsagittal:
+        skin = pinned_x(skin, model, mapping)
+        notes.append("midsagittal data: fitted in y and z only (each marker's x is set to its "
+                     "model point's, on the midline of a symmetric face)")
+    return skin, mapping, notes
+
+
+def _jaw_drive(ms, model, prm, mapping, src, lead, chin_marker, second, incisor, molar,
+               by_role):
+    """(the jaw series: None, (frames,) angles or (frames, 3) poses; what it is, for the
+    notes)."""
+    from ..solvers.jaw import jaw_angles_from_marker, jaw_poses_from_points
+    from ..solvers.jaw_bone import jaw_poses_from_bone, protrusion_of
+
+    if incisor is not None:
+        poses = jaw_poses_from_bone(ms.marker(incisor), model, prm,
+                                    molar=None if molar is None else ms.marker(molar),
+                                    lead=lead, names=(incisor, molar or "molar"), source=src)
+        pro = protrusion_of(poses, prm) * 1e3
+        what = (f"the bone point{'s' if molar else ''} {incisor} (lower incisor"
+                f"{f') and {molar} (molar' if molar else ''}){' by role' if by_role else ''}: "
+                f"angle {np.degrees(poses[:, 0].min()):.1f} to "
+                f"{np.degrees(poses[:, 0].max()):.1f} degrees, protrusion {pro.min():.1f} to "
+                f"{pro.max():.1f} mm; {lead}-frame lead")
+        return poses, what
+    if second is not None:
+        for name in (chin_marker, second):
             if name not in ms.names:
                 raise InputError("jaw marker not in the file", source=src, field=name)
-        jaw = jaw_poses_from_points(ms.marker(chin_marker), ms.marker(jaw_second_marker),
-                                    hinge_point=model.hinge_point, lead=jaw_lead,
-                                    names=(chin_marker, jaw_second_marker), source=src)
-        jaw_fixed = True
-    elif chin_marker is not None:
+        jaw = jaw_poses_from_points(ms.marker(chin_marker), ms.marker(second),
+                                    hinge_point=model.hinge_point, lead=lead,
+                                    names=(chin_marker, second), source=src)
+        return jaw, f"jaw markers {chin_marker},{second} ({lead}-frame lead)"
+    if chin_marker is not None:
         node = mapping.get(chin_marker)
         if node is None:
             raise InputError("chin marker has no node (not in the file or not mapped)",
                              source=src, field=chin_marker)
         jaw = jaw_angles_from_marker(model, prm, node, ms.marker(chin_marker)[:, 1],
-                                     lead=jaw_lead, source=src)
-    ctrl = controls if controls in ("speech", "emg7", "all") else [
-        c.strip().upper() for c in controls.split(",") if c.strip()]
-    return invert(model, ms, mapping, method=solver, positive=positive, controls=ctrl,
-                  jaw_angle=jaw, estimate_jaw=None if jaw is None else not jaw_fixed,
-                  jaw_source=None if chin_marker is None else
-                  f"{'jaw markers' if jaw_second_marker else 'chin marker'} {chin_marker}"
-                  f"{',' + jaw_second_marker if jaw_second_marker else ''} "
-                  f"({jaw_lead}-frame lead)",
-                  params=prm, dt=dt, noise_mm=noise, progress=progress)
+                                     lead=lead, source=src)
+        return jaw, f"chin marker {chin_marker} ({lead}-frame lead)"
+    return None, None
+
+
+def _controls(controls, model, prm, skin, mapping, jaw, estimate, jaw_source, midsagittal, dt,
+              src):
+    """(controls for :func:`invert`, jaw series, estimate the jaw, jaw source, the note of
+    controls picked or None)."""
+    from ..solvers.jaw import jaw_poses
+    from .control_pick import pick_controls
+    from .invert import control_matrix
+
+    given = controls is not None
+    ctrl = "speech" if controls is None else (
+        controls if controls in ("speech", "emg7", "all")
+        else [c.strip().upper() for c in controls.split(",") if c.strip()])
+    names = [n for n in skin.names if n in mapping]
+    per = 2 if midsagittal else 3
+    coords = per * len(names)
+    n_controls = len(control_matrix(ctrl)[0]) + (1 if estimate in (None, True) else 0)
+    if coords >= n_controls or not names:
+        return ctrl, jaw, estimate, jaw_source, None
+    if given:
+        raise InputError(f"{len(names)} markers give {coords} coordinates"
+                         f"{' (y, z: midsagittal)' if midsagittal else ''} for {n_controls} "
+                         "controls: use more markers or fewer controls", source=src,
+                         field="markers")
+    if jaw is None:
+        start = np.zeros(3)
+    elif jaw.ndim == 2:
+        start = jaw[0]
+    else:
+        start = jaw_poses(np.atleast_1d(jaw[0]), prm)[0]
+    estimated = estimate in (None, True)
+    pick = pick_controls(model, prm, np.array([mapping[n] for n in names]), ctrl,
+                         estimate_jaw=estimated, jaw_start=start,
+                         axes=(1, 2) if midsagittal else (0, 1, 2), dt=dt)
+    if estimated and not pick.jaw:
+        held = np.full(len(skin.positions), start[0]) if jaw is None else jaw
+        jaw, estimate = held, False
+        jaw_source = f"{jaw_source or 'the jaw at rest'} (held: the markers do not determine it)"
+    return list(pick.muscles), jaw, estimate, jaw_source, pick.note(len(names), midsagittal)

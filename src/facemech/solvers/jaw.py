@@ -10,7 +10,9 @@ anatomical preset) couples the condyle's forward and downward glide to the openi
 Drives: the angle of each frame from one jaw marker (:func:`angles_from_chin` for a point on
 the bone, :func:`jaw_angles_from_marker` for a chin marker on the skin), applied two 60-Hz
 samples (33 ms) early to make up for the delay of propagation from the skull to the skin; or
-the whole pose from two markers on the mandible (:func:`jaw_poses_from_points`).
+the whole pose from two markers on the mandible (:func:`jaw_poses_from_points`). Points on the
+bone itself (a lower-incisor sensor, a molar pellet) give the angle and a free protrusion of
+the condyles along the eminence, without lead (:mod:`.jaw_bone`).
 """
 
 from __future__ import annotations

@@ -3,7 +3,8 @@
 A jaw pose is (angle rad, shift_y m, shift_z m): the mandible turns by ``angle`` about the hinge
 axis through the hinge point (the condyles; positive opens the mouth) and the hinge itself moves
 by (0, shift_y, shift_z) in the sagittal plane (the condyle's glide along the articular
-eminence). A point of jaw weight ``w`` (1 on the mandible, blending to 0 on the fixed skull)
+eminence: the glide coupled to the opening, and any free protrusion or retraction,
+:mod:`.jaw_bone`). A point of jaw weight ``w`` (1 on the mandible, blending to 0 on the fixed skull)
 moves to::
 
     p = hinge + R(w angle) (p0 - hinge) + w (0, shift_y, shift_z)

@@ -12,8 +12,9 @@ __all__ = ["draw", "invert", "notes", "report"]
 
 def invert(markers: str | Path, output: str | Path, *, face: str | Path = "default",
            map_file: str | Path | None = None, method: str = "lsq", positive: bool = True,
-           controls: str = "speech", chin_marker: str | None = None,
-           jaw_second_marker: str | None = None, jaw_fixed: bool = False, jaw_lead: int = 2,
+           controls: str | None = None, chin_marker: str | None = None,
+           jaw_second_marker: str | None = None, jaw_incisor: str | None = None,
+           jaw_molar: str | None = None, jaw_fixed: bool = False, jaw_lead: int | None = None,
            noise: float | None = None, window: int | None = None, tol: float | None = None,
            bend: float | None = None, smooth: float | None = None, effort: float | None = None,
            max_evaluations: int | None = None, scale_pair: str | None = None,
@@ -30,9 +31,11 @@ def invert(markers: str | Path, output: str | Path, *, face: str | Path = "defau
     face, map_file : the face (file or built-in name) and a marker,node CSV (default: the
         closest nodes)
     method, positive, controls : "lsq" or "powell"; activity >= 0; "speech", "emg7", "all" or
-        comma-separated groups
-    chin_marker, jaw_second_marker, jaw_fixed, jaw_lead : a jaw recording (see
-        :func:`facemech.inverse.workflow.invert_markers`), lead in frames
+        comma-separated groups (None: "speech", or the part of it the markers determine)
+    chin_marker, jaw_second_marker, jaw_incisor, jaw_molar, jaw_fixed, jaw_lead : a jaw
+        recording, on the skin or on the bone (see
+        :func:`facemech.inverse.workflow.invert_markers`), lead in frames (None: 2 for a skin
+        marker, 0 for bone points)
     noise : marker noise for the standard errors, mm (default: from the residuals)
     window, tol, bend, smooth, effort, max_evaluations : the method's options (None: its
         default; tol in mm, weights in mm per unit)
@@ -62,7 +65,8 @@ def invert(markers: str | Path, output: str | Path, *, face: str | Path = "defau
         markers, face=face, map_file=map_file, units=units, scale_pair=scale_pair,
         preset=preset, jaw_kinematics=jaw_kinematics, method=method, positive=positive,
         controls=controls, chin_marker=chin_marker, jaw_second_marker=jaw_second_marker,
-        jaw_fixed=jaw_fixed, jaw_lead=jaw_lead, noise=noise, dt=dt,
+        jaw_incisor=jaw_incisor, jaw_molar=jaw_molar, jaw_fixed=jaw_fixed, jaw_lead=jaw_lead,
+        noise=noise, dt=dt,
         options=dict(window=window, tol=tol, bend=bend, smooth=smooth, effort=effort,
                      max_evaluations=max_evaluations),
         progress=None if progress is None else (lambda d, n: progress(label, d, n)))

@@ -1,6 +1,7 @@
 """The simulation workflow: muscle input (activity or EMG), a jaw trajectory (a CSV of angles,
-a chin marker, two mandible markers, or none; with or without a bite block), the face driven by
-them, the results written and, if asked, rendered."""
+a chin marker, two mandible markers, a lower-incisor sensor with or without a molar pellet, or
+none; with or without a bite block), the face driven by them, the results written and, if
+asked, rendered."""
 
 from __future__ import annotations
 
@@ -34,24 +35,38 @@ class Controls:
 @dataclass(frozen=True)
 class JawSource:
     """Where the jaw's trajectory comes from: at most one of ``angles`` (a CSV of ``time`` and
-    ``jaw_angle`` rad or ``jaw_angle_deg``) and ``markers`` (a marker file with the chin marker
-    ``chin_marker`` and, for a two-marker drive, a second mandible marker ``second_marker``;
-    lengths in ``units`` if the file does not say); neither: the jaw stays closed.
-    ``bite_block`` holds the jaw at its first pose whatever the source."""
+    ``jaw_angle`` rad or ``jaw_angle_deg``) and ``markers`` (a marker file; lengths in ``units``
+    if the file does not say); neither: the jaw stays closed. In the marker file, either a skin
+    chin marker ``chin_marker`` (default ``R01``) and, for a two-marker drive, a second mandible
+    marker ``second_marker``; or points on the bone: a lower-incisor sensor ``incisor`` and
+    optionally a molar pellet ``molar`` (:func:`facemech.solvers.jaw_bone.jaw_poses_from_bone`;
+    without names or a chin marker, a file whose sensors carry articulography roles gives its
+    ``lower_incisor`` and ``molar``). ``bite_block`` holds the jaw at its first pose whatever
+    the source."""
 
     angles: Path | None = None
     markers: Path | None = None
-    chin_marker: str = "R01"
+    chin_marker: str | None = None
     second_marker: str | None = None
     units: str | None = None
     bite_block: bool = False
+    incisor: str | None = None
+    molar: str | None = None
 
     def __post_init__(self):
         if self.markers is not None and self.angles is not None:
             raise InputError("give at most one of --jaw-chin and --jaw-angle", field="jaw")
-        if self.second_marker is not None and self.markers is None:
-            raise InputError("--jaw-second-marker names a marker of the --jaw-chin file: give "
-                             "--jaw-chin too", field="jaw-second-marker")
+        for name, opt in ((self.second_marker, "jaw-second-marker"),
+                          (self.incisor, "jaw-incisor"), (self.molar, "jaw-molar")):
+            if name is not None and self.markers is None:
+                raise InputError(f"--{opt} names a marker of the --jaw-chin file: give "
+                                 "--jaw-chin too", field=opt)
+        if self.incisor is not None and (self.chin_marker or self.second_marker) is not None:
+            raise InputError("give one jaw drive: bone points (--jaw-incisor) or skin markers "
+                             "(--chin-marker)", field="jaw-incisor")
+        if self.molar is not None and self.incisor is None:
+            raise InputError("a molar point needs the lower incisor too (--jaw-incisor)",
+                             field="jaw-molar")
 
 
 def read_controls(controls: Controls, frame_rate: float) -> tuple[np.ndarray, np.ndarray, dict]:
@@ -143,6 +158,32 @@ def jaw_from_two_markers(path: str | Path, first: str, second: str, model, times
                                  source=str(path))
 
 
+def jaw_from_bone(path: str | Path, model, params, times: np.ndarray, *,
+                  incisor: str | None = None, molar: str | None = None,
+                  units: str | None = None) -> np.ndarray | None:
+    """Jaw poses (frames, 3) (angle rad, shift_y m, shift_z m) at ``times`` from points on the
+    bone in a marker file (model axes): the lower-incisor sensor ``incisor`` and the molar
+    pellet ``molar``, or, without names, the sensors of roles ``lower_incisor`` and ``molar``
+    (:func:`facemech.kinematics.roles.bone_points`); None when there is neither. No lead: the
+    points are on the bone (:func:`facemech.solvers.jaw_bone.jaw_poses_from_bone`).
+    """
+    from ..io.markers import read_markers
+    from ..kinematics.roles import bone_points
+    from ..solvers.jaw_bone import jaw_poses_from_bone
+
+    ms = read_markers(path, units=units)
+    incisor, molar, _ = bone_points(ms, incisor=incisor, molar=molar)
+    if incisor is None:
+        return None
+    if times[0] < ms.time[0] - 1e-6 or times[-1] > ms.time[-1] + 1e-6:
+        raise InputError("the jaw's bone points do not cover the activity's time span",
+                         source=str(path), field="time")
+    pts = {n: np.column_stack([np.interp(times, ms.time, ms.marker(n)[:, a]) for a in range(3)])
+           for n in (incisor, molar) if n is not None}
+    return jaw_poses_from_bone(pts[incisor], model, params, molar=pts.get(molar),
+                               names=(incisor, molar or "molar"), source=str(path))
+
+
 def bite_block(jaw: np.ndarray) -> np.ndarray:
     """A jaw series (frames,) or (frames, 3) held at its first value: a bite block."""
     jaw = np.asarray(jaw, float)
@@ -154,18 +195,25 @@ def jaw_series(source: JawSource, model, params, times: np.ndarray) -> tuple[np.
 
     Returns
     -------
-    jaw : (frames,) angles rad, or (frames, 3) poses for a two-marker drive; zeros without a
-        source; held at the first value under a bite block (the one place it is applied)
+    jaw : (frames,) angles rad, or (frames, 3) poses for a two-marker or bone-point drive;
+        zeros without a source; held at the first value under a bite block (the one place it
+        is applied)
     inputs : input name -> file hash
     """
     from ..io.results import file_hash
 
-    if source.markers is not None and source.second_marker is not None:
-        jaw = jaw_from_two_markers(source.markers, source.chin_marker, source.second_marker,
+    chin = source.chin_marker or "R01"
+    bone = None
+    if source.markers is not None and source.chin_marker is None and source.second_marker is None:
+        bone = jaw_from_bone(source.markers, model, params, times, incisor=source.incisor,
+                             molar=source.molar, units=source.units)
+    if bone is not None:
+        jaw = bone
+    elif source.markers is not None and source.second_marker is not None:
+        jaw = jaw_from_two_markers(source.markers, chin, source.second_marker,
                                    model, times, units=source.units)
     elif source.markers is not None:
-        jaw = jaw_from_chin(source.markers, source.chin_marker, model, params, times,
-                            units=source.units)
+        jaw = jaw_from_chin(source.markers, chin, model, params, times, units=source.units)
     elif source.angles is not None:
         jaw = jaw_from_csv(source.angles, times)
     else:
