@@ -142,7 +142,7 @@ def emg_process(emg: Path, output: Path = ..., rate: float | None = None,
 
 @command(markers_app, "info")
 def markers_info(source: Path, units: str | None = None, as_json: bool = False):
-    """Rate, units, markers and gaps of a marker file (.c3d, .trc, .csv or .tsv)."""
+    """Rate, units, markers and gaps of a marker file (.c3d .trc .csv .tsv .ema .est .txy)."""
     out.print(wf.markers.marker_info(source, units=units).text(as_json), markup=False)
 
 @command(markers_app, "convert", args=("target",))

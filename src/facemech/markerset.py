@@ -16,6 +16,10 @@ from .errors import InputError
 
 #: Hz, the highest sampling rate accepted: above any motion-capture system (they reach a few kHz)
 MAX_RATE_HZ = 100_000.0
+#: the roles an articulography reader may give a sensor in ``meta["roles"]`` (readers:
+#: :mod:`facemech.io.articulography`; use: :mod:`facemech.kinematics.roles`)
+SENSOR_ROLES = ("upper_lip", "lower_lip", "lower_incisor", "upper_incisor", "molar", "tongue",
+                "velum", "reference", "other")
 
 
 @dataclass(frozen=True, eq=False)

@@ -110,9 +110,10 @@ def invert_markers(
         prm = prm.with_(jaw_kinematics=jaw_kinematics)
     ms = markers if isinstance(markers, MarkerSet) else read_markers(markers, units=units)
     src = ms.meta.get("source") or str(markers)
-    ms, resampled = _at_frame_rate(ms, prm.frame_rate)
     incisor, molar, by_role = bone_points(ms, incisor=jaw_incisor, molar=jaw_molar,
                                           skin_jaw=chin_marker)
+    molar, dropped = _usable_molar(ms, molar, by_role)
+    ms, resampled = _at_frame_rate(ms, prm.frame_rate)
     ms, filled = _bone_gaps_filled(ms, (incisor, molar), by_role)
     if jaw_fixed and chin_marker is None and incisor is None:
         raise InputError("--jaw-fixed needs a jaw recording (--chin-marker or --jaw-incisor)",
@@ -120,7 +121,7 @@ def invert_markers(
     model = load_face(face, tissue=prm.tissue)
     midsagittal = is_midsagittal(ms)
     skin, mapping, notes = _skin_markers(ms, model, map_file, (incisor, molar), midsagittal)
-    notes = resampled + filled + notes
+    notes = resampled + dropped + filled + notes
     if scale_pair is not None:
         a, _, b = scale_pair.partition(",")
         skin = scale_adapt(skin, model, mapping, (a.strip(), b.strip())).markers
@@ -147,6 +148,24 @@ def _at_frame_rate(ms, rate):
         return ms, []
     return resample(ms, rate), [f"articulography at {ms.rate:g} Hz resampled to {rate:g} Hz "
                                 "(low-passed, cubic spline)"]
+
+
+def _usable_molar(ms, molar, by_role):
+    """(the molar or None, a note): a molar pellet found by its role is left out when it has a
+    gap longer than :data:`MAX_BONE_GAP_S` (X-ray microbeam's molar pellet is often lost for
+    whole recordings): the jaw then comes from the incisor alone. A molar named by the user
+    is kept, and its gaps are refused by the drive."""
+    if not by_role or molar is None:
+        return molar, []
+    valid = ms.valid[:, ms.index(molar)]
+    longest = run = 0
+    for ok in valid:
+        run = 0 if ok else run + 1
+        longest = max(longest, run)
+    if longest <= int(MAX_BONE_GAP_S * ms.rate):
+        return molar, []
+    return None, [f"molar pellet {molar} left out ({int((~valid).sum())} of {len(valid)} "
+                  "samples missing): the jaw comes from the lower incisor alone"]
 
 
 def _bone_gaps_filled(ms, bone, by_role):

@@ -65,12 +65,9 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
+from ..markerset import SENSOR_ROLES as ROLES  # noqa: F401  (re-exported: the roles a reader gives)
 from ..markerset import MarkerSet
 from ..units import length_scale
-
-#: the roles a sensor can have in ``meta["roles"]``
-ROLES = ("upper_lip", "lower_lip", "lower_incisor", "upper_incisor", "molar", "tongue", "velum",
-         "reference", "other")
 
 #: MOCHA-TIMIT's 20 EMA channels, in file order (``****``: unused channels)
 MOCHA_CHANNELS = ("ui_x", "li_x", "ul_x", "ll_x", "tt_x", "ui_y", "li_y", "ul_y", "ll_y", "tt_y",

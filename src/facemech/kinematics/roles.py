@@ -25,14 +25,12 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InputError
+from ..markerset import SENSOR_ROLES as ROLES
 from ..markerset import MarkerSet
 
 __all__ = ["BONE_ROLES", "LIP_SITES", "ROLES", "bone_points", "is_midsagittal", "lip_markers",
            "marker_roles", "on_sites", "pinned_x"]
 
-#: the roles a reader may give a sensor
-ROLES = ("upper_lip", "lower_lip", "lower_incisor", "upper_incisor", "molar", "tongue", "velum",
-         "reference", "other")
 #: role -> the face's landmark of the lip's midsagittal vermilion point
 LIP_SITES = {"upper_lip": "upper_lip_center", "lower_lip": "lower_lip_center"}
 #: roles of points on the mandible
