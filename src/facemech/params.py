@@ -17,8 +17,11 @@ from .units import CM, DYNE, GRAM
 #: Muscle groups of the model, in the order used for activity arrays.
 MUSCLE_GROUPS: tuple[str, ...] = (
     "DAO", "DLI", "LAO", "ZYG", "LLS", "MEN", "OOS", "OOI",
-    "ZMI", "RIS", "LLSAN", "COR", "CSU", "FRM", "FRL", "FRI",
+    "ZMI", "RIS", "LLSAN", "COR", "CSU", "FRM", "FRL", "FRI", "OOSM", "OOIM",
 )  # fmt: skip
+#: The marginal part of orbicularis oris (upper, lower lip): built only on the anatomical tissue
+#: (:data:`facemech.geometry.anatomy.MARGINAL`); the seeds' faces have no muscle of these groups
+MARGINAL_GROUPS: tuple[str, ...] = ("OOSM", "OOIM")
 
 #: The seven EMG control channels of the seeds (LAO and ZYG share one signal).
 EMG_CHANNELS: tuple[str, ...] = ("LLS", "LAO", "DAO", "DLI", "MEN", "OOS", "OOI")
@@ -37,11 +40,15 @@ FRAME_RATE_HZ = 60.0
 #   FRM   0.40  frontalis, central belly: a broad sheet, like DAO (0.40)
 #   FRL   0.20  lateral frontalis: half of the central belly
 #   FRI   0.20  inner frontalis
+#   OOSM, OOIM 0.20  the marginal part of orbicularis oris in each lip: a third of Table II's
+#               0.60 for the whole muscle of a lip, a bundle about 5 mm high and 4 mm thick in
+#               the red lip near its free margin (our estimate; with it the part lowers the
+#               upper lip 3.6 mm and lifts the lower lip 6.6 mm on the jaw, docs/model.md)
 AREA_CM2 = MappingProxyType({
     "ZYG": 0.10, "LLS": 0.15, "DAO": 0.40, "DLI": 0.11, "MEN": 0.07, "LAO": 0.10,
     "OOS": 0.60, "OOI": 0.60,
     "ZMI": 0.10, "RIS": 0.05, "LLSAN": 0.10, "COR": 0.15, "CSU": 0.10,
-    "FRM": 0.40, "FRL": 0.20, "FRI": 0.20,
+    "FRM": 0.40, "FRL": 0.20, "FRI": 0.20, "OOSM": 0.20, "OOIM": 0.20,
 })  # fmt: skip
 
 
@@ -166,7 +173,11 @@ class Parameters:
         return self.areas_cm2[group] * CM**2 * scale
 
     def passive_stiffness(self, group: str) -> float:
-        """Passive muscle stiffness k_m of eq. (6) in N/m (17.3 N/m per cm^2 of area)."""
+        """Passive muscle stiffness k_m of eq. (7) in N/m (17.3 N/m per cm^2 of area); none for
+        orbicularis oris's marginal part, whose passive tissue is the red lip's own (the
+        continuum's lip moduli), so that the part is inert at rest."""
+        if group in MARGINAL_GROUPS:
+            return 0.0
         return self.k_passive_per_cm2 * self.areas_cm2[group]
 
     @property

@@ -80,6 +80,14 @@ INCISIVE_MUSCLES: tuple[LinearMuscleSite, ...] = (
 #: (:func:`facemech.geometry.muscle_sites.sphincter_paths`).
 SPHINCTERS: tuple[str, ...] = ("OOS", "OOI")
 
+#: The marginal part (pars marginalis) of orbicularis oris, upper and lower lip, built only in
+#: the anatomical tissue: fibres along the red lip close to its free margin (ANATOMY.md; Rogers
+#: et al. 2009). Each side runs from the modiolus to the midline through the vermilion, arched
+#: away from the lip line as the red lip widens toward the midline, so that its tension lowers
+#: the upper lip and lifts the lower lip toward the line, presses them onto the teeth and
+#: together, and turns the vermilion in (:func:`facemech.geometry.muscle_sites.sphincter_paths`).
+MARGINAL: tuple[str, ...] = ("OOSM", "OOIM")
+
 # Virtual OPTOTRAK-like markers: 11 on the right half of the lower face (R01 on the chin, used to
 # drive the jaw), 8 on the left half for held-out checks.  (x, y) mm on the generic face.
 RIGHT_MARKERS: dict[str, tuple[float, float]] = {

@@ -157,8 +157,8 @@ def linear_muscle(site: anatomy.LinearMuscleSite, sign: float, suffix: str, at: 
                           origin_offset=offset)
 
 
-def sphincter_beads(path: list[int], lip_side: int, at: Attachment,
-                    opt: BuildOptions) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def sphincter_beads(path: list[int], lip_side: int, at: Attachment, opt: BuildOptions,
+                    marginal: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Beads of one half of an anatomical orbicularis oris, from the mouth corner to the midline.
 
     ``path`` is the lip-line path (epidermal nodes, corner first). Beads lie every
@@ -169,6 +169,11 @@ def sphincter_beads(path: list[int], lip_side: int, at: Attachment,
     area and by a smooth bump of the distance. The first bead is the modiolus, ``modiolus``
     lateral to the corner, and takes nodes of both lips. Returns the nodes (global indices),
     their weights and the bead of each.
+
+    The marginal part (``marginal``) runs in the red lip near its free margin: its beads lie
+    ``marginal_height x (1 - (1 - u)^2)`` from the lip line (u: 0 at the corner, 1 at the
+    midline; an arch whose top is level at the midline), gather ``marginal_radius`` and take
+    ``marginal_depth_weights``.
     """
     vertices, side, tree = at.sites.mouth.vertices, at.sites.mouth.side, at.sites.tree
     n = len(vertices)
@@ -177,20 +182,25 @@ def sphincter_beads(path: list[int], lip_side: int, at: Attachment,
     count = max(3, int(round(arc[-1] / opt.sphincter_spacing)) + 1)
     lateral = np.sign(pts[0, 0] - pts[-1, 0])
     out_nodes, out_w, out_b = [], [], []
+    radius = opt.marginal_radius if marginal else opt.sphincter_radius
     for k, s_k in enumerate(np.linspace(0.0, arc[-1], count)):
         centre = np.array([np.interp(s_k, arc, pts[:, a]) for a in range(3)])
+        u = s_k / arc[-1]
+        offset = (opt.marginal_height * (1.0 - (1.0 - u) ** 2) if marginal
+                  else opt.sphincter_offset)
         if k > 0:
-            centre = centre + np.array([0.0, lip_side * opt.sphincter_offset, 0.0])
+            centre = centre + np.array([0.0, lip_side * offset, 0.0])
         else:
             centre = centre + np.array([lateral * opt.modiolus, 0.0, 0.0])
-        near = np.asarray(tree.query_ball_point(centre, opt.sphincter_radius), np.int64)
+        near = np.asarray(tree.query_ball_point(centre, radius), np.int64)
         if k > 0:
             near = near[side[near] == lip_side]
         if len(near) == 0:
             near = np.array([int(tree.query(centre)[1])])
-        dist = np.linalg.norm(vertices[near] - centre, axis=1) / opt.sphincter_radius
+        dist = np.linalg.norm(vertices[near] - centre, axis=1) / radius
         w = bump_weights(dist, at.area[near])
-        shares = opt.sphincter_depth_weights if k > 0 else opt.modiolus_depth_weights
+        shares = ((opt.marginal_depth_weights if marginal else opt.sphincter_depth_weights)
+                  if k > 0 else opt.modiolus_depth_weights)
         for layer, share in zip(Layer, shares, strict=True):
             # the deep surface takes a share only where it moves
             ok = at.layers.slides[near] if layer == SKULL else np.ones(len(near), bool)
@@ -208,10 +218,12 @@ def sphincter_beads(path: list[int], lip_side: int, at: Attachment,
 
 def sphincter_half(group: str, lip_side: int, suffix: str, path: list[int], at: Attachment,
                    opt: BuildOptions) -> MuscleInstance:
-    """Half a sphincter along ``path`` (epidermal lip-line nodes of ``lip_side``, corner first)."""
+    """Half a sphincter along ``path`` (epidermal lip-line nodes of ``lip_side``, corner first);
+    a group of :data:`anatomy.MARGINAL` is the marginal part (anatomical tissue only)."""
     rest = at.layers.rest
     if opt.anatomical:
-        nodes, w, beads = sphincter_beads(path, lip_side, at, opt)
+        nodes, w, beads = sphincter_beads(path, lip_side, at, opt,
+                                          marginal=group in anatomy.MARGINAL)
         chain_rest = np.array([(w[beads == k, None] * rest[nodes[beads == k]]).sum(axis=0)
                                for k in range(beads.max() + 1)])
     else:
@@ -225,16 +237,19 @@ def sphincter_half(group: str, lip_side: int, suffix: str, path: list[int], at: 
                           origin_offset=np.zeros(3))
 
 
-def sphincter_paths(at: Attachment) -> list[tuple[str, int, str, list[int]]]:
+def sphincter_paths(at: Attachment, marginal: bool = False
+                    ) -> list[tuple[str, int, str, list[int]]]:
     """(group, lip side, suffix, path) of every sphincter half: each lip's line, corner first.
 
     The halves meet at the lip-line node nearest the stomion; the lower lip runs through the
-    cut's lower twins.
+    cut's lower twins. ``marginal`` adds the marginal part's halves (:data:`anatomy.MARGINAL`),
+    along the same lines.
     """
     mouth = at.sites.mouth
     path, mid, twin = mouth.path, mouth.midline_index(), mouth.lower_twin()
     out = []
-    for group, lip_side in zip(anatomy.SPHINCTERS, (UPPER_LIP, LOWER_LIP), strict=True):
+    groups = anatomy.SPHINCTERS + (anatomy.MARGINAL if marginal else ())
+    for group, lip_side in zip(groups, (UPPER_LIP, LOWER_LIP) * (len(groups) // 2), strict=True):
         for suffix, seg in (("R", path[: mid + 1]), ("L", path[mid:][::-1])):
             seq = [twin.get(int(v), int(v)) if lip_side == LOWER_LIP else int(v) for v in seg]
             out.append((group, lip_side, suffix, seq))
@@ -246,7 +261,8 @@ def muscle_instances(at: Attachment, opt: BuildOptions) -> list[MuscleInstance]:
     linear_sites = anatomy.LINEAR_MUSCLES + (anatomy.INCISIVE_MUSCLES if opt.anatomical else ())
     linear = [linear_muscle(site, sign, suffix, at, opt)
               for site in linear_sites for sign, suffix in SIDES]
-    return linear + [sphincter_half(*half, at, opt) for half in sphincter_paths(at)]
+    return linear + [sphincter_half(*half, at, opt)
+                     for half in sphincter_paths(at, marginal=opt.anatomical)]
 
 
 def assemble_muscles(instances: list[MuscleInstance]) -> Muscles:

@@ -41,6 +41,12 @@ class BuildOptions:
     sphincter_depth_weights: tuple = (0.0, 0.0, 1.0)
     modiolus: float = 5e-3  # anatomical: m, the first bead lateral to the mouth corner
     modiolus_depth_weights: tuple = (1.0, 1.0, 0.0)  # anatomical: the first bead's layers
+    #: anatomical, orbicularis oris's marginal part: its beads' distance from the lip line at
+    #: the midline (m; the arch falls to 0 at the corner as the red lip narrows), their patch
+    #: radius (m) and their share on the skin, the muscle plane and the deep surface
+    marginal_height: float = 3.0e-3
+    marginal_radius: float = 3.0e-3
+    marginal_depth_weights: tuple = (0.5, 0.5, 0.0)
 
     @property
     def anatomical(self) -> bool:
