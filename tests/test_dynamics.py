@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from facemech.params import Parameters
+from facemech.params import MUSCLE_GROUPS, Parameters
 from facemech.physics.bundles import (
     ContactBundle,
     ForceBundles,
@@ -58,7 +58,7 @@ def run_euler(pos, vel, net, n_dynamic, mass, dt, steps):
                      muscle_group=np.zeros(0, np.int64), max_force=np.zeros(0), tau=0.015,
                      frame_duration=steps * dt, n_steps=steps, step=dt)
     state = State(pos, vel, np.zeros(0), np.zeros(0))
-    controls = Controls(np.zeros(16), np.zeros(3), np.zeros(3))
+    controls = Controls(np.zeros(len(MUSCLE_GROUPS)), np.zeros(3), np.zeros(3))
     return ExplicitEuler(dt).step(ss, state, controls).positions
 
 

@@ -89,7 +89,7 @@ def test_seven_channel_control_drives_zygomatic_with_levator_anguli():
     ch = {g: np.full(5, 0.1 * (k + 1)) for k, g in
           enumerate(("LLS", "LAO", "DAO", "DLI", "MEN", "OOS", "OOI"))}
     act = seven_channel_control(ch)
-    assert act.shape == (5, 16)
+    assert act.shape == (5, len(MUSCLE_GROUPS))
     np.testing.assert_allclose(act[:, MUSCLE_GROUPS.index("ZYG")], 0.2)
     np.testing.assert_allclose(act[:, MUSCLE_GROUPS.index("LAO")], 0.2)
     assert np.all(act[:, MUSCLE_GROUPS.index("FRM")] == 0)
@@ -97,7 +97,7 @@ def test_seven_channel_control_drives_zygomatic_with_levator_anguli():
 
 def test_activity_csv_round_trip_and_resampling(tmp_path):
     t = np.arange(30) / 60
-    a = np.zeros((30, 16))
+    a = np.zeros((30, len(MUSCLE_GROUPS)))
     a[:, 0] = np.linspace(0, 1, 30)
     write_activity(tmp_path / "a.csv", t, a)
     t2, a2 = read_activity(tmp_path / "a.csv")
@@ -140,7 +140,7 @@ def test_marker_csv_round_trip_with_units_and_gaps(tmp_path):
 
 
 def test_results_round_trip(face, tmp_path):
-    act = np.zeros((6, 16))
+    act = np.zeros((6, len(MUSCLE_GROUPS)))
     act[:, 0] = 0.5
     sim = simulate(face, act, np.linspace(0, 0.05, 6))
     path = write_results(tmp_path / "r.nc", sim, inputs={"activity": "abc"})
@@ -157,7 +157,7 @@ def test_results_round_trip(face, tmp_path):
 
 
 def test_results_refuse_non_finite(face, tmp_path):
-    sim = simulate(face, np.zeros((3, 16)))
+    sim = simulate(face, np.zeros((3, len(MUSCLE_GROUPS))))
     sim.positions[1, 0, 0] = np.nan
     with pytest.raises(InputError, match="non-finite"):
         write_results(tmp_path / "r.nc", sim)

@@ -12,7 +12,7 @@ from facemech.inverse.experiments import synthetic_data, triangle_sequence
 from facemech.inverse.frame import FrameProblem
 from facemech.inverse.invert import control_matrix, invert
 from facemech.inverse.methods import LeastSquares
-from facemech.params import Parameters
+from facemech.params import MUSCLE_GROUPS, Parameters
 from facemech.physics.assembly import Physics
 from facemech.solvers.state import State
 from facemech.solvers.step import Stepper
@@ -238,7 +238,7 @@ def test_second_talker_adaptation_by_scaling_and_warp(seeds_face):
     np.testing.assert_allclose(warped.rest_positions[[mapping[n] for n in names]], rest_other,
                                atol=1e-9)
     # the warped face is a working model: a short simulation stays finite and moves
-    act = np.zeros((6, 16))
+    act = np.zeros((6, len(MUSCLE_GROUPS)))
     act[:, 6:8] = 0.5
     sim = simulate(warped, act, params=SEEDS)
     assert np.isfinite(sim.positions).all() and np.ptp(sim.positions[:, :, 0], axis=0).max() > 0

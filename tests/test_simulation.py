@@ -7,7 +7,7 @@ import pytest
 from conftest import activity
 from facemech import SimulationBlowUp, Stepper, simulate
 from facemech.errors import InputError
-from facemech.params import Parameters
+from facemech.params import MUSCLE_GROUPS, Parameters
 from facemech.physics.assembly import Physics
 from facemech.solvers.explicit import ExplicitEuler
 from facemech.solvers.implicit import LinearImplicitEuler, Rosenbrock2
@@ -93,7 +93,7 @@ def test_jaw_opening_lowers_lower_lip_and_chin_without_interpenetration(seeds_fa
     assert lip_gaps(face, sim).min() > -1e-5
     # and closing again with the lips pressed together by the sphincter keeps them apart
     back = np.concatenate([jaw, np.linspace(theta, 0, 15), np.zeros(15)])
-    act = np.zeros((60, 16))
+    act = np.zeros((60, len(MUSCLE_GROUPS)))
     act[30:, 6:8] = 1.0  # OOS and OOI
     sim2 = simulate(face, act, back, params=SEEDS)
     assert lip_gaps(face, sim2).min() > -0.15e-3
@@ -214,7 +214,7 @@ def test_collapse_within_a_frame_is_a_blow_up_with_its_frame(seeds_face):
     from facemech.inverse.experiments import triangle_sequence
     from facemech.params import preset
 
-    act = np.zeros((12, 16))
+    act = np.zeros((12, len(MUSCLE_GROUPS)))
     act[:, :8] = triangle_sequence(1)[:, None]
     # the seeds' second damping value is too much for 1-ms explicit steps: nodes meet
     with pytest.raises(SimulationBlowUp, match=r"frame \d+.*time step") as info:

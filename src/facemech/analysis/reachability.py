@@ -1,11 +1,16 @@
 """Can the face reach the lip positions of real speech? Synthetic targets and their inversion.
 
 The targets are not made by the model: they are marker trajectories laid out by hand from the
-ranges of real speech (issue 11, from an X-ray microbeam / EMA recording: upper lip 3.6 mm
-vertical and 3 mm front to back, lower lip 9 mm and 4.3 mm, the jaw 4.5 mm at the chin), as a
-string of postures (bilabial closure, /a/, /u/, /i/) joined by smooth (raised-cosine)
-transitions. The inversion (lsq, the seeds' seven controls) drives the jaw from the chin marker,
-as a user would, and fits the lip and corner markers; :func:`reach` reports the RMS error.
+ranges of real speech (issues 11 and 27, from X-ray microbeam and EMA recordings: the upper lip
+3 mm down and 3 mm front to back, the lower lip 9 mm vertical and 4.5 mm front to back, 6 mm of
+it relative to the jaw), as a string of postures (bilabial closure, /a/, /u/, /i/) joined by
+smooth (raised-cosine) transitions: the lower lip's 9 mm in 120 ms peaks at 118 mm/s, the
+speeds of real lips (60-120 mm/s). The jaw is a bone point, the lower incisor's sensor as
+articulography has it (``incisor``, 4.5 mm down in /a/ and 0.8 mm back), and drives the jaw
+(:func:`facemech.solvers.jaw_bone.jaw_poses_from_incisor`); the inversion fits the lip and
+corner markers with the speech controls and orbicularis oris's marginal part
+(:data:`REACH_CONTROLS`); :func:`reach` reports the RMS error. A chin skin marker (``chin``)
+is kept in the targets for the older drive (``jaw="chin"``).
 """
 
 from __future__ import annotations
@@ -19,23 +24,28 @@ from ..params import Parameters
 from ..waveforms import cosine_ramp
 
 #: displacements (mm) of each marker group in each posture: (dx, dy, dz); "out" for the corners
-#: is lateral (its sign follows the side). Ranges over the postures: upper lip y 3.6 (-1.6 to
-#: +2.0), z 3.0 (-1.2 to +1.8); lower lip y 9.0 (-9.0 to 0), z 4.3 (-1.5 to +2.8); chin y 4.5.
+#: is lateral (its sign follows the side). Ranges over the postures: upper lip y 3.0 (-3.0 to
+#: 0), z 3.0 (-1.2 to +1.8); lower lip y 9.0 (-9.0 to 0), z 4.5 (-1.5 to +3.0), and relative to
+#: the incisor y 6.0 (-4.5 to +1.5); the incisor y 4.5 (-4.5 to 0) and z 0.8; chin y 4.5.
 POSTURES_MM: dict[str, dict[str, tuple[float, float, float]]] = {
-    "rest": {"upper": (0, 0, 0), "lower": (0, 0, 0), "corner": (0, 0, 0), "chin": (0, 0, 0)},
-    "p": {"upper": (0, -1.6, 0.6), "lower": (0, 0.0, 0.8), "corner": (-1.0, 0, 0.3),
-          "chin": (0, 0, 0)},
-    "a": {"upper": (0, 1.6, -1.0), "lower": (0, -9.0, -1.5), "corner": (0.5, -2.5, -1.0),
-          "chin": (0, -4.5, -2.5)},
-    "u": {"upper": (0, 0.4, 1.8), "lower": (0, -2.0, 2.8), "corner": (-3.0, -0.5, 0.8),
-          "chin": (0, -1.5, -0.8)},
-    "i": {"upper": (0, 2.0, -1.2), "lower": (0, -1.5, -1.5), "corner": (2.0, 1.2, -1.2),
-          "chin": (0, -1.0, -0.5)},
+    "rest": {"upper": (0, 0, 0), "lower": (0, 0, 0), "corner": (0, 0, 0), "chin": (0, 0, 0),
+             "incisor": (0, 0, 0)},
+    "p": {"upper": (0, -3.0, 0.6), "lower": (0, 0.0, 0.8), "corner": (-1.0, 0, 0.3),
+          "chin": (0, -1.0, -0.5), "incisor": (0, -1.5, -0.2)},
+    "a": {"upper": (0, 0.0, -1.2), "lower": (0, -9.0, -1.5), "corner": (0.5, -2.5, -1.0),
+          "chin": (0, -4.5, -2.5), "incisor": (0, -4.5, -0.8)},
+    "u": {"upper": (0, -0.6, 1.8), "lower": (0, -2.0, 3.0), "corner": (-3.0, -0.5, 0.8),
+          "chin": (0, -1.5, -0.8), "incisor": (0, -1.5, -0.3)},
+    "i": {"upper": (0, -0.2, -1.2), "lower": (0, -1.5, -1.5), "corner": (2.0, 1.2, -1.2),
+          "chin": (0, -1.0, -0.5), "incisor": (0, -1.0, -0.2)},
 }
 SEQUENCE = ("rest", "p", "a", "p", "u", "p", "i", "rest")
 #: markers of the built-in face per group (right side first)
 GROUPS = {"upper": ("R05", "L04"), "lower": ("R03", "L02"), "corner": ("R07", "L06"),
-          "chin": ("R01",)}
+          "chin": ("R01",), "incisor": ("LI",)}
+#: the controls of the reachability inversion: the speech set and orbicularis oris's marginal
+#: part (the two that lower the upper lip and lift the lower lip on the jaw)
+REACH_CONTROLS = ("LLS", "ZYG", "LAO", "RIS", "DAO", "DLI", "MEN", "OOS", "OOI", "OOSM", "OOIM")
 
 
 def speech_targets(face, *, posture_s: float = 0.16, transition_s: float = 0.12,
@@ -75,9 +85,19 @@ def speech_targets(face, *, posture_s: float = 0.16, transition_s: float = 0.12,
                 p0[0] *= side
                 p1[0] *= side
             disp[sel, m] = (p0 + (p1 - p0) * u[:, None]) * 1e-3
-    rest = np.array([face.rest_positions[face.markers[n]] for n in names])
+    rest = np.array([_rest_point(face, n) for n in names])
     return MarkerSet(rest[None] + disp, tuple(names), frame_rate,
-                     meta={"source": "synthetic speech targets"})
+                     meta={"source": "synthetic speech targets",
+                           "roles": {"LI": "lower_incisor"}})
+
+
+def _rest_point(face, name: str) -> np.ndarray:
+    """Rest position (3,) m of a target: a marker's node, or the lower incisor's tip."""
+    if name == "LI":
+        from ..solvers.jaw import lower_incisor_point
+
+        return lower_incisor_point(face)
+    return face.rest_positions[face.markers[name]]
 
 
 @dataclass(frozen=True)
@@ -91,20 +111,30 @@ class Reach:
     activity_on_bound: float  # share of control values at 0 or 1
 
 
-def reach(face, params=None, *, markers: MarkerSet | None = None, **invert_kw) -> Reach:
-    """Invert the speech targets with the jaw from the chin marker; the fit's errors."""
+def reach(face, params=None, *, markers: MarkerSet | None = None, jaw: str = "incisor",
+          controls=REACH_CONTROLS, **invert_kw) -> Reach:
+    """Invert the speech targets with the jaw from the lower incisor (``jaw="incisor"``, a bone
+    point) or from the chin skin marker (``"chin"``); the fit's errors over the lip and corner
+    markers."""
     from ..inverse.invert import invert
-    from ..solvers.jaw import jaw_angles_from_marker
-
-    params = params if params is not None else None
     from ..params import default_parameters
 
     params = params or default_parameters()
     ms = markers if markers is not None else speech_targets(face, frame_rate=params.frame_rate)
-    jaw = jaw_angles_from_marker(face, params, face.markers["R01"], ms.marker("R01")[:, 1])
-    fitted = {n: face.markers[n] for n in ms.names if n != "R01"}
-    res = invert(face, ms.select(list(fitted)), fitted, jaw_angle=jaw, params=params,
-                 **invert_kw)
+    if jaw == "incisor":
+        from ..solvers.jaw_bone import jaw_poses_from_incisor
+
+        drive = jaw_poses_from_incisor(ms.marker("LI"), face, params)
+    elif jaw == "chin":
+        from ..solvers.jaw import jaw_angles_from_marker
+
+        drive = jaw_angles_from_marker(face, params, face.markers["R01"],
+                                       ms.marker("R01")[:, 1])
+    else:
+        raise ValueError(f"jaw must be 'incisor' or 'chin', not {jaw!r}")
+    fitted = {n: face.markers[n] for n in ms.names if n not in ("R01", "LI")}
+    res = invert(face, ms.select(list(fitted)), fitted, jaw_angle=drive, params=params,
+                 controls=controls, **invert_kw)
     err = np.linalg.norm(res.model_markers[1:] - res.data_markers[1:], axis=2)
     frame = np.sqrt(np.mean(err**2, axis=1))
     on = np.mean((res.controls <= 1e-6) | (res.controls >= 1 - 1e-6))

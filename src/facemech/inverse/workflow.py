@@ -265,6 +265,17 @@ def _jaw_drive(ms, model, prm, mapping, src, lead, chin_marker, second, incisor,
     return None, None
 
 
+def pick_candidates(model) -> tuple[str, ...]:
+    """The groups a control pick chooses from: the speech controls and, on a face that has it,
+    orbicularis oris's marginal part (what lowers the upper lip and lifts the lower lip on the
+    jaw: the reach of real lips, issue 27)."""
+    from ..params import MARGINAL_GROUPS, MUSCLE_GROUPS
+    from .invert import SPEECH_CONTROLS
+
+    present = {MUSCLE_GROUPS[g] for g in model.muscles.group}
+    return SPEECH_CONTROLS + tuple(g for g in MARGINAL_GROUPS if g in present)
+
+
 def _controls(controls, model, prm, skin, mapping, jaw, estimate, jaw_source, midsagittal, dt,
               src):
     """(controls for :func:`invert`, jaw series, estimate the jaw, jaw source, the note of
@@ -295,8 +306,8 @@ def _controls(controls, model, prm, skin, mapping, jaw, estimate, jaw_source, mi
     else:
         start = jaw_poses(np.atleast_1d(jaw[0]), prm)[0]
     estimated = estimate in (None, True)
-    pick = pick_controls(model, prm, np.array([mapping[n] for n in names]), ctrl,
-                         estimate_jaw=estimated, jaw_start=start,
+    pick = pick_controls(model, prm, np.array([mapping[n] for n in names]),
+                         pick_candidates(model), estimate_jaw=estimated, jaw_start=start,
                          axes=(1, 2) if midsagittal else (0, 1, 2), dt=dt)
     if estimated and not pick.jaw:
         held = np.full(len(skin.positions), start[0]) if jaw is None else jaw
