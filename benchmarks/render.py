@@ -42,6 +42,7 @@ def main() -> None:
     args = ap.parse_args()
 
     from facemech.geometry.builder import default_face
+    from facemech.params import MUSCLE_GROUPS
     from facemech.solvers.forward import simulate
     from facemech.viz import render as R
     from facemech.viz.raster import GROUND, LINEAR_TO_SRGB_LUT, SKY, WRAP, rasterise, vertex_light
@@ -50,7 +51,7 @@ def main() -> None:
 
     face = default_face()
     n = 19
-    act = np.zeros((n, 16))
+    act = np.zeros((n, len(MUSCLE_GROUPS)))
     jaw = np.radians(12.0) * np.linspace(0, 1, n)
     sim = simulate(face, act, jaw)
     skin, angle = sim.positions[-1], float(jaw[-1])

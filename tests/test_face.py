@@ -246,7 +246,8 @@ def test_muscles_are_assembled_in_csr_form(face):
         for bead in np.unique(b):  # each bead's weights share its force
             assert w[b == bead].sum() == pytest.approx(1.0, abs=1e-12)
     names = list(m.names)
-    assert names[-4:] == ["OOS_R", "OOS_L", "OOI_R", "OOI_L"]
+    assert names[-8:] == ["OOS_R", "OOS_L", "OOI_R", "OOI_L",
+                          "OOSM_R", "OOSM_L", "OOIM_R", "OOIM_L"]
     assert names[:2] == ["ZYG_R", "ZYG_L"]
     np.testing.assert_allclose(bump_weights(np.array([0.0, 0.5, 1.0, 2.0]), np.full(4, 2.0)),
                                [2.0, 2.0 * 0.75**2, 2.0 * 0.05**2, 2.0 * 0.05**2])

@@ -47,7 +47,7 @@ def utterance(frame_rate: float = FRAME_RATE_HZ) -> tuple[np.ndarray, np.ndarray
     Returns
     -------
     time : (frames,) s
-    activity : (frames, 16) in [0, 1]
+    activity : (frames, groups) in [0, 1]
     jaw_angle : (frames,) rad
     """
     duration = 2 * LEAD_S + SYLLABLE_S * len(SYLLABLES)

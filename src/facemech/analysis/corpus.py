@@ -82,7 +82,7 @@ def site_nodes(face) -> dict[str, int]:
 
 def random_utterance(rng: np.random.Generator, frames: int,
                      frame_rate: float = Parameters.frame_rate):
-    """Activity (frames, 16) and jaw angles (frames,) rad of a random CV-syllable string at
+    """Activity (frames, groups) and jaw angles (frames,) rad of a random CV-syllable string at
     ``frame_rate`` (Hz)."""
     t = np.arange(frames) / frame_rate
     act = np.zeros((frames, len(MUSCLE_GROUPS)))

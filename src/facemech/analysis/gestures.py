@@ -48,7 +48,7 @@ MAX_DISPLACEMENT_MM = 20.0
 
 def gesture_activity(groups, *, ramp: float = 0.2, hold: float = 0.5, level: float = 1.0,
                      frame_rate: float = Parameters.frame_rate) -> np.ndarray:
-    """Activity (frames, 16): the groups ramped linearly to ``level`` over ``ramp`` s, held for
+    """Activity (frames, groups): the groups ramped linearly to ``level`` over ``ramp`` s, held for
     ``hold`` s (frame 0 at rest)."""
     frames = int(round((ramp + hold) * frame_rate)) + 1
     t = np.arange(frames) / frame_rate

@@ -81,7 +81,7 @@ def step_response_matrix(face, params, nodes, gmat, *, estimate_jaw: bool,
                          jaw_start=(0.0, 0.0, 0.0), dt: float | None = None) -> np.ndarray:
     """Step responses (3 markers, controls), mm per unit, from rest at the jaw's first pose
     (:func:`facemech.inverse.uncertainty.step_responses`): the muscle controls ``gmat``
-    (16, controls) and, with ``estimate_jaw``, the jaw angle in units of
+    (groups, controls) and, with ``estimate_jaw``, the jaw angle in units of
     :data:`~facemech.inverse.frame.JAW_UNIT` rad; a jaw that is not estimated is held at
     ``jaw_start`` (angle rad, shift_y m, shift_z m)."""
     from ..physics.assembly import Physics

@@ -70,7 +70,7 @@ def triangle_sequence(repeats: int = 3) -> np.ndarray:
 
 def synthetic_data(face, *, dt: float | None = None, noise: float = 0.0, seed: int = 0,
                    params=None):
-    """The synthetic markers (MarkerSet, metres), the true group activity (36, 16).
+    """The synthetic markers (MarkerSet, metres), the true group activity (36, groups).
 
     ``params`` defaults to the default preset and ``dt`` (s) to its ``fast_dt`` (used by the
     explicit integrator of the seeds' presets); ``noise`` (m) is the standard deviation of
@@ -352,7 +352,7 @@ def second_talker():
 
 
 def gesture_controls(frames: int = 120, frame_rate: float = Parameters.frame_rate):
-    """Activity (frames, 16) and jaw angles (frames,) rad of /baeb beb daed ded/-like gestures
+    """Activity (frames, groups) and jaw angles (frames,) rad of /baeb beb daed ded/-like gestures
     at ``frame_rate`` (Hz)."""
     t = np.arange(frames) / frame_rate
     act = np.zeros((frames, len(MUSCLE_GROUPS)))

@@ -1,7 +1,7 @@
 """One frame's fit of the inversion (Pitermann & Munhall 2001, II.C), over a window of frames.
 
 The unknowns of frame k are the controls of frames k ... k + w - 1, ``x`` of shape (w, c): the
-muscle controls (mapped to the 16 groups by ``gmat``) and, when the jaw is estimated, one more
+muscle controls (mapped to every group by ``gmat``) and, when the jaw is estimated, one more
 column, the jaw angle reached at the end of the frame in units of ``JAW_UNIT`` rad. The residual
 stacks the markers of frames k + 1 ... k + w (missing ones left out frame by frame), in mm. Only
 the first frame's controls are kept (a receding horizon).
@@ -27,7 +27,7 @@ class FrameProblem:
     ----------
     stepper : Stepper
     state : State at frame k
-    gmat : (16, muscle controls) map from muscle controls to group activity
+    gmat : (groups, muscle controls) map from muscle controls to group activity
     nodes : (markers,) model nodes of the markers
     data : (frames, markers, 3) m, the markers
     jaw : (frames,) rad or (frames, 3) poses, the jaw where it is given (ignored for an

@@ -52,10 +52,10 @@ SPEECH_CONTROLS = ("LLS", "ZYG", "LAO", "RIS", "DAO", "DLI", "MEN", "OOS", "OOI"
 
 
 def control_matrix(controls) -> tuple[tuple[str, ...], np.ndarray]:
-    """Names of the inverted muscle controls and the (16, controls) map to group activity.
+    """Names of the inverted muscle controls and the (groups, controls) map to group activity.
 
     ``"speech"`` (default): :data:`SPEECH_CONTROLS`; ``"emg7"``: the seeds' seven EMG
-    channels (ZYG follows LAO); ``"all"``: the 16 groups; or a list of group names.
+    channels (ZYG follows LAO); ``"all"``: every group; or a list of group names.
     """
     if controls == "emg7":
         names = EMG_CHANNELS
@@ -311,7 +311,7 @@ class _Run:
 class _Problem:
     """What an inversion was asked, for :func:`_finish`: the face, parameters and stepper, the
     markers used (names, nodes, data (frames, markers, 3) m), the controls (names, the
-    (16, controls) map), the jaw plan, the method and the noise (mm, None: estimated)."""
+    (groups, controls) map), the jaw plan, the method and the noise (mm, None: estimated)."""
 
     face: object
     params: Parameters

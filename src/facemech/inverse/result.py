@@ -24,7 +24,7 @@ class Inversion:
     positions : (frames, n_surface, 3) m, the re-animated skin
     marker_names, marker_nodes : the data's markers that were used and their model nodes
     data_markers : (frames, markers, 3) m
-    activity : (frames, 16) group activity of each frame's interval (the last row repeats the
+    activity : (frames, groups) group activity of each frame's interval (the last row repeats the
         one before)
     jaw_angle : (frames,) rad; ``jaw_pose`` (frames, 3) when a pose series drove the jaw
     control_names, controls : the inverted controls (frames, c), the jaw last when estimated,

@@ -33,7 +33,7 @@ def read_activity(path: str | Path, *,
     Returns
     -------
     time : (frames,) s
-    activity : (frames, 16) in [0, 1]
+    activity : (frames, groups) in [0, 1]
     """
     t, cols = read_table(path)
     cols.pop("__meta__")
@@ -68,7 +68,7 @@ def write_activity(path: str | Path, time: np.ndarray, activity: np.ndarray,
 
 
 def seven_channel_control(channels: dict[str, np.ndarray]) -> np.ndarray:
-    """Group activity (frames, 16) from the seeds' EMG channels.
+    """Group activity (frames, groups) from the seeds' EMG channels.
 
     The channels are those of :data:`~facemech.params.EMG_CHANNELS` (LLS, LAO, DAO, DLI, MEN,
     OOS, OOI); zygomatic major follows levator anguli oris (they share one signal in Lucero &

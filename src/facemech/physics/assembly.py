@@ -196,7 +196,7 @@ class Physics:
         return len(self.dynamic)
 
     def steady_force(self, activity: np.ndarray) -> np.ndarray:
-        """M_bar per muscle instance (N) from group activity (16,) in [0, 1] (eq. 3)."""
+        """M_bar per muscle instance (N) from group activity (groups,) in [0, 1] (eq. 3)."""
         return self.params.k_force * self.muscle_area * np.asarray(activity)[self.muscle_group]
 
 

@@ -186,7 +186,7 @@ def muscle_output_variables(physics: Physics, states: Sequence | MuscleSeries) -
         ``muscle_activation`` (N), each on (time, muscle_instance); ``muscle_group`` and
         ``muscle_max_force`` (N, k_f S) on (muscle_instance). The ``muscle_instance``
         coordinate holds the instance names (``"OOS_R"``, ...): the results' ``muscle``
-        coordinate is taken by the 16 groups of ``activity``.
+        coordinate is taken by every group of ``activity``.
 
     Examples
     --------

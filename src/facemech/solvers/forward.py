@@ -37,7 +37,7 @@ class Simulation:
     time : (frames,) s
     positions : (frames, n_surface, 3) m -- epidermal nodes
     markers : (frames, markers, 3) m -- landmarks and virtual markers, named by ``marker_names``
-    activity : (frames, 16) in [0, 1], columns :data:`~facemech.params.MUSCLE_GROUPS`
+    activity : (frames, groups) in [0, 1], columns :data:`~facemech.params.MUSCLE_GROUPS`
     jaw_angle : (frames,) rad
     jaw_shift : (frames, 2) m -- the condyles' shift (y, z); None: zeros (a hinge)
     final_state : State
@@ -89,7 +89,7 @@ def marker_nodes(model: FaceModel) -> tuple[tuple[str, ...], np.ndarray]:
 
 
 def check_activity(activity: np.ndarray, *, source: str | None = None) -> np.ndarray:
-    """Validate an activity array (frames, 16): finite and within [0, 1]."""
+    """Validate an activity array (frames, groups): finite and within [0, 1]."""
     a = np.asarray(activity, float)
     if a.ndim != 2 or a.shape[1] != len(MUSCLE_GROUPS):
         raise InputError(f"activity must have shape (frames, {len(MUSCLE_GROUPS)}), got {a.shape}",
@@ -140,7 +140,7 @@ def simulate(
     Parameters
     ----------
     model : FaceModel
-    activity : (frames, 16) array in [0, 1], columns :data:`~facemech.params.MUSCLE_GROUPS`
+    activity : (frames, groups) array in [0, 1], columns :data:`~facemech.params.MUSCLE_GROUPS`
     jaw_angle : (frames,) rad or (frames, 3) poses, optional (default: jaw closed)
         The jaw's angle per frame, its condyles' shift then following the preset's
         ``jaw_kinematics`` (the coupled glide of the anatomical preset, none for the seeds'

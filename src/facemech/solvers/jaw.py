@@ -21,7 +21,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from ..errors import InputError
-from ..params import GLIDE_RATE, GLIDE_SLOPE
+from ..params import GLIDE_RATE, GLIDE_SLOPE, MUSCLE_GROUPS
 
 JAW_LEAD_SAMPLES = 2  #: 33 ms at 60 Hz
 MAX_JAW_ANGLE = np.radians(30.0)
@@ -222,7 +222,7 @@ def skin_drop_curve(model, params, node: int) -> tuple[np.ndarray, np.ndarray]:
         return hit[1], hit[2]
     angles = np.repeat(CURVE_ANGLES, CURVE_HOLD_FRAMES)
     angles = np.concatenate([[0.0], angles])
-    sim = simulate(model, np.zeros((len(angles), 16)), angles, params=params)
+    sim = simulate(model, np.zeros((len(angles), len(MUSCLE_GROUPS))), angles, params=params)
     ends = np.arange(1, len(CURVE_ANGLES) + 1) * CURVE_HOLD_FRAMES
     drop = sim.positions[ends, node, 1] - sim.positions[0, node, 1]
     out = (np.concatenate([[0.0], CURVE_ANGLES]),

@@ -64,7 +64,7 @@ class SolverState:
     zeta: float = 1.0
 
     def steady_force(self, activity: np.ndarray) -> np.ndarray:
-        """M_bar (muscles,) N of each instance from group activity (16,) in [0, 1] (eq. 3)."""
+        """M_bar (muscles,) N of each instance from group activity (groups,) in [0, 1] (eq. 3)."""
         return self.max_force * np.asarray(activity)[self.muscle_group]
 
 

@@ -71,7 +71,7 @@ class Controls:
 
     Attributes
     ----------
-    activity : (16,) array in [0, 1] -- muscle activity per group
+    activity : (groups,) array in [0, 1] -- muscle activity per group
         (:data:`~facemech.params.MUSCLE_GROUPS`), held over the frame
     jaw_start : (3,) array -- the jaw's pose (angle rad, shift_y m, shift_z m) at the frame's
         start

@@ -150,14 +150,14 @@ class Stepper:
         return pose.copy()
 
     def controls(self, state: State, activity: np.ndarray, jaw) -> Controls:
-        """The :class:`Controls` of a frame from ``state`` with ``activity`` (16,) towards the
+        """The :class:`Controls` of a frame from ``state`` with ``activity`` (groups,) towards the
         jaw target ``jaw`` (an angle or a (3,) pose), as ``jaw_drive`` says."""
         target = self.jaw_pose(jaw)
         start = target if self.jaw_drive == "hold" else state.jaw_pose
         return Controls(np.asarray(activity, float), start, target)
 
     def advance(self, state: State, activity: np.ndarray, jaw) -> State:
-        """Advance ``state`` by one frame with ``activity`` (16 groups, [0, 1]).
+        """Advance ``state`` by one frame with ``activity`` (one per group, [0, 1]).
 
         The jaw goes from the state's pose (``jaw_angle``, ``jaw_shift``) to ``jaw``, as
         ``jaw_drive`` says: ``ramp`` moves the pose linearly over the frame, ``hold`` sets it

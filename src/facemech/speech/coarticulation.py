@@ -98,12 +98,12 @@ def blend(t: np.ndarray, items: list[Gesture], *, exponent: float = DOMINANCE_EX
 
     Returns
     -------
-    activity : (frames, 16) in [0, 1]
+    activity : (frames, groups) in [0, 1]
     jaw : (frames,) rad
     """
     t = np.asarray(t, float)
     vis = [VISEMES[g.cls] for g in items]
-    act_targets = np.array([v.activity_vector() for v in vis])  # (S, 16)
+    act_targets = np.array([v.activity_vector() for v in vis])  # (S, groups)
     jaw_targets = np.array([v.jaw for v in vis])  # (S,)
     decay = np.stack([log_dominance(t, g, 1.0, v.anticipatory_rate, v.carryover_rate, exponent)
                       for g, v in zip(items, vis, strict=True)], axis=1)  # (T, S)
@@ -138,7 +138,7 @@ def controls_from_alignment(alignment: Alignment, *, frame_rate: float = 60.0,
     Returns
     -------
     time : (frames,) s, ``k / frame_rate`` from 0 to the first frame at or after the duration
-    activity : (frames, 16) in [0, 1], columns :data:`~facemech.params.MUSCLE_GROUPS`
+    activity : (frames, groups) in [0, 1], columns :data:`~facemech.params.MUSCLE_GROUPS`
     jaw : (frames,) rad, positive opens
 
     The first and last frames are at rest (zero activity, jaw closed): the controls are tapered

@@ -48,7 +48,7 @@ class Viseme:
     carryover_rate: float = 15.0
 
     def activity_vector(self) -> np.ndarray:
-        """(16,) activity in the order of :data:`~facemech.params.MUSCLE_GROUPS`."""
+        """(groups,) activity in the order of :data:`~facemech.params.MUSCLE_GROUPS`."""
         a = np.zeros(len(MUSCLE_GROUPS))
         for g, v in self.activity.items():
             a[MUSCLE_GROUPS.index(g)] = v

@@ -75,7 +75,7 @@ def read_controls(controls: Controls, frame_rate: float) -> tuple[np.ndarray, np
     Returns
     -------
     time : (frames,) s
-    activity : (frames, 16) in [0, 1], columns :data:`~facemech.params.MUSCLE_GROUPS`
+    activity : (frames, groups) in [0, 1], columns :data:`~facemech.params.MUSCLE_GROUPS`
     inputs : input name -> file hash, for the results' provenance
     """
     from ..io.activity import read_activity, seven_channel_control
@@ -318,7 +318,7 @@ def simulate_to_file(output: str | Path, model, activity: np.ndarray,
     ----------
     output : results file (``.nc``)
     model : FaceModel
-    activity : (frames, 16) array in [0, 1], columns :data:`~facemech.params.MUSCLE_GROUPS`
+    activity : (frames, groups) array in [0, 1], columns :data:`~facemech.params.MUSCLE_GROUPS`
     jaw_angle : (frames,) rad or (frames, 3) poses, optional (default: jaw closed)
     inputs : input name -> file hash, for the results' provenance
     block_frames : frames held in memory at a time (default
