@@ -224,3 +224,32 @@ def test_a_head_with_ears_opens_its_jaw_15_degrees_without_a_crease():
     assert len(notes) == 2 and all("ear" in n for n in notes)
     sim = _open_jaw(model)
     assert largest_fold_increase(sim.model, sim.positions[-1]) < 20.0
+
+
+def test_a_head_scan_with_menpo_v3_landmarks_builds_as_it_comes(tmp_path, monkeypatch, capsys):
+    """The scan-like head written as a scanner would (OBJ in mm) with its 68 points in menpo's
+    LJSON version 3, parts stored in a landmarker.io order: ``facemech face build`` reads,
+    crops, refines and builds it (exit 0), and the model keeps every prism whole."""
+    import json
+
+    from conftest import run_cli
+    from facemech.geometry.ibug import generic_ibug68
+    from facemech.geometry.model import FaceModel
+    from scans import reshape, write_obj
+    from test_ljson import v3
+
+    v, f, lm = scan_head()
+    write_obj(tmp_path / "head.obj", v * 1e3, f)
+    (tmp_path / "head.ljson").write_text(json.dumps(v3(reshape(generic_ibug68()) * 1e3)))
+    code, _, err = run_cli(monkeypatch, capsys, "face", "build", tmp_path / "head.obj",
+                           tmp_path / "head.ljson", "-o", tmp_path / "head.npz")
+    assert code == 0, err
+    assert "68 iBUG points" in err
+    model = FaceModel.load(tmp_path / "head.npz")
+    vols, _ = rest_geometry(model.rest_positions, model.prism_nodes)
+    assert vols.min() > 0
+    n = model.n_surface
+    corner = model.rest_positions[model.landmarks["mouth_corner_left"]]
+    np.testing.assert_allclose(corner, lm["mouth_corner_left"], atol=1e-9)
+    thickness = np.linalg.norm(model.rest_positions[:n] - model.rest_positions[2 * n:], axis=1)
+    assert thickness.min() < MIN_DEPTH  # the jaw's underside thinned past the first floor
