@@ -47,14 +47,16 @@ MIN_QUALITY = 0.3
 SHEAR_COS = 0.5
 #: thinning tapers: the thinning falls off by at most this many metres per metre of skin
 MAX_SLOPE = 0.5
-#: m, the tissue is never thinned below the thinnest of the anatomical map (the nasal bridge,
-#: :data:`tissue.DEPTH_RANGE_MM`): thinner layers are stiffer than any the built-in face has, and
-#: the default time step would not hold them
+#: m, the tissue thins first down to the thinnest of the anatomical map (the nasal bridge,
+#: :data:`tissue.DEPTH_RANGE_MM`): no thinner, and so no stiffer, than the built-in face has
 MIN_DEPTH = DEPTH_RANGE_MM[0] * 1e-3
 #: m, where a prism still folds at that floor (a rim sharper than 3 mm), the tissue there thins
 #: on to this
 LAST_DEPTH = 1.5e-3
-THIN_STEP, TURN_STEP, MAX_ROUNDS = 0.85, 0.5, 80
+#: a thinning step keeps this share of the depth; a turning step goes this share of the way
+THIN_STEP, TURN_STEP = 0.85, 0.5
+#: rounds of each remedy at most
+MAX_ROUNDS = 80
 #: an offset within about 2.5 degrees of its triangles' middle direction has turned enough
 TURNED_COS = 0.999
 
