@@ -27,9 +27,21 @@ def reshape(p):
 def scan_face(spacing_deg: float = 2.4, spacing_mm: float = 3.0, seed: int = 0,
               lip_points: int = 15):
     """Vertices (m), triangles and landmarks (m) of the scan-like face."""
+    pts, tri = _parameter_mesh(spacing_deg, spacing_mm, seed, lip_points, generic.Y_BOTTOM)
+    theta, y = np.radians(pts[:, 0]), pts[:, 1]
+    bx, bz = generic._row_point(theta, y)
+    verts = np.column_stack([bx, y, bz + generic.features(bx, y)]) * 1e-3
+    tri = _wound(pts, tri, verts)
+    lm = {k: v * 1e-3 for k, v in generic.landmarks().items()}
+    return reshape(verts), tri.astype(np.int64), {k: reshape(v) for k, v in lm.items()}
+
+
+def _parameter_mesh(spacing_deg, spacing_mm, seed, lip_points, bottom):
+    """Jittered (angle deg, height mm) samples from ``bottom`` to the hairline, with a row on
+    the lip line, and their Delaunay triangles."""
     rng = np.random.default_rng(seed)
     th = np.arange(-84.0, 84.01, spacing_deg)
-    ys = np.arange(generic.Y_BOTTOM, generic.Y_TOP + 0.01, spacing_mm)
+    ys = np.arange(bottom, generic.Y_TOP + 0.01, spacing_mm)
     tt, yy = np.meshgrid(th, ys)
     inner = np.zeros(tt.shape, bool)
     inner[1:-1, 1:-1] = True  # a regular outer ring: no sliver triangles on the hull
@@ -44,20 +56,82 @@ def scan_face(spacing_deg: float = 2.4, spacing_mm: float = 3.0, seed: int = 0,
                             np.full(lip_points, generic.Y_STOMION)])
     pts = np.concatenate([pts, line])
     pts[:, 0] = np.clip(pts[:, 0], -84.0, 84.0)
-    pts[:, 1] = np.clip(pts[:, 1], generic.Y_BOTTOM, generic.Y_TOP)
-    tri = Delaunay(pts).simplices
-    theta, y = np.radians(pts[:, 0]), pts[:, 1]
-    bx, bz = generic._row_point(theta, y)
-    verts = np.column_stack([bx, y, bz + generic.features(bx, y)]) * 1e-3
-    # wind every triangle alike in the parameter plane, then so that the front faces +z
+    pts[:, 1] = np.clip(pts[:, 1], bottom, generic.Y_TOP)
+    return pts, Delaunay(pts).simplices
+
+
+def _wound(pts, tri, verts):
+    """Every triangle wound alike in the parameter plane, then so that the front faces +z."""
+    tri = tri.copy()
     a, b, c = (pts[tri[:, k]] for k in range(3))
     area2 = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
     tri[area2 < 0] = tri[area2 < 0][:, ::-1]
     a, b, c = (verts[tri[:, k]] for k in range(3))
     if np.cross(b - a, c - a)[:, 2].sum() < 0:
         tri = tri[:, ::-1]
-    lm = {k: v * 1e-3 for k, v in generic.landmarks().items()}
-    return reshape(verts), tri.astype(np.int64), {k: reshape(v) for k, v in lm.items()}
+    return tri
+
+
+# ---- a head as scanners give it: a neck, ears, a jaw that stands out ---------------------------
+#: mm, the scan-like head's ears: tilted fins in front of the tragion (height, half-thickness and
+#: half-height of the Gaussian, backward tilt per mm of height, angle of the row, height)
+EAR = {"height": 14.0, "thick": 3.0, "tall": 10.0, "tilt": 1.2, "theta_deg": 76.0, "y": -35.0}
+#: mm, how far the jaw's lower border stands out of the neck at the angles, the height over
+#: which it drops back, and the height of its edge (generic frontal y)
+JAW = {"out": 12.0, "drop": 2.0, "edge": -126.0}
+#: mm, the neck down to about where a scan is cropped (25 mm under the menton)
+NECK_BOTTOM = -150.0
+
+
+def _smoothstep(u):
+    u = np.clip(u, 0.0, 1.0)
+    return u * u * (3.0 - 2.0 * u)
+
+
+def _head_row_point(theta, y, jaw):
+    """(x, z) mm of the generic row at (theta rad, y mm), the jaw widened at the sides."""
+    e = 2.0 / generic.SUPERELLIPSE_N
+    s, c = np.sin(theta), np.cos(theta)
+    w = generic._width(np.clip(y, generic.Y_BOTTOM, generic.Y_TOP))
+    if jaw:
+        lateral = _smoothstep((np.degrees(np.abs(theta)) - 35.0) / 35.0)
+        out = JAW["out"] * _smoothstep((y - JAW["edge"] + JAW["drop"]) / JAW["drop"]) \
+            * (1.0 - _smoothstep((y + 85.0) / 20.0))
+        w = w + out * lateral
+    depth = generic.midline_depth(y) - generic.Z_EAR
+    return w * np.sign(s) * np.abs(s) ** e, generic.Z_EAR + depth * np.abs(c) ** e
+
+
+def scan_head(spacing_deg: float = 3.6, spacing_mm: float = 4.5, seed: int = 0, *,
+              ears: bool = True, jaw: bool = True, bottom: float = NECK_BOTTOM):
+    """Vertices (m), triangles and landmarks (m) of a scan-like head with the places a real head
+    curves more sharply than its tissue is deep.
+
+    The scan-like face (:func:`scan_face`'s sampling and proportions, coarser by default) with
+    a neck down to ``bottom`` (the throat turning into the neck under the chin), the jaw's lower
+    border standing :data:`JAW` ``out`` mm out of the neck at the angles (a convex edge over a
+    concave one), and ears (:data:`EAR`): fins in front of the tragion, tilted backwards, whose
+    rim is sharper than the 10 mm of tissue there and whose back faces away from the head.
+    """
+    from facemech.geometry.mesh import vertex_normals
+
+    pts, tri = _parameter_mesh(spacing_deg, spacing_mm, seed, 15, bottom)
+    theta, y = np.radians(pts[:, 0]), pts[:, 1]
+    bx, bz = _head_row_point(theta, y, jaw)
+    verts = np.column_stack([bx, y, bz + generic.features(bx, y)])
+    tri = _wound(pts, tri, verts)
+    if ears:
+        normal = vertex_normals(verts, tri)
+        back = np.array([0.0, 0.0, -1.0])
+        for side in (-1.0, 1.0):
+            _, z0 = _head_row_point(np.radians(side * EAR["theta_deg"]), np.array(EAR["y"]),
+                                    jaw)
+            fin = EAR["height"] * np.exp(-0.5 * ((verts[:, 2] - z0) / EAR["thick"]) ** 2) \
+                * np.exp(-0.5 * ((verts[:, 1] - EAR["y"]) / EAR["tall"]) ** 2) \
+                * (np.sign(verts[:, 0]) == side)
+            verts = verts + fin[:, None] * (normal + EAR["tilt"] * back)
+    lm = {k: reshape(v * 1e-3) for k, v in generic.landmarks().items()}
+    return reshape(verts * 1e-3), tri.astype(np.int64), lm
 
 
 # ---- the generic face written as scans come: other units, axes, seams, fragments -------------

@@ -70,6 +70,7 @@ def build_face(
     name: str = "face",
     source: str | None = None,
     appearance: Appearance | None = None,
+    notes: list[str] | None = None,
 ) -> FaceModel:
     """Build the layered face model from an epidermal surface (metres) and its landmarks.
 
@@ -84,12 +85,15 @@ def build_face(
     appearance : the surface's texture (UVs per corner of ``faces``) or vertex colours (per
         row of ``vertices``), carried onto the model: the nodes the mouth cut adds take their
         twins' colours, and the triangles keep their corners' texture coordinates
+    notes : a list the build appends its notes to: where the tissue was thinned (or its offset
+        turned) so that its layers do not fold (:mod:`thinning`), one line each
 
     Raises
     ------
     InputError
         Unknown tissue, missing landmarks, a surface too coarse, not manifold, open at the
-        mouth corners, or too concave for the anatomical tissue depth.
+        mouth corners, or folded over itself where the anatomical tissue would fold
+        (:mod:`thinning` mends what it can first).
     """
     opt = options or BuildOptions()
     vertices, faces, appearance = checked_surface(vertices, faces, landmarks, opt, source,
@@ -97,6 +101,8 @@ def build_face(
     lm = {k: np.asarray(v, float) for k, v in landmarks.items()}
     mouth = cut_mouth(vertices, faces, lm, source)
     layers, topology, bone_weight = tissue_geometry(mouth, lm, opt, source)
+    if notes is not None:
+        notes.extend(layers.notes)
     jaw = attach_jaw(bone_weight, layers.slides, lm, opt)
     sites = surface_sites(mouth, lm)
     area = vertex_areas(mouth.vertices, mouth.faces)

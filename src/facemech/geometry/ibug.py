@@ -17,7 +17,6 @@ image points are refused.
 from __future__ import annotations
 
 import csv
-import json
 from pathlib import Path
 
 import numpy as np
@@ -161,21 +160,19 @@ def read_pts(path: str | Path) -> np.ndarray:
 
 
 def read_ljson(path: str | Path) -> np.ndarray:
-    """The points of a menpo ``.ljson`` file (version 2 ``landmarks.points``, or version 1
-    ``groups[].landmarks[].point``), (68, 3) in the file's unit."""
+    """The points of a menpo ``.ljson`` file (versions 1, 2 and 3, ordered by their labels:
+    :mod:`scan_ljson`), (68, 3) in the file's unit."""
+    from .scan_ljson import read_ljson_points
+
     path = Path(path)
-    try:
-        data = json.loads(path.read_text())
-        if "landmarks" in data:
-            raw = data["landmarks"]["points"]
-        else:
-            raw = [p["point"] for g in data["groups"] for p in g["landmarks"]]
-        points = np.array([[np.nan if c is None else c for c in p] for p in raw], float)
-    except (ValueError, KeyError, TypeError, UnicodeDecodeError):
-        raise InputError("not a menpo landmark file (expected landmarks.points or "
-                         "groups[].landmarks[].point)", source=str(path),
-                         field="landmarks") from None
-    return _checked(points.reshape(len(points), -1), str(path), "landmarks")
+    found = read_ljson_points(path)
+    points = found.points
+    if points.shape[1] == 3 and not np.all(np.isfinite(points)):
+        k = int(np.argmax(~np.all(np.isfinite(points), axis=1)))
+        raise InputError(f"iBUG point {k} (0-based; row {int(found.rows[k])} of the file) is "
+                         "null or not finite: every point must be on the scan", source=str(path),
+                         field=found.field)
+    return _checked(points, str(path), found.field)
 
 
 def read_ibug_csv(path: str | Path) -> np.ndarray:

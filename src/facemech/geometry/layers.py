@@ -12,7 +12,9 @@ Two tissue geometries (:attr:`BuildOptions.tissue`):
     centimetre so that the thick layers do not fold in concave places; the fascia (the plane of
     the mimetic muscles) lies at ``fascia_fraction`` of that depth. Under the lips and the chin
     pad the skull layer is the deep surface of the tissue (labial mucosa, chin fat), which moves
-    and slides on the teeth and bone.
+    and slides on the teeth and bone. Where a real head curves more sharply than that (the jaw
+    angles, under the chin, the ears), the tissue thins or its offset turns towards the skin's
+    normal until no prism folds, and a note says where and by how much (:mod:`thinning`).
 """
 
 from __future__ import annotations
@@ -26,6 +28,7 @@ from .kinds import FASCIA, SKULL, layer_nodes
 from .mesh import smoothed_normals
 from .mouth import MouthCut, uniform_lip_region
 from .options import BuildOptions
+from .thinning import relieve_folds
 
 
 @dataclass(frozen=True)
@@ -47,6 +50,8 @@ class Layers:
     sliding_tether : (slides.sum(),) array or None
         How firmly each sliding node is held to the bone, a factor on the preset's tether
         stiffness (:func:`tissue.tether_weight`); None where nothing slides (uniform).
+    notes : what was changed to keep the layers from folding, one line per place
+        (:func:`thinning.relieve_folds`); empty on a face that needs nothing
     """
 
     rest: np.ndarray
@@ -55,6 +60,7 @@ class Layers:
     free: np.ndarray
     slides: np.ndarray
     sliding_tether: np.ndarray | None = None
+    notes: tuple[str, ...] = ()
 
     @property
     def n_surface(self) -> int:
@@ -113,10 +119,13 @@ def anatomical_layers(mouth: MouthCut, generic_xy: np.ndarray, opt: BuildOptions
     depth = tissue.tissue_depth_mm(gx, gy) * 1e-3
     offset = smoothed_normals(v, mouth.faces, opt.normal_smoothing)
     offset[mouth.pairs[:, 1]] = offset[mouth.pairs[:, 0]]  # the slit's twins stay together
+    offset, depth, notes = relieve_folds(v, mouth.faces, offset, depth, opt.fascia_fraction,
+                                         generic_xy=generic_xy, twins=mouth.pairs)
     fascia = v - (opt.fascia_fraction * depth)[:, None] * offset
     skull = v - depth[:, None] * offset
     slides = tissue.sliding_region(gx, gy)
     return Layers(rest=np.concatenate([v, fascia, skull]),
                   skull_normals=np.concatenate([offset, offset, offset]),
                   lip_region=tissue.lip_ellipse(gx, gy), free=slides, slides=slides,
-                  sliding_tether=tissue.tether_weight(gx[slides], gy[slides]))
+                  sliding_tether=tissue.tether_weight(gx[slides], gy[slides]),
+                  notes=tuple(notes))

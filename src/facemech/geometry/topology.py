@@ -106,7 +106,8 @@ def check_prisms(rest: np.ndarray, prism_nodes: np.ndarray, source: str | None =
     Raises
     ------
     InputError
-        A prism has no volume: the surface is too concave for the tissue depth (names where).
+        A prism has no volume (names where): left after :mod:`thinning` has mended what it can,
+        this is skin that folds over itself or a rim sharper than 3 mm of tissue.
     """
     from ..physics.volume import rest_geometry
 
@@ -115,5 +116,7 @@ def check_prisms(rest: np.ndarray, prism_nodes: np.ndarray, source: str | None =
         bad = int(np.argmin(vols))
         p = rest[prism_nodes[bad, 0]] * 1e3
         raise InputError("the tissue layers fold (a prism has no volume) near "
-                         f"({p[0]:.0f}, {p[1]:.0f}, {p[2]:.0f}) mm: the surface is too concave "
-                         "there for the tissue depth", source=source, field="tissue")
+                         f"({p[0]:.0f}, {p[1]:.0f}, {p[2]:.0f}) mm even with the tissue thinned "
+                         "to 3 mm and its offsets turned there: the skin folds over itself or "
+                         "is too sharp there; smooth the scan there", source=source,
+                         field="tissue")
