@@ -245,6 +245,7 @@ def test_a_head_scan_with_menpo_v3_landmarks_builds_as_it_comes(tmp_path, monkey
                            tmp_path / "head.ljson", "-o", tmp_path / "head.npz")
     assert code == 0, err
     assert "68 iBUG points" in err
+    assert "thinned by up to" in err  # the mending notes reach the user
     model = FaceModel.load(tmp_path / "head.npz")
     vols, _ = rest_geometry(model.rest_positions, model.prism_nodes)
     assert vols.min() > 0

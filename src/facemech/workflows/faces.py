@@ -51,7 +51,8 @@ def build_face_file(surface: str | Path, landmarks: str | Path, output: str | Pa
         progress("build", 0, 1)
     scan = load_scan(surface, landmarks, units=None if units == "auto" else units, axes=axes)
     model = build_face(scan.vertices, scan.faces, scan.landmarks, name=name or surface.stem,
-                       source=str(surface), options=opts, appearance=scan.appearance)
+                       source=str(surface), options=opts, appearance=scan.appearance,
+                       notes=scan.notes)
     model.save(output)
     if progress is not None:
         progress("build", 1, 1)
