@@ -51,16 +51,19 @@ JAW_CLOSE = -np.radians(3.0)
 SPEECH_CONTROLS = ("LLS", "ZYG", "LAO", "RIS", "DAO", "DLI", "MEN", "OOS", "OOI")
 
 
-def control_matrix(controls) -> tuple[tuple[str, ...], np.ndarray]:
+def control_matrix(controls, model=None) -> tuple[tuple[str, ...], np.ndarray]:
     """Names of the inverted muscle controls and the (groups, controls) map to group activity.
 
     ``"speech"`` (default): :data:`SPEECH_CONTROLS`; ``"emg7"``: the seeds' seven EMG
-    channels (ZYG follows LAO); ``"all"``: every group; or a list of group names.
+    channels (ZYG follows LAO); ``"all"``: every group (of ``model`` when given: the seeds'
+    faces have no marginal orbicularis); or a list of group names.
     """
     if controls == "emg7":
         names = EMG_CHANNELS
     elif controls == "all":
-        names = MUSCLE_GROUPS
+        present = (set(MUSCLE_GROUPS) if model is None
+                   else {MUSCLE_GROUPS[g] for g in model.muscles.group})
+        names = tuple(g for g in MUSCLE_GROUPS if g in present)
     elif controls == "speech":
         names = SPEECH_CONTROLS
     else:
@@ -146,7 +149,7 @@ def invert(
     names = [n for n in markers.names if n in mapping]
     if not names:
         raise InputError("no marker has a node", source=src, field="mapping")
-    cnames, gmat = control_matrix(controls)
+    cnames, gmat = control_matrix(controls, face)
     data = markers.select(names).positions
     frames = len(data)
     jaw, estimate_jaw, jaw_note = _jaw_plan(jaw_angle, estimate_jaw, jaw_source, frames)

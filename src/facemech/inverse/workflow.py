@@ -291,7 +291,7 @@ def _controls(controls, model, prm, skin, mapping, jaw, estimate, jaw_source, mi
     names = [n for n in skin.names if n in mapping]
     per = 2 if midsagittal else 3
     coords = per * len(names)
-    n_controls = len(control_matrix(ctrl)[0]) + (1 if estimate in (None, True) else 0)
+    n_controls = len(control_matrix(ctrl, model)[0]) + (1 if estimate in (None, True) else 0)
     if coords >= n_controls or not names:
         return ctrl, jaw, estimate, jaw_source, None
     if given:
