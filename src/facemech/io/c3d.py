@@ -118,7 +118,8 @@ def _isolated_read(path: str | Path, what: str, timeout: float = 60.0):
     try:
         try:
             run = subprocess.run([sys.executable, "-c", _CHILD, str(path), what, target],
-                                 capture_output=True, text=True, timeout=timeout)
+                                 capture_output=True, text=True, timeout=timeout,
+                                 stdin=subprocess.DEVNULL)
         except subprocess.TimeoutExpired:
             raise InputError("corrupt C3D: the reader stopped (timed out)",
                              source=str(path)) from None

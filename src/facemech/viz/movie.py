@@ -115,9 +115,11 @@ def write_movie(
 def _mux(exe: str, video: Path, audio) -> None:
     muxed = video.with_name(video.stem + ".mux.mp4")
     try:
-        cmd = [exe, "-y", "-loglevel", "error", "-i", str(video), "-i", str(audio),
+        # -nostdin and no standard input: ffmpeg would otherwise read (and swallow) the
+        # caller's input, e.g. the next line of a `while read` loop in a shell script
+        cmd = [exe, "-nostdin", "-y", "-loglevel", "error", "-i", str(video), "-i", str(audio),
                "-c:v", "copy", "-c:a", "aac", "-shortest", str(muxed)]
-        run = subprocess.run(cmd, capture_output=True, text=True)
+        run = subprocess.run(cmd, capture_output=True, text=True, stdin=subprocess.DEVNULL)
         if run.returncode != 0:
             last = (run.stderr.strip().splitlines() or ["unknown error"])[-1]
             raise InputError(f"ffmpeg could not mux the audio: {last}", source=str(audio))
