@@ -35,6 +35,24 @@ class Movie:
     options: object | None = None
 
 
+def check_movie(movie: Movie | tuple, inputs=(), field: str = "-o") -> Movie:
+    """Check a :class:`Movie` (or its fields as a tuple) before any long work: its output
+    (never one of ``inputs``, writable; ``field`` the option that gave it) and its audio (a
+    readable WAV with some sound, and only for an MP4). Returns the :class:`Movie`."""
+    from ..errors import InputError
+    from ..speech.wav import check_audio
+
+    movie = movie if isinstance(movie, Movie) else Movie(*movie)
+    frames = Path(movie.path).suffix == ""
+    check_output(movie.path, [*inputs, movie.audio], folder=frames, field=field)
+    if movie.audio is not None:
+        if frames:
+            raise InputError("audio goes into a movie, not into PNG frames",
+                             source=str(movie.audio), field="audio")
+        check_audio(movie.audio, field="audio")
+    return movie
+
+
 def render_movie(results, movie: Movie | tuple, *, source: str | None = None,
                  progress: StagedProgress | None = None) -> Written:
     """Render a results dataset (or file) to ``movie`` (a :class:`Movie`, or its fields as a
@@ -43,10 +61,7 @@ def render_movie(results, movie: Movie | tuple, *, source: str | None = None,
     writable: :func:`facemech.io.atomic.check_output`)."""
     from ..viz.video import render_results
 
-    movie = movie if isinstance(movie, Movie) else Movie(*movie)
-    given = results if isinstance(results, (str, Path)) else source
-    check_output(movie.path, [given, movie.audio], folder=Path(movie.path).suffix == "",
-                 field="-o")
+    movie = check_movie(movie, [results if isinstance(results, (str, Path)) else source])
     if isinstance(results, (str, Path)):
         from ..io.results import read_results
 

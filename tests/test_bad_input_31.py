@@ -1,0 +1,85 @@
+"""Bad input, the last mile (issue 31): checks before the long work, one line naming the file
+and field (or option and value), nothing written, inputs byte-identical."""
+
+from __future__ import annotations
+
+import hashlib
+import time
+
+import numpy as np
+import pytest
+
+from conftest import run_cli
+from facemech.errors import InputError
+
+
+def _snapshot(folder):
+    return {str(p.relative_to(folder)): hashlib.sha256(p.read_bytes()).hexdigest()
+            if p.is_file() else "dir" for p in sorted(folder.rglob("*"))}
+
+
+def refused(monkeypatch, capsys, tmp_path, *args, words=(), seconds=5.0) -> str:
+    """Run ``facemech ARGS`` (``{t}`` in an argument: ``tmp_path``); it must exit 2 with one
+    stderr line holding ``words``, within ``seconds``, leaving ``tmp_path`` as it was."""
+    before = _snapshot(tmp_path)
+    start = time.perf_counter()
+    code, _, err = run_cli(monkeypatch, capsys, *(str(a).format(t=tmp_path) for a in args))
+    took = time.perf_counter() - start
+    lines = err.strip().splitlines()
+    assert code == 2, err
+    assert len(lines) == 1 and "Traceback" not in err, err
+    assert lines[0].startswith("facemech: error: "), lines[0]
+    for w in words:
+        assert str(w).format(t=tmp_path) in lines[0], lines[0]
+    assert "np.float64" not in lines[0] and "np.int64" not in lines[0], lines[0]
+    assert _snapshot(tmp_path) == before, "the folder changed"
+    assert took < seconds, f"refused after {took:.1f} s"
+    return lines[0]
+
+
+def _activity(path, frames=30):
+    t = np.arange(frames) / 60.0
+    path.write_text("time,OOS\n" + "".join(f"{x:.6f},0.1\n" for x in t))
+    return path
+
+
+# ---- audio checked before the long work ---------------------------------------------------------
+@pytest.mark.parametrize("audio, why", [
+    ("missing.wav", "no such audio file"),
+    ("garbage.wav", "not a readable WAV file"),
+    ("silent.wav", "silent"),
+])
+def test_render_checks_its_audio_first(monkeypatch, capsys, tmp_path, audio, why):
+    from facemech.speech.wav import write_wav
+
+    (tmp_path / "r.nc").write_bytes(b"not read: the audio is checked first")
+    (tmp_path / "garbage.wav").write_bytes(b"RIFF\x10\x00\x00\x00garbage garbage")
+    write_wav(tmp_path / "silent.wav", np.zeros(1000), 8000)
+    refused(monkeypatch, capsys, tmp_path, "render", "{t}/r.nc", "-o", "{t}/m.mp4",
+            "--audio", f"{{t}}/{audio}", words=(f"{{t}}/{audio}", "field 'audio'", why))
+
+
+def test_simulate_checks_the_movies_audio_before_simulating(monkeypatch, capsys, tmp_path):
+    _activity(tmp_path / "a.csv")
+    (tmp_path / "garbage.wav").write_bytes(bytes(range(256)) * 4)
+    refused(monkeypatch, capsys, tmp_path, "simulate", "-o", "{t}/out.nc", "--activity",
+            "{t}/a.csv", "--video", "{t}/m.mp4", "--audio", "{t}/garbage.wav",
+            words=("{t}/garbage.wav", "field 'audio'"))
+
+
+def test_audio_for_png_frames_is_refused_first(monkeypatch, capsys, tmp_path):
+    from facemech.speech.wav import write_wav
+
+    (tmp_path / "r.nc").write_bytes(b"not read")
+    write_wav(tmp_path / "v.wav", np.sin(np.arange(800) / 5.0), 8000)
+    refused(monkeypatch, capsys, tmp_path, "render", "{t}/r.nc", "-o", "{t}/frames",
+            "--audio", "{t}/v.wav", words=("not into PNG frames",))
+
+
+def test_check_audio_gives_the_length(tmp_path):
+    from facemech.speech.wav import check_audio, write_wav
+
+    write_wav(tmp_path / "v.wav", np.sin(np.arange(8000) / 5.0), 8000)
+    assert check_audio(tmp_path / "v.wav") == pytest.approx(1.0)
+    with pytest.raises(InputError, match="not a regular file"):
+        check_audio(tmp_path)
