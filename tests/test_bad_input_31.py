@@ -83,3 +83,40 @@ def test_check_audio_gives_the_length(tmp_path):
     assert check_audio(tmp_path / "v.wav") == pytest.approx(1.0)
     with pytest.raises(InputError, match="not a regular file"):
         check_audio(tmp_path)
+
+
+# ---- design tables: the whole table before the first row --------------------------------------
+@pytest.mark.parametrize("cells, words", [
+    ({"colour": "red"}, ("row 2, column 'colour'", "unknown column")),
+    ({"amplitude": "-1"}, ("row 2, column 'amplitude'", "'-1'")),
+    ({"id": "one"}, ("row 2, column 'id'", "'one' is used by an earlier row")),
+    ({"av_offset_ms": "-100000"}, ("row 2, column 'av_offset_ms'", "-100000 ms")),
+    ({"audio": "garbage.wav"}, ("row 2, column 'audio'", "garbage.wav")),
+    ({"time_scale": "nan"}, ("row 2, column 'time_scale'", "'nan'")),
+])
+def test_a_design_table_that_cannot_run_is_refused_before_any_row(monkeypatch, capsys,
+                                                                  tmp_path, cells, words):
+    from facemech.speech.wav import write_wav
+
+    (tmp_path / "r.nc").write_bytes(b"not read: the table is refused first")
+    write_wav(tmp_path / "v.wav", np.sin(np.arange(4000) / 5.0), 8000)
+    (tmp_path / "garbage.wav").write_bytes(b"RIFF....WAVEfmt nothing more")
+    rows = [{"id": "one", "results": "r.nc", "audio": "v.wav"},
+            {"id": "two", "results": "r.nc", "audio": "v.wav", **cells}]
+    cols = list(dict.fromkeys(c for r in rows for c in r))
+    (tmp_path / "d.csv").write_text("\n".join([",".join(cols)] + [
+        ",".join(r.get(c, "") for c in cols) for r in rows]) + "\n")
+    refused(monkeypatch, capsys, tmp_path, "stimuli", "{t}/d.csv", "-o", "{t}/out",
+            words=("{t}/d.csv", *words))
+
+
+@pytest.mark.parametrize("cells, words", [
+    ("text = \"hello\"\ncolour = \"red\"", ("row 1, column 'colour'", "unknown column")),
+    ("text = \"hello\"\nrate_wpm = \"fast\"", ("row 1, column 'rate_wpm'", "'fast'")),
+    ("text = \"hello\"\nstrength = -2", ("row 1, column 'strength'", "-2")),
+])
+def test_text_rows_are_checked_before_any_is_spoken(monkeypatch, capsys, tmp_path, cells,
+                                                    words):
+    (tmp_path / "d.toml").write_text(f"[[stimulus]]\nid = \"a\"\n{cells}\n")
+    refused(monkeypatch, capsys, tmp_path, "stimuli", "{t}/d.toml", "-o", "{t}/out",
+            words=("{t}/d.toml", *words))

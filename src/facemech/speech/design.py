@@ -373,6 +373,7 @@ def run_design(table_path: str | Path, out_dir: str | Path, make_item: MakeItem 
             parsed.append(spec)
         except RowError as exc:
             parsed.append(exc)
+    refuse_table(parsed, table_path, make_item)  # before anything is written
     cache: dict[str, tuple] = {}
     total = len(parsed)
     for done, spec in enumerate(parsed):
@@ -450,6 +451,53 @@ def run_design(table_path: str | Path, out_dir: str | Path, make_item: MakeItem 
         progress("stimuli", total, total)
     _write_manifest(out_dir, table_path, render, entries, report)
     return report
+
+
+def refuse_table(parsed: list, table: Path, make_item: MakeItem | None = None) -> None:
+    """Refuse a design table that cannot run, before its first row is made: the first row that
+    does not parse (unknown column, a value out of range, a repeated id, a missing file), or
+    whose sound cannot be read or would be moved out of the stimulus by its offset.
+
+    ``parsed`` holds each row's :class:`Stimulus` or :class:`RowError`. A ``make_item`` hook
+    may carry ``check(row) -> None`` (raising :class:`InputError`) to check its own columns.
+
+    Raises
+    ------
+    InputError
+        One line naming the table, the row, the column and the value.
+    """
+    from .wav import check_audio
+
+    def refuse(exc: RowError):
+        err = _with_source(exc, table)
+        raise InputError(err.message, source=err.source) from None
+
+    for spec in parsed:
+        if isinstance(spec, RowError):
+            refuse(spec)
+    check = getattr(make_item, "check", None)
+    lengths: dict[str, float] = {}
+    for spec in parsed:
+        if "text" in spec.source and check is not None:
+            try:
+                check(dict(spec.source))
+            except InputError as exc:
+                refuse(RowError(exc.message, row=spec.row, column=exc.field))
+        for column, path in (("audio", spec.source.get("audio")),
+                             ("dub_audio", spec.settings.get("dub_audio"))):
+            if path is not None and path not in lengths:
+                try:
+                    lengths[path] = check_audio(path, field=column)
+                except InputError as exc:
+                    refuse(RowError(f"{path}: {exc.message}", row=spec.row, column=column))
+        sound = spec.settings.get("dub_audio", spec.source.get("audio"))
+        offset = abs(spec.settings.get("av_offset_ms", 0.0)) / 1e3
+        if sound is not None and "dub_from" not in spec.settings:
+            length = lengths[sound] * spec.settings.get("time_scale", 1.0)
+            if offset >= length:
+                refuse(RowError(f"an offset of {spec.settings['av_offset_ms']:g} ms moves the "
+                                f"whole sound ({1e3 * length:.0f} ms) out of the stimulus",
+                                row=spec.row, column="av_offset_ms"))
 
 
 def _item(sid, source, make_item, row, cache):

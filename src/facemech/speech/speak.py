@@ -232,16 +232,26 @@ def text_items(work_dir: str | Path, *, preset: str = "anatomical"):
 
     work = Path(work_dir)
 
-    def make_item(row: dict):
+    def check(row: dict) -> tuple[int, float]:
+        """The row's columns and numbers, checked before any row runs: (rate_wpm, strength)."""
         unknown = [k for k in row if k not in TEXT_ROW_COLUMNS]
         if unknown:
-            raise InputError(f"not a column of a text row (have {', '.join(TEXT_ROW_COLUMNS)})",
-                             field=unknown[0])
-        try:
-            rate = int(float(row.get("rate_wpm", 160)))
-            strength = float(row.get("strength", 1.0))
-        except ValueError as exc:
-            raise InputError(f"not a number ({exc})", field="rate_wpm/strength") from None
+            raise InputError(f"unknown column {unknown[0]!r} (a text row has "
+                             f"{', '.join(TEXT_ROW_COLUMNS)})", field=unknown[0])
+        values = []
+        for column, default, kind in (("rate_wpm", 160, int), ("strength", 1.0, float)):
+            text = row.get(column, default)
+            try:
+                v = float(text)
+            except (TypeError, ValueError):
+                raise InputError(f"{text!r} is not a number", field=column) from None
+            if not (np.isfinite(v) and v > 0):
+                raise InputError(f"{text!r} must be a positive number", field=column)
+            values.append(kind(v))
+        return values[0], values[1]
+
+    def make_item(row: dict):
+        rate, strength = check(row)
         key = _row_key(row, preset)
         spoken = speak(work / key, str(row["text"]), voice=str(row.get("voice", "en-us")),
                        rate_wpm=rate, face=row.get("face", "default"),
@@ -249,6 +259,7 @@ def text_items(work_dir: str | Path, *, preset: str = "anatomical"):
         return spoken.dataset, spoken.files["audio"]
 
     make_item.version = f"speak {__version__}"
+    make_item.check = check
     return make_item
 
 
