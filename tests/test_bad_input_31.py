@@ -120,3 +120,96 @@ def test_text_rows_are_checked_before_any_is_spoken(monkeypatch, capsys, tmp_pat
     (tmp_path / "d.toml").write_text(f"[[stimulus]]\nid = \"a\"\n{cells}\n")
     refused(monkeypatch, capsys, tmp_path, "stimuli", "{t}/d.toml", "-o", "{t}/out",
             words=("{t}/d.toml", *words))
+
+
+# ---- tracebacks and messages that named nothing ------------------------------------------------
+def tiny_results(path, frames=6):
+    """A small results file: three nodes, markers R01-R03 moving up 1 mm per frame."""
+    import xarray as xr
+
+    rest = np.array([[0.0, 0.0, 0.0], [0.03, 0.0, 0.0], [0.0, 0.03, 0.01]])
+    pos = rest[None] + np.arange(frames)[:, None, None] * np.array([0.0, 1e-3, 0.0])
+    ds = xr.Dataset({"positions": (("time", "node", "axis"), pos),
+                     "markers": (("time", "marker", "axis"), pos.copy()),
+                     "triangles": (("triangle", "corner"), np.array([[0, 1, 2]]))},
+                    coords={"time": np.arange(frames) / 60.0, "axis": list("xyz"),
+                            "marker": ["R01", "R02", "R03"]},
+                    attrs={"frame_rate_hz": 60.0})
+    ds.to_netcdf(path, engine="h5netcdf")
+    return path
+
+
+def marker_csv(path, rows, names=("R01", "R02")):
+    head = "time," + ",".join(f"{n}_{a}" for n in names for a in "xyz")
+    path.write_text("# units: mm\n" + head + "\n" + "".join(
+        f"{k / 60:.6f}," + ",".join(r) + "\n" for k, r in enumerate(rows)))
+    return path
+
+
+def test_plot_refuses_an_all_missing_measured_marker(monkeypatch, capsys, tmp_path):
+    tiny_results(tmp_path / "r.nc")
+    marker_csv(tmp_path / "m.csv", [[""] * 3 + ["1", "2", "3"]] * 6)
+    refused(monkeypatch, capsys, tmp_path, "plot", "{t}/r.nc", "-o", "{t}/p.png", "--markers",
+            "R01", "--measured", "{t}/m.csv", words=("{t}/m.csv", "field 'R01'", "no sample"))
+
+
+@pytest.mark.parametrize("names, words", [(",", ("--markers", "','")),
+                                          ("R01,X9", ("{t}/r.nc", "'X9'"))])
+def test_plot_refuses_marker_names_it_cannot_draw(monkeypatch, capsys, tmp_path, names, words):
+    tiny_results(tmp_path / "r.nc")
+    refused(monkeypatch, capsys, tmp_path, "plot", "{t}/r.nc", "-o", "{t}/p.png", "--markers",
+            names, words=words)
+
+
+def test_plot_draws_measured_markers_without_gaps(monkeypatch, capsys, tmp_path):
+    tiny_results(tmp_path / "r.nc")
+    marker_csv(tmp_path / "m.csv", [[str(v) for v in (0, k, 0, 30, 0, 0)] for k in range(6)])
+    code, _, err = run_cli(monkeypatch, capsys, "plot", tmp_path / "r.nc", "-o",
+                           tmp_path / "p.png", "--markers", "R01,R02", "--measured",
+                           tmp_path / "m.csv")
+    assert code == 0, err
+    assert (tmp_path / "p.png").stat().st_size > 1000
+
+
+def test_regions_names_the_file_and_marker_of_a_gap(monkeypatch, capsys, tmp_path):
+    full = [["0", "0", "0", "1", "2", "3"]] * 5
+    marker_csv(tmp_path / "a.csv", full)
+    marker_csv(tmp_path / "b.csv", full[:2] + [["0", "0", "0", "", "", ""]] + full[3:])
+    refused(monkeypatch, capsys, tmp_path, "regions", "{t}/a.csv", "{t}/b.csv", "-o",
+            "{t}/out", words=("{t}/b.csv", "field 'R02'", "frame 3"))
+
+
+@pytest.mark.parametrize("pair, words", [("R01", ("--scale-pair", "'R01'")),
+                                         ("R01,R01", ("--scale-pair",)),
+                                         ("R01,Q7", ("--scale-pair", "'Q7'"))])
+def test_invert_checks_its_scale_pair_first(monkeypatch, capsys, tmp_path, pair, words):
+    marker_csv(tmp_path / "m.csv", [["0", "0", "0", "30", "2", "3"]] * 4)
+    refused(monkeypatch, capsys, tmp_path, "invert", "--markers", "{t}/m.csv", "-o",
+            "{t}/r.nc", "--scale-pair", pair, words=words)
+
+
+def test_invert_refuses_a_frame_without_any_marker_first(monkeypatch, capsys, tmp_path):
+    rows = [["0", "0", "0", "30", "2", "3"]] * 4
+    marker_csv(tmp_path / "m.csv", rows[:2] + [[""] * 6] + rows[3:])
+    refused(monkeypatch, capsys, tmp_path, "invert", "--markers", "{t}/m.csv", "-o",
+            "{t}/r.nc", words=("{t}/m.csv", "frame 3", "no marker at all"))
+
+
+def test_a_binary_landmark_file_is_refused(monkeypatch, capsys, tmp_path):
+    (tmp_path / "face.obj").write_text("v 0 0 0\nv 150 0 0\nv 0 150 0\nf 1 2 3\n")
+    (tmp_path / "lm.csv").write_bytes(bytes(range(256)) * 16)
+    refused(monkeypatch, capsys, tmp_path, "face", "build", "{t}/face.obj", "{t}/lm.csv", "-o",
+            "{t}/f.json", words=("{t}/lm.csv", "binary"))
+
+
+def test_a_garbage_obj_names_the_file_not_a_module(tmp_path):
+    from facemech.geometry.surface_io import read_surface
+
+    (tmp_path / "g.obj").write_bytes(bytes(range(256)) * 16)
+    with pytest.raises(InputError, match=r"g\.obj: field 'geometry': binary data"):
+        read_surface(tmp_path / "g.obj")
+
+
+def test_numpy_scalars_print_as_values():
+    err = InputError(f"rate {np.float64(np.nan)!r} Hz, {np.int64(3)!r} frames", field="rate")
+    assert str(err) == "field 'rate': rate nan Hz, 3 frames"

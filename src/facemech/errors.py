@@ -6,6 +6,11 @@ users can catch it and read ``source`` and ``field``.
 
 from __future__ import annotations
 
+import re
+
+#: numpy's repr of a scalar (NumPy >= 2), e.g. ``np.float64(nan)``: printed as the value itself
+_NUMPY_REPR = re.compile(r"\bnp\.(float|int|uint|bool|complex|str)_?\d*\(([^()]*)\)")
+
 
 class FacemechError(Exception):
     """A user-facing error: bad input, an impossible request, a numerical blow-up.
@@ -34,7 +39,7 @@ class FacemechError(Exception):
             where.append(f"field '{self.field}'")
         prefix = ": ".join(where)
         text = f"{prefix}: {self.message}" if prefix else self.message
-        return " ".join(text.split())
+        return " ".join(_NUMPY_REPR.sub(r"\2", text).split())
 
 
 class InputError(FacemechError):
