@@ -213,3 +213,57 @@ def test_a_garbage_obj_names_the_file_not_a_module(tmp_path):
 def test_numpy_scalars_print_as_values():
     err = InputError(f"rate {np.float64(np.nan)!r} Hz, {np.int64(3)!r} frames", field="rate")
     assert str(err) == "field 'rate': rate nan Hz, 3 frames"
+
+
+# ---- no file facemech cannot read back ---------------------------------------------------------
+def test_an_infinite_coordinate_is_an_error_naming_the_cell(monkeypatch, capsys, tmp_path):
+    marker_csv(tmp_path / "m.csv", [["0", "0", "0", "1", "2", "3"], ["0", "0", "0", "1", "inf",
+                                                                     "3"]] * 2)
+    refused(monkeypatch, capsys, tmp_path, "markers", "info", "{t}/m.csv",
+            words=("{t}/m.csv", "field 'R02_y'", "row 2", "'inf'"))
+
+
+def test_an_infinite_trc_coordinate_is_an_error_naming_marker_and_frame(tmp_path):
+    from facemech.io.markers import read_markers
+    from facemech.io.trc import write_trc
+    from facemech.markerset import MarkerSet
+
+    write_trc(tmp_path / "a.trc", MarkerSet(np.ones((3, 1, 3)) * 0.01, ("A",), 60.0),
+              units="mm")
+    text = (tmp_path / "a.trc").read_text().splitlines()
+    cells = text[-1].split("\t")
+    cells[3] = "-inf"
+    (tmp_path / "b.trc").write_text("\n".join([*text[:-1], "\t".join(cells)]) + "\n")
+    with pytest.raises(InputError, match=r"b\.trc: field 'A_y': infinite coordinate at frame 3"):
+        read_markers(tmp_path / "b.trc")
+
+
+def test_a_byte_order_mark_is_read(tmp_path):
+    from facemech.io.markers import read_markers
+
+    marker_csv(tmp_path / "m.csv", [["0", "0", "0", "30", "2", "3"]] * 3)
+    (tmp_path / "bom.csv").write_bytes(b"\xef\xbb\xbf" + (tmp_path / "m.csv").read_bytes())
+    ms = read_markers(tmp_path / "bom.csv")
+    assert ms.names == ("R01", "R02") and ms.n_frames == 3
+    assert ms.marker("R02")[0] == pytest.approx([0.03, 0.002, 0.003])
+
+
+def test_resampling_to_fewer_than_two_frames_is_refused(monkeypatch, capsys, tmp_path):
+    marker_csv(tmp_path / "m.csv", [["0", "0", "0", "30", "2", "3"]] * 6)
+    refused(monkeypatch, capsys, tmp_path, "markers", "resample", "{t}/m.csv", "-o",
+            "{t}/r.csv", "--rate", "0.001", words=("field 'rate'", "at least two"))
+
+
+def test_a_one_frame_trc_is_refused_and_never_written(monkeypatch, capsys, tmp_path):
+    from facemech.io.markers import write_markers
+    from facemech.markerset import MarkerSet
+
+    one = MarkerSet(np.full((1, 2, 3), 0.01), ("A", "B"), 60.0)
+    with pytest.raises(InputError, match="field 'frames'"):
+        write_markers(tmp_path / "one.trc", one)
+    assert not (tmp_path / "one.trc").exists()
+    (tmp_path / "one.trc").write_text(
+        "PathFileType\t4\t(X/Y/Z)\tone.trc\nDataRate\tCameraRate\tNumFrames\tNumMarkers\tUnits\n"
+        "60\t60\t1\t1\tmm\nFrame#\tTime\tA\t\t\n\t\tX1\tY1\tZ1\n\n1\t0.0\t1\t2\t3\n")
+    refused(monkeypatch, capsys, tmp_path, "markers", "info", "{t}/one.trc",
+            words=("{t}/one.trc", "field 'frames'", "at least two"))
