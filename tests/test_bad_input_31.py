@@ -267,3 +267,12 @@ def test_a_one_frame_trc_is_refused_and_never_written(monkeypatch, capsys, tmp_p
         "60\t60\t1\t1\tmm\nFrame#\tTime\tA\t\t\n\t\tX1\tY1\tZ1\n\n1\t0.0\t1\t2\t3\n")
     refused(monkeypatch, capsys, tmp_path, "markers", "info", "{t}/one.trc",
             words=("{t}/one.trc", "field 'frames'", "at least two"))
+
+
+# ---- sizes as typed ----------------------------------------------------------------------------
+def test_the_design_manifest_writes_the_size_as_typed():
+    from facemech.speech.design import _render_settings
+    from facemech.workflows.pictures import render_options
+
+    assert _render_settings(render_options(size="640x480"), True)["size"] == "640x480"
+    assert _render_settings(render_options(size="640x480"), False) == {"video": False}

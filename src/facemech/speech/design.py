@@ -526,7 +526,10 @@ def _render_settings(options, video: bool) -> dict:
         from ..viz.render import RenderOptions
 
         options = RenderOptions()
-    d = asdict(options) if hasattr(options, "__dataclass_fields__") else vars(options)
+    d = dict(asdict(options) if hasattr(options, "__dataclass_fields__") else vars(options))
+    if "size" in d:  # as typed: WIDTHxHEIGHT (RenderOptions keeps (height, width))
+        h, w = d["size"]
+        d["size"] = f"{w}x{h}"
     return {"video": True, **{k: (list(v) if isinstance(v, tuple) else v)
                               for k, v in d.items()}}
 
