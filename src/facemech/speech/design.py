@@ -352,37 +352,17 @@ def run_design(table_path: str | Path, out_dir: str | Path, make_item: MakeItem 
     from ..io.results import file_hash, write_dataset
 
     table_path, out_dir = Path(table_path), Path(out_dir)
-    rows = read_design(table_path)
-    base = table_path.parent
-    ids = {str(r.get("id", "")).strip() for r in rows}
+    parsed = check_design(table_path, make_item)  # the whole table, before anything is written
+    specs = {spec.id: spec for spec in parsed}  # every row parsed: a RowError refused it
     render = _render_settings(options, video)
     old = _old_entries(out_dir / "manifest.json")
     report = DesignReport()
     entries: list[dict] = []
-    specs: dict[str, Stimulus] = {}
-    seen: set[str] = set()
-    parsed: list[Stimulus | RowError] = []
-    for row in rows:
-        try:
-            spec = parse_row(row, base=base, ids=ids, has_hook=make_item is not None)
-            if spec.id in seen:
-                raise RowError(f"the id {spec.id!r} is used by an earlier row", row=spec.row,
-                               column="id")
-            seen.add(spec.id)
-            specs[spec.id] = spec
-            parsed.append(spec)
-        except RowError as exc:
-            parsed.append(exc)
-    refuse_table(parsed, table_path, make_item)  # before anything is written
     cache: dict[str, tuple] = {}
     total = len(parsed)
     for done, spec in enumerate(parsed):
         if progress is not None:
             progress("stimuli", done, total)
-        if isinstance(spec, RowError):
-            report.failed.append(_with_source(spec, table_path))
-            entries.append(_failed_entry(spec, rows))
-            continue
         try:
             inputs = {"source": _source_hash(spec.source, make_item)}
             if "dub_audio" in spec.settings:
@@ -441,16 +421,45 @@ def run_design(table_path: str | Path, out_dir: str | Path, make_item: MakeItem 
             report.made.append(spec.id)
         except RowError as exc:
             report.failed.append(_with_source(exc, table_path))
-            entries.append(_failed_entry(exc, rows, spec))
+            entries.append(_failed_entry(exc, spec))
         except FacemechError as exc:
             err = _with_source(RowError(exc.one_line(), row=spec.row), table_path)
             report.failed.append(err)
-            entries.append(_failed_entry(err, rows, spec))
+            entries.append(_failed_entry(err, spec))
         _write_manifest(out_dir, table_path, render, entries, report)
     if progress is not None:
         progress("stimuli", total, total)
     _write_manifest(out_dir, table_path, render, entries, report)
     return report
+
+
+def check_design(table_path: str | Path, make_item: MakeItem | None = None) -> list[Stimulus]:
+    """Read and check a whole design table (:func:`read_design`, :func:`parse_row`,
+    :func:`refuse_table`) without making anything: its stimuli, in row order.
+
+    Raises
+    ------
+    InputError
+        One line naming the table, the row, the column and the value of the first problem.
+    """
+    table_path = Path(table_path)
+    rows = read_design(table_path)
+    ids = {str(r.get("id", "")).strip() for r in rows}
+    seen: set[str] = set()
+    parsed: list[Stimulus | RowError] = []
+    for row in rows:
+        try:
+            spec = parse_row(row, base=table_path.parent, ids=ids,
+                             has_hook=make_item is not None)
+            if spec.id in seen:
+                raise RowError(f"the id {spec.id!r} is used by an earlier row", row=spec.row,
+                               column="id")
+            seen.add(spec.id)
+            parsed.append(spec)
+        except RowError as exc:
+            parsed.append(exc)
+    refuse_table(parsed, table_path, make_item)
+    return parsed
 
 
 def refuse_table(parsed: list, table: Path, make_item: MakeItem | None = None) -> None:
@@ -512,10 +521,8 @@ def _with_source(exc: RowError, table: Path) -> RowError:
     return exc
 
 
-def _failed_entry(exc: RowError, rows, spec: Stimulus | None = None) -> dict:
-    sid = spec.id if spec is not None else str(
-        next((r.get("id", "") for r in rows if r["_row"] == exc.row), ""))
-    return {"id": sid, "row": exc.row, "status": "failed",
+def _failed_entry(exc: RowError, spec: Stimulus) -> dict:
+    return {"id": spec.id, "row": exc.row, "status": "failed",
             "error": {"column": exc.column, "message": exc.one_line()}}
 
 
