@@ -276,3 +276,27 @@ def test_the_design_manifest_writes_the_size_as_typed():
 
     assert _render_settings(render_options(size="640x480"), True)["size"] == "640x480"
     assert _render_settings(render_options(size="640x480"), False) == {"video": False}
+
+
+# ---- plausibility ------------------------------------------------------------------------------
+def test_a_rest_interval_must_lie_inside_the_recording(monkeypatch, capsys, tmp_path):
+    marker_csv(tmp_path / "m.csv", [["0", "0", "0", "30", "2", "3"]] * 31)  # 0.5 s
+    refused(monkeypatch, capsys, tmp_path, "subject", "default", "--markers", "{t}/m.csv",
+            "-o", "{t}/S", "--rest", "0.4,1.0",
+            words=("{t}/m.csv", "field 'rest'", "0.4,1 s", "0 to 0.5 s"))
+
+
+def test_unlabelled_trajectories_are_left_out_unless_named():
+    from facemech.markerset import MarkerSet
+    from facemech.workflows.subject import labelled
+
+    ms = MarkerSet(np.zeros((2, 4, 3)), ("LLIP", "*12", "Unlabeled 3", "*7"), 60.0)
+    kept, note = labelled(ms)
+    assert kept.names == ("LLIP",)
+    assert note == ["unlabelled trajectories left out: *12, Unlabeled 3, *7 (name one with "
+                    "--head, --frame or --chin-marker to use it)"]
+    kept, note = labelled(ms, named=("*7",))
+    assert kept.names == ("LLIP", "*7") and "*7," not in note[0]
+    assert labelled(ms.select(["LLIP"]))[1] == []
+    with pytest.raises(InputError, match="every trajectory is unlabelled"):
+        labelled(ms.select(["*12"]))

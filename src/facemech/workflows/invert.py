@@ -86,7 +86,11 @@ def check_markers(markers: str | Path, *, units: str | None = None,
     two different markers of the file. Returns the :class:`~facemech.markerset.MarkerSet`."""
     from ..io.markers import read_markers
 
-    ms = read_markers(markers, units=units)
+    return check_marker_set(read_markers(markers, units=units), markers, scale_pair=scale_pair)
+
+
+def check_marker_set(ms, markers: str | Path, *, scale_pair: str | None = None):
+    """:func:`check_markers` of a marker set read from the file ``markers``; returns it."""
     empty = ~ms.valid.any(axis=1)
     if empty.any():
         k = int(np.argmax(empty))
