@@ -255,8 +255,10 @@ def make_subject(face: str | Path, markers: str | Path, output: str | Path, *,
                              field="landmarks")
         import tempfile
 
+        from ..io.atomic import pending_folder
         from .faces import build_face_file
-        with tempfile.TemporaryDirectory() as tmp:  # the scan's unit from its size
+
+        with tempfile.TemporaryDirectory() as tmp, pending_folder(tmp):  # gone if interrupted
             model = build_face_file(face_path, landmarks, Path(tmp) / "f.npz", units="auto").data
         warp = bool(warp)
     else:
