@@ -81,7 +81,7 @@ def test_check_audio_gives_the_length(tmp_path):
 
     write_wav(tmp_path / "v.wav", np.sin(np.arange(8000) / 5.0), 8000)
     assert check_audio(tmp_path / "v.wav") == pytest.approx(1.0)
-    with pytest.raises(InputError, match="not a regular file"):
+    with pytest.raises(InputError, match="a folder, not a WAV file"):
         check_audio(tmp_path)
 
 
@@ -300,3 +300,16 @@ def test_unlabelled_trajectories_are_left_out_unless_named():
     assert labelled(ms.select(["LLIP"]))[1] == []
     with pytest.raises(InputError, match="every trajectory is unlabelled"):
         labelled(ms.select(["*12"]))
+
+
+def test_a_fifo_is_named_as_such_not_as_missing(monkeypatch, capsys, tmp_path):
+    os = pytest.importorskip("os")
+    if not hasattr(os, "mkfifo"):
+        pytest.skip("no FIFOs here")
+    os.mkfifo(tmp_path / "m.csv")
+    refused(monkeypatch, capsys, tmp_path, "markers", "info", "{t}/m.csv",
+            words=("{t}/m.csv", "a FIFO (named pipe), not a file"))
+    from facemech.speech.wav import check_audio
+
+    with pytest.raises(InputError, match="FIFO"):
+        check_audio(tmp_path / "m.csv")

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, missing_input
 from ..units import length_scale
 from .appearance import Appearance
 
@@ -75,7 +75,7 @@ def _read(path: Path, units: str, *, with_appearance: bool):
 
     scale = length_scale(units, source=str(path))
     if not path.is_file():
-        raise InputError("file not found", source=str(path))
+        raise missing_input(path)
     if path.suffix.lower() == ".obj":
         try:  # trimesh would guess an encoding (and may need a module that is not there)
             path.read_bytes().decode("utf-8")
@@ -281,7 +281,7 @@ def read_landmarks(path: str | Path, *, units: str = "mm",
     path = Path(path)
     scale = length_scale(units, source=str(path))
     if not path.is_file():
-        raise InputError("file not found", source=str(path))
+        raise missing_input(path)
     try:
         return _landmark_rows(path, scale, required)
     except UnicodeDecodeError:

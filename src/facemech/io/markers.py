@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, missing_input
 from ..markerset import MarkerSet
 from ..units import length_scale
 from .atomic import atomic_path
@@ -94,7 +94,7 @@ def read_qualisys_tsv(path: str | Path, *, units: str | None = None) -> MarkerSe
     """
     path = Path(path)
     if not path.is_file():
-        raise InputError("file not found", source=str(path))
+        raise missing_input(path)
     header: dict[str, list[str]] = {}
     rows: list[list[str]] = []
     with path.open() as fh:
@@ -146,7 +146,7 @@ def read_markers(path: str | Path, *, units: str | None = None) -> MarkerSet:
         raise InputError(f"unknown marker format {path.suffix!r} (expected "
                          f"{', '.join(FORMATS)})", source=str(path))
     if not path.is_file():
-        raise InputError("file not found", source=str(path))
+        raise missing_input(path)
     try:
         return check_span(check_frames(_read(path, fmt, units)), source=path)
     except UnicodeDecodeError:

@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, missing_input
 from ..params import FRAME_RATE_HZ, MUSCLE_GROUPS
 from .atomic import atomic_path
 
@@ -173,7 +173,7 @@ def read_results(path: str | Path):
 
     path = Path(path)
     if not path.is_file():
-        raise InputError("file not found", source=str(path))
+        raise missing_input(path)
     import h5py
 
     try:  # quick refusals first: not HDF5 at all, or HDF5 that h5py cannot open

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, missing_input
 
 
 def read_table(path: str | Path, *, time_column: str = "time") -> tuple[np.ndarray, dict]:
@@ -22,7 +22,7 @@ def read_table(path: str | Path, *, time_column: str = "time") -> tuple[np.ndarr
     """
     path = Path(path)
     if not path.is_file():
-        raise InputError("file not found", source=str(path))
+        raise missing_input(path)
     meta: dict[str, str] = {}
     rows: list[list[str]] = []
     header: list[str] | None = None

@@ -41,7 +41,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import FacemechError, InputError
+from ..errors import FacemechError, InputError, missing_input
 from .audio import Audio, read_wav, write_wav
 
 SOURCE_COLUMNS = ("results", "audio", "text", "face")
@@ -87,7 +87,7 @@ def read_design(path: str | Path) -> list[dict]:
     numbers under ``"_row"``). A table that cannot be read at all raises InputError."""
     path = Path(path)
     if not path.is_file():
-        raise InputError("design table not found", source=str(path))
+        raise missing_input(path, what="design table")
     suffix = path.suffix.lower()
     if suffix == ".csv":
         rows = _read_csv(path)

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, missing_input
 from ..io.atomic import atomic_path
 
 
@@ -57,8 +57,9 @@ def read_samples(path: str | os.PathLike) -> tuple[np.ndarray, int]:
 
     path = Path(path)
     if not path.is_file():
-        what = "not a regular file" if path.exists() else "no such audio file"
-        raise InputError(what, source=path)
+        if not path.exists():
+            raise InputError("no such audio file", source=path)
+        raise missing_input(path, what="WAV file")
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", wavfile.WavFileWarning)  # unknown chunks are fine

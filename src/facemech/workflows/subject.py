@@ -205,7 +205,7 @@ def _map(moved: np.ndarray, names: tuple[str, ...], model, skip: tuple[str, ...]
 def make_subject(face: str | Path, markers: str | Path, output: str | Path, *,
                  head: str | None = None, frame: str | None = None,
                  landmarks: str | Path | None = None, units: str | None = None,
-                 rest: str | tuple[float, float] = (0.0, 0.5), chin_marker: str | None = None,
+                 rest: str | tuple[float, float] | None = None, chin_marker: str | None = None,
                  jaw_second_marker: str | None = None, warp: bool | None = None,
                  progress=None) -> Written:
     """Make a subject folder from a face and a rest recording.
@@ -221,7 +221,8 @@ def make_subject(face: str | Path, markers: str | Path, output: str | Path, *,
         :mod:`facemech.kinematics.frames`); not needed when at least 4 markers are named as the
         face's landmarks or markers
     landmarks, units : the scan's landmark CSV; length unit of files that carry none
-    rest : ``"START,STOP"`` seconds of rest in ``markers``
+    rest : ``"START,STOP"`` seconds of rest in ``markers``, inside the recording (None: its
+        first :data:`DEFAULT_REST_S` s, or all of a shorter one)
     chin_marker, jaw_second_marker : jaw markers for :func:`analyse` (None: estimated)
     warp : warp the face so that its nodes sit on the rest markers (default: for built-in faces)
     progress : staged callback; stages ``subject`` (0..4 of 4)
@@ -246,7 +247,11 @@ def make_subject(face: str | Path, markers: str | Path, output: str | Path, *,
     for n in (chin_marker, jaw_second_marker, *frame_names):
         if n is not None and n not in ms.names:
             raise InputError("marker not in the recording", source=src, field=n)
-    check_interval(ms, interval, source=src, field="rest")
+    if interval is None:
+        t0 = float(ms.time[0])
+        interval = (t0, min(t0 + DEFAULT_REST_S, float(ms.time[-1])))
+    else:
+        check_interval(ms, interval, source=src, field="rest")
     ms, unlabelled = labelled(ms, (chin_marker, jaw_second_marker, *frame_names, *head_names))
     say("subject", 0, 4)
     if face_path.suffix.lower() in SURFACES:
@@ -304,6 +309,9 @@ def make_subject(face: str | Path, markers: str | Path, output: str | Path, *,
             f"{worst * 1e3:.2f} mm; warped: {bool(warp)}) -> {out}/")
     return Written(out, subj, "\n".join([*(f"  {n}" for n in notes["notes"]), line]))
 
+
+#: s, the rest interval of a recording when none is given: its first half second
+DEFAULT_REST_S = 0.5
 
 #: names of unlabelled trajectories: Vicon Nexus's ``*12``, Qualisys's ``Unlabeled 12`` (and
 #: the British spelling), Cortex's ``unnamed12``
