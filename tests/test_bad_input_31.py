@@ -313,3 +313,10 @@ def test_a_fifo_is_named_as_such_not_as_missing(monkeypatch, capsys, tmp_path):
 
     with pytest.raises(InputError, match="FIFO"):
         check_audio(tmp_path / "m.csv")
+
+
+def test_speak_checks_a_recorded_voice_first(monkeypatch, capsys, tmp_path):
+    (tmp_path / "v.wav").write_bytes(b"RIFF\x00\x00\x00\x00WAVE")
+    (tmp_path / "v.TextGrid").write_text("not read")
+    refused(monkeypatch, capsys, tmp_path, "speak", "--audio", "{t}/v.wav", "--textgrid",
+            "{t}/v.TextGrid", "-o", "{t}/out", words=("{t}/v.wav", "field 'audio'"))

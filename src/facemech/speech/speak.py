@@ -118,7 +118,6 @@ def speak(
             raise InputError("an input would be overwritten by an output of the same name",
                              source=str(given), field="output")
     prm = P.preset(preset)
-    model = load_face(face, tissue=prm.tissue)
     files = {k: out / v for k, v in FILES.items()}
     inputs: dict = {}
     if text is not None:
@@ -130,7 +129,10 @@ def speak(
                                            LEAD_IN_S, TAIL_S)
         inputs["text"] = text
     else:
-        samples, rate = read_wav(audio)
+        try:
+            samples, rate = read_wav(audio)
+        except InputError as exc:
+            raise InputError(exc.message, source=str(audio), field="audio") from None
         alignment = read_textgrid(textgrid, word_tier=word_tier, phone_tier=phone_tier)
         dur = len(samples) / rate
         if alignment.phones and alignment.phones[-1].end > dur + 0.05:
@@ -139,6 +141,7 @@ def speak(
                              source=str(textgrid), field="time")
         inputs["audio"] = file_hash(audio)
         inputs["textgrid"] = file_hash(textgrid)
+    model = load_face(face, tissue=prm.tissue)  # after the inputs are checked: it takes a while
     out.mkdir(parents=True, exist_ok=True)
     write_wav(files["audio"], samples, rate)
     write_textgrid(files["textgrid"], alignment)
