@@ -248,6 +248,24 @@ def test_a_byte_order_mark_is_read(tmp_path):
     assert ms.marker("R02")[0] == pytest.approx([0.03, 0.002, 0.003])
 
 
+@pytest.mark.parametrize("suffix", [".trc", ".tsv"])
+def test_a_byte_order_mark_is_read_in_trc_and_tsv(tmp_path, suffix):
+    from facemech.io.markers import read_markers
+
+    if suffix == ".trc":
+        from facemech.io.trc import write_trc
+        from facemech.markerset import MarkerSet
+
+        write_trc(tmp_path / "a.trc", MarkerSet(np.full((3, 2, 3), 0.01), ("A", "B"), 60.0),
+                  units="mm")
+        text = (tmp_path / "a.trc").read_bytes()
+    else:
+        text = (b"NO_OF_FRAMES\t2\nFREQUENCY\t100\nMARKER_NAMES\tA\tB\n"
+                b"1\t0.00\t10\t2\t3\t30\t2\t3\n2\t0.01\t10\t2\t3\t30\t2\t3\n")
+    (tmp_path / f"bom{suffix}").write_bytes(b"\xef\xbb\xbf" + text)
+    assert read_markers(tmp_path / f"bom{suffix}").names == ("A", "B")
+
+
 def test_resampling_to_fewer_than_two_frames_is_refused(monkeypatch, capsys, tmp_path):
     marker_csv(tmp_path / "m.csv", [["0", "0", "0", "30", "2", "3"]] * 6)
     refused(monkeypatch, capsys, tmp_path, "markers", "resample", "{t}/m.csv", "-o",

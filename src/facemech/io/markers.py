@@ -97,7 +97,7 @@ def read_qualisys_tsv(path: str | Path, *, units: str | None = None) -> MarkerSe
         raise missing_input(path)
     header: dict[str, list[str]] = {}
     rows: list[list[str]] = []
-    with path.open() as fh:
+    with path.open(encoding="utf-8-sig") as fh:  # a byte-order mark is read
         for line in fh:
             cells = line.rstrip("\r\n").split("\t")
             if not cells or not cells[0].strip():
