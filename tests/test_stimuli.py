@@ -204,16 +204,17 @@ def test_design_bad_row_rerun_and_manifest(item, tmp_path):
     table = _design(tmp_path / "design.csv", [
         {"id": "half", "results": item / "a.nc", "audio": item / "a.wav", "amplitude": 0.5,
          "amplitude_region": "lips"},
-        {"id": "bad", "results": item / "a.nc", "audio": item / "a.wav", "amplitude": "big"},
+        {"id": "bad", "results": tmp_path / "bad.nc", "audio": item / "a.wav"},  # fails late
         {"id": "mcgurk", "results": item / "a.nc", "audio": item / "a.wav",
          "dub_audio": item / "b.wav", "dub_align": "onset", "av_offset_ms": 40},
     ])
+    (tmp_path / "bad.nc").write_bytes(b"not a results file")
     out = tmp_path / "out"
     opts = RenderOptions(view="frontal", size=(120, 160), supersample=1)
     rep = run_design(table, out, options=opts)
     assert rep.made == ["half", "mcgurk"] and rep.skipped == []
-    assert [(e.row, e.column) for e in rep.failed] == [(2, "amplitude")]
-    assert "row 2, column 'amplitude'" in rep.failed[0].one_line()
+    assert [(e.row, e.column) for e in rep.failed] == [(2, "results")]
+    assert "row 2, column 'results'" in rep.failed[0].one_line()
     for sid in ("half", "mcgurk"):
         assert (out / f"{sid}.mp4").stat().st_size > 1000
     assert not (out / "bad.nc").exists()
@@ -293,6 +294,19 @@ def test_cli_describe_and_bad_tables(item, tmp_path, monkeypatch, capsys):
          "amplitude_region": "nose"}])
     code, out, err = run_cli(monkeypatch, capsys, "stimuli", table, "-o", tmp_path / "o2",
                              "--no-video")
-    assert code == 2 and "1 made" in out
+    assert code == 2 and len(err.strip().splitlines()) == 1  # the whole table, before any row
     assert "row 2, column 'amplitude_region'" in err and "nose" in err
-    assert (tmp_path / "o2" / "ok.nc").is_file() and not (tmp_path / "o2" / "typo.nc").exists()
+    assert not (tmp_path / "o2").exists()
+
+
+def test_an_offset_or_freeze_that_leaves_nothing_is_an_error(ds, item):
+    from facemech.errors import InputError
+    from facemech.speech.stimuli import freeze, offset_audio
+
+    a = read_wav(item / "a.wav")
+    with pytest.raises(InputError, match=r"av_offset_ms.*-100000 ms moves the whole sound"):
+        offset_audio(ds, a, -100000.0)
+    assert np.any(offset_audio(ds, a, 0.5e3 * a.duration)[1].samples)  # half of it stays
+    with pytest.raises(InputError, match=r"freeze_region.*leaves no motion"):
+        freeze(ds, "face")
+    assert np.ptp(freeze(ds, "upper_face")["positions"].values, axis=0).max() > 0

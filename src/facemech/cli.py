@@ -312,7 +312,7 @@ def calibrate(gestures: list[str] | None = None, output: Path = Path("calibrated
 @command()
 def subject(face: str, markers: Path = ..., output: Path = ..., head: str | None = None,
             frame: str | None = None, landmarks: Path | None = None, units: str | None = None,
-            rest: str = "0,0.5", chin_marker: str | None = None,
+            rest: str | None = None, chin_marker: str | None = None,
             jaw_second_marker: str | None = None, warp: bool | None = None):
     """Make a subject folder: a face (built-in, face file or scan) fitted to rest markers."""
     return _staged(wf.subject.make_subject, **locals())

@@ -12,17 +12,48 @@ import os
 import signal
 import sys
 
-__all__ = ["EXIT_STATUS", "install", "handle"]
+__all__ = ["EXIT_STATUS", "handle", "install", "on_interrupt"]
 
 #: the exit status of a command ended by each signal (128 + the signal number)
 EXIT_STATUS = {signal.SIGINT: 130, signal.SIGTERM: 143}
 
 
+#: clean-ups of the running command (e.g. a batch's workers and half-made folders), run first
+_CLEANUPS: list = []
+
+
+def on_interrupt(cleanup):
+    """Run ``cleanup()`` if the command is interrupted (before the temporary files are
+    removed); returns a function that unregisters it. Its errors are ignored: the command is
+    ending anyway, and it says so in one line."""
+    _CLEANUPS.append(cleanup)
+
+    def remove() -> None:
+        if cleanup in _CLEANUPS:
+            _CLEANUPS.remove(cleanup)
+
+    return remove
+
+
+def _quietly(fn) -> None:
+    import contextlib
+    import io
+
+    with contextlib.suppress(Exception), contextlib.redirect_stderr(io.StringIO()), \
+            contextlib.redirect_stdout(io.StringIO()):
+        fn()
+
+
 def handle(signum: int, frame=None) -> None:
-    """Clean up and exit: remove pending temporary files, say so, exit 128 + ``signum``."""
+    """Clean up and exit: run the registered clean-ups (:func:`on_interrupt`), remove pending
+    temporary files and folders, say so, exit 128 + ``signum``."""
     from .io.atomic import remove_pending
 
-    remove_pending()
+    for sig in EXIT_STATUS:  # a second signal during the clean-up does not cut it short
+        signal.signal(sig, signal.SIG_IGN)
+    for cleanup in reversed(_CLEANUPS):
+        _quietly(cleanup)
+    _quietly(remove_pending)
     try:
         sys.stderr.write("facemech: interrupted\n")
         sys.stderr.flush()

@@ -57,8 +57,12 @@ class MarkerSet:
             dup = next(n for n in names if names.count(n) > 1)
             raise InputError("duplicate marker label", field=dup)
         if not (np.isfinite(self.rate) and 0 < self.rate <= MAX_RATE_HZ):
-            raise InputError(f"sampling rate {self.rate!r} Hz is not a finite rate in "
+            raise InputError(f"sampling rate {float(self.rate)!r} Hz is not a finite rate in "
                              f"(0, {MAX_RATE_HZ:g}] Hz", field="rate")
+        if np.isinf(pos).any():  # a broken sample, not a missing one (NaN)
+            k, m, a = (int(i[0]) for i in np.nonzero(np.isinf(pos)))
+            raise InputError(f"infinite coordinate at frame {k + 1} (leave a missing sample "
+                             "empty or NaN)", field=f"{names[m]}_{'xyz'[a]}")
         t = (np.arange(pos.shape[0]) / self.rate if self.time is None
              else np.asarray(self.time, float))
         if t.shape != pos.shape[:1]:

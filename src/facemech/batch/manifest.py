@@ -23,7 +23,7 @@ import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..errors import InputError
+from ..errors import InputError, missing_input
 from .jobs import JOBS, check_kind
 
 __all__ = ["Item", "item_key", "parse_item", "read_manifest", "read_rows"]
@@ -173,7 +173,11 @@ def _file(text: str, base: Path, where: dict) -> str:
     path = Path(text).expanduser()
     path = path if path.is_absolute() else base / path
     if not path.is_file():
-        raise InputError(f"row {where['row']}: input file not found: {path}", **where["err"])
+        if not path.exists():
+            raise InputError(f"row {where['row']}: input file not found: {path}",
+                             **where["err"])
+        raise InputError(f"row {where['row']}: input {path}: {missing_input(path).message}",
+                         **where["err"])
     return str(path.resolve())
 
 

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, missing_input
 from ..units import length_scale
 from .appearance import Appearance
 
@@ -75,13 +75,22 @@ def _read(path: Path, units: str, *, with_appearance: bool):
 
     scale = length_scale(units, source=str(path))
     if not path.is_file():
-        raise InputError("file not found", source=str(path))
+        raise missing_input(path)
+    if path.suffix.lower() == ".obj":
+        try:  # trimesh would guess an encoding (and may need a module that is not there)
+            path.read_bytes().decode("utf-8")
+        except UnicodeDecodeError:
+            raise InputError("binary data where a text OBJ file was expected", source=str(path),
+                             field="geometry") from None
     if with_appearance and path.suffix.lower() == ".obj":
         _check_obj_materials(path)
     try:
         loaded = trimesh.load(path, process=False)
         parts = loaded.dump() if isinstance(loaded, trimesh.Scene) else [loaded]
         parts = [m for m in parts if isinstance(m, trimesh.Trimesh) and len(m.faces)]
+    except ImportError:  # a loader that needs an optional module: the file was not readable
+        raise InputError(f"cannot read mesh (not a readable {path.suffix.lstrip('.').upper()} "
+                         "file)", source=str(path), field="geometry") from None
     except Exception as exc:  # trimesh raises many types for malformed files
         raise InputError(f"cannot read mesh ({type(exc).__name__}: {exc})", source=str(path),
                          field="geometry") from None
@@ -272,16 +281,27 @@ def read_landmarks(path: str | Path, *, units: str = "mm",
     path = Path(path)
     scale = length_scale(units, source=str(path))
     if not path.is_file():
-        raise InputError("file not found", source=str(path))
+        raise missing_input(path)
+    try:
+        return _landmark_rows(path, scale, required)
+    except UnicodeDecodeError:
+        raise InputError("binary data where a text landmark CSV was expected",
+                         source=str(path)) from None
+    except csv.Error as exc:
+        raise InputError(f"not a readable CSV file ({exc})", source=str(path)) from None
+
+
+def _landmark_rows(path: Path, scale: float, required) -> dict[str, np.ndarray]:
     out: dict[str, np.ndarray] = {}
-    with path.open(newline="") as fh:
+    with path.open(newline="", encoding="utf-8-sig") as fh:
         reader = csv.DictReader(fh)
         cols = [c.strip().lower() for c in (reader.fieldnames or [])]
         for need in ("name", "x", "y", "z"):
             if need not in cols:
                 raise InputError("missing column", source=str(path), field=need)
         for lineno, row in enumerate(reader, start=2):
-            row = {k.strip().lower(): (v or "").strip() for k, v in row.items() if k}
+            row = {k.strip().lower(): (v or "").strip() if isinstance(v, str) else ""
+                   for k, v in row.items() if k}
             try:
                 xyz = np.array([float(row["x"]), float(row["y"]), float(row["z"])])
             except ValueError:

@@ -49,8 +49,9 @@ def read_activity(path: str | Path, *,
         bad = ~np.isfinite(v) | (v < 0) | (v > 1)
         if bad.any():
             r = int(np.nonzero(bad)[0][0])
-            raise InputError(f"row {r + 1}: value {v[r]!r} is outside [0, 1]", source=str(path),
-                             field=name)
+            what = ("is empty or NaN" if np.isnan(v[r])
+                    else f"value {float(v[r]):g} is outside [0, 1]")
+            raise InputError(f"row {r + 1}: {what}", source=str(path), field=name)
         act[:, MUSCLE_GROUPS.index(key)] = v
     d = np.diff(t) * frame_rate
     if np.max(np.abs(d - 1.0)) > 1e-3:  # not already at the frame rate

@@ -16,7 +16,7 @@ from pathlib import Path
 
 from ..errors import InputError
 
-__all__ = ["atomic_path", "check_output", "remove_pending"]
+__all__ = ["atomic_path", "check_output", "pending_folder", "remove_pending"]
 
 #: temporary files being written right now (removed on success, failure or interruption)
 _PENDING: set[Path] = set()
@@ -58,13 +58,31 @@ def atomic_path(path: str | os.PathLike, suffix: str | None = None) -> Iterator[
             tmp.unlink()
 
 
+@contextlib.contextmanager
+def pending_folder(folder: str | os.PathLike) -> Iterator[Path]:
+    """Mark a temporary folder as being filled: removed (whole) if the command is interrupted
+    (:func:`remove_pending`) while inside the block; yields it as a path."""
+    folder = Path(folder)
+    _PENDING.add(folder)
+    try:
+        yield folder
+    finally:
+        _PENDING.discard(folder)
+
+
 def remove_pending() -> int:
-    """Remove every temporary file still being written; return how many there were."""
+    """Remove every temporary file or folder still being written; return how many there
+    were."""
+    import shutil
+
     n = 0
     for tmp in list(_PENDING):
         _PENDING.discard(tmp)
         with contextlib.suppress(OSError):
-            tmp.unlink()
+            if tmp.is_dir() and not tmp.is_symlink():
+                shutil.rmtree(tmp)
+            else:
+                tmp.unlink()
             n += 1
     return n
 

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, missing_input
 from ..markerset import MarkerSet
 from ..units import length_scale
 from .atomic import atomic_path
@@ -106,7 +106,7 @@ def _isolated_read(path: str | Path, what: str, timeout: float = 60.0):
     """Read points or analogs with ezc3d in a separate interpreter (crash- and hang-proof)."""
     path = Path(path)
     if not path.is_file():
-        raise InputError("file not found", source=str(path))
+        raise missing_input(path)
     try:
         import ezc3d  # noqa: F401
     except ImportError:
@@ -118,7 +118,8 @@ def _isolated_read(path: str | Path, what: str, timeout: float = 60.0):
     try:
         try:
             run = subprocess.run([sys.executable, "-c", _CHILD, str(path), what, target],
-                                 capture_output=True, text=True, timeout=timeout)
+                                 capture_output=True, text=True, timeout=timeout,
+                                 stdin=subprocess.DEVNULL)
         except subprocess.TimeoutExpired:
             raise InputError("corrupt C3D: the reader stopped (timed out)",
                              source=str(path)) from None

@@ -31,7 +31,7 @@ import numpy as np
 from ..errors import InputError
 from ..params import FRAME_RATE_HZ
 from ..units import length_scale
-from .atomic import atomic_path
+from .atomic import atomic_path, pending_folder
 
 GLB_MAGIC = 0x46546C67  # "glTF"
 CHUNK_JSON = 0x4E4F534A  # "JSON"
@@ -373,38 +373,39 @@ def write_mesh_sequence(results, folder: str | Path, fmt: str = "obj", *,
     _check_folder(folder)
     folder.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", dir=folder.parent))
-    try:
-        entries = []
-        faces_text = "".join(f"f {a} {b} {c}\n" for a, b, c in (tris + 1).tolist())
-        for k in range(len(pos)):
-            name = f"frame_{k:05d}.{fmt}"
-            note = (f"facemech frame {k}, t = {times[k]:.6f} s, units {units}, "
-                    "+x subject's left, +y up, +z forward")
-            if fmt == "obj":
-                (tmp / name).write_text(_obj_text(pos[k] / scale, faces_text, f"# {note}\n"))
+    with pending_folder(tmp):  # removed whole if the command is interrupted
+        try:
+            entries = []
+            faces_text = "".join(f"f {a} {b} {c}\n" for a, b, c in (tris + 1).tolist())
+            for k in range(len(pos)):
+                name = f"frame_{k:05d}.{fmt}"
+                note = (f"facemech frame {k}, t = {times[k]:.6f} s, units {units}, "
+                        "+x subject's left, +y up, +z forward")
+                if fmt == "obj":
+                    (tmp / name).write_text(_obj_text(pos[k] / scale, faces_text, f"# {note}\n"))
+                else:
+                    (tmp / name).write_bytes(_ply_bytes(pos[k] / scale, tris, note))
+                entries.append({"file": name, "time_s": float(times[k])})
+            index = {"format": SEQUENCE_FORMAT, "version": 1, "mesh_format": fmt, "units": units,
+                     "axes": "+x subject's left, +y up, +z forward",
+                     "frame_rate_hz": float(ds.attrs.get("frame_rate_hz", FRAME_RATE_HZ)),
+                     "nodes": int(pos.shape[1]), "triangles": int(len(tris)),
+                     "source": "" if source is None else Path(source).name, "frames": entries}
+            (tmp / "index.json").write_text(_index_text(index))
+            umask = os.umask(0)
+            os.umask(umask)
+            os.chmod(tmp, 0o777 & ~umask)  # mkdtemp makes 0700
+            _check_folder(folder)  # again: it may have changed while we wrote
+            if folder.exists():
+                old = Path(tempfile.mkdtemp(prefix=f".{folder.name}.old.", dir=folder.parent))
+                os.replace(folder, old / "previous")
+                os.replace(tmp, folder)
+                shutil.rmtree(old, ignore_errors=True)
             else:
-                (tmp / name).write_bytes(_ply_bytes(pos[k] / scale, tris, note))
-            entries.append({"file": name, "time_s": float(times[k])})
-        index = {"format": SEQUENCE_FORMAT, "version": 1, "mesh_format": fmt, "units": units,
-                 "axes": "+x subject's left, +y up, +z forward",
-                 "frame_rate_hz": float(ds.attrs.get("frame_rate_hz", FRAME_RATE_HZ)),
-                 "nodes": int(pos.shape[1]), "triangles": int(len(tris)),
-                 "source": "" if source is None else Path(source).name, "frames": entries}
-        (tmp / "index.json").write_text(_index_text(index))
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o777 & ~umask)  # mkdtemp makes 0700
-        _check_folder(folder)  # again: it may have changed while we wrote
-        if folder.exists():
-            old = Path(tempfile.mkdtemp(prefix=f".{folder.name}.old.", dir=folder.parent))
-            os.replace(folder, old / "previous")
-            os.replace(tmp, folder)
-            shutil.rmtree(old, ignore_errors=True)
-        else:
-            os.replace(tmp, folder)
-    finally:
-        if tmp.exists():
-            shutil.rmtree(tmp, ignore_errors=True)
+                os.replace(tmp, folder)
+        finally:
+            if tmp.exists():
+                shutil.rmtree(tmp, ignore_errors=True)
     nbytes = sum(p.stat().st_size for p in folder.iterdir())
     return Exported(folder, f"{fmt.upper()} sequence", len(pos), len(pos) + 1, nbytes)
 

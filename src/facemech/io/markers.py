@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, missing_input
 from ..markerset import MarkerSet
 from ..units import length_scale
 from .atomic import atomic_path
@@ -94,10 +94,10 @@ def read_qualisys_tsv(path: str | Path, *, units: str | None = None) -> MarkerSe
     """
     path = Path(path)
     if not path.is_file():
-        raise InputError("file not found", source=str(path))
+        raise missing_input(path)
     header: dict[str, list[str]] = {}
     rows: list[list[str]] = []
-    with path.open() as fh:
+    with path.open(encoding="utf-8-sig") as fh:  # a byte-order mark is read
         for line in fh:
             cells = line.rstrip("\r\n").split("\t")
             if not cells or not cells[0].strip():
@@ -146,9 +146,9 @@ def read_markers(path: str | Path, *, units: str | None = None) -> MarkerSet:
         raise InputError(f"unknown marker format {path.suffix!r} (expected "
                          f"{', '.join(FORMATS)})", source=str(path))
     if not path.is_file():
-        raise InputError("file not found", source=str(path))
+        raise missing_input(path)
     try:
-        return check_span(_read(path, fmt, units), source=path)
+        return check_span(check_frames(_read(path, fmt, units)), source=path)
     except UnicodeDecodeError:
         raise InputError(f"binary data where a text {fmt.upper()} file was expected",
                          source=str(path)) from None
@@ -156,6 +156,15 @@ def read_markers(path: str | Path, *, units: str | None = None) -> MarkerSet:
         if exc.source is None:  # raised by the marker-set type: name the file it came from
             raise InputError(exc.message, source=str(path), field=exc.field) from None
         raise
+
+
+def check_frames(ms: MarkerSet, *, source: str | Path | None = None) -> MarkerSet:
+    """Refuse a recording of fewer than two frames (it has no rate, no motion, and a CSV of
+    it cannot be read back); returns ``ms``."""
+    if ms.n_frames < 2:
+        raise InputError(f"{ms.n_frames} frame: a recording needs at least two",
+                         source=None if source is None else str(source), field="frames")
+    return ms
 
 
 #: m, the extent of a marker recording of two or more markers that is plausible for a face (or
@@ -226,6 +235,7 @@ def write_markers(path: str | Path, ms: MarkerSet, *, units: str | None = None) 
     fmt = FORMATS.get(path.suffix.lower())
     if fmt not in ("csv", "trc", "c3d"):
         raise InputError("can write .csv, .trc or .c3d", source=str(path))
+    check_frames(ms, source=path)  # never a file that no reader takes back
     if fmt == "csv":
         write_marker_csv(path, ms, units=units)
     elif fmt == "trc":

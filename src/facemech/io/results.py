@@ -19,13 +19,15 @@ Attributes carry provenance: facemech version, preset, integrator, dt, input has
 
 from __future__ import annotations
 
+import gc
 import hashlib
 import json
+import sys
 from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, missing_input
 from ..params import FRAME_RATE_HZ, MUSCLE_GROUPS
 from .atomic import atomic_path
 
@@ -171,13 +173,33 @@ def read_results(path: str | Path):
 
     path = Path(path)
     if not path.is_file():
-        raise InputError("file not found", source=str(path))
-    try:
-        with xr.open_dataset(path, engine="h5netcdf") as ds:
-            ds = ds.load()
+        raise missing_input(path)
+    import h5py
+
+    try:  # quick refusals first: not HDF5 at all, or HDF5 that h5py cannot open
+        if not h5py.is_hdf5(path):
+            raise OSError("no HDF5 signature")
+        with h5py.File(path, "r"):
+            pass
     except Exception as exc:
         raise InputError(f"not a readable NetCDF results file ({type(exc).__name__})",
                          source=str(path)) from None
+    error, hook = None, sys.unraisablehook
+    # a damaged file leaves h5netcdf a half-made File whose clean-up fails when it is
+    # collected, outside any handler: that clean-up stays quiet, the error is reported
+    sys.unraisablehook = lambda _: None
+    try:
+        try:
+            with xr.open_dataset(path, engine="h5netcdf") as ds:
+                ds = ds.load()
+        except Exception as exc:
+            error = f"not a readable NetCDF results file ({type(exc).__name__})"
+        if error is not None:
+            gc.collect()
+    finally:
+        sys.unraisablehook = hook
+    if error is not None:
+        raise InputError(error, source=str(path))
     for need in ("positions", "markers", "triangles"):
         if need not in ds:
             raise InputError("not a facemech results file", source=str(path), field=need)

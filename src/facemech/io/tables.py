@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, missing_input
 
 
 def read_table(path: str | Path, *, time_column: str = "time") -> tuple[np.ndarray, dict]:
@@ -22,12 +22,12 @@ def read_table(path: str | Path, *, time_column: str = "time") -> tuple[np.ndarr
     """
     path = Path(path)
     if not path.is_file():
-        raise InputError("file not found", source=str(path))
+        raise missing_input(path)
     meta: dict[str, str] = {}
     rows: list[list[str]] = []
     header: list[str] | None = None
-    try:
-        with path.open(newline="") as fh:
+    try:  # utf-8-sig: a byte-order mark (Excel's "CSV UTF-8") is read, not part of a name
+        with path.open(newline="", encoding="utf-8-sig") as fh:
             for lineno, row in enumerate(csv.reader(fh), start=1):
                 if not row or not "".join(row).strip():
                     continue
@@ -46,6 +46,8 @@ def read_table(path: str | Path, *, time_column: str = "time") -> tuple[np.ndarr
                 rows.append(row)
     except UnicodeDecodeError:
         raise InputError("not a text CSV file", source=str(path)) from None
+    except csv.Error as exc:  # a NUL byte, a cell beyond the csv module's size limit
+        raise InputError(f"not a readable CSV file ({exc})", source=str(path)) from None
     if header is None:
         raise InputError("empty file (no header row)", source=str(path))
     lower = [h.lower() for h in header]
@@ -64,6 +66,10 @@ def read_table(path: str | Path, *, time_column: str = "time") -> tuple[np.ndarr
             except ValueError:
                 raise InputError(f"row {r + 1}: {cell!r} is not a number", source=str(path),
                                  field=header[c]) from None
+            if np.isinf(data[r, c]):  # not a missing sample (empty or NaN): a broken one
+                raise InputError(f"row {r + 1}: {cell!r} is not a finite number (leave the "
+                                 "cell empty for a missing sample)", source=str(path),
+                                 field=header[c])
     t = data[:, lower.index(time_column)]
     if len(t) < 2:
         raise InputError("needs at least two rows", source=str(path), field=time_column)

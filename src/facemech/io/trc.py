@@ -15,7 +15,7 @@ from .atomic import atomic_path
 def read_trc(path: str | Path, *, units: str | None = None) -> MarkerSet:
     """Read a TRC file; the header's ``Units`` is honoured (``units`` only if it has none)."""
     path = Path(path)
-    lines = path.read_text().splitlines()
+    lines = path.read_text(encoding="utf-8-sig").splitlines()  # a byte-order mark is read
     if len(lines) < 5 or not lines[0].startswith("PathFileType"):
         raise InputError("not a TRC file (no PathFileType line)", source=str(path))
     keys = [k.strip() for k in lines[1].split("\t")]

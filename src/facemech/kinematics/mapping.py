@@ -84,7 +84,8 @@ def scale_adapt(ms: MarkerSet, model, mapping: dict[str, int], far_pair: tuple[s
     a, b = far_pair
     for n in (a, b):
         if n not in mapping:
-            raise InputError("scaling marker has no node", field=n)
+            raise InputError(f"scaling marker {n!r} (--scale-pair {a},{b}) has no node on the "
+                             "face: choose two skin markers", field="scale-pair")
     rest = model.rest_positions
     dn = np.abs(rest[mapping[a]] - rest[mapping[b]])
     dm = np.abs(ms.marker(a)[reference] - ms.marker(b)[reference])

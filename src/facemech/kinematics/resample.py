@@ -21,10 +21,13 @@ def resample(ms: MarkerSet, rate: float, *, cutoff_fraction: float = 0.8) -> Mar
     phase, cut-off at ``cutoff_fraction`` of the new Nyquist frequency); then a cubic spline
     through the run gives the new samples. Output samples outside every run are NaN.
     """
-    if not rate > 0:
-        raise InputError("rate must be positive", field="rate")
+    if not (np.isfinite(rate) and rate > 0):
+        raise InputError(f"rate {float(rate):g} Hz must be a positive number", field="rate")
     t0, t1 = ms.time[0], ms.time[-1]
     n = int(np.floor((t1 - t0) * rate + 1e-6)) + 1
+    if n < 2:  # a one-frame recording has no rate: no reader of facemech takes it back
+        raise InputError(f"{1e3 * (t1 - t0):.4g} ms of data at {float(rate):g} Hz gives {n} "
+                         "frame: a recording needs at least two (raise the rate)", field="rate")
     grid = t0 + np.arange(n) / rate
     out = np.full((n, ms.n_markers, 3), np.nan)
     filled = np.zeros((n, ms.n_markers), bool)

@@ -20,6 +20,8 @@ import os
 import re
 from pathlib import Path
 
+import numpy as np
+
 from ..errors import InputError
 from ..io.atomic import atomic_path
 from .alignment import NOTATIONS, Alignment, Segment
@@ -168,7 +170,14 @@ def read_textgrid(path: str | os.PathLike, *, word_tier: str | None = None,
     def segments(name: str, kind: str, note: str | None) -> tuple[Segment, ...]:
         out = []
         for entry in tiers[name]["entries"]:
-            start, end, label = float(entry[0]), float(entry[1]), str(entry[2])
+            try:
+                start, end, label = float(entry[0]), float(entry[1]), str(entry[2])
+            except (ValueError, TypeError, IndexError):
+                raise InputError(f"an interval {tuple(entry)!r} is not (start, end, label)",
+                                 source=src, field=f"{kind}_tier {name}") from None
+            if not (np.isfinite(start) and np.isfinite(end)):
+                raise InputError(f"interval {label!r} has a time that is not a number",
+                                 source=src, field=f"{kind}_tier {name}")
             if end < start:
                 raise InputError(f"interval {label!r} ends ({end:g} s) before it starts "
                                  f"({start:g} s)", source=src, field=f"{kind}_tier {name}")
@@ -185,8 +194,15 @@ def read_textgrid(path: str | os.PathLike, *, word_tier: str | None = None,
                              field=f"phone_tier {pname}") from None
     phones = segments(pname, "phone", notation)
     word_segs = segments(wname, "word", None) if wname is not None else ()
+    try:
+        duration = float(tg["xmax"])
+    except (ValueError, TypeError, KeyError):
+        duration = float("nan")
+    if not np.isfinite(duration):
+        raise InputError(f"the end time xmax {tg.get('xmax')!r} is not a number", source=src,
+                         field="xmax")
     return Alignment(words=word_segs, phones=phones, notation=notation,
-                     duration=float(tg["xmax"]), source=src,
+                     duration=duration, source=src,
                      meta={"word_tier": wname, "phone_tier": pname, "format": "TextGrid"})
 
 

@@ -41,7 +41,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import FacemechError, InputError
+from ..errors import FacemechError, InputError, missing_input
 from .audio import Audio, read_wav, write_wav
 
 SOURCE_COLUMNS = ("results", "audio", "text", "face")
@@ -87,7 +87,7 @@ def read_design(path: str | Path) -> list[dict]:
     numbers under ``"_row"``). A table that cannot be read at all raises InputError."""
     path = Path(path)
     if not path.is_file():
-        raise InputError("design table not found", source=str(path))
+        raise missing_input(path, what="design table")
     suffix = path.suffix.lower()
     if suffix == ".csv":
         rows = _read_csv(path)
@@ -352,36 +352,17 @@ def run_design(table_path: str | Path, out_dir: str | Path, make_item: MakeItem 
     from ..io.results import file_hash, write_dataset
 
     table_path, out_dir = Path(table_path), Path(out_dir)
-    rows = read_design(table_path)
-    base = table_path.parent
-    ids = {str(r.get("id", "")).strip() for r in rows}
+    parsed = check_design(table_path, make_item)  # the whole table, before anything is written
+    specs = {spec.id: spec for spec in parsed}  # every row parsed: a RowError refused it
     render = _render_settings(options, video)
     old = _old_entries(out_dir / "manifest.json")
     report = DesignReport()
     entries: list[dict] = []
-    specs: dict[str, Stimulus] = {}
-    seen: set[str] = set()
-    parsed: list[Stimulus | RowError] = []
-    for row in rows:
-        try:
-            spec = parse_row(row, base=base, ids=ids, has_hook=make_item is not None)
-            if spec.id in seen:
-                raise RowError(f"the id {spec.id!r} is used by an earlier row", row=spec.row,
-                               column="id")
-            seen.add(spec.id)
-            specs[spec.id] = spec
-            parsed.append(spec)
-        except RowError as exc:
-            parsed.append(exc)
     cache: dict[str, tuple] = {}
     total = len(parsed)
     for done, spec in enumerate(parsed):
         if progress is not None:
             progress("stimuli", done, total)
-        if isinstance(spec, RowError):
-            report.failed.append(_with_source(spec, table_path))
-            entries.append(_failed_entry(spec, rows))
-            continue
         try:
             inputs = {"source": _source_hash(spec.source, make_item)}
             if "dub_audio" in spec.settings:
@@ -440,16 +421,92 @@ def run_design(table_path: str | Path, out_dir: str | Path, make_item: MakeItem 
             report.made.append(spec.id)
         except RowError as exc:
             report.failed.append(_with_source(exc, table_path))
-            entries.append(_failed_entry(exc, rows, spec))
+            entries.append(_failed_entry(exc, spec))
         except FacemechError as exc:
             err = _with_source(RowError(exc.one_line(), row=spec.row), table_path)
             report.failed.append(err)
-            entries.append(_failed_entry(err, rows, spec))
+            entries.append(_failed_entry(err, spec))
         _write_manifest(out_dir, table_path, render, entries, report)
     if progress is not None:
         progress("stimuli", total, total)
     _write_manifest(out_dir, table_path, render, entries, report)
     return report
+
+
+def check_design(table_path: str | Path, make_item: MakeItem | None = None) -> list[Stimulus]:
+    """Read and check a whole design table (:func:`read_design`, :func:`parse_row`,
+    :func:`refuse_table`) without making anything: its stimuli, in row order.
+
+    Raises
+    ------
+    InputError
+        One line naming the table, the row, the column and the value of the first problem.
+    """
+    table_path = Path(table_path)
+    rows = read_design(table_path)
+    ids = {str(r.get("id", "")).strip() for r in rows}
+    seen: set[str] = set()
+    parsed: list[Stimulus | RowError] = []
+    for row in rows:
+        try:
+            spec = parse_row(row, base=table_path.parent, ids=ids,
+                             has_hook=make_item is not None)
+            if spec.id in seen:
+                raise RowError(f"the id {spec.id!r} is used by an earlier row", row=spec.row,
+                               column="id")
+            seen.add(spec.id)
+            parsed.append(spec)
+        except RowError as exc:
+            parsed.append(exc)
+    refuse_table(parsed, table_path, make_item)
+    return parsed
+
+
+def refuse_table(parsed: list, table: Path, make_item: MakeItem | None = None) -> None:
+    """Refuse a design table that cannot run, before its first row is made: the first row that
+    does not parse (unknown column, a value out of range, a repeated id, a missing file), or
+    whose sound cannot be read or would be moved out of the stimulus by its offset.
+
+    ``parsed`` holds each row's :class:`Stimulus` or :class:`RowError`. A ``make_item`` hook
+    may carry ``check(row) -> None`` (raising :class:`InputError`) to check its own columns.
+
+    Raises
+    ------
+    InputError
+        One line naming the table, the row, the column and the value.
+    """
+    from .wav import check_audio
+
+    def refuse(exc: RowError):
+        err = _with_source(exc, table)
+        raise InputError(err.message, source=err.source) from None
+
+    for spec in parsed:
+        if isinstance(spec, RowError):
+            refuse(spec)
+    check = getattr(make_item, "check", None)
+    lengths: dict[str, float] = {}
+    for spec in parsed:
+        if "text" in spec.source and check is not None:
+            try:
+                check(dict(spec.source))
+            except InputError as exc:
+                refuse(RowError(exc.message, row=spec.row, column=exc.field))
+        for column, path in (("audio", spec.source.get("audio")),
+                             ("dub_audio", spec.settings.get("dub_audio"))):
+            if path is not None and path not in lengths:
+                try:
+                    lengths[path] = check_audio(path, field=column)
+                except InputError as exc:
+                    refuse(RowError(f"{path}: {exc.message}", row=spec.row, column=column))
+        sound = spec.settings.get("dub_audio", spec.source.get("audio"))
+        offset = abs(spec.settings.get("av_offset_ms", 0.0)) / 1e3
+        if sound is not None and "dub_from" not in spec.settings:
+            length = lengths[sound] * spec.settings.get("time_scale", 1.0)
+            if offset >= length:
+                refuse(RowError(f"an offset of {spec.settings['av_offset_ms']:g} ms moves the "
+                                f"whole sound ({1e3 * length:.0f} ms) out of the stimulus",
+                                row=spec.row, column="av_offset_ms"))
 
 
 def _item(sid, source, make_item, row, cache):
@@ -464,10 +521,8 @@ def _with_source(exc: RowError, table: Path) -> RowError:
     return exc
 
 
-def _failed_entry(exc: RowError, rows, spec: Stimulus | None = None) -> dict:
-    sid = spec.id if spec is not None else str(
-        next((r.get("id", "") for r in rows if r["_row"] == exc.row), ""))
-    return {"id": sid, "row": exc.row, "status": "failed",
+def _failed_entry(exc: RowError, spec: Stimulus) -> dict:
+    return {"id": spec.id, "row": exc.row, "status": "failed",
             "error": {"column": exc.column, "message": exc.one_line()}}
 
 
@@ -478,7 +533,10 @@ def _render_settings(options, video: bool) -> dict:
         from ..viz.render import RenderOptions
 
         options = RenderOptions()
-    d = asdict(options) if hasattr(options, "__dataclass_fields__") else vars(options)
+    d = dict(asdict(options) if hasattr(options, "__dataclass_fields__") else vars(options))
+    if "size" in d:  # as typed: WIDTHxHEIGHT (RenderOptions keeps (height, width))
+        h, w = d["size"]
+        d["size"] = f"{w}x{h}"
     return {"video": True, **{k: (list(v) if isinstance(v, tuple) else v)
                               for k, v in d.items()}}
 

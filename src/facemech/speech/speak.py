@@ -118,7 +118,6 @@ def speak(
             raise InputError("an input would be overwritten by an output of the same name",
                              source=str(given), field="output")
     prm = P.preset(preset)
-    model = load_face(face, tissue=prm.tissue)
     files = {k: out / v for k, v in FILES.items()}
     inputs: dict = {}
     if text is not None:
@@ -130,7 +129,10 @@ def speak(
                                            LEAD_IN_S, TAIL_S)
         inputs["text"] = text
     else:
-        samples, rate = read_wav(audio)
+        try:
+            samples, rate = read_wav(audio)
+        except InputError as exc:
+            raise InputError(exc.message, source=str(audio), field="audio") from None
         alignment = read_textgrid(textgrid, word_tier=word_tier, phone_tier=phone_tier)
         dur = len(samples) / rate
         if alignment.phones and alignment.phones[-1].end > dur + 0.05:
@@ -139,6 +141,7 @@ def speak(
                              source=str(textgrid), field="time")
         inputs["audio"] = file_hash(audio)
         inputs["textgrid"] = file_hash(textgrid)
+    model = load_face(face, tissue=prm.tissue)  # after the inputs are checked: it takes a while
     out.mkdir(parents=True, exist_ok=True)
     write_wav(files["audio"], samples, rate)
     write_textgrid(files["textgrid"], alignment)
@@ -232,16 +235,26 @@ def text_items(work_dir: str | Path, *, preset: str = "anatomical"):
 
     work = Path(work_dir)
 
-    def make_item(row: dict):
+    def check(row: dict) -> tuple[int, float]:
+        """The row's columns and numbers, checked before any row runs: (rate_wpm, strength)."""
         unknown = [k for k in row if k not in TEXT_ROW_COLUMNS]
         if unknown:
-            raise InputError(f"not a column of a text row (have {', '.join(TEXT_ROW_COLUMNS)})",
-                             field=unknown[0])
-        try:
-            rate = int(float(row.get("rate_wpm", 160)))
-            strength = float(row.get("strength", 1.0))
-        except ValueError as exc:
-            raise InputError(f"not a number ({exc})", field="rate_wpm/strength") from None
+            raise InputError(f"unknown column {unknown[0]!r} (a text row has "
+                             f"{', '.join(TEXT_ROW_COLUMNS)})", field=unknown[0])
+        values = []
+        for column, default, kind in (("rate_wpm", 160, int), ("strength", 1.0, float)):
+            text = row.get(column, default)
+            try:
+                v = float(text)
+            except (TypeError, ValueError):
+                raise InputError(f"{text!r} is not a number", field=column) from None
+            if not (np.isfinite(v) and v > 0):
+                raise InputError(f"{text!r} must be a positive number", field=column)
+            values.append(kind(v))
+        return values[0], values[1]
+
+    def make_item(row: dict):
+        rate, strength = check(row)
         key = _row_key(row, preset)
         spoken = speak(work / key, str(row["text"]), voice=str(row.get("voice", "en-us")),
                        rate_wpm=rate, face=row.get("face", "default"),
@@ -249,6 +262,7 @@ def text_items(work_dir: str | Path, *, preset: str = "anatomical"):
         return spoken.dataset, spoken.files["audio"]
 
     make_item.version = f"speak {__version__}"
+    make_item.check = check
     return make_item
 
 

@@ -221,6 +221,10 @@ def freeze(ds, region: str, at: str | int | float = "rest"):
         s_ref = None if sh is None else sh[k]
         where = k
     new = pos + w[None, :, None] * (ref - pos)
+    still = 1e-9  # m: below this the region's nodes do not move (rounding of p + (ref - p))
+    if np.ptp(pos, axis=0).max() > still and not np.ptp(new, axis=0).max() > still and (
+            angle is None or _moves_jaw(region) or np.ptp(angle) == 0):
+        raise InputError(f"freezing {region!r} leaves no motion at all", field="freeze_region")
     if _moves_jaw(region):
         angle = None if angle is None else np.full_like(angle, a_ref)
         sh = None if sh is None else np.broadcast_to(s_ref, sh.shape).astype(float)
@@ -286,6 +290,10 @@ def offset_audio(ds, audio: Audio, offset_ms: float):
     if not np.isfinite(offset_ms):
         raise InputError("the audio-visual offset must be a number", field="av_offset_ms")
     moved, k = shift(audio, offset_ms / 1e3)
+    if np.any(audio.samples) and not np.any(moved.samples):
+        raise InputError(f"an offset of {offset_ms:g} ms moves the whole sound "
+                         f"({1e3 * audio.duration:.0f} ms) out of the stimulus",
+                         field="av_offset_ms")
     made = 1e3 * k / audio.rate
     out = ds.copy()
     out.attrs = {**ds.attrs, "audio_offset_ms": float(ds.attrs.get("audio_offset_ms", 0.0))

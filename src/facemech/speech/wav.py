@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, missing_input
 from ..io.atomic import atomic_path
 
 
@@ -57,12 +57,15 @@ def read_samples(path: str | os.PathLike) -> tuple[np.ndarray, int]:
 
     path = Path(path)
     if not path.is_file():
-        raise InputError("no such audio file", source=path)
+        if not path.exists():
+            raise InputError("no such audio file", source=path)
+        raise missing_input(path, what="WAV file")
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", wavfile.WavFileWarning)  # unknown chunks are fine
             rate, data = wavfile.read(path)
-    except (ValueError, OSError, EOFError) as exc:
+    except Exception as exc:  # scipy's parser raises many kinds on a damaged file (ValueError,
+        # struct.error, EOFError, even UnboundLocalError): all mean "not readable"
         first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise InputError(f"not a readable WAV file ({first})", source=path) from None
     data = np.asarray(data)
@@ -98,3 +101,33 @@ def read_wav(path: str | os.PathLike) -> tuple[np.ndarray, int]:
     else:
         a = data.astype(float)
     return a.mean(axis=1), rate
+
+
+def check_audio(path: str | os.PathLike | None, field: str = "audio") -> float | None:
+    """Check a WAV file before any long work that will use it (reading it whole, which is
+    quick): it must exist, be a readable WAV and hold some sound.
+
+    Parameters
+    ----------
+    path : the WAV file (None: nothing to check)
+    field : the option or column that gave it, for the message
+
+    Returns
+    -------
+    Its length in s (None for no file).
+
+    Raises
+    ------
+    InputError
+        Naming the file and ``field`` when the file is missing, not a WAV, empty or silent.
+    """
+    if path is None:
+        return None
+    try:
+        data, rate = read_samples(path)
+    except InputError as exc:
+        raise InputError(exc.message, source=str(path), field=field) from None
+    if not np.any(data):
+        raise InputError("the WAV file is silent (every sample is zero)", source=str(path),
+                         field=field)
+    return len(data) / rate

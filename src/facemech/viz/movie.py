@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
-from ..io.atomic import atomic_path
+from ..io.atomic import atomic_path, pending_folder
 from ..params import FRAME_RATE_HZ
 from .render import RenderOptions
 from .scene import Scene
@@ -114,10 +114,17 @@ def write_movie(
 
 def _mux(exe: str, video: Path, audio) -> None:
     muxed = video.with_name(video.stem + ".mux.mp4")
+    with pending_folder(muxed):  # removed if the command is interrupted
+        _mux_into(exe, video, audio, muxed)
+
+
+def _mux_into(exe: str, video: Path, audio, muxed: Path) -> None:
     try:
-        cmd = [exe, "-y", "-loglevel", "error", "-i", str(video), "-i", str(audio),
+        # -nostdin and no standard input: ffmpeg would otherwise read (and swallow) the
+        # caller's input, e.g. the next line of a `while read` loop in a shell script
+        cmd = [exe, "-nostdin", "-y", "-loglevel", "error", "-i", str(video), "-i", str(audio),
                "-c:v", "copy", "-c:a", "aac", "-shortest", str(muxed)]
-        run = subprocess.run(cmd, capture_output=True, text=True)
+        run = subprocess.run(cmd, capture_output=True, text=True, stdin=subprocess.DEVNULL)
         if run.returncode != 0:
             last = (run.stderr.strip().splitlines() or ["unknown error"])[-1]
             raise InputError(f"ffmpeg could not mux the audio: {last}", source=str(audio))
@@ -151,13 +158,14 @@ def write_frames(
     folder.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", dir=folder.parent))
     try:
-        for k in range(len(positions)):
-            mpimg.imsave(tmp / f"frame_{k:05d}.png", render(positions[k], jaw[k]))
-            if progress is not None:
-                progress(k + 1, len(positions))
-        if folder.exists():
-            folder.rmdir()
-        tmp.rename(folder)
+        with pending_folder(tmp):  # removed whole if the command is interrupted
+            for k in range(len(positions)):
+                mpimg.imsave(tmp / f"frame_{k:05d}.png", render(positions[k], jaw[k]))
+                if progress is not None:
+                    progress(k + 1, len(positions))
+            if folder.exists():
+                folder.rmdir()
+            tmp.rename(folder)
     finally:
         if tmp.exists():
             shutil.rmtree(tmp, ignore_errors=True)

@@ -7,6 +7,7 @@ dask.distributed (the ``batch`` extra) is imported only here, inside the functio
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
 import uuid
@@ -76,6 +77,46 @@ def _input_bytes(item: Item) -> int:
     return total
 
 
+def _stop_workers(out: Path) -> None:
+    """On an interrupt: end this command's worker processes at once (SIGKILL, so that none
+    logs or starts another item), then remove the items' half-made folders."""
+    try:
+        import psutil  # a dependency of dask.distributed
+    except ImportError:
+        psutil = None
+    if psutil is not None:
+        children = psutil.Process().children(recursive=True)
+        for child in children:
+            with contextlib.suppress(psutil.Error):
+                child.kill()
+        psutil.wait_procs(children, timeout=5)
+    remove_partial(out)
+
+
+def _quiet_resource_tracker() -> None:
+    """Start multiprocessing's resource tracker with its stderr on the null device: when an
+    interrupt ends the command at once, the tracker still releases the semaphores of the local
+    cluster, without printing its "leaked semaphore objects" warning after the command's one
+    line. A tracker already running is left as it is."""
+    from multiprocessing import resource_tracker
+
+    tracker = resource_tracker._resource_tracker
+    if getattr(tracker, "_pid", None) is not None:
+        return
+    try:
+        saved = os.dup(2)
+    except OSError:
+        return
+    try:
+        null = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(null, 2)
+        os.close(null)
+        tracker.ensure_running()
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
+
+
 def _connect(workers: int | None, scheduler: str | None, processes: bool, n_jobs: int):
     """A dask Client and its description: the scheduler at ``scheduler``, else a new
     LocalCluster (``workers`` processes, one thread each; default one per core, at most one
@@ -98,6 +139,8 @@ def _connect(workers: int | None, scheduler: str | None, processes: bool, n_jobs
         raise InputError(f"workers must be at least 1 (got {n})", field="workers")
     import dask
 
+    if processes:
+        _quiet_resource_tracker()
     # one item at a time on each worker, the next one handed to whichever worker is free
     # first (dask's default, 1.1, gives a one-thread worker a second item to hold: at the end
     # of a batch one worker may sit idle while another has two to do)
@@ -187,11 +230,15 @@ def run_batch(manifest: str | Path, output: str | Path, *, workers: int | None =
             finished(skipped(item, record, out / item.id))
         else:
             todo.append(item)
+    from ..interrupts import on_interrupt
+
+    forget = on_interrupt(lambda: _stop_workers(out))  # SIGINT/SIGTERM: no .partial-* left
     try:
         if todo:
             rep.cluster = _run_on_dask(todo, out, finished, workers=workers,
                                        scheduler=scheduler, client=client, processes=processes)
     finally:
+        forget()
         remove_partial(out)
         rep.outcomes = [results.get(i.id) or Outcome(i.id, i.job, "not run") for i in items]
         rep.summary_csv = write_summary(out / "summary.csv", [o.row() for o in rep.outcomes])

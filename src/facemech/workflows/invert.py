@@ -5,6 +5,8 @@ from __future__ import annotations
 from collections.abc import Callable
 from pathlib import Path
 
+import numpy as np
+
 from ..errors import InputError
 
 __all__ = ["draw", "invert", "notes", "report"]
@@ -60,9 +62,10 @@ def invert(markers: str | Path, output: str | Path, *, face: str | Path = "defau
             raise InputError("the figure and the results file are the same path",
                              source=str(figure), field="--figure")
         check_output(figure, inputs, field="--figure")
+    ms = check_markers(markers, units=units, scale_pair=scale_pair)  # before the long work
     label = f"invert ({method})"
     res = invert_markers(
-        markers, face=face, map_file=map_file, units=units, scale_pair=scale_pair,
+        ms, face=face, map_file=map_file, units=units, scale_pair=scale_pair,
         preset=preset, jaw_kinematics=jaw_kinematics, method=method, positive=positive,
         controls=controls, chin_marker=chin_marker, jaw_second_marker=jaw_second_marker,
         jaw_incisor=jaw_incisor, jaw_molar=jaw_molar, jaw_fixed=jaw_fixed, jaw_lead=jaw_lead,
@@ -74,6 +77,40 @@ def invert(markers: str | Path, output: str | Path, *, face: str | Path = "defau
     if figure is not None:
         draw(res, figure, title=f"{Path(markers).name}: inverted controls ({res.method.name})")
     return res
+
+
+def check_markers(markers: str | Path, *, units: str | None = None,
+                  scale_pair: str | None = None):
+    """Read the marker file of an inversion and refuse, before the inversion starts, what would
+    stop it later: a frame where every marker is missing, and a ``--scale-pair`` that is not
+    two different markers of the file. Returns the :class:`~facemech.markerset.MarkerSet`."""
+    from ..io.markers import read_markers
+
+    return check_marker_set(read_markers(markers, units=units), markers, scale_pair=scale_pair)
+
+
+def check_marker_set(ms, markers: str | Path, *, scale_pair: str | None = None):
+    """:func:`check_markers` of a marker set read from the file ``markers``; returns it."""
+    empty = ~ms.valid.any(axis=1)
+    if empty.any():
+        k = int(np.argmax(empty))
+        raise InputError(f"frame {k + 1} (t = {ms.time[k]:.3f} s) has no marker at all "
+                         f"({int(empty.sum())} such frames): cut them or fill the gaps "
+                         "(facemech markers fill-gaps)", source=str(markers), field="frames")
+    if scale_pair is not None:
+        pair = [p.strip() for p in str(scale_pair).split(",")]
+        if len(pair) != 2 or not all(pair) or pair[0] == pair[1]:
+            raise InputError(f"{scale_pair!r}: give two different markers far apart, A,B "
+                             "(e.g. R01,L01)", field="--scale-pair")
+        for name in pair:
+            if name not in ms.names:
+                raise InputError(f"{scale_pair!r}: no marker {name!r} in {markers}",
+                                 field="--scale-pair")
+            if not ms.valid[0, ms.index(name)]:
+                raise InputError(f"{scale_pair!r}: marker {name!r} is missing in the first "
+                                 f"frame of {markers} (the scaling's reference)",
+                                 field="--scale-pair")
+    return ms
 
 
 def draw(res, path: str | Path, *, title: str = "") -> Path:

@@ -7,6 +7,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+
 from ..io.atomic import check_output
 from ..progress import StagedProgress, stage
 from .outcome import Written
@@ -35,6 +37,24 @@ class Movie:
     options: object | None = None
 
 
+def check_movie(movie: Movie | tuple, inputs=(), field: str = "-o") -> Movie:
+    """Check a :class:`Movie` (or its fields as a tuple) before any long work: its output
+    (never one of ``inputs``, writable; ``field`` the option that gave it) and its audio (a
+    readable WAV with some sound, and only for an MP4). Returns the :class:`Movie`."""
+    from ..errors import InputError
+    from ..speech.wav import check_audio
+
+    movie = movie if isinstance(movie, Movie) else Movie(*movie)
+    frames = Path(movie.path).suffix == ""
+    check_output(movie.path, [*inputs, movie.audio], folder=frames, field=field)
+    if movie.audio is not None:
+        if frames:
+            raise InputError("audio goes into a movie, not into PNG frames",
+                             source=str(movie.audio), field="audio")
+        check_audio(movie.audio, field="audio")
+    return movie
+
+
 def render_movie(results, movie: Movie | tuple, *, source: str | None = None,
                  progress: StagedProgress | None = None) -> Written:
     """Render a results dataset (or file) to ``movie`` (a :class:`Movie`, or its fields as a
@@ -43,10 +63,7 @@ def render_movie(results, movie: Movie | tuple, *, source: str | None = None,
     writable: :func:`facemech.io.atomic.check_output`)."""
     from ..viz.video import render_results
 
-    movie = movie if isinstance(movie, Movie) else Movie(*movie)
-    given = results if isinstance(results, (str, Path)) else source
-    check_output(movie.path, [given, movie.audio], folder=Path(movie.path).suffix == "",
-                 field="-o")
+    movie = check_movie(movie, [results if isinstance(results, (str, Path)) else source])
     if isinstance(results, (str, Path)):
         from ..io.results import read_results
 
@@ -92,17 +109,33 @@ def plot_file(result: str | Path, output: str | Path, markers: str | Sequence[st
         interpolated onto the results' times
     units : length unit of ``measured`` if it does not say
     """
+    from ..errors import InputError
     from ..io.markers import read_markers
     from ..viz.plots import kinematics_figure
     from .markers import names_of, trajectories
 
     check_output(output, [result, measured], field="-o")
-    ms = read_markers(result)
     names = names_of(markers)
+    if not names:
+        raise InputError(f"no marker name in {markers!r} (e.g. R03,R05)", field="--markers")
+    ms = read_markers(result)
+    unknown = [n for n in names if n not in ms.names]
+    if unknown:
+        raise InputError(f"--markers: no marker {unknown[0]!r} in the results (have "
+                         f"{', '.join(ms.names[:12])}, ...)", source=str(result), field=unknown[0])
     traj = {n: ms.marker(n) for n in names}
     meas = None
     if measured is not None:
         meas = trajectories(measured, names, units=units, times=ms.time, missing="skip")[1]
+        for n, xyz in meas.items():
+            gap = ~np.isfinite(xyz).all(axis=1)
+            if gap.all():
+                raise InputError("the marker has no sample at all", source=str(measured),
+                                 field=n)
+            if gap.any():
+                k = int(np.argmax(gap))
+                raise InputError(f"the marker has a gap at t = {ms.time[k]:.3f} s (fill it: "
+                                 "facemech markers fill-gaps)", source=str(measured), field=n)
     path = kinematics_figure(output, ms.time, traj, rate=ms.rate, measured=meas,
                              title=str(Path(result).name))
     return Written(Path(path), traj, f"figure -> {output}")

@@ -81,10 +81,32 @@ def read_utterances(files: Sequence[str | Path], *, neutral: str | Path = "first
             missing = sorted(set(names) ^ set(ms.names))
             raise InputError("markers differ from the first file's", source=str(f),
                              field=missing[0] if missing else "order")
+    for f, ms in zip(files, sets, strict=True):
+        _no_gap(ms, f, "the utterance")
     base: str | np.ndarray = "first"
     if str(neutral) != "first":
-        base = read_markers(Path(neutral), units=units).select(names).positions[0]
+        ref = read_markers(Path(neutral), units=units)
+        missing = [n for n in names if n not in ref.names]
+        if missing:
+            raise InputError("the neutral file lacks a marker of the utterances",
+                             source=str(neutral), field=missing[0])
+        ref = ref.select(names)
+        _no_gap(ref, neutral, "the neutral (first frame)", frames=1)
+        base = ref.positions[0]
     return [ms.positions for ms in sets], names, base, sets[0].rate
+
+
+def _no_gap(ms, path, what: str, frames: int | None = None) -> None:
+    """Refuse a gap in a marker file of the region analysis, naming the file, the marker and
+    the frame (the analysis needs every sample)."""
+    valid = ms.valid[:frames]
+    if valid.all():
+        return
+    k, m = (int(i[0]) for i in np.nonzero(~valid))
+    lost = int((~valid[:, m]).sum())
+    raise InputError(f"{what} has a gap at frame {k + 1} (t = {ms.time[k]:.3f} s; {lost} of "
+                     f"{len(valid)} samples missing): fill it (facemech markers fill-gaps) or "
+                     "drop the file", source=str(path), field=ms.names[m])
 
 
 def regions(files: Sequence[str | Path], output: str | Path, *, k: int | None = None,

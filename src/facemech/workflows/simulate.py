@@ -278,13 +278,13 @@ def simulate_files(output: str | Path, controls: Controls, jaw: JawSource = JawS
         prm = prm.with_(jaw_kinematics=jaw_kinematics)
     from ..io.atomic import check_output
 
-    movie_path = None if movie is None else (movie.path if hasattr(movie, "path") else movie[0])
     given = [controls.activity, controls.emg, controls.emg_calibration, jaw.angles, jaw.markers,
              face if Path(str(face)).suffix else None]
     check_output(output, given, field="-o")
-    if movie_path is not None:
-        check_output(movie_path, [*given, output], folder=Path(movie_path).suffix == "",
-                     field="video")
+    if movie is not None:
+        from .pictures import check_movie
+
+        movie = check_movie(movie, [*given, output], field="video")
     times, act, inputs = read_controls(controls, prm.frame_rate)  # before the slow face
     model = load_face(face, tissue=prm.tissue)
     jaw_angles, jaw_inputs = jaw_series(jaw, model, prm, times)

@@ -18,6 +18,7 @@ statistics, the figures and (optionally) the movie into ``OUT/``.
 from __future__ import annotations
 
 import json
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -204,7 +205,7 @@ def _map(moved: np.ndarray, names: tuple[str, ...], model, skip: tuple[str, ...]
 def make_subject(face: str | Path, markers: str | Path, output: str | Path, *,
                  head: str | None = None, frame: str | None = None,
                  landmarks: str | Path | None = None, units: str | None = None,
-                 rest: str | tuple[float, float] = (0.0, 0.5), chin_marker: str | None = None,
+                 rest: str | tuple[float, float] | None = None, chin_marker: str | None = None,
                  jaw_second_marker: str | None = None, warp: bool | None = None,
                  progress=None) -> Written:
     """Make a subject folder from a face and a rest recording.
@@ -220,7 +221,8 @@ def make_subject(face: str | Path, markers: str | Path, output: str | Path, *,
         :mod:`facemech.kinematics.frames`); not needed when at least 4 markers are named as the
         face's landmarks or markers
     landmarks, units : the scan's landmark CSV; length unit of files that carry none
-    rest : ``"START,STOP"`` seconds of rest in ``markers``
+    rest : ``"START,STOP"`` seconds of rest in ``markers``, inside the recording (None: its
+        first :data:`DEFAULT_REST_S` s, or all of a shorter one)
     chin_marker, jaw_second_marker : jaw markers for :func:`analyse` (None: estimated)
     warp : warp the face so that its nodes sit on the rest markers (default: for built-in faces)
     progress : staged callback; stages ``subject`` (0..4 of 4)
@@ -241,6 +243,16 @@ def make_subject(face: str | Path, markers: str | Path, output: str | Path, *,
     say = progress or (lambda *a: None)
     head_names, frame_names = _names(head, "head"), _names(frame, "frame")
     interval = as_interval(rest, "rest")
+    ms = read_markers(markers, units=units)
+    for n in (chin_marker, jaw_second_marker, *frame_names):
+        if n is not None and n not in ms.names:
+            raise InputError("marker not in the recording", source=src, field=n)
+    if interval is None:
+        t0 = float(ms.time[0])
+        interval = (t0, min(t0 + DEFAULT_REST_S, float(ms.time[-1])))
+    else:
+        check_interval(ms, interval, source=src, field="rest")
+    ms, unlabelled = labelled(ms, (chin_marker, jaw_second_marker, *frame_names, *head_names))
     say("subject", 0, 4)
     if face_path.suffix.lower() in SURFACES:
         if landmarks is None:
@@ -248,20 +260,18 @@ def make_subject(face: str | Path, markers: str | Path, output: str | Path, *,
                              field="landmarks")
         import tempfile
 
+        from ..io.atomic import pending_folder
         from .faces import build_face_file
-        with tempfile.TemporaryDirectory() as tmp:  # the scan's unit from its size
+
+        with tempfile.TemporaryDirectory() as tmp, pending_folder(tmp):  # gone if interrupted
             model = build_face_file(face_path, landmarks, Path(tmp) / "f.npz", units="auto").data
         warp = bool(warp)
     else:
         model = load_face(face)
         warp = (not face_path.exists()) if warp is None else warp
-    ms = read_markers(markers, units=units)
-    for n in (chin_marker, jaw_second_marker, *frame_names):
-        if n is not None and n not in ms.names:
-            raise InputError("marker not in the recording", source=src, field=n)
     head_names, head_notes = usable_head(ms, head_names, source=src) if head_names else ((), [])
     rest_m, names, notes = rest_positions(ms, head_names, interval, source=src)
-    notes["notes"] = head_notes + notes["notes"]
+    notes["notes"] = unlabelled + head_notes + notes["notes"]
     say("subject", 1, 4)
     fit, how = _align(rest_m, names, model, frame_names, head_names, src)
     moved = fit(rest_m)
@@ -300,6 +310,39 @@ def make_subject(face: str | Path, markers: str | Path, output: str | Path, *,
     return Written(out, subj, "\n".join([*(f"  {n}" for n in notes["notes"]), line]))
 
 
+#: s, the rest interval of a recording when none is given: its first half second
+DEFAULT_REST_S = 0.5
+
+#: names of unlabelled trajectories: Vicon Nexus's ``*12``, Qualisys's ``Unlabeled 12`` (and
+#: the British spelling), Cortex's ``unnamed12``
+UNLABELLED = re.compile(r"^(\*\d+|unlabell?ed[ _-]*\d*|unnamed[ _-]*\d*)$", re.IGNORECASE)
+
+
+def labelled(ms, named=()) -> tuple[object, list[str]]:
+    """``ms`` without its unlabelled trajectories (:data:`UNLABELLED`), unless ``named``
+    names them, and a note listing those left out (empty when none)."""
+    drop = [n for n in ms.names if UNLABELLED.match(n) and n not in named]
+    if not drop:
+        return ms, []
+    keep = [n for n in ms.names if n not in drop]
+    if not keep:
+        raise InputError(f"every trajectory is unlabelled ({', '.join(drop[:5])}...): label "
+                         "the markers first", source=ms.meta.get("source"), field=drop[0])
+    return ms.select(keep), [f"unlabelled trajectories left out: {', '.join(drop)} (name one "
+                             "with --head, --frame or --chin-marker to use it)"]
+
+
+def check_interval(ms, interval: tuple[float, float], *, source: str, field: str) -> None:
+    """Refuse an interval (s) that reaches outside the recording's time span (half a frame of
+    tolerance at each end)."""
+    half = 0.5 / ms.rate
+    t0, t1 = float(ms.time[0]), float(ms.time[-1])
+    a, b = interval
+    if a < t0 - half or b > t1 + half:
+        raise InputError(f"--{field} {a:g},{b:g} s reaches outside the recording ({t0:g} to "
+                         f"{t1:g} s)", source=source, field=field)
+
+
 def read_subject(folder: str | Path) -> Subject:
     """Read a subject folder written by :func:`make_subject`."""
     from ..kinematics.alignment import Similarity
@@ -316,8 +359,11 @@ def read_subject(folder: str | Path) -> Subject:
             name, node = line.split(",")
             mapping[name] = int(node)
         fit = Similarity.from_dict(info["lab_to_model"])
-    except (OSError, ValueError, KeyError) as exc:
+    except (OSError, ValueError, KeyError, TypeError, AttributeError) as exc:
         raise InputError(f"unreadable subject folder ({exc})", source=str(folder)) from None
+    if not (folder / "face.npz").is_file():
+        raise InputError("the subject folder has no face (face.npz): make it again with "
+                         "`facemech subject`", source=str(folder), field="face.npz")
     return Subject(folder, fit, mapping, {k: np.array(v) for k, v in info["head"].items()},
                    info.get("chin_marker"), info.get("jaw_second_marker"), info)
 
@@ -418,6 +464,7 @@ def analyse(subject: str | Path, recording: str | Path, output: str | Path, *,
     say("prepare", 0, 1)
     ms, notes = prepare(subj, read_markers(recording, units=units), max_gap=max_gap,
                         rate=P.preset(preset).frame_rate, source=src, lowpass_hz=lowpass)
+    invert.check_marker_set(ms, src)  # what would stop the inversion: before anything is written
     write_markers(out / "markers.csv", ms, units="mm")
     with atomic_path(out / "mapping.csv") as tmp:  # the subject's, for the markers recorded
         tmp.write_text("marker,node\n" + "".join(f"{n},{subj.mapping[n]}\n" for n in ms.names))
