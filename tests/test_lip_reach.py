@@ -16,6 +16,9 @@ inert at rest: a default face's results do not change by their presence (tests/t
 tables are unchanged).
 """
 
+import contextlib
+import io
+
 import numpy as np
 import pytest
 
@@ -37,13 +40,14 @@ def _run(tmp_path, monkeypatch, capsys, name, levels):
     act = np.zeros((FRAMES, len(MUSCLE_GROUPS)))
     for g, v in levels.items():
         act[:, MUSCLE_GROUPS.index(g)] = v
-    write_activity(tmp_path / f"{name}.csv", t, act)
+    write_activity(tmp_path / f"act-{name}.csv", t, act)
     jaw = tmp_path / "jaw.csv"
     deg = JAW_DEG * np.clip(np.arange(FRAMES) / 10, 0, 1)
     jaw.write_text("time,jaw_angle_deg\n" + "".join(f"{a:.6f},{b:.6f}\n"
                                                      for a, b in zip(t, deg, strict=True)))
     out = tmp_path / f"{name}.nc"
-    code, _, err = run_cli(monkeypatch, capsys, "simulate", "--activity", tmp_path / f"{name}.csv",
+    code, _, err = run_cli(monkeypatch, capsys, "simulate", "--activity",
+                           tmp_path / f"act-{name}.csv",
                            "--jaw-angle", jaw, "-o", out)
     assert code == 0, err
     return read_results(out)["positions"].values[-1]
@@ -54,13 +58,21 @@ def runs(tmp_path_factory):
     mp = pytest.MonkeyPatch()
     tmp = tmp_path_factory.mktemp("reach")
 
-    class _Cap:  # capsys is function-scoped: the module's runs leave the streams as they are
+    class _Cap:  # capsys is function-scoped: the module's runs read their own streams
+        def __init__(self):
+            self.out, self.err = io.StringIO(), io.StringIO()
+
         def readouterr(self):
-            return "", ""
+            return self.out.getvalue(), self.err.getvalue()
+
+    def run(name, levels):
+        cap = _Cap()
+        with contextlib.redirect_stdout(cap.out), contextlib.redirect_stderr(cap.err):
+            return _run(tmp, mp, cap, name, levels)
 
     cases = {"jaw": {}, "OOSM": {"OOSM": 1.0}, "OOIM": {"OOIM": 1.0},
              "closed": {"OOSM": 1.0, "OOIM": 1.0, "MEN": 1.0}}
-    out = {name: _run(tmp, mp, _Cap(), name, lv) for name, lv in cases.items()}
+    out = {name: run(name, lv) for name, lv in cases.items()}
     mp.undo()
     return out
 
