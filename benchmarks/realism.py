@@ -8,8 +8,8 @@
   rest after a 100-ms full pulse, at the preset's steps and at 8 times finer steps;
 - ``crease``: the largest growth of a fold angle outside the lips for a 10-degree jaw opening;
 - ``reachability``: the RMS error of inverting synthetic lip targets with the ranges of real
-  speech, the jaw driven from the chin marker (analysis/reachability.py), with the seeds'
-  seven EMG controls and with all 16 groups.
+  speech, the jaw driven from the lower incisor (analysis/reachability.py), with the speech
+  controls and orbicularis oris's marginal part, and with the speech controls alone.
 
 Usage: python benchmarks/realism.py [--quick]   (--quick: gestures and crease only)
 """
@@ -117,12 +117,14 @@ def main() -> None:
         report["dynamics"] = {"preset_steps": rise_and_overshoot(face, anat),
                               "8x_finer_steps": rise_and_overshoot(face, anat,
                                                                    8 * anat.substeps)}
-        from facemech.analysis.reachability import reach
+        from facemech.analysis.reachability import REACH_CONTROLS, reach
+        from facemech.inverse.invert import SPEECH_CONTROLS
 
         report["reachability"] = {}
-        for controls in ("emg7", "all"):
+        for label, controls in (("speech+marginal", REACH_CONTROLS),
+                                ("speech", SPEECH_CONTROLS)):
             r = reach(face, anat, controls=controls)
-            report["reachability"][controls] = {
+            report["reachability"][label] = {
                 "rms_mm": round(r.rms * 1e3, 3),
                 "median_frame_rms_mm": round(float(np.median(r.frame_rms)) * 1e3, 3),
                 "largest_mm": round(r.largest * 1e3, 2),
