@@ -363,13 +363,16 @@ def visemes_lag(out: dict) -> str:
 
 @dataclass(frozen=True)
 class Table:
-    """A generated table: its name (the marker's), file, commands, formatter and speed."""
+    """A generated table: its name (the marker's), file, commands, formatter and speed, and how
+    far its numbers may move (``tolerance``: (column, absolute, relative) triples; a column not
+    named is compared as text, exactly; see :func:`differences`)."""
 
     name: str
     doc: str
     runs: tuple[str, ...]
     render: Callable[[dict], str]
     slow: bool = False  # left out of --fast (and of the default test run)
+    tolerance: tuple[tuple[int, float, float], ...] = ()
 
 
 TABLES: tuple[Table, ...] = (
@@ -397,6 +400,52 @@ def block(t: Table, outputs: dict[str, dict]) -> str:
 # ---- markdown ------------------------------------------------------------------------------
 
 MARKER = re.compile(r"(<!-- table: ([\w-]+) -->\n)(.*?)(<!-- /table -->)", re.S)
+
+
+#: a number in a table's cell: not part of a word (a marker name as R11), e.g. .77, -0.02, +5.38
+NUMBER = re.compile(r"(?<![\w.])[-+]?(?:\d+(?:\.\d*)?|\.\d+)(?![\w.])")
+
+
+def differences(doc: str, new: str, tolerance=()) -> list[str]:
+    """Where a table in the docs (``doc``) and the same table generated anew (``new``) differ
+    by more than ``tolerance`` allows: one line per cell that differs (none: they match).
+
+    ``tolerance`` holds (column, absolute, relative) triples: in a table row, the numbers of
+    such a column (:data:`NUMBER`) match when each pair differs by at most ``max(absolute,
+    relative * |docs' value|)``, and the words between them are not compared (the marker with
+    the lowest correlation may change with the numbers). Every other cell and line is compared
+    as text. The last bits of the inversions' numbers depend on the BLAS kernels, threads and CPU
+    (docs/reproducibility.md): the tolerances of :data:`TABLES` come from that spread.
+    """
+    tol = {c: (a, r) for c, a, r in tolerance}
+    old_lines, new_lines = doc.strip("\n").splitlines(), new.strip("\n").splitlines()
+    if len(old_lines) != len(new_lines):
+        return [f"{len(old_lines)} lines in the docs, {len(new_lines)} generated"]
+    out = []
+    for n, (a, b) in enumerate(zip(old_lines, new_lines, strict=True)):
+        if a == b:
+            continue
+        if not (a.startswith("|") and b.startswith("|")):
+            out.append(f"line {n + 1}: {a!r} != {b!r}")
+            continue
+        ca, cb = a.strip().strip("|").split("|"), b.strip().strip("|").split("|")
+        if len(ca) != len(cb):
+            out.append(f"line {n + 1}: {len(ca)} cells in the docs, {len(cb)} generated")
+            continue
+        for c, (x, y) in enumerate(zip(ca, cb, strict=True)):
+            if x == y:
+                continue
+            if c not in tol:
+                out.append(f"line {n + 1}, column {c + 1}: {x.strip()!r} != {y.strip()!r}")
+                continue
+            nx, ny = NUMBER.findall(x), NUMBER.findall(y)
+            absolute, relative = tol[c]
+            if len(nx) != len(ny) or any(
+                    abs(float(v) - float(u)) > max(absolute, relative * abs(float(u))) + 1e-12
+                    for u, v in zip(nx, ny, strict=True)):
+                out.append(f"line {n + 1}, column {c + 1}: {x.strip()!r} != {y.strip()!r} "
+                           f"(beyond {absolute:g} or {relative:.0%})")
+    return out
 
 
 def find_tables(text: str) -> dict[str, str]:
@@ -489,7 +538,9 @@ def apply(blocks: dict[str, str], tables: list[Table], check: bool) -> list[str]
         for name, new in mine.items():
             if name not in present:
                 raise SystemExit(f"docs: {doc} has no marker <!-- table: {name} -->")
-            if present[name].rstrip("\n") != new.rstrip("\n"):
+            table_of = next(t for t in tables if t.name == name)
+            if (differences(present[name], new, table_of.tolerance) if check
+                    else present[name].rstrip("\n") != new.rstrip("\n")):
                 differ.append(f"{doc}: {name}")
                 if check:
                     sys.stderr.writelines(difflib.unified_diff(

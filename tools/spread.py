@@ -62,12 +62,17 @@ ENVS: dict[str, dict[str, str]] = {
     "generic": {"NUMBA_CPU_NAME": "generic"},
     "perturbed": {"FACEMECH_SPREAD_PERTURB": str(PERTURBATION)},
 }
+#: the environments measured by default (haswell: only on request; the default kernels of an
+#: AVX-512 machine are SkylakeX, of an AVX2 one Haswell)
+DEFAULT_ENVS = ("default", "prescott", "nehalem", "blas-2", "generic", "perturbed", "numba-2")
 #: every child starts from this: one thread for numba and the BLAS, as the docs' tables and the
 #: tests are measured
 BASE_ENV = {"FACEMECH_THREADS": "1", "NUMBA_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1",
             "MPLBACKEND": "Agg"}
 JOBS = ("e1-lucero1999", "e1-anatomical", "inversion-default", "demo-twin", "subject-twin",
-        "visemes")
+        "visemes", "speak")
+#: the sentences of tests/test_speak.py's viseme targets
+SENTENCES = ("Bob bought a puppy", "Pop, a blue balloon, and a large car.")
 
 
 # ---- in the child ---------------------------------------------------------------------------
@@ -191,6 +196,40 @@ def job_subject_twin(folder: Path) -> dict:
     return _recovery(folder / "demo" / "result.nc", folder / "OUT" / "result.nc")
 
 
+def job_speak(folder: Path) -> dict:
+    """``facemech speak`` on :data:`SENTENCES`: at the acoustic middle of each phone, what
+    tests/test_speak.py checks (bilabials' lip gap, rounded lips' protrusion, /i/'s width, /a/'s
+    jaw angle)."""
+    import numpy as np
+
+    from facemech import default_face, read_results
+    from facemech.speech.alignment_io import read_alignment_csv
+    from facemech.speech.mouth import mouth_measures
+    from facemech.speech.phoneclass import phone_classes
+
+    out = {}
+    for n, text in enumerate(SENTENCES):
+        d = folder / f"s{n}"
+        assert _cli("speak", text, "-o", d, "--no-video") == 0
+        ds = read_results(d / "result.nc")
+        m = mouth_measures(default_face(), ds["positions"].values)
+        jaw = np.degrees(ds["jaw_angle"].values)
+        al = read_alignment_csv(d / "alignment.csv")
+        for i, ph in enumerate(al.phones):
+            k = int(round(ph.mid * 60))
+            key = f"{text.split(',')[0]}: phone {i} {ph.label}"
+            c = phone_classes(ph.label, al.notation)
+            if c == ("bilabial",):
+                out[f"{key}: lip gap mm"] = float(m["lip_gap"][k] * 1e3)
+            elif c in (("close_back_rounded",), ("w",)):
+                out[f"{key}: lower lip forward mm"] = float(m["lower_forward"][k] * 1e3)
+            elif c == ("close_front_spread",):
+                out[f"{key}: width change mm"] = float(m["width_change"][k] * 1e3)
+            elif c == ("open",):
+                out[f"{key}: jaw deg"] = float(jaw[k])
+    return out
+
+
 def _flatten(tree, prefix: str = "") -> dict:
     """Numeric leaves of a JSON tree, keyed ``a: b: c``; timings (``wall``, ``_s`` keys) left
     out."""
@@ -232,9 +271,9 @@ def child(job: str) -> dict:
             numbers = job_demo_twin(Path(tmp))
         elif job == "subject-twin":
             numbers = job_subject_twin(Path(tmp))
+        elif job == "speak":
+            numbers = job_speak(Path(tmp))
         elif job == "visemes":
-            if rel:
-                raise SystemExit("visemes: a forward simulation, no markers to perturb")
             numbers = job_script("visemes.py")
         else:
             raise SystemExit(f"unknown job {job!r} (expected one of {', '.join(JOBS)})")
@@ -254,13 +293,12 @@ def run_child(job: str, env_name: str, cache: Path, fresh: bool) -> dict:
     env = {k: v for k, v in os.environ.items() if k != "FACEMECH_SPREAD_PERTURB"}
     env.update({**BASE_ENV, **ENVS[env_name]})
     t0 = time.monotonic()
-    proc = subprocess.run([sys.executable, __file__, "--child", job], env=env, cwd=ROOT,
-                          capture_output=True, text=True)
+    cache.mkdir(parents=True, exist_ok=True)
+    proc = subprocess.run([sys.executable, __file__, "--child", job, "--to", str(path)], env=env,
+                          cwd=ROOT, capture_output=True, text=True)
     if proc.returncode != 0:
         raise RuntimeError(f"{job} under {env_name} failed:\n{proc.stderr[-3000:]}")
-    res = json.loads(proc.stdout.strip().splitlines()[-1])
-    cache.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(res, indent=1))
+    res = json.loads(path.read_text())
     print(f"spread: {job} under {env_name}: {time.monotonic() - t0:.0f} s", file=sys.stderr,
           flush=True)
     return res
@@ -327,8 +365,10 @@ def _fmt(key: str, v) -> str:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--child", help=argparse.SUPPRESS)
+    ap.add_argument("--to", type=Path, help=argparse.SUPPRESS)
     ap.add_argument("--jobs", default=",".join(JOBS))
-    ap.add_argument("--envs", default=",".join(ENVS))
+    ap.add_argument("--envs", default=",".join(DEFAULT_ENVS),
+                    help=f"default: {','.join(DEFAULT_ENVS)} (also: haswell)")
     ap.add_argument("--parallel", type=int, default=2, help="children at once (default 2)")
     ap.add_argument("--cache", type=Path, default=ROOT / ".spread-cache")
     ap.add_argument("--fresh", action="store_true", help="ignore the cache")
@@ -336,8 +376,13 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("-o", "--output", type=Path, help="write the JSON here too")
     ap.add_argument("--list", action="store_true", help="list the jobs and environments")
     args = ap.parse_args(argv)
-    if args.child:
-        print(json.dumps(child(args.child)))
+    if args.child:  # the child writes its own result: an interrupted parent loses nothing
+        text = json.dumps(child(args.child), indent=1)
+        if args.to:
+            tmp = args.to.with_suffix(".tmp")
+            tmp.write_text(text)
+            os.replace(tmp, args.to)
+        print(text)
         return 0
     if args.list:
         print(json.dumps({"jobs": list(JOBS), "envs": ENVS, "base_env": BASE_ENV}, indent=2))
@@ -350,7 +395,7 @@ def main(argv: list[str] | None = None) -> int:
     if "default" not in envs:
         envs.insert(0, "default")
     pairs = [(j, e) for e in envs for j in jobs  # every job's default first
-             if not (j == "visemes" and e == "perturbed")]
+             if not (j in ("visemes", "speak") and e == "perturbed")]
     with ThreadPoolExecutor(max(1, args.parallel)) as pool:
         done = list(pool.map(lambda p: run_child(*p, args.cache, args.fresh), pairs))
     results = {p: r for p, r in zip(pairs, done, strict=True)}
