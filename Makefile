@@ -44,14 +44,16 @@ test: $(STAMP) chromium lint
 	MPLBACKEND=Agg $(BIN)/python -m pytest -q
 
 # the suite on the oldest versions that pyproject's ranges allow (constraints-lowest.txt), in
-# .venv-lowest; no lint (an old ruff knows other rules)
+# .venv-lowest; no lint (an old ruff knows other rules); numba's cache apart, so that the two
+# numba versions do not overwrite each other's compiled kernels in src/
 test-lowest: $(LOW_STAMP) chromium
-	MPLBACKEND=Agg $(LOW_BIN)/python -m pytest -q
+	NUMBA_CACHE_DIR=$(LOW_VENV)/numba-cache MPLBACKEND=Agg $(LOW_BIN)/python -m pytest -q
 
 # the numeric tests once more under another OpenBLAS kernel (CI runs it after `make test`):
 # results must not hang on the last bit of the BLAS (docs/reproducibility.md)
 PORTABLE_TESTS := tests/test_inverse.py tests/test_inversion_rolls.py tests/test_inversion_steps.py \
-	tests/test_inversion_trust.py tests/test_error_stats.py tests/test_regions.py tests/test_subject.py
+	tests/test_inversion_trust.py tests/test_subject.py tests/test_regions.py tests/test_realism.py \
+	tests/test_calibrate.py tests/test_speak.py tests/test_docs_tables.py
 CORETYPE ?= Prescott
 test-portable: $(STAMP)
 	OPENBLAS_CORETYPE=$(CORETYPE) MPLBACKEND=Agg $(BIN)/python -m pytest -q $(PORTABLE_TESTS)

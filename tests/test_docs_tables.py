@@ -127,6 +127,9 @@ def test_numbers_match_within_a_columns_tolerance_and_text_exactly():
     assert dt.differences(doc, doc.replace("lsq, none", "lsq, positive"), tol)  # text: exact
     assert dt.differences(doc, doc.replace("from x", "from y"), tol)
     assert dt.differences(doc, doc.replace(".77 .81", ".77"), tol)  # a number missing
+    row = ((3, 0.0, 0.20, "lsq, none"),)  # a rule for one row only
+    assert dt.differences(doc, doc.replace("977", "1150"), row) == []
+    assert dt.differences(doc, doc.replace("977", "1200"), row)
 
 
 def test_number_formats():

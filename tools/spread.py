@@ -330,26 +330,34 @@ def _commit() -> str:
 
 
 def markdown(report: dict) -> str:
-    """The tables of docs/reproducibility.md: one per job, a row per number."""
-    envs = report["envs"]
+    """The tables of docs/reproducibility.md: one per job, a row per number that moves (the
+    numbers that are the same in every environment are counted below the table)."""
+    envs = list(report["envs"])
     lines = []
     for job, rows in report["spread"].items():
         lines += [f"#### {job}", "", "| number | " + " | ".join(envs) + " | spread |",
                   "|---|" + "---|" * (len(envs) + 1)]
+        same = 0
         for key, s in rows.items():
-            cells = []
-            for e in envs:
-                v = s["values"].get(e)
-                cells.append("" if v is None else _fmt(key, v))
+            moved = s.get("max_abs_dev", 0) > 0 if "max_abs_dev" in s else not s["same"]
+            if not moved:
+                same += 1
+                continue
+            cells = ["" if s["values"].get(e) is None else _fmt(key, s["values"][e])
+                     for e in envs]
             if "max_abs_dev" in s:
-                dev = s["max_abs_dev"]
-                tail = (f"{dev:.3g}" if " r " in f" {key}" or "corr" in key
-                        else f"{100 * s['max_rel_dev']:.3g} %")
+                tail = (f"±{s['max_abs_dev']:.2f}" if _is_corr(key)
+                        else f"±{s['max_abs_dev']:.3g} ({100 * s['max_rel_dev']:.0f} %)")
             else:
-                tail = "same" if s["same"] else "differs"
+                tail = "differs"
             lines.append(f"| {key} | " + " | ".join(cells) + f" | {tail} |")
-        lines.append("")
+        lines += ["", f"{same} other numbers of {job}: the same in every environment.", ""]
     return "\n".join(lines)
+
+
+def _is_corr(key: str) -> bool:
+    return (" r " in f" {key.split(': ')[-1]}" or "corr" in key) and "corr >" not in key \
+        and "corr >=" not in key
 
 
 def _fmt(key: str, v) -> str:
@@ -372,6 +380,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--parallel", type=int, default=2, help="children at once (default 2)")
     ap.add_argument("--cache", type=Path, default=ROOT / ".spread-cache")
     ap.add_argument("--fresh", action="store_true", help="ignore the cache")
+    ap.add_argument("--cached", action="store_true",
+                    help="report only what the cache holds (run nothing)")
     ap.add_argument("--markdown", action="store_true", help="print the docs' tables")
     ap.add_argument("-o", "--output", type=Path, help="write the JSON here too")
     ap.add_argument("--list", action="store_true", help="list the jobs and environments")
@@ -396,9 +406,12 @@ def main(argv: list[str] | None = None) -> int:
         envs.insert(0, "default")
     pairs = [(j, e) for e in envs for j in jobs  # every job's default first
              if not (j in ("visemes", "speak") and e == "perturbed")]
+    if args.cached:
+        pairs = [p for p in pairs if (args.cache / f"{p[0]}@{p[1]}.json").exists()]
     with ThreadPoolExecutor(max(1, args.parallel)) as pool:
         done = list(pool.map(lambda p: run_child(*p, args.cache, args.fresh), pairs))
     results = {p: r for p, r in zip(pairs, done, strict=True)}
+    envs = [e for e in envs if any(p[1] == e for p in pairs)]
     sys.path.insert(0, str(ROOT / "src"))
     from facemech.io.results import numerics_attrs
 
@@ -406,8 +419,8 @@ def main(argv: list[str] | None = None) -> int:
     report = {"tool": "tools/spread.py", "commit": _commit(),
               "date": datetime.date.today().isoformat(), "machine": machine,
               "base_env": BASE_ENV, "envs": {e: ENVS[e] for e in envs},
-              "kernels": {e: {"blas_core": results[(jobs[0], e)]["blas_core"],
-                              "numba_cpu": results[(jobs[0], e)]["numba_cpu"]} for e in envs},
+              "kernels": {e: {k: next(r[k] for (_, e2), r in results.items() if e2 == e)
+                              for k in ("blas_core", "numba_cpu")} for e in envs},
               "wall_s": {f"{j}@{e}": round(results[(j, e)]["wall_s"], 1) for j, e in pairs},
               "spread": {}}
     for j in jobs:
