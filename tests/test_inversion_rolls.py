@@ -23,7 +23,7 @@ from facemech.params import preset
 #: measured on main: frame steps over the 35 fitted frames, median / max per-frame RMS error (mm)
 STEPS, MEDIAN_MM, MAX_MM = 692, 0.055418248713573356, 0.4914152796540393
 #: the largest of each over the environments of tools/spread.py (e1-anatomical, lsq, positive)
-SPREAD_STEPS, SPREAD_MEDIAN_MM, SPREAD_MAX_MM = 827, 0.05661, 0.4914
+SPREAD_STEPS, SPREAD_MEDIAN_MM, SPREAD_MAX_MM = 827, 0.05661, 0.4932
 
 
 def test_anatomical_experiment1_trial_rolls_do_not_come_back(face):

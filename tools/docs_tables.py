@@ -378,10 +378,11 @@ class Table:
 #: how far the numbers of the checked tables may move (:func:`differences`): the spread that
 #: tools/spread.py measured over OpenBLAS's kernels (the machine's, Prescott, Nehalem), its
 #: threads and 1e-12 changes of the markers (docs/reproducibility.md), about 1.5 times over.
-#: Experiment 1: activity correlations +-0.04 under lucero1999 and +-0.22 under anatomical,
-#: the 3-D correlation counts by 1 and the lowest by 0.30, median errors by 59 % and largest
-#: ones by 84 % (anatomical), frame steps by 20 %, the synthetic movement by 1 %
-E1_TOLERANCE = ((2, 0.06, 0.0), (2, 0.35, 0.0, "**anatomical**"), (3, 0.45, 0.10),
+#: Experiment 1: activity correlations +-0.05 under lucero1999 and +-0.22 under anatomical,
+#: the 3-D correlation counts by 2 and the lowest by 0.32, median errors by 100 % (lucero1999,
+#: printed as 0.001 or 0.002 mm) and 59 % (anatomical), the largest ones by 84 % (anatomical),
+#: frame steps by 20 %, the synthetic movement by 1 %
+E1_TOLERANCE = ((2, 0.08, 0.0), (2, 0.35, 0.0, "**anatomical**"), (3, 0.45, 0.15),
                 (4, 0.005, 0.6), (4, 0.005, 1.0, "**anatomical**"), (5, 0.0, 0.30),
                 (6, 0.0, 0.02))
 #: the viseme targets: lip gap, protrusion and width by up to 0.09 mm (a bilabial's closure)
