@@ -30,7 +30,8 @@ goes on where it stopped; delete the folder (or use ``--fresh``) after changing 
 Usage::
 
     python tools/spread.py [--jobs e1-lucero1999,demo-twin] [--envs default,prescott]
-                           [--parallel 2] [--cache DIR] [--fresh] [--markdown] [-o OUT.json]
+                           [--parallel 2] [--cache DIR] [--fresh] [--cached] [--markdown]
+                           [--write-docs] [-o OUT.json]
     python tools/spread.py --list
 """
 
@@ -355,6 +356,33 @@ def markdown(report: dict) -> str:
     return "\n".join(lines)
 
 
+DOC = ROOT / "docs" / "reproducibility.md"
+MEASURED = ("<!-- measured -->\n", "<!-- /measured -->")
+
+
+def docs_block(report: dict) -> str:
+    """The measured part of docs/reproducibility.md: when, where and with what, then the
+    tables of :func:`markdown`."""
+    m = report["machine"]
+    kernels = ", ".join(f"{e}: {k['blas_core']} / {k['numba_cpu']}"
+                        for e, k in report["kernels"].items())
+    return (f"Measured {report['date']} at commit {report['commit']} by `tools/spread.py`, on "
+            f"{m['cpu_model']} ({m['machine']}, 2 cores), Python {m['python_version']}, numpy "
+            f"{m['numpy_version']}, scipy {m['scipy_version']}, numba {m['numba_version']}, "
+            f"llvmlite {m['llvmlite_version']} (constraints.txt). OpenBLAS kernels / numba's CPU "
+            f"in each environment: {kernels}. The spread column is the largest deviation from "
+            "the default environment: absolute for correlations, absolute and relative "
+            "otherwise.\n\n" + markdown(report))
+
+
+def write_docs(report: dict, path: Path = DOC) -> None:
+    """Replace the measured part of docs/reproducibility.md (between its markers)."""
+    text = path.read_text(encoding="utf-8")
+    start, end = text.index(MEASURED[0]) + len(MEASURED[0]), text.index(MEASURED[1])
+    path.write_text(text[:start] + docs_block(report).rstrip("\n") + "\n" + text[end:],
+                    encoding="utf-8")
+
+
 def _is_corr(key: str) -> bool:
     return (" r " in f" {key.split(': ')[-1]}" or "corr" in key) and "corr >" not in key \
         and "corr >=" not in key
@@ -383,6 +411,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--cached", action="store_true",
                     help="report only what the cache holds (run nothing)")
     ap.add_argument("--markdown", action="store_true", help="print the docs' tables")
+    ap.add_argument("--write-docs", action="store_true",
+                    help="write the tables into docs/reproducibility.md")
     ap.add_argument("-o", "--output", type=Path, help="write the JSON here too")
     ap.add_argument("--list", action="store_true", help="list the jobs and environments")
     args = ap.parse_args(argv)
@@ -430,6 +460,8 @@ def main(argv: list[str] | None = None) -> int:
     text = json.dumps(report, indent=2)
     if args.output:
         args.output.write_text(text + "\n")
+    if args.write_docs:
+        write_docs(report)
     print(markdown(report) if args.markdown else text)
     return 0
 
