@@ -85,8 +85,9 @@ def numerics_attrs() -> dict[str, str]:
     kernels are compiled for: ``NUMBA_CPU_NAME``, else LLVM's name of the host, e.g.
     ``skylake-avx512``), ``blas_core`` (the core type of each loaded OpenBLAS's kernels, e.g.
     ``SkylakeX``, which ``OPENBLAS_CORETYPE`` overrides), ``blas`` (JSON: every BLAS/LAPACK
-    library that threadpoolctl sees, with version, core type and threads), ``cpu_model`` and
-    ``machine``. Libraries not installed read ``"none"``."""
+    library that threadpoolctl sees, with version, core type and threading layer; not its
+    thread count, which a run changes as it goes), ``cpu_model`` and ``machine``. Libraries not
+    installed read ``"none"``."""
     from importlib import metadata
 
     def version(name: str) -> str:
@@ -110,7 +111,7 @@ def numerics_attrs() -> dict[str, str]:
         from threadpoolctl import threadpool_info
 
         libs = [{k: lib.get(k) for k in ("internal_api", "version", "architecture",
-                                         "threading_layer", "num_threads", "filepath")}
+                                         "threading_layer", "filepath")}
                 for lib in threadpool_info() if lib.get("user_api") == "blas"]
     except Exception:  # a record, never a failure
         libs = []
