@@ -3,15 +3,27 @@ PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
+# the pinned versions of every package (constraints.txt); the lowest that pyproject allows
+# (constraints-lowest.txt) for `make test-lowest`, in a venv of its own
+CONSTRAINTS ?= constraints.txt
+LOW_VENV := .venv-lowest
+LOW_BIN  := $(LOW_VENV)/bin
+LOW_STAMP := $(LOW_VENV)/.installed
 SUDO   := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
-.PHONY: demo test lint bench clean chromium docs docs-check
+.PHONY: demo test test-lowest test-portable lint bench clean chromium docs docs-check
 
-$(STAMP): pyproject.toml
+$(STAMP): pyproject.toml $(CONSTRAINTS)
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip
-	$(BIN)/python -m pip install -q -e ".[dev]"
+	$(BIN)/python -m pip install -q -c $(CONSTRAINTS) -e ".[dev]"
 	touch $(STAMP)
+
+$(LOW_STAMP): pyproject.toml constraints-lowest.txt
+	$(PYTHON) -m venv $(LOW_VENV)
+	$(LOW_BIN)/python -m pip install -q --upgrade pip
+	$(LOW_BIN)/python -m pip install -q -c constraints-lowest.txt -e ".[dev]"
+	touch $(LOW_STAMP)
 
 # a headless browser for the viewer's test (tests/test_viewer.py): installed with apt-get only
 # when no chromium is on the PATH, so running it again costs nothing
@@ -31,6 +43,21 @@ lint: $(STAMP)
 test: $(STAMP) chromium lint
 	MPLBACKEND=Agg $(BIN)/python -m pytest -q
 
+# the suite on the oldest versions that pyproject's ranges allow (constraints-lowest.txt), in
+# .venv-lowest; no lint (an old ruff knows other rules); numba's cache apart, so that the two
+# numba versions do not overwrite each other's compiled kernels in src/
+test-lowest: $(LOW_STAMP) chromium
+	NUMBA_CACHE_DIR=$(LOW_VENV)/numba-cache MPLBACKEND=Agg $(LOW_BIN)/python -m pytest -q
+
+# the numeric tests once more under another OpenBLAS kernel (CI runs it after `make test`):
+# results must not hang on the last bit of the BLAS (docs/reproducibility.md)
+PORTABLE_TESTS := tests/test_inverse.py tests/test_inversion_rolls.py tests/test_inversion_steps.py \
+	tests/test_inversion_trust.py tests/test_subject.py tests/test_regions.py tests/test_realism.py \
+	tests/test_calibrate.py tests/test_speak.py tests/test_docs_tables.py
+CORETYPE ?= Prescott
+test-portable: $(STAMP)
+	OPENBLAS_CORETYPE=$(CORETYPE) MPLBACKEND=Agg $(BIN)/python -m pytest -q $(PORTABLE_TESTS)
+
 # the numeric tables of docs/*.md, regenerated in place from the commands that produce them
 # (tools/docs_tables.py; 15-40 minutes on 2 shared cores, Powell's Experiment 1 and
 # benchmarks/realism.py the longest); docs-check only compares (exit 1 if a table is stale)
@@ -44,4 +71,4 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/forward.py
 
 clean:
-	rm -rf $(VENV) demo-output .pytest_cache
+	rm -rf $(VENV) $(LOW_VENV) demo-output .pytest_cache

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from conftest import run_cli as cli
+from conftest import without_progress
 from facemech import default_face, read_results
 from facemech.geometry.builder import default_surface
 
@@ -183,7 +184,7 @@ def test_cli_entry_point_runs_as_a_program():
     run = subprocess.run([sys.executable, "-m", "facemech.cli", "face", "info", "nope.npz"],
                          capture_output=True, text=True)
     assert run.returncode == 2
-    assert run.stderr.strip().startswith("facemech: error: nope.npz")
+    assert without_progress(run.stderr).strip().startswith("facemech: error: nope.npz")
     assert "Traceback" not in run.stderr
 
 

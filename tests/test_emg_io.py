@@ -156,6 +156,26 @@ def test_results_round_trip(face, tmp_path):
     assert list(tmp_path.iterdir()) == [path]  # no temporary file left
 
 
+def test_results_name_the_numerical_environment(face, tmp_path):
+    """The libraries and the CPU target that made the numbers (issue 32): their last bits
+    depend on them (docs/reproducibility.md)."""
+    import json
+    from importlib import metadata
+
+    import numba
+
+    sim = simulate(face, np.zeros((3, 16)))
+    ds = read_results(write_results(tmp_path / "r.nc", sim))
+    for lib in ("numpy", "scipy", "numba", "llvmlite"):
+        assert ds.attrs[f"{lib}_version"] == metadata.version(lib), lib
+    assert ds.attrs["numba_cpu"] == (numba.config.CPU_NAME
+                                     or numba.core.codegen.ll.get_host_cpu_name())
+    blas = json.loads(ds.attrs["blas"])
+    assert blas and all(b["version"] and b["architecture"] for b in blas), blas
+    assert ds.attrs["blas_core"] == ",".join(sorted({b["architecture"] for b in blas}))
+    assert ds.attrs["cpu_model"] and ds.attrs["machine"]
+
+
 def test_results_refuse_non_finite(face, tmp_path):
     sim = simulate(face, np.zeros((3, len(MUSCLE_GROUPS))))
     sim.positions[1, 0, 0] = np.nan

@@ -7,6 +7,7 @@ import warnings
 import numpy as np
 import pytest
 
+from conftest import without_progress
 from facemech import (
     InputError,
     MarkerSet,
@@ -301,8 +302,12 @@ def test_markers_to_nodes_and_scaling_adaptation(face, tmp_path):
 
 
 def run_cli(*args):
-    return subprocess.run([sys.executable, "-m", "facemech.cli", *map(str, args)],
-                          capture_output=True, text=True)
+    """``facemech ARGS`` as a program; its stderr less the progress lines, which depend on the
+    clock (conftest.without_progress)."""
+    run = subprocess.run([sys.executable, "-m", "facemech.cli", *map(str, args)],
+                         capture_output=True, text=True)
+    run.stderr = without_progress(run.stderr)
+    return run
 
 
 def test_markers_cli(face, tmp_path):

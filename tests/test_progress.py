@@ -5,7 +5,7 @@ import subprocess
 import sys
 import time
 
-from facemech.progress import LogProgress, staged
+from facemech.progress import HEARTBEAT_S, LogProgress, staged
 
 
 class FakeClock:
@@ -55,11 +55,17 @@ def test_heartbeat_thread_prints_while_silent_and_stops_cleanly():
     assert s.getvalue().splitlines() == lines  # nothing after the end
 
 
-def test_demo_under_a_pipe_prints_a_line_at_least_every_10_s(tmp_path):
-    """``facemech demo`` with stderr piped: no silence longer than 10 s, from the start to the
-    first line, between lines, and from the last line to the exit."""
+def test_demo_under_a_pipe_keeps_printing_lines(tmp_path):
+    """``facemech demo`` with stderr piped: log lines come while it works (the stages' counts,
+    the heartbeat's when a stage is silent), and the last one soon before the exit.
+
+    The heartbeat's timing itself is tested with a fake clock above. Here the clock of a real
+    run decides nothing but a loose bound (issue 32): on a machine loaded several times over,
+    the interpreter's start (before any facemech code runs, so not timed) and a heartbeat that
+    waits for numba's compiler to let go of the GIL take longer than on a quiet one; no silence
+    between two lines, or before the exit, may exceed three heartbeats."""
     start = time.monotonic()
-    stamps, lines = [start], []
+    stamps, lines = [], []
     with subprocess.Popen([sys.executable, "-m", "facemech.cli", "demo", "-o",
                            str(tmp_path / "d"), "--no-video"], stdout=subprocess.DEVNULL,
                           stderr=subprocess.PIPE, text=True, bufsize=1) as proc:
@@ -68,7 +74,9 @@ def test_demo_under_a_pipe_prints_a_line_at_least_every_10_s(tmp_path):
             lines.append(line.rstrip())
         assert proc.wait() == 0, "\n".join(lines)
     stamps.append(time.monotonic())
+    assert stamps[0] > start and len(lines) >= 2, lines
     gaps = [b - a for a, b in zip(stamps, stamps[1:], strict=False)]
-    assert max(gaps) <= 10.0, list(zip(gaps, ["(start)", *lines], strict=False))
+    assert max(gaps) <= 3 * HEARTBEAT_S, list(zip(gaps, lines, strict=False))
+    assert all(ln.startswith("facemech: ") for ln in lines), lines
     assert any(ln.startswith("facemech: simulate: 155/155 (") for ln in lines), lines
     assert (tmp_path / "d" / "result.nc").is_file()

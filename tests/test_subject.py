@@ -18,6 +18,9 @@ from facemech.solvers.forward import marker_nodes
 from facemech.workflows.demo import run as run_demo
 from twin_recording import lab_recordings
 
+#: the lowest correlation of a seen muscle with the truth over tools/spread.py's environments
+SEEN_R_LOWEST = 0.7957
+
 
 @pytest.fixture(scope="module")
 def twin(tmp_path_factory):
@@ -112,7 +115,9 @@ def test_analyse_recovers_the_twin(subject, twin, monkeypatch, capsys):
         r[str(name)] = (float(np.corrcoef(a, b)[0, 1]), bool(seen))
     seen = {k: v for k, (v, ok) in r.items() if ok}
     assert len(seen) >= 7, r  # the jaw and most speech muscles are determined
-    assert all(v >= 0.8 for v in seen.values()), r
+    # RIS 0.806 in the default environment, 0.796 under other BLAS kernels (the lowest over
+    # the environments of tools/spread.py, subject-twin; docs/reproducibility.md), less 0.05
+    assert all(v >= SEEN_R_LOWEST - 0.05 for v in seen.values()), r
     assert r["jaw"][0] >= 0.95
     summary = json.loads((res / "summary.json").read_text())
     assert summary["error_mm"]["median"] < 0.3 and summary["frames"] == n

@@ -14,7 +14,10 @@ Muscle outputs, per muscle instance (coordinate ``muscle_instance``: ``"ZYG_R"``
 state M of eq. 4), ``muscle_group`` and ``muscle_max_force`` (N, k_f S) (see
 :mod:`facemech.physics.muscle_outputs`; read back with :func:`results_muscles`). Files written
 before these existed have none of them and still read.
-Attributes carry provenance: facemech version, preset, integrator, dt, input hashes.
+Attributes carry provenance: facemech version, preset, integrator, dt, input hashes, and the
+numerical environment that made the numbers (:func:`numerics_attrs`: the versions of numpy, scipy,
+numba and llvmlite, the CPU that numba compiled for and the BLAS kernels' core type), since the
+last bits of a result depend on them (docs/reproducibility.md).
 """
 
 from __future__ import annotations
@@ -22,6 +25,8 @@ from __future__ import annotations
 import gc
 import hashlib
 import json
+import os
+import platform
 import sys
 from pathlib import Path
 
@@ -62,6 +67,64 @@ def render_attrs(model) -> dict:
     return {"hinge_point_m": json.dumps([float(v) for v in model.hinge_point]),
             "hinge_axis": json.dumps([float(v) for v in model.hinge_axis]),
             "teeth_depth_m": depth}
+
+
+def _cpu_model() -> str:
+    """The CPU's model name as the kernel reports it (Linux), else the platform's word."""
+    try:
+        with open("/proc/cpuinfo") as fh:
+            for line in fh:
+                if line.startswith("model name"):
+                    return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine()
+
+
+def numerics_attrs() -> dict[str, str]:
+    """The numerical environment, as results-file attributes (strings): the versions of numpy,
+    scipy, numba and llvmlite (``numpy_version``, ...), ``numba_cpu`` (the CPU that numba's
+    kernels are compiled for: ``NUMBA_CPU_NAME``, else LLVM's name of the host, e.g.
+    ``skylake-avx512``), ``blas_core`` (the core type of each loaded OpenBLAS's kernels, e.g.
+    ``SkylakeX``, which ``OPENBLAS_CORETYPE`` overrides), ``blas`` (JSON: every BLAS/LAPACK
+    library that threadpoolctl sees, with version, core type and threading layer; not its
+    thread count, which a run changes as it goes), ``cpu_model`` and ``machine``. Libraries not
+    installed read ``"none"``."""
+    from importlib import metadata
+
+    def version(name: str) -> str:
+        try:
+            return metadata.version(name)
+        except metadata.PackageNotFoundError:
+            return "none"
+
+    try:
+        import numba
+
+        cpu = numba.config.CPU_NAME or __import__("llvmlite.binding", fromlist=["binding"]
+                                                   ).get_host_cpu_name()
+    except ImportError:
+        cpu = "none"
+    try:
+        import scipy.linalg  # noqa: F401  (loads scipy's own BLAS, so that it is listed too)
+    except ImportError:
+        pass
+    try:
+        from threadpoolctl import threadpool_info
+
+        libs = [{k: lib.get(k) for k in ("internal_api", "version", "architecture",
+                                         "threading_layer", "filepath")}
+                for lib in threadpool_info() if lib.get("user_api") == "blas"]
+    except Exception:  # a record, never a failure
+        libs = []
+    for lib in libs:
+        lib["filepath"] = os.path.basename(lib["filepath"] or "")
+    cores = sorted({str(lib["architecture"]) for lib in libs if lib.get("architecture")})
+    return {"numpy_version": version("numpy"), "scipy_version": version("scipy"),
+            "numba_version": version("numba"), "llvmlite_version": version("llvmlite"),
+            "python_version": platform.python_version(), "numba_cpu": cpu,
+            "blas_core": ",".join(cores) or "unknown", "blas": json.dumps(libs),
+            "cpu_model": _cpu_model(), "machine": platform.machine()}
 
 
 def to_dataset(sim, inputs: dict[str, str] | None = None, extra: dict | None = None):
@@ -118,6 +181,7 @@ def to_dataset(sim, inputs: dict[str, str] | None = None, extra: dict | None = N
             "marker_nodes": json.dumps({**model.landmarks, **model.markers}),
             **render_attrs(model),
             "inputs": json.dumps(inputs or {}),
+            **numerics_attrs(),
             **look_attrs,
             **{k: (v if isinstance(v, (int, float, str)) else str(v))
                for k, v in sim.attrs.items()},
