@@ -292,12 +292,13 @@ def test_three_markers_invert_the_controls_they_determine(face, talking, tmp_pat
     assert err.count("note: controls:") == 1
     note = err.split("note: controls:")[1].split("facemech:")[0]
     kept = read_results(tmp_path / "r.nc").attrs["controls"].split(",")
-    assert f"3 markers give 9 coordinates for the 10 default controls; kept the {len(kept)}" \
-        in note
+    assert ("3 markers give 9 coordinates for the 12 candidate controls (the default set, and "
+            "orbicularis oris's marginal part where the face has it); kept the "
+            f"{len(kept)}") in note
     assert "jaw" in kept and note.split("mm per unit): ")[1].startswith("jaw ")  # taken first
     held = note.split("held at rest: ")[1]
     assert len(kept) <= 9
-    assert all(f"{c} " in held for c in {*SPEECH_CONTROLS, "jaw"} - set(kept))
+    assert all(f"{c} " in held for c in {*SPEECH_CONTROLS, "OOSM", "OOIM", "jaw"} - set(kept))
     assert not any(f"{c} " in held for c in kept)
 
 
@@ -325,7 +326,10 @@ def test_midsagittal_articulography_fits_the_lips_with_the_jaw_from_the_incisor(
     lm = face.landmarks
     nodes = [lm["upper_lip_center"], lm["lower_lip_center"]]
     _, _, poses = speech_jaw(prm, frames)
-    pick = pick_controls(face, prm, nodes, "speech", estimate_jaw=False, axes=(1, 2))
+    from facemech.inverse.workflow import pick_candidates
+
+    pick = pick_controls(face, prm, nodes, pick_candidates(face), estimate_jaw=False,
+                         axes=(1, 2))
     assert len(pick.order) == 4 and not pick.jaw
     # a twin the picked controls can make: each at a different level, rising and falling
     act = np.zeros((frames, len(MUSCLE_GROUPS)))
@@ -349,5 +353,5 @@ def test_midsagittal_articulography_fits_the_lips_with_the_jaw_from_the_incisor(
     text = "\n".join(res.notes)
     assert "UL (upper_lip) -> node" in text and "(upper_lip_center)" in text
     assert "TD (tongue)" in text and "midsagittal" in text
-    assert "2 markers give 4 coordinates (y and z: midsagittal) for the 9 default" in text
+    assert "2 markers give 4 coordinates (y and z: midsagittal) for the 11 candidate" in text
     assert sum("controls:" in n for n in res.notes) == 1

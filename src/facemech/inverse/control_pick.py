@@ -72,7 +72,9 @@ class ControlPick:
                "combination of them" if k == self.coordinates else
                f"each of these adds less than {MIN_NEW_MOTION_MM:.0f} mm per unit to them")
         return (f"controls: {n_markers} markers give {self.coordinates} coordinates{axes} for "
-                f"the {k + len(self.held)} default controls; kept the {k} they determine best "
+                f"the {k + len(self.held)} candidate controls (the default set, and "
+                f"orbicularis oris's marginal part where the face has it); kept the {k} they "
+                f"determine best "
                 f"(QR with column pivoting of their 100-ms step responses; new marker motion, "
                 f"mm per unit): {kept}; held at rest: {held} ({why})")
 

@@ -305,6 +305,21 @@ def planar_rigid_fit(before: np.ndarray, after: np.ndarray) -> tuple[float, np.n
     return float(np.arctan2(s, c)), np.stack([ca, cb])
 
 
+def checked_trajectory(p, name: str, source: str | None = None, *,
+                       hint: str = "") -> np.ndarray:
+    """A jaw marker's (frames, 3) trajectory as floats, checked: an InputError naming the
+    marker for another shape or a gap (a non-finite sample), ``hint`` added to the latter."""
+    p = np.asarray(p, float)
+    if p.ndim != 2 or p.shape[1] != 3 or len(p) == 0:
+        raise InputError(f"{name} must be a (frames, 3) trajectory, got {p.shape}",
+                         source=source, field=name)
+    bad = ~np.all(np.isfinite(p), axis=1)
+    if bad.any():
+        raise InputError(f"{name} has a gap at sample {int(np.nonzero(bad)[0][0])}{hint}",
+                         source=source, field=name)
+    return p
+
+
 def jaw_poses_from_points(p1: np.ndarray, p2: np.ndarray, *, hinge_point: np.ndarray,
                           lead: int = JAW_LEAD_SAMPLES, bite_block: bool = False,
                           names: tuple[str, str] = ("jaw marker", "second jaw marker"),
@@ -336,14 +351,7 @@ def jaw_poses_from_points(p1: np.ndarray, p2: np.ndarray, *, hinge_point: np.nda
     """
     pts = []
     for p, name in zip((p1, p2), names, strict=True):
-        p = np.asarray(p, float)
-        if p.ndim != 2 or p.shape[1] != 3 or len(p) == 0:
-            raise InputError(f"{name} must be a (frames, 3) trajectory, got {p.shape}",
-                             source=source, field=name)
-        bad = ~np.all(np.isfinite(p), axis=1)
-        if bad.any():
-            raise InputError(f"{name} has a gap at sample {int(np.nonzero(bad)[0][0])}",
-                             source=source, field=name)
+        p = checked_trajectory(p, name, source)
         pts.append(p[:, 1:])
     if len(pts[0]) != len(pts[1]):
         raise InputError(f"the jaw markers have {len(pts[0])} and {len(pts[1])} samples",

@@ -45,6 +45,7 @@ from .jaw import (
     MAX_JAW_ANGLE,
     MAX_JAW_SHIFT,
     _lead,
+    checked_trajectory,
     jaw_poses_from_points,
     lower_incisor_point,
 )
@@ -94,15 +95,8 @@ def protrusion_of(poses, params) -> np.ndarray:
 
 def _trajectory(p, name, source) -> np.ndarray:
     """A bone point's (frames, 3) trajectory, checked: no gaps."""
-    p = np.asarray(p, float)
-    if p.ndim != 2 or p.shape[1] != 3 or len(p) == 0:
-        raise InputError(f"{name} must be a (frames, 3) trajectory, got {p.shape}",
-                         source=source, field=name)
-    bad = ~np.all(np.isfinite(p), axis=1)
-    if bad.any():
-        raise InputError(f"{name} has a gap at sample {int(np.nonzero(bad)[0][0])}: fill it "
-                         "first (facemech markers fill-gaps)", source=source, field=name)
-    return p
+    return checked_trajectory(p, name, source,
+                              hint=": fill it first (facemech markers fill-gaps)")
 
 
 def _sagittal_axis(model) -> None:
