@@ -1,6 +1,6 @@
 """Visemes: the target of the face for each articulatory class, and its dominance.
 
-A target is the activity of the 16 muscle groups (in [0, 1], both sides alike) and a jaw angle
+A target is the activity of the muscle groups (in [0, 1], both sides alike) and a jaw angle
 (rad, positive opens) that, held, give the face the visible shape of the class. The targets were
 set on the default face (anatomical preset) and measured with ``benchmarks/visemes.py``: each
 held for 300 ms after a 100-ms ramp; docs/stimuli.md ("Visemes and coarticulation") lists the
