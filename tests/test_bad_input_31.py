@@ -338,3 +338,19 @@ def test_speak_checks_a_recorded_voice_first(monkeypatch, capsys, tmp_path):
     (tmp_path / "v.TextGrid").write_text("not read")
     refused(monkeypatch, capsys, tmp_path, "speak", "--audio", "{t}/v.wav", "--textgrid",
             "{t}/v.TextGrid", "-o", "{t}/out", words=("{t}/v.wav", "field 'audio'"))
+
+
+def test_a_ply_face_naming_a_missing_vertex_is_refused(tmp_path):
+    """Found by the fuzz tests: a face index past the vertex list reached trimesh's merge as an
+    IndexError; it is now facemech's own error naming the file and the field."""
+    from facemech.geometry.surface_io import read_surface
+
+    path = tmp_path / "bad.ply"
+    path.write_text("ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\n"
+                    "property float y\nproperty float z\nelement face 1\n"
+                    "property list uchar int vertex_indices\nend_header\n"
+                    "0 0 0\n1 0 0\n0 1 0\n1 1 0\n0 0 1\n3 0 1 6\n")
+    with pytest.raises(InputError) as info:
+        read_surface(path)
+    assert info.value.field == "faces" and "vertex 6" in str(info.value)
+    assert str(path) in str(info.value)

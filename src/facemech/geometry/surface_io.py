@@ -100,6 +100,12 @@ def _read(path: Path, units: str, *, with_appearance: bool):
     raw_vertices = np.concatenate([np.asarray(m.vertices, float) for m in parts])
     raw_faces = np.concatenate([np.asarray(m.faces, np.int64) + o
                                 for m, o in zip(parts, offsets, strict=False)])
+    for m in parts:  # a face naming a vertex the file does not have
+        f = np.asarray(m.faces, np.int64)
+        if f.size and (f.min() < 0 or f.max() >= len(m.vertices)):
+            bad = int(f.max()) if f.max() >= len(m.vertices) else int(f.min())
+            raise InputError(f"a face names vertex {bad}, but the mesh has {len(m.vertices)} "
+                             "vertices", source=str(path), field="faces")
     # the geometry alone, its vertices merged by position (texture seams and all)
     mesh = trimesh.Trimesh(raw_vertices, raw_faces, process=True)
     if len(mesh.faces) == 0:
