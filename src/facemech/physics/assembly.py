@@ -396,6 +396,12 @@ def bead_muscle_forces(muscles, pos, vel, muscle_force, out):
 #: springs and prisms below which :func:`accumulate_forces` stays on one thread (a parallel
 #: region costs a few microseconds; the default face has about 47 000 elements)
 PARALLEL_MIN_ELEMENTS = 4096
+#: m, the band of eq. (10)'s skull contact: a tied fascia node within this height of its rest
+#: height above the skull counts as touching it. The seeds' nodes sit *at* their rest height,
+#: so a sharp comparison let the last bit of the height switch a whole force on or off and
+#: turned a rounding difference of 1e-17 m into 5e-7 m (docs/reproducibility.md); 1 nm is far
+#: below any modelled motion and far above rounding.
+SKULL_BAND = 1e-9
 
 
 @nb.njit(cache=True, inline="always")
@@ -638,8 +644,8 @@ def accumulate_forces(forces, pos, vel, muscle_force, anchors, out):
                 out[u, a] -= k_contact[c] * gap * lip_normals[c, a]
                 out[w, a] += k_contact[c] * gap * lip_normals[c, a]
     # skull non-penetration, eq. (10): cancel the net force on a tied fascia node into the skull
-    # while the node sits at or below its rest height above the skull (a node lifted off the
-    # skull may come back down; otherwise nothing would ever pull it back)
+    # while the node sits at or below its rest height above the skull, within SKULL_BAND (a node
+    # lifted off the skull may come back down; otherwise nothing would ever pull it back)
     for k in range(tied.shape[0] if restoration.skull_contact else 0):
         i = tied[k]
         s = tied_skull[k]
@@ -648,7 +654,7 @@ def accumulate_forces(forces, pos, vel, muscle_force, anchors, out):
         for a in range(3):
             fn += out[i, a] * tied_normal[k, a]
             height += (pos[i, a] - pos[s, a]) * tied_normal[k, a]
-        if fn < 0.0 and height <= tied_height[k]:
+        if fn < 0.0 and height <= tied_height[k] + SKULL_BAND:
             for a in range(3):
                 out[i, a] -= fn * tied_normal[k, a]
 

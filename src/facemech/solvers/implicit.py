@@ -38,6 +38,7 @@ from scipy.sparse.linalg import splu
 from ..errors import InputError
 from ..physics.assembly import Physics, accumulate_forces, rest_anchors
 from ..physics.volume import volume_gradients
+from .contacts import resolve_contacts
 from .muscle_implicit import MuscleJacobian
 from .solver_state import (
     SolverState,
@@ -196,7 +197,9 @@ def _warm_up(ss: SolverState, physics: Physics) -> None:
     vel = np.zeros_like(pos)
     m = np.zeros(len(ss.muscle_group))
     place_jaw_into(ss.jaw, np.zeros(3), np.zeros(3), pos, vel)
-    accumulate_forces(ss.forces, pos, vel, m, rest_anchors(physics), np.zeros_like(pos))
+    anchors = rest_anchors(physics)
+    accumulate_forces(ss.forces, pos, vel, m, anchors, np.zeros_like(pos))
+    _contacts(ss, pos, vel, anchors)
     filter_exact(m, m, m, ss.tau, ss.step, ss.zeta)
     ss.system.linearise(pos, vel, m + 1.0, m)
 
@@ -247,6 +250,7 @@ class LinearImplicitEuler:
             rhs = h * (out[dyn] - h * system.apply_stiffness(v0, jac))
             vel[dyn] = v0 + system.solve(rhs, jac, h)
             pos[dyn] += h * vel[dyn]
+            _contacts(ss, pos, vel, anchors)
             m_force, m_rate = filter_exact(m_force, m_rate, m_steady, ss.tau, h, ss.zeta)
         return finish_frame(ss, state, controls, pos, vel, m_force, m_rate, f.jaw_rate)
 
@@ -300,7 +304,17 @@ class Rosenbrock2:
             k2x, k2v = _ros2_stage(ss, vel[dyn] - 2.0 * k1x, out[dyn] * inv_m - 2.0 * k1v, jac)
             pos[dyn] = x0 + h * (1.5 * k1x + 0.5 * k2x)
             vel[dyn] = v0 + h * (1.5 * k1v + 0.5 * k2v)
+            _contacts(ss, pos, vel, anchors)
         return finish_frame(ss, state, controls, pos, vel, m_force, m_rate, f.jaw_rate)
+
+
+def _contacts(ss: SolverState, pos: np.ndarray, vel: np.ndarray, anchors) -> None:
+    """The stiff contacts' own implicit step after a step's solve (:mod:`.contacts`)."""
+    c = ss.contacts
+    if len(c.bone_k) or len(c.lip_k):
+        resolve_contacts(pos, vel, ss.inv_mass, c.tied, c.bone_k, anchors.rest, anchors.normal,
+                         c.pairs, c.normals, c.lip_k, ss.step, c.floor_nodes, c.floor_tied,
+                         c.floor_offset, c.floor_k)
 
 
 def _ros2_stage(ss: SolverState, r_x, r_v, jac):

@@ -21,6 +21,7 @@ import numpy as np
 from ..physics.assembly import Physics, force_bundles
 from ..physics.bundles import Anchors, ForceBundles
 from ..physics.muscle import activation_exact_damped
+from .contacts import ImplicitContacts, deep_floor, split_contacts
 from .mandible import JawBundle, jaw_bundle, place_jaw, set_jaw_nodes
 from .state import Controls, State
 
@@ -48,6 +49,8 @@ class SolverState:
     system : ImplicitSystem or None -- the implicit methods' factorised constant matrix and
         the muscles' Jacobian (:mod:`facemech.solvers.implicit`); None for explicit Euler
     zeta : float -- the damping ratio of the activation filter (eq. 4; 1 in the seeds)
+    contacts : ImplicitContacts -- the stiff contacts the implicit methods step apart
+        (:mod:`facemech.solvers.contacts`); left out of ``forces``; empty otherwise
     """
 
     forces: ForceBundles
@@ -62,6 +65,7 @@ class SolverState:
     step: float
     system: ImplicitSystem | None = None
     zeta: float = 1.0
+    contacts: ImplicitContacts = ImplicitContacts.empty()
 
     def steady_force(self, activity: np.ndarray) -> np.ndarray:
         """M_bar (muscles,) N of each instance from group activity (groups,) in [0, 1] (eq. 3)."""
@@ -70,11 +74,18 @@ class SolverState:
 
 def solver_state(physics: Physics, n_steps: int,
                  system: ImplicitSystem | None = None) -> SolverState:
-    """The :class:`SolverState` of a model stepped ``n_steps`` times per frame."""
+    """The :class:`SolverState` of a model stepped ``n_steps`` times per frame.
+
+    With an implicit ``system`` and the continuum's tissue, the bone and lip contacts leave the
+    force kernel and are stepped implicitly after each solve (:mod:`.contacts`)."""
     p = physics.params
     frame = 1.0 / p.frame_rate
+    forces = force_bundles(physics)
+    contacts = ImplicitContacts.empty()
+    if system is not None and p.is_continuum:
+        forces, contacts = split_contacts(forces, deep_floor(physics, p.deep_floor))
     return SolverState(
-        forces=force_bundles(physics), jaw=jaw_bundle(physics), dynamic=physics.dynamic,
+        forces=forces, contacts=contacts, jaw=jaw_bundle(physics), dynamic=physics.dynamic,
         inv_mass=physics.inv_mass, muscle_group=physics.muscle_group,
         max_force=p.k_force * physics.muscle_area, tau=p.tau_activation,
         frame_duration=frame, n_steps=int(n_steps), step=frame / n_steps, system=system,
