@@ -13,14 +13,13 @@ from facemech.solvers.contacts import resolve_contacts
 from facemech.solvers.forward import simulate
 
 NONE_I = np.zeros(0, np.int64)
-NO_FLOOR = (NONE_I, NONE_I, np.zeros(0), np.zeros(0))
 
 
 def _bone(pos, vel, inv_mass, k, h):
     anchor = np.zeros((1, 3))
     normal = np.array([[0.0, 0.0, 1.0]])
     return resolve_contacts(pos, vel, inv_mass, np.array([0]), np.array([k]), anchor, normal,
-                            np.zeros((0, 2), np.int64), np.zeros((0, 3)), np.zeros(0), h, *NO_FLOOR)
+                            np.zeros((0, 2), np.int64), np.zeros((0, 3)), np.zeros(0), h)
 
 
 def test_a_node_in_the_bone_takes_the_backward_euler_step_of_its_spring():
@@ -72,8 +71,7 @@ def test_a_lip_pair_keeps_its_momentum_and_contracts_its_gap():
     g_star = (pos[0] - pos[1]) @ n[0]
     mu = 1 / inv_mass.sum()
     acted = resolve_contacts(pos, vel, inv_mass, NONE_I, np.zeros(0), np.zeros((0, 3)),
-                             np.zeros((0, 3)), np.array([[0, 1]]), n, np.array([k]), h,
-                             *NO_FLOOR)
+                             np.zeros((0, 3)), np.array([[0, 1]]), n, np.array([k]), h)
     assert acted == 1
     assert (vel / inv_mass[:, None]).sum(axis=0) == pytest.approx(p0, abs=1e-15)
     assert (pos[0] - pos[1]) @ n[0] == pytest.approx(g_star / (1 + h * h * k / mu), rel=1e-12)

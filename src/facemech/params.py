@@ -142,9 +142,6 @@ class Parameters:
     tether: float = 0.0  # N/m^3, stiffness per area holding the sliding deep surface (continuum)
     incisive_area_cm2: float = 0.10  # cm^2, each incisive bundle of orbicularis oris (estimate)
     k_bone_contact: float = 0.0  # N/m^3, one-sided contact of the sliding surface with the bone
-    #: share of the deep layer's rest thickness below which the muscle plane meets the bone
-    #: (continuum, implicit methods; 0: no floor)
-    deep_floor: float = 0.0
     # how a jaw angle alone moves the mandible (JAW_KINEMATICS): the seeds' hinge, or the hinge
     # with the condyle's coupled glide of glide_rate (m/rad) along glide_slope (rad below the
     # horizontal)

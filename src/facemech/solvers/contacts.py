@@ -41,10 +41,6 @@ class ImplicitContacts(NamedTuple):
     pairs : (c, 2) int64 -- twin nodes of the lip line (upper, lower)
     normals : (c, 3) -- unit normal of each pair, from the lower to the upper lip
     lip_k : (c,) N/m -- the lip contact stiffness of each pair
-    floor_nodes : (f,) int64 -- muscle-plane nodes kept off the bone
-    floor_tied : (f,) int64 -- the index (into ``tied``) of the sliding node under each
-    floor_offset : (f,) m -- the least height of each above the bone's plane under it
-    floor_k : (f,) N/m -- the floor's contact stiffness
     """
 
     tied: np.ndarray
@@ -52,10 +48,6 @@ class ImplicitContacts(NamedTuple):
     pairs: np.ndarray
     normals: np.ndarray
     lip_k: np.ndarray
-    floor_nodes: np.ndarray = np.zeros(0, np.int64)
-    floor_tied: np.ndarray = np.zeros(0, np.int64)
-    floor_offset: np.ndarray = np.zeros(0)
-    floor_k: np.ndarray = np.zeros(0)
 
     @classmethod
     def empty(cls) -> ImplicitContacts:
@@ -66,7 +58,7 @@ class ImplicitContacts(NamedTuple):
 
 @nb.njit(cache=True)
 def resolve_contacts(pos, vel, inv_mass, tied, bone_k, anchor, normal, pairs, pair_normal,
-                     lip_k, h, floor_nodes, floor_tied, floor_offset, floor_k):
+                     lip_k, h):
     """Step every penetrating contact implicitly (see the module doc), in place.
 
     Parameters
@@ -77,8 +69,6 @@ def resolve_contacts(pos, vel, inv_mass, tied, bone_k, anchor, normal, pairs, pa
     anchor, normal : (t, 3) m and unit -- the bone's tangent plane under each tied node
     pairs, pair_normal, lip_k : the lip pairs, their normals and stiffness (N/m)
     h : float, s -- the step
-    floor_nodes, floor_tied, floor_offset, floor_k : the muscle plane's floor
-        (:class:`ImplicitContacts`)
 
     Returns
     -------
@@ -98,21 +88,6 @@ def resolve_contacts(pos, vel, inv_mass, tied, bone_k, anchor, normal, pairs, pa
             for a in range(3):
                 vel[i, a] += dv * normal[k, a]
                 pos[i, a] += h * dv * normal[k, a]
-            acted += 1
-    for f in range(floor_nodes.shape[0]):
-        i = floor_nodes[f]
-        t = floor_tied[f]
-        if floor_k[f] <= 0.0 or inv_mass[i] <= 0.0:
-            continue
-        gap = -floor_offset[f]
-        for a in range(3):
-            gap += (pos[i, a] - anchor[t, a]) * normal[t, a]
-        if gap < 0.0:
-            m = 1.0 / inv_mass[i]
-            dv = -h * floor_k[f] * gap / (m + h * h * floor_k[f])
-            for a in range(3):
-                vel[i, a] += dv * normal[t, a]
-                pos[i, a] += h * dv * normal[t, a]
             acted += 1
     for c in range(pairs.shape[0]):
         u = pairs[c, 0]
@@ -136,27 +111,7 @@ def resolve_contacts(pos, vel, inv_mass, tied, bone_k, anchor, normal, pairs, pa
     return acted
 
 
-def deep_floor(physics, share: float):
-    """The muscle plane's floor: each muscle-plane node above a sliding node of the bone stays
-    at least ``share`` of the deep layer's rest thickness above the bone's plane there.
-
-    Returns (floor_nodes, floor_tied, floor_offset m, floor_k N/m).
-    """
-    ph = physics
-    n = ph.model.n_surface
-    rest = ph.model.rest_positions
-    tied = np.asarray(ph.tied, np.int64)
-    if share <= 0.0 or not len(tied):
-        return (np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0), np.zeros(0))
-    above = tied - n
-    normal = ph.model.skull_normals[ph.tied_skull]
-    thick = np.einsum("ka,ka->k", rest[above] - rest[tied], normal)
-    ok = (above >= n) & (thick > 0) & (ph.inv_mass[above] > 0)
-    return (above[ok], np.flatnonzero(ok).astype(np.int64), share * thick[ok],
-            np.asarray(ph.bone_k, float)[ok])
-
-
-def split_contacts(forces, floor=None):
+def split_contacts(forces):
     """``forces`` (ForceBundles) without the bone and lip penalties, and those penalties as
     :class:`ImplicitContacts`, for a method that steps them with :func:`resolve_contacts`.
 
@@ -171,12 +126,9 @@ def split_contacts(forces, floor=None):
     r, c = forces.restoration, forces.contact
     contacts = ImplicitContacts(tied=r.nodes, bone_k=np.asarray(r.bone_k, float),
                                 pairs=c.pairs, normals=c.normals, lip_k=np.asarray(c.k, float))
-    if floor is not None:
-        contacts = contacts._replace(floor_nodes=floor[0], floor_tied=floor[1],
-                                     floor_offset=floor[2], floor_k=floor[3])
     bare = forces._replace(restoration=r._replace(bone_k=np.zeros_like(r.bone_k)),
                            contact=c._replace(k=np.zeros_like(c.k)))
     return bare, contacts
 
 
-__all__ = ["ImplicitContacts", "resolve_contacts", "split_contacts", "deep_floor"]
+__all__ = ["ImplicitContacts", "resolve_contacts", "split_contacts"]

@@ -313,8 +313,7 @@ def _contacts(ss: SolverState, pos: np.ndarray, vel: np.ndarray, anchors) -> Non
     c = ss.contacts
     if len(c.bone_k) or len(c.lip_k):
         resolve_contacts(pos, vel, ss.inv_mass, c.tied, c.bone_k, anchors.rest, anchors.normal,
-                         c.pairs, c.normals, c.lip_k, ss.step, c.floor_nodes, c.floor_tied,
-                         c.floor_offset, c.floor_k)
+                         c.pairs, c.normals, c.lip_k, ss.step)
 
 
 def _ros2_stage(ss: SolverState, r_x, r_v, jac):

@@ -21,7 +21,7 @@ import numpy as np
 from ..physics.assembly import Physics, force_bundles
 from ..physics.bundles import Anchors, ForceBundles
 from ..physics.muscle import activation_exact_damped
-from .contacts import ImplicitContacts, deep_floor, split_contacts
+from .contacts import ImplicitContacts, split_contacts
 from .mandible import JawBundle, jaw_bundle, place_jaw, set_jaw_nodes
 from .state import Controls, State
 
@@ -83,7 +83,7 @@ def solver_state(physics: Physics, n_steps: int,
     forces = force_bundles(physics)
     contacts = ImplicitContacts.empty()
     if system is not None and p.is_continuum:
-        forces, contacts = split_contacts(forces, deep_floor(physics, p.deep_floor))
+        forces, contacts = split_contacts(forces)
     return SolverState(
         forces=forces, contacts=contacts, jaw=jaw_bundle(physics), dynamic=physics.dynamic,
         inv_mass=physics.inv_mass, muscle_group=physics.muscle_group,
