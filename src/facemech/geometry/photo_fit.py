@@ -68,8 +68,9 @@ DLIB_OFFSETS_MM = np.array([
     (0.3, -2.5), (1.8, -3.0), (0.0, -3.3), (-1.8, -3.0), (-0.3, -2.5), (1.3, -0.7), (0.9, 2.6),
     (0.0, 2.3), (-0.9, 2.6), (-1.3, -0.7), (-0.8, -0.8), (0.0, -1.5), (0.8, -0.8),
 ])  # fmt: skip
-#: the generic mesh the photo face is made from: (rows, columns) of :func:`generic.make_surface`
-PHOTO_RESOLUTION = (62, 53)
+#: the generic mesh the photo face is made from: (rows, columns) of :func:`generic.make_surface`,
+#: the built-in face's (about 2 mm between nodes at the lips)
+PHOTO_RESOLUTION = (48, 41)
 
 
 @dataclass(frozen=True)

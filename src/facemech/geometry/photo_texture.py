@@ -115,7 +115,8 @@ def bake_photo_texture(fit: PhotoFit, photo: np.ndarray, *, delight: bool = True
                          0.0, 1.0)
     lo, hi = GRAZING
     t = np.clip((cosine - lo) / (hi - lo), 0.0, 1.0)
-    weight = t * t * (3 - 2 * t) * inside * _outline_weight(fit.image_points, (ph, pw), px)
+    top = float(fit.camera.project(fit.vertices)[:, 1].min())
+    weight = t * t * (3 - 2 * t) * inside * _outline_weight(fit.image_points, (ph, pw), px, top)
     skin = _skin_tone(colour, weight, pts, fit)
     out = weight[:, None] * colour + (1 - weight[:, None]) * skin
     image = np.round(_linear_to_srgb(out) * 255).astype(np.uint8).reshape(th, tw, 3)
@@ -125,19 +126,26 @@ def bake_photo_texture(fit: PhotoFit, photo: np.ndarray, *, delight: bool = True
     return BakedTexture(app, weight.reshape(th, tw), skin_srgb)
 
 
-def _outline_weight(points: np.ndarray, size: tuple[int, int], px: np.ndarray) -> np.ndarray:
+def _outline_weight(points: np.ndarray, size: tuple[int, int], px: np.ndarray,
+                    top: float) -> np.ndarray:
     """How far (0..1) image points ``px`` (n, 2) lie inside the face's outline in the photo.
 
-    The outline: the jaw line (iBUG 0-16), closed upwards by the verticals from its ends to
-    the top of the image (the forehead and the hair above it); 1 from :data:`FEATHER` of the
-    jaw's width inside it, 0 outside. The photo's background never paints the skin.
+    The outline: the jaw line (iBUG 0-16), closed over the forehead by the half ellipse from
+    its ends up to the image row ``top`` (the fitted face's hairline, px); 1 from
+    :data:`FEATHER` of the jaw's width inside it, 0 outside. The photo's background never
+    paints the skin.
     """
     from matplotlib.path import Path as Polygon
     from scipy.ndimage import distance_transform_edt, map_coordinates
 
     h, w = size
     jaw = np.asarray(points[:17], float)
-    poly = np.concatenate([jaw, [[jaw[-1, 0], 0.0], [jaw[0, 0], 0.0]]])
+    centre = 0.5 * (jaw[0] + jaw[-1])
+    half = 0.5 * (jaw[-1, 0] - jaw[0, 0])
+    rise = max(centre[1] - top, 1.0)
+    a = np.linspace(0.0, np.pi, 33)[1:-1]
+    cap = np.column_stack([centre[0] + half * np.cos(a), centre[1] - rise * np.sin(a)])
+    poly = np.concatenate([jaw, cap])
     yy, xx = np.mgrid[0:h, 0:w]
     inside = Polygon(poly).contains_points(np.column_stack([xx.ravel() + 0.5,
                                                             yy.ravel() + 0.5])).reshape(h, w)
