@@ -350,32 +350,53 @@ class ProfileSilhouette:
                          camera: PhotoCamera) -> DepthCorrection:
         """The midline depth change that makes the fitted face's profile the photo's.
 
-        The profile is registered to the fitted face by its nasion and pronasale (iBUG 27 and
-        30): their heights set the profile's scale and offset, the pronasale its depth. The
-        fitted midline depth is compared with the outline row by row and the difference,
-        smoothed over 4 mm, becomes the correction.
+        The profile is registered to the fitted face at the pronasale's height (iBUG 30: the
+        outline's most forward point), at the depth of the median difference between the two
+        midlines (the differences are local: a nose, a chin), and scaled by the pixel size
+        that lays the outline closest (mean absolute depth difference) on the fitted face's
+        midline from the menton to above the brows, searched 25 % either side of the size that
+        the nasion's height gives. The depth difference, smoothed over 2 mm, becomes the
+        correction.
         """
         i_n, i_t = self.nasion_and_tip()
         if i_t - i_n < 3:
             raise InputError("the profile's nose is not found (no nasion above the nose tip)",
                              source=self.source or None, field="--profile")
         y_n, y_t = ibug[27, 1], ibug[30, 1]
-        m_per_px = (y_n - y_t) / float(self.rows[i_t] - self.rows[i_n])
-        heights = y_t - (self.rows - self.rows[i_t]) * m_per_px
-        depth_photo = (self.front - self.front[i_t]) * m_per_px
-        mid = _midline_depth(vertices, faces, heights)
-        ok = np.isfinite(mid)
-        tip_fit = np.interp(y_t, heights[ok][::-1], mid[ok][::-1])
-        diff = np.where(ok, depth_photo + tip_fit - mid, 0.0)
-        # only the face between the brow and the chin's underside: above and below, the hair
-        # and the neck are not the face surface
         top = y_n + 0.6 * (y_n - y_t)
         bottom = ibug[8, 1]
-        keep = ok & (heights <= top) & (heights >= bottom)
+        guess = (y_n - y_t) / float(self.rows[i_t] - self.rows[i_n])
+        mid_y = np.linspace(bottom, top, 200)
+        mid_z = _midline_depth(vertices, faces, mid_y)
+        ok = np.isfinite(mid_z)
+        if ok.sum() < 20:
+            raise InputError("the fitted face has no midline to compare the profile with",
+                             source=self.source or None, field="--profile")
+        mid_y, mid_z = mid_y[ok], mid_z[ok]
+
+        def photo_depth(m_per_px: float) -> np.ndarray:
+            """The outline's depth (m) at the fitted midline's heights, at the depth where
+            half the midline lies in front of the fitted face and half behind."""
+            heights = y_t - (self.rows - self.rows[i_t]) * m_per_px
+            depth = (self.front - self.front[i_t]) * m_per_px
+            out = np.interp(mid_y, heights[::-1], depth[::-1], left=np.nan, right=np.nan)
+            return out - np.nanmedian(out - mid_z)
+
+        # the pixel size: the one that lays the outline best on the fitted midline (brow,
+        # lips and chin in place), searched 25 % either side of the nasion's guess
+        sizes = guess * np.linspace(0.75, 1.25, 101)
+        costs = []
+        for m in sizes:
+            d = photo_depth(m) - mid_z
+            costs.append(np.nanmean(np.abs(d)) if np.isfinite(d).sum() > 0.8 * len(d)
+                         else np.inf)
+        m_per_px = float(sizes[int(np.argmin(costs))])
+        diff = photo_depth(m_per_px) - mid_z
+        keep = np.isfinite(diff)
         if keep.sum() < 5:
             raise InputError("the profile's outline does not cover the face", field="--profile",
                              source=self.source or None)
-        h, d = heights[keep][::-1], diff[keep][::-1]
+        h, d = mid_y[keep], diff[keep]
         grid = np.arange(h[0], h[-1], 5e-4)
         dg = np.interp(grid, h, d)
         kernel = np.exp(-0.5 * (np.arange(-16, 17) * 5e-4 / 2e-3) ** 2)

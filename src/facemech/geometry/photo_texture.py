@@ -130,8 +130,9 @@ def _outline_weight(points: np.ndarray, size: tuple[int, int], px: np.ndarray,
                     top: float) -> np.ndarray:
     """How far (0..1) image points ``px`` (n, 2) lie inside the face's outline in the photo.
 
-    The outline: the jaw line (iBUG 0-16), closed over the forehead by the half ellipse from
-    its ends up to the image row ``top`` (the fitted face's hairline, px); 1 from
+    The outline: the jaw line (iBUG 0-16), closed over the forehead by half a super-ellipse
+    (exponent 4, a rounded box) from its ends up to a tenth of the jaw's width over the image
+    row ``top`` (the fitted face's hairline, px); 1 from
     :data:`FEATHER` of the jaw's width inside it, 0 outside. The photo's background never
     paints the skin.
     """
@@ -142,9 +143,11 @@ def _outline_weight(points: np.ndarray, size: tuple[int, int], px: np.ndarray,
     jaw = np.asarray(points[:17], float)
     centre = 0.5 * (jaw[0] + jaw[-1])
     half = 0.5 * (jaw[-1, 0] - jaw[0, 0])
-    rise = max(centre[1] - top, 1.0)
+    rise = max(centre[1] - top, 1.0) + 0.2 * half
     a = np.linspace(0.0, np.pi, 33)[1:-1]
-    cap = np.column_stack([centre[0] + half * np.cos(a), centre[1] - rise * np.sin(a)])
+    c, s = np.cos(a), np.sin(a)  # a super-ellipse of exponent 4: a rounded box
+    cap = np.column_stack([centre[0] + half * np.sign(c) * np.sqrt(np.abs(c)),
+                           centre[1] - rise * np.sqrt(s)])
     poly = np.concatenate([jaw, cap])
     yy, xx = np.mgrid[0:h, 0:w]
     inside = Polygon(poly).contains_points(np.column_stack([xx.ravel() + 0.5,
