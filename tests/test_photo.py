@@ -290,8 +290,43 @@ def _small(subject):
     return np.asarray(Image.fromarray(subject.front).resize((w // 4, h // 4), Image.BOX))
 
 
+def _turned(subject):
+    """The face from a camera 30 degrees to its side (the frontal framing)."""
+    from facemech.viz.camera import Camera, view_rotation
+    from facemech.viz.look import look_from_model
+    from facemech.viz.render import parse_background, render_panel
+    from facemech.viz.scene import build_scene
+
+    look = look_from_model(subject.model)
+    scene = build_scene(look)
+    frontal = _frontal_camera(scene)
+    cam = Camera(view_rotation(30.0, 0.0), frontal.target, frontal.half_height, SIZE,
+                 DISTANCE)
+    verts, norms = scene.frame(look.rest, 0.0)
+    return np.ascontiguousarray(render_panel(scene, verts, norms, cam, background=(
+        parse_background("#8a9099")))[..., :3])
+
+
+def _frontal_camera(scene):
+    from facemech.viz.camera import view_camera
+
+    return view_camera("frontal", scene.framing, SIZE, DISTANCE)
+
+
+@pytest.mark.parametrize("degrees", [-30.0, -12.0, 0.0, 15.0, 40.0])
+def test_the_yaw_of_a_turned_face_is_read_from_its_nose(degrees):
+    """The generic face's iBUG points turned and seen from far give their angle back."""
+    from facemech.io.photo import yaw_degrees
+
+    g = generic_ibug68()
+    r = np.radians(degrees)
+    points = np.column_stack([g[:, 0] * np.cos(r) + g[:, 2] * np.sin(r), -g[:, 1]]) * 4e3
+    assert yaw_degrees(points + [300.0, 400.0]) == pytest.approx(degrees, abs=0.3)
+
+
 @pytest.mark.parametrize(("make", "message"), [
     (_no_face, "no face found"),
+    (_turned, "degrees from the camera (at most 20)"),
     (_two_faces, "2 faces found; crop the photo to one face"),
     (_small, "px across, under the 100 px needed"),
     (lambda s: s.profile, "the face is in profile, not facing the camera"),

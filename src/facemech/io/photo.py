@@ -135,23 +135,38 @@ def _reduced(image: np.ndarray, side: int) -> tuple[np.ndarray, float]:
     return small, w / size[0]
 
 
-def yaw_degrees(points: np.ndarray) -> float:
-    """How far a face is turned, degrees (positive: towards the subject's left), from the nose.
-
-    The nose's bridge and tip (iBUG 27-30) sit midway between the outer eye corners (36, 45)
-    when the face looks at the camera; turned by ``a`` they shift by about ``sin a`` times the
-    corners' depth ahead of ... the eyes' half-span. The estimate is ``asin(2 d / span)``, with
-    ``d`` the nose's shift from the corners' midpoint along the eye line and ``span`` the eye
-    line's length, scaled by the generic face's ratio of nose depth to eye span.
-    """
+def _nose_shift(points: np.ndarray) -> np.ndarray:
+    """The nose line's shift (iBUG 27-30) from the outer eye corners' midpoint (36, 45), along
+    the eye line, over half the corners' distance; points (..., 68, 2)."""
     p = np.asarray(points, float)
-    a, b = p[36], p[45]
-    axis = (b - a) / np.linalg.norm(b - a)
-    d = float(np.mean((p[27:31] - 0.5 * (a + b)) @ axis))
-    span = float(np.linalg.norm(b - a))
-    # generic face: the outer corners 88 mm apart, the nose line 30 mm in front of them
-    ratio = 44.0 / 30.0
-    return float(np.degrees(np.arcsin(np.clip(ratio * d / (0.5 * span), -1.0, 1.0))))
+    a, b = p[..., 36, :], p[..., 45, :]
+    axis = (b - a) / np.linalg.norm(b - a, axis=-1, keepdims=True)
+    nose = p[..., 27:31, :].mean(axis=-2) - 0.5 * (a + b)
+    return (nose * axis).sum(axis=-1) / (0.5 * np.linalg.norm(b - a, axis=-1))
+
+
+def yaw_degrees(points: np.ndarray) -> float:
+    """How far a face is turned from the camera, degrees (positive: to the subject's left).
+
+    A face turned by ``a`` shifts its nose line (iBUG 27-30) from the outer eye corners'
+    midpoint along the eye line; the shift, over half the corners' distance, is read against
+    the generic face's iBUG points turned by -60 to 60 degrees (seen from far).
+
+    Parameters
+    ----------
+    points : (68, 2) image points, px (x right, y down)
+    """
+    from ..geometry.ibug import generic_ibug68
+
+    g = generic_ibug68()
+    angles = np.linspace(-60.0, 60.0, 121)
+    r = np.radians(angles)
+    # the subject turned to its left by a: +z (forward) towards +x (its left), seen from +z;
+    # its left is the image's right (x right) and +y up is the image's up (y down)
+    x = g[:, 0][None] * np.cos(r)[:, None] + g[:, 2][None] * np.sin(r)[:, None]
+    turned = np.stack([x, -np.broadcast_to(g[:, 1], x.shape)], axis=-1)
+    shift = _nose_shift(turned)
+    return float(np.interp(_nose_shift(points), shift, angles))
 
 
 def frontal_landmarks(image: np.ndarray, *, source: str, field: str | None = None,
