@@ -31,7 +31,6 @@ MAX_YAW_DEG = 20.0
 DETECT_SIDE = 1600
 #: the frontal detector's score under which a detection is not taken as a face
 MIN_SCORE = 0.0
-PHOTO_SUFFIXES = (".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff", ".webp")
 
 
 def read_photo(path: str | Path, *, field: str | None = None) -> np.ndarray:
