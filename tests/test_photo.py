@@ -328,7 +328,7 @@ def test_the_yaw_of_a_turned_face_is_read_from_its_nose(degrees):
     (_no_face, "no face found"),
     (_turned, "degrees from the camera (at most 20)"),
     (_two_faces, "2 faces found; crop the photo to one face"),
-    (_small, "px across, under the 100 px needed"),
+    (_small, "the face is 90 px across, under the 150 px needed"),
     (lambda s: s.profile, "the face is in profile, not facing the camera"),
 ])
 def test_a_bad_photo_is_refused_in_one_line(built_in, tmp_path, monkeypatch, capsys, make,

@@ -20,10 +20,11 @@ import numpy as np
 
 from ..errors import InputError, missing_input
 
-#: the smallest face the landmarks are taken from: the detector's box, pixels across. A face
-#: 140 mm wide over 100 px is 1.4 mm a pixel; the predictor's typical error of 2-3 % of the
-#: box (Kazemi & Sullivan 2014) is then 3-4 mm, and the texture a blur
-MIN_FACE_PX = 100
+#: the smallest face the landmarks are taken from: the detector's box, pixels across. Measured
+#: on tests/test_photo.py's photo of the built-in face scaled down, the fit's worst landmark:
+#: from 155 px up 1.0-3.6 mm (four sizes, 155-385 px); from 129 px down it jumps about,
+#: 2.7-8.7 mm (seven sizes, 62-129 px)
+MIN_FACE_PX = 150
 #: the most a frontal face may be turned (yaw, from the nose between the eyes), degrees
 MAX_YAW_DEG = 20.0
 #: images over this many pixels a side are reduced for detection (the landmarks are found on
@@ -191,8 +192,8 @@ def frontal_landmarks(image: np.ndarray, *, source: str, field: str | None = Non
     face = faces[0]
     if face.width < MIN_FACE_PX:
         raise InputError(f"the face is {face.width} px across, under the {MIN_FACE_PX} px "
-                         "needed to place its landmarks to a millimetre or two", source=source,
-                         field=field)
+                         "needed to place its landmarks within a few millimetres",
+                         source=source, field=field)
     yaw = yaw_degrees(face.points)
     if abs(yaw) > MAX_YAW_DEG:
         raise InputError(f"the face is turned {abs(yaw):.0f} degrees from the camera (at most "
