@@ -198,6 +198,15 @@ def test_a_profile_corrects_the_depth_the_front_cannot_see(variant):
     assert max(np.linalg.norm(e) for e in both.values()) < 2.0, both
 
 
+def test_a_profile_facing_either_way_reads_the_same(variant):
+    from facemech.geometry.photo_fit import profile_silhouette
+
+    right = profile_silhouette(variant.profile)
+    left = profile_silhouette(variant.profile[:, ::-1])
+    np.testing.assert_array_equal(right.rows, left.rows)
+    np.testing.assert_allclose(right.front - right.front.max(), left.front - left.front.max())
+
+
 # ---- the whole route: dlib's landmarks -------------------------------------------------------
 #: mm: the built-in face's landmarks from dlib's points, the jaw angles apart, come within
 #: 2.0 mm (the menton; the others 0.3-1.6 mm); the jaw angles, which the spline carries from the
@@ -354,6 +363,17 @@ def test_a_frontal_photo_given_as_the_profile_is_refused(built_in, tmp_path, mon
     assert code == 2 and err.count("\n") == 1, err
     assert "field '--profile': this is a frontal photo, not a profile" in err
     assert not talker.exists() and front.read_bytes() == before
+
+
+def test_a_profile_without_a_subject_is_refused(built_in, tmp_path, monkeypatch, capsys):
+    front, side = tmp_path / "front.png", tmp_path / "side.png"
+    _save(built_in.front, front)
+    _save(np.full((*SIZE, 3), 128, np.uint8), side)
+    code, out, err = run_cli(monkeypatch, capsys, "face", "from-photo", front, "--profile",
+                             side, "-o", tmp_path / "t.npz")
+    assert code == 2 and err.count("\n") == 1, err
+    assert f"{side}: field '--profile': no subject distinct from the background" in err
+    assert not (tmp_path / "t.npz").exists()
 
 
 def test_not_a_photo_and_not_a_face_file(tmp_path, monkeypatch, capsys):
