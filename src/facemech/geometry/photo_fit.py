@@ -254,7 +254,7 @@ def fit_frontal(points: np.ndarray, size: tuple[int, int], *, ipd: float | None 
     ibug = warped(own)  # facemech's own iBUG points, carried by the same warp
     correction = None
     if profile is not None:
-        correction = profile.depth_correction(verts, faces, ibug, cam)
+        correction = profile.depth_correction(verts, faces, ibug)
         verts[:, 2] += correction(verts)
         ibug[:, 2] += correction(ibug)
     lm = ibug_to_landmarks(ibug, verts, faces)
@@ -346,8 +346,8 @@ class ProfileSilhouette:
         nasion = lo + int(np.argmin(above[lo:])) if tip > lo else tip
         return nasion, tip
 
-    def depth_correction(self, vertices: np.ndarray, faces: np.ndarray, ibug: np.ndarray,
-                         camera: PhotoCamera) -> DepthCorrection:
+    def depth_correction(self, vertices: np.ndarray, faces: np.ndarray,
+                         ibug: np.ndarray) -> DepthCorrection:
         """The midline depth change that makes the fitted face's profile the photo's.
 
         The profile is registered to the fitted face at the pronasale's height (iBUG 30: the
