@@ -6,7 +6,7 @@ ships in the ``face-recognition-models`` package: ``pip install facemech[photo]`
 downloaded at run time. Both are imported when first needed.
 
 A photo that cannot make a talker is refused with one line naming the file: no face, more
-than one face, a face too small to place landmarks to a millimetre or two, a face turned away
+than one face, a face too small to place landmarks within a few millimetres, a face turned away
 from the camera, or a profile given where the frontal photo belongs (dlib's convolutional
 detector, also in the package, finds a face that the frontal detector does not: a profile).
 """
