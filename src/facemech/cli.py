@@ -118,6 +118,14 @@ def face_build(surface: Path, landmarks: Path, output: Path = ..., units: str = 
     keeps its look) and landmarks; notes (unit inferred, axes turned) on stderr."""
     return _staged(wf.faces.build_face_file, **locals())
 
+@command(face_app, "from-photo")
+def face_from_photo(front: Path, output: Path = ..., profile: Path | None = None,
+                    ipd: float | None = None, distance: float = 1.0, name: str | None = None,
+                    tissue: str = "anatomical"):
+    """A talker from a frontal photo (and a profile): the generic face fitted to its landmarks,
+    the photo as its skin (docs/photo.md); the scale used on stderr."""
+    return _staged(wf.photo.face_from_photo_file, **locals())
+
 @command(face_app, "info", args=("face",))
 def face_info(face: str = "default", as_json: bool = False, tissue: str | None = None):
     """Counts of a face model: nodes per layer, springs by kind, prisms, muscles, free fascia."""

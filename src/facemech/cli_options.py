@@ -121,6 +121,11 @@ face_build.output: the face model (.npz)
 face_build.surface: OBJ (+ MTL, texture), PLY or STL
 face_build.units: length unit of both files (mm, cm, m, um), or auto: from the face's size
 face_export_default.output: folder for face.obj and landmarks.csv
+face_from_photo.front: frontal photo of the face (JPEG, PNG)
+face_from_photo.output: the talker (.npz)
+face_from_photo.profile: profile photo on a plain background: depth of nose, lips, chin
+face_from_photo.ipd: interpupillary distance, mm (default: adult norm 63.4, Dodgson 2004)
+face_from_photo.distance: camera to face, m
 face_info.face: face file or built-in face
 invert.markers: marker file in the model's frame and frame rate
 invert.output: results file (.nc)
@@ -193,7 +198,7 @@ RANGES: dict[str, str] = {
     "reference": "[0, inf)", "frames": "[2, 1e6]", "utterances": "[1, 1e4]", "k": "[1, 1000]",
     "aa": "[1, 4]", "rate_wpm": "[80, 450]", "strength": "[0, 10]", "jaw_lead": "[0, 600]",
     "max_evaluations": "[1, 1e7]", "lowpass": "[0, 1000]",
-    "workers": "[1, 1024]"}
+    "workers": "[1, 1024]", "ipd": "[50, 80]", "distance": "[0.3, 20]"}
 
 
 def help_for(command: str, parameter: str) -> str | None:

@@ -1,0 +1,472 @@
+"""The generic face fitted to a photo's 68 iBUG landmarks: its shape, its size and the camera.
+
+A frontal photo gives the face's outline in the image plane; its size and depth it cannot give.
+:func:`fit_frontal` reads the photo through a pinhole camera at a stated distance and:
+
+1. levels the eyes (the camera's roll) and takes the metric scale from the interpupillary
+   distance, given or the adult norm :data:`IPD_NORM` (Dodgson 2004);
+2. back-projects every 2-D point to the depth the generic face has there (scaled by the
+   interpupillary distance over the generic face's), so that the perspective of a close
+   camera does not widen the nose or shrink the ears;
+3. warps the generic surface (:func:`generic.make_surface`) by the 2-D thin-plate spline that
+   takes the generic face's iBUG points (:func:`ibug.generic_ibug68`) onto the back-projected
+   ones, and scales its depth by the face's size;
+4. optionally corrects the depth along the midline from a profile photo's silhouette
+   (:func:`profile_depth`), carried sideways by the same spline's smooth falloff.
+
+The result is "a scan": vertices, triangles and 3-D iBUG points, metres, in facemech's axes
+(+x the subject's left, +y up, +z forward; the generic face's nasion near the origin), with the
+camera that sees it as the photo did (:class:`PhotoCamera`), to paint the photo on it
+(:mod:`photo_texture`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.interpolate import RBFInterpolator
+
+from ..errors import InputError
+from . import generic
+from .ibug import SPLINE_POINTS, generic_ibug68, ibug_to_landmarks
+
+#: adult interpupillary distance, m: the mean of adults in Dodgson (2004), "Variation and
+#: extrema of human interpupillary distance", Proc. SPIE 5291 (63.4 mm, SD 3.8 mm; men 64.7,
+#: women 62.3), the norm the scale is taken from when none is given
+IPD_NORM = 0.0634
+#: the span of plausible adult interpupillary distances, m (Dodgson 2004: 50 to 75 mm)
+IPD_RANGE = (0.050, 0.080)
+#: iBUG points of the eyes: the subject's right (36-41) and left (42-47)
+RIGHT_EYE, LEFT_EYE = np.arange(36, 42), np.arange(42, 48)
+#: the mirror image of each iBUG point (the point on the other side of the face, or itself)
+MIRROR = np.array([*range(16, -1, -1), *range(26, 16, -1), 27, 28, 29, 30, *range(35, 30, -1),
+                   45, 44, 43, 42, 47, 46, 39, 38, 37, 36, 41, 40, 54, 53, 52, 51, 50, 49, 48,
+                   59, 58, 57, 56, 55, 64, 63, 62, 61, 60, 67, 66, 65])
+#: where dlib's predictor puts the 68 points on the generic face, mm (x to the subject's left, y
+#: up) from facemech's own placement (:func:`ibug.generic_ibug68`): the jaw line on the face's
+#: outline, the eye corners where the rendered fissure ends. Measured by
+#: ``tools/photo_detector_offsets.py`` on four frontal renders of the built-in face (image
+#: sizes 420-900 px, cameras 0.7-2.5 m; the largest standard deviation over them 1.3 mm), and
+#: made mirror-symmetric.
+DLIB_OFFSETS_MM = np.array([
+    # jaw, 0 (right ear) to 16
+    (-5.8, 4.2), (-5.3, 8.3), (-6.0, 11.7), (-8.4, 13.4), (-11.6, 12.5), (-13.0, 9.6), (-12.1, 5.2),
+    (-8.1, 0.9), (0.0, 0.2), (8.1, 0.9), (12.1, 5.2), (13.0, 9.6), (11.6, 12.5), (8.4, 13.4),
+    (6.0, 11.7), (5.3, 8.3), (5.8, 4.2),
+    # brows
+    (-0.9, 0.2), (-0.3, 1.3), (-0.5, 0.7), (0.1, -0.2), (1.4, -2.2), (-1.4, -2.2), (-0.1, -0.2),
+    (0.5, 0.7), (0.3, 1.3), (0.9, 0.2),
+    # nose
+    (0.0, -3.4), (0.0, -1.8), (0.0, -0.4), (0.0, 2.0), (3.0, 1.0), (1.6, 1.1), (0.0, 1.5),
+    (-1.6, 1.1), (-3.0, 1.0),
+    # eyes
+    (7.6, -1.4), (6.2, -0.2), (4.4, 0.2), (3.3, -1.5), (3.9, -0.5), (6.2, -0.8), (-3.3, -1.5),
+    (-4.4, 0.2), (-6.2, -0.2), (-7.6, -1.4), (-6.2, -0.8), (-3.9, -0.5),
+    # lips
+    (2.0, -0.9), (0.1, 1.7), (-1.1, 1.7), (0.0, -0.3), (1.1, 1.7), (-0.1, 1.7), (-2.0, -0.9),
+    (0.3, -2.5), (1.8, -3.0), (0.0, -3.3), (-1.8, -3.0), (-0.3, -2.5), (1.3, -0.7), (0.9, 2.6),
+    (0.0, 2.3), (-0.9, 2.6), (-1.3, -0.7), (-0.8, -0.8), (0.0, -1.5), (0.8, -0.8),
+])  # fmt: skip
+#: the generic mesh the photo face is made from: (rows, columns) of :func:`generic.make_surface`,
+#: the built-in face's (about 2 mm between nodes at the lips)
+PHOTO_RESOLUTION = (48, 41)
+
+
+@dataclass(frozen=True)
+class PhotoCamera:
+    """A pinhole camera facing the subject, as the photo was taken.
+
+    The camera sits ``distance`` in front of the plane ``z = plane_z`` (model axes), on the line
+    through ``(centre_x, centre_y)``, and is turned by ``roll`` about its axis; ``metres_per_px``
+    is the size of a pixel on that plane.
+
+    Attributes
+    ----------
+    centre_px : (2,) image point (x right, y down; pixel centres at integers + 0.5) of the
+        model point (centre_x, centre_y, plane_z)
+    centre_m : (2,) m, that model point's x and y
+    plane_z : m, depth of the reference plane
+    metres_per_px : m per pixel on the reference plane
+    distance : m from the camera to the reference plane
+    roll : rad, the image's turn about the camera axis (counter-clockwise in the image)
+    size : (height, width) of the photo, pixels
+    """
+
+    centre_px: np.ndarray
+    centre_m: np.ndarray
+    plane_z: float
+    metres_per_px: float
+    distance: float
+    roll: float
+    size: tuple[int, int]
+
+    def project(self, points: np.ndarray) -> np.ndarray:
+        """Image points (n, 2) px (x right, y down) of model points (n, 3) m."""
+        p = np.atleast_2d(np.asarray(points, float))
+        k = self.distance / np.maximum(self.distance - (p[:, 2] - self.plane_z), 1e-3)
+        dx = (p[:, 0] - self.centre_m[0]) * k / self.metres_per_px
+        dy = -(p[:, 1] - self.centre_m[1]) * k / self.metres_per_px
+        c, s = np.cos(self.roll), np.sin(self.roll)
+        return np.column_stack([self.centre_px[0] + c * dx + s * dy,
+                                self.centre_px[1] - s * dx + c * dy])
+
+    def back_project(self, image_points: np.ndarray, z: np.ndarray) -> np.ndarray:
+        """Model points (n, 3) m on the rays of image points (n, 2) px, at depths z (n,) m."""
+        q = np.asarray(image_points, float) - self.centre_px
+        c, s = np.cos(self.roll), np.sin(self.roll)
+        dx = c * q[:, 0] - s * q[:, 1]
+        dy = s * q[:, 0] + c * q[:, 1]
+        k = (self.distance - (np.asarray(z, float) - self.plane_z)) / self.distance
+        return np.column_stack([self.centre_m[0] + dx * self.metres_per_px * k,
+                                self.centre_m[1] - dy * self.metres_per_px * k, z])
+
+    def view_direction(self, points: np.ndarray) -> np.ndarray:
+        """Unit vectors (n, 3) from model points towards the camera."""
+        eye = np.array([self.centre_m[0], self.centre_m[1], self.plane_z + self.distance])
+        d = eye - np.atleast_2d(points)
+        return d / np.linalg.norm(d, axis=1, keepdims=True)
+
+
+@dataclass(frozen=True)
+class PhotoFit:
+    """The generic face fitted to a photo.
+
+    Attributes
+    ----------
+    vertices : (n, 3) m, the fitted surface (the generic grid warped)
+    faces : (f, 3) int, its triangles (the generic grid's)
+    generic_vertices : (n, 3) m, the same nodes on the generic face (for texture coordinates)
+    ibug : (68, 3) m, the iBUG points on the fitted face, in facemech's placement
+    landmarks : name -> (3,) m, facemech's 18 landmarks on the fitted face
+    camera : the photo's camera
+    image_points : (68, 2) px, the landmarks found in the photo
+    ipd : m, the interpupillary distance the scale was set by
+    scale_source : ``"given"`` or the norm's citation
+    size_factor : the fitted face's size over the generic face's (its depth is scaled by it)
+    profile_correction : (rows,) m, the midline depth correction from a profile photo, or None
+    """
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    generic_vertices: np.ndarray
+    ibug: np.ndarray
+    landmarks: dict
+    camera: PhotoCamera
+    image_points: np.ndarray
+    ipd: float
+    scale_source: str
+    size_factor: float
+    profile_correction: np.ndarray | None = None
+
+    def note(self) -> str:
+        """One line: the scale and where it came from."""
+        return (f"scale: interpupillary distance {self.ipd * 1e3:.1f} mm ({self.scale_source}); "
+                f"face {self.size_factor:.3f} x the generic face")
+
+
+def eye_centres(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The centres of the subject's right and left eyes (means of their six iBUG points)."""
+    p = np.asarray(points, float)
+    return p[RIGHT_EYE].mean(axis=0), p[LEFT_EYE].mean(axis=0)
+
+
+def _generic_grid() -> tuple[np.ndarray, np.ndarray]:
+    surf = generic.make_surface(*PHOTO_RESOLUTION)
+    return surf.vertices * 1e-3, surf.faces
+
+
+def fit_frontal(points: np.ndarray, size: tuple[int, int], *, ipd: float | None = None,
+                distance: float = 1.0, profile: ProfileSilhouette | None = None,
+                offsets: np.ndarray | None = DLIB_OFFSETS_MM,
+                source: str | None = None) -> PhotoFit:
+    """Fit the generic face to the 68 iBUG points of a frontal photo.
+
+    Parameters
+    ----------
+    points : (68, 2) image points, px (x right, y down), iBUG order (point 0 on the subject's
+        right, the image's left)
+    size : (height, width) of the photo, pixels
+    ipd : the subject's interpupillary distance, m; None takes the adult norm :data:`IPD_NORM`
+    distance : m from the camera to the face (its eyes); 0.3 to 20
+    profile : the silhouette of a profile photo (:func:`profile_silhouette`), to correct the
+        midline depth; None keeps the generic face's depth, scaled
+    offsets : (68, 2) mm, where the points' detector puts the iBUG points on the generic face
+        from facemech's own placement (default: dlib's, :data:`DLIB_OFFSETS_MM`); None for
+        points in facemech's placement (e.g. projected from a known face)
+    source : the photo's name, for errors
+
+    Returns
+    -------
+    PhotoFit
+
+    Raises
+    ------
+    InputError
+        Points not (68, 2) finite, an interpupillary distance outside :data:`IPD_RANGE`, a
+        distance outside 0.3-20 m, or a face whose landmarks fold (a mirrored or garbled
+        detection).
+    """
+    pts = np.asarray(points, float)
+    if pts.shape != (68, 2) or not np.all(np.isfinite(pts)):
+        raise InputError(f"expected 68 finite image points, got shape {pts.shape}",
+                         source=source, field="landmarks")
+    if ipd is not None and not IPD_RANGE[0] <= ipd <= IPD_RANGE[1]:
+        raise InputError(f"interpupillary distance {ipd * 1e3:.1f} mm is outside "
+                         f"{IPD_RANGE[0] * 1e3:.0f}-{IPD_RANGE[1] * 1e3:.0f} mm", field="ipd")
+    if not 0.3 <= distance <= 20.0:
+        raise InputError(f"camera distance {distance:g} m is outside 0.3-20 m", field="distance")
+    own = generic_ibug68()
+    gen = own if offsets is None else _detector_points(offsets)
+    v_gen, faces = _generic_grid()
+    er, el = eye_centres(pts)
+    if el[0] <= er[0]:
+        raise InputError("the landmarks' left and right are swapped (a mirrored image?)",
+                         source=source, field="landmarks")
+    roll = float(np.arctan2(-(el[1] - er[1]), el[0] - er[0]))
+    ipd_m = IPD_NORM if ipd is None else float(ipd)
+    g_er, g_el = eye_centres(gen)
+    own_ipd = float(np.linalg.norm(np.subtract(*eye_centres(own))))
+    size_factor = ipd_m / own_ipd
+    # the detector's eye centres lie apart by the generic face's ratio of its two placements
+    eyes_m = ipd_m * float(np.linalg.norm(g_el - g_er)) / own_ipd
+    # the reference plane: the eyes' depth on the fitted face; the generic face is scaled
+    # about its eye midpoint, which stays where the generic face has it
+    g_mid = 0.5 * (g_er + g_el)
+    cam = PhotoCamera(centre_px=0.5 * (er + el), centre_m=g_mid[:2].copy(),
+                      plane_z=float(g_mid[2]), metres_per_px=0.0, distance=float(distance),
+                      roll=roll, size=(int(size[0]), int(size[1])))
+    z = g_mid[2] + size_factor * (gen[:, 2] - g_mid[2])
+    # the eye centres lie at their own depth; the pixel size on the plane follows from them
+    cam = _with_pixel(cam, eyes_m, er, el, z[RIGHT_EYE].mean(), z[LEFT_EYE].mean())
+    fitted = cam.back_project(pts, z)
+    _check_order(fitted, source)
+    warp = RBFInterpolator(gen[SPLINE_POINTS, :2], fitted[SPLINE_POINTS, :2] - gen[
+        SPLINE_POINTS, :2], kernel="thin_plate_spline", degree=1)
+
+    def warped(p: np.ndarray) -> np.ndarray:
+        out = np.empty_like(p)
+        out[:, :2] = p[:, :2] + warp(p[:, :2])
+        out[:, 2] = g_mid[2] + size_factor * (p[:, 2] - g_mid[2])
+        return out
+
+    verts = warped(v_gen)
+    ibug = warped(own)  # facemech's own iBUG points, carried by the same warp
+    correction = None
+    if profile is not None:
+        correction = profile.depth_correction(verts, faces, ibug)
+        verts[:, 2] += correction(verts)
+        ibug[:, 2] += correction(ibug)
+    lm = ibug_to_landmarks(ibug, verts, faces)
+    return PhotoFit(verts, faces, v_gen, ibug, lm, cam, pts.copy(), ipd_m,
+                    "given" if ipd is not None else "adult norm, Dodgson 2004",
+                    float(size_factor), None if correction is None else correction.values)
+
+
+def _detector_points(offsets_mm: np.ndarray) -> np.ndarray:
+    """The generic face's iBUG points (68, 3) m where a detector puts them: facemech's frontal
+    placement shifted by ``offsets_mm`` (68, 2), back on the surface."""
+    from .ibug import _generic_xy
+
+    off = np.asarray(offsets_mm, float)
+    if off.shape != (68, 2):
+        raise ValueError(f"detector offsets must be (68, 2) mm, got {off.shape}")
+    xy = _generic_xy() + off
+    return generic.surface_point(xy[:, 0], xy[:, 1]) * 1e-3
+
+
+def _with_pixel(cam: PhotoCamera, ipd_m: float, er, el, z_r: float, z_l: float) -> PhotoCamera:
+    """The camera whose pixel size puts the two eye centres ``ipd_m`` apart at their depths."""
+    from dataclasses import replace
+
+    probe = replace(cam, metres_per_px=1.0)
+    a = probe.back_project(np.array([er]), np.array([z_r]))[0]
+    b = probe.back_project(np.array([el]), np.array([z_l]))[0]
+    return replace(cam, metres_per_px=ipd_m / float(np.linalg.norm(a[:2] - b[:2])))
+
+
+def _check_order(p: np.ndarray, source: str | None) -> None:
+    """Refuse landmarks in an impossible order: brows under the eyes, nose under the mouth."""
+    brows = p[17:27, 1].mean()
+    eyes = p[36:48, 1].mean()
+    nose = p[30, 1]
+    mouth = p[48:60, 1].mean()
+    chin = p[8, 1]
+    if not brows > eyes > nose > mouth > chin:
+        raise InputError("the landmarks are not in a face's order (brows, eyes, nose, mouth, "
+                         "chin from the top): an upside-down photo or a failed detection",
+                         source=source, field="landmarks")
+
+
+# ---- the profile -----------------------------------------------------------------------------
+@dataclass(frozen=True)
+class DepthCorrection:
+    """A smooth depth change (m along +z) over the face: the midline's, fading sideways.
+
+    ``heights`` (k,) m and ``values`` (k,) m sample the midline correction; it fades with the
+    distance from the midline as a Gaussian of ``width`` m (the nose and lips are the parts
+    that differ between faces in profile; the cheeks follow the generic face).
+    """
+
+    heights: np.ndarray
+    values: np.ndarray
+    width: float
+
+    def __call__(self, points: np.ndarray) -> np.ndarray:
+        p = np.atleast_2d(points)
+        along = np.interp(p[:, 1], self.heights, self.values, left=self.values[0],
+                          right=self.values[-1])
+        return along * np.exp(-0.5 * (p[:, 0] / self.width) ** 2)
+
+
+@dataclass(frozen=True)
+class ProfileSilhouette:
+    """The facial outline of a profile photo: per image row, how far forward the face reaches.
+
+    Attributes
+    ----------
+    rows : (k,) image rows, px (y down)
+    front : (k,) the outline's forward extent on each row, px, measured towards the face's
+        front (larger is further forward)
+    source : the photo's name
+    """
+
+    rows: np.ndarray
+    front: np.ndarray
+    source: str = ""
+
+    def nasion_and_tip(self) -> tuple[int, int]:
+        """Indices of the pronasale (the most forward point of the middle of the outline) and
+        the nasion (the deepest point between it and the brow above)."""
+        k = len(self.rows)
+        mid = slice(k // 5, 4 * k // 5)
+        tip = mid.start + int(np.argmax(self.front[mid]))
+        above = self.front[:tip]
+        lo = max(tip - k // 4, 0)
+        nasion = lo + int(np.argmin(above[lo:])) if tip > lo else tip
+        return nasion, tip
+
+    def depth_correction(self, vertices: np.ndarray, faces: np.ndarray,
+                         ibug: np.ndarray) -> DepthCorrection:
+        """The midline depth change that makes the fitted face's profile the photo's.
+
+        The profile is registered to the fitted face at the pronasale's height (iBUG 30: the
+        outline's most forward point), at the depth of the median difference between the two
+        midlines (the differences are local: a nose, a chin), and scaled by the pixel size
+        that lays the outline closest (mean absolute depth difference) on the fitted face's
+        midline from the menton to above the brows, searched 25 % either side of the size that
+        the nasion's height gives. The depth difference, smoothed over 2 mm, becomes the
+        correction.
+        """
+        i_n, i_t = self.nasion_and_tip()
+        if i_t - i_n < 3:
+            raise InputError("the profile's nose is not found (no nasion above the nose tip)",
+                             source=self.source or None, field="--profile")
+        y_n, y_t = ibug[27, 1], ibug[30, 1]
+        top = y_n + 0.6 * (y_n - y_t)
+        bottom = ibug[8, 1]
+        guess = (y_n - y_t) / float(self.rows[i_t] - self.rows[i_n])
+        mid_y = np.linspace(bottom, top, 200)
+        mid_z = _midline_depth(vertices, faces, mid_y)
+        ok = np.isfinite(mid_z)
+        if ok.sum() < 20:
+            raise InputError("the fitted face has no midline to compare the profile with",
+                             source=self.source or None, field="--profile")
+        mid_y, mid_z = mid_y[ok], mid_z[ok]
+
+        def photo_depth(m_per_px: float) -> np.ndarray:
+            """The outline's depth (m) at the fitted midline's heights, at the depth where
+            half the midline lies in front of the fitted face and half behind."""
+            heights = y_t - (self.rows - self.rows[i_t]) * m_per_px
+            depth = (self.front - self.front[i_t]) * m_per_px
+            out = np.interp(mid_y, heights[::-1], depth[::-1], left=np.nan, right=np.nan)
+            return out - np.nanmedian(out - mid_z)
+
+        # the pixel size: the one that lays the outline best on the fitted midline (brow,
+        # lips and chin in place), searched 25 % either side of the nasion's guess
+        sizes = guess * np.linspace(0.75, 1.25, 101)
+        costs = []
+        for m in sizes:
+            d = photo_depth(m) - mid_z
+            costs.append(np.nanmean(np.abs(d)) if np.isfinite(d).sum() > 0.8 * len(d)
+                         else np.inf)
+        m_per_px = float(sizes[int(np.argmin(costs))])
+        diff = photo_depth(m_per_px) - mid_z
+        keep = np.isfinite(diff)
+        if keep.sum() < 5:
+            raise InputError("the profile's outline does not cover the face", field="--profile",
+                             source=self.source or None)
+        h, d = mid_y[keep], diff[keep]
+        grid = np.arange(h[0], h[-1], 5e-4)
+        dg = np.interp(grid, h, d)
+        kernel = np.exp(-0.5 * (np.arange(-16, 17) * 5e-4 / 2e-3) ** 2)
+        kernel /= kernel.sum()
+        dg = np.convolve(np.pad(dg, 16, mode="edge"), kernel, mode="valid")
+        # fade to nothing above the brows and below the chin
+        ramp = np.clip((grid - bottom + 0.004) / 0.008, 0, 1) * np.clip(
+            (top + 0.004 - grid) / 0.008, 0, 1)
+        return DepthCorrection(grid, dg * ramp, width=0.018)
+
+
+def _midline_depth(vertices: np.ndarray, faces: np.ndarray, heights: np.ndarray) -> np.ndarray:
+    """Depth (m) of the surface where the plane x = 0 cuts it, at each height (nan off it)."""
+    v = vertices
+    tri = v[faces]
+    out = np.full(len(heights), np.nan)
+    # the midline edges: triangle edges that cross x = 0
+    segs = []
+    for a, b in ((0, 1), (1, 2), (2, 0)):
+        pa, pb = tri[:, a], tri[:, b]
+        cross = (pa[:, 0] <= 0) != (pb[:, 0] <= 0)
+        t = pa[cross, 0] / (pa[cross, 0] - pb[cross, 0])
+        segs.append(pa[cross] + t[:, None] * (pb[cross] - pa[cross]))
+    pts = np.concatenate(segs)
+    if len(pts) < 2:
+        return out
+    order = np.argsort(pts[:, 1])
+    y, z = pts[order, 1], pts[order, 2]
+    inside = (heights >= y[0]) & (heights <= y[-1])
+    out[inside] = np.interp(heights[inside], y, z)
+    return out
+
+
+def profile_silhouette(image: np.ndarray, *, source: str = "") -> ProfileSilhouette:
+    """The facial outline of a profile photo against a plain background.
+
+    The background is the median colour of the image's border; the subject is the largest
+    connected region that differs from it by more than 12 % of full scale (sRGB distance). The
+    face looks towards the side whose outline has the larger bump (the nose) over its running
+    median in the middle half of the rows.
+
+    Raises
+    ------
+    InputError
+        No subject distinct from the background, or one touching both sides of the image.
+    """
+    from scipy import ndimage
+
+    img = np.asarray(image, float)[..., :3] / 255.0
+    h, w = img.shape[:2]
+    border = np.concatenate([img[0], img[-1], img[:, 0], img[:, -1]])
+    bg = np.median(border, axis=0)
+    fg = np.linalg.norm(img - bg, axis=-1) > 0.12
+    lab, n = ndimage.label(fg)
+    if n == 0:
+        raise InputError("no subject distinct from the background in the profile photo",
+                         source=source or None, field="--profile")
+    sizes = ndimage.sum(fg, lab, index=np.arange(1, n + 1))
+    sub = lab == 1 + int(np.argmax(sizes))
+    sub = ndimage.binary_fill_holes(sub)
+    rows = np.flatnonzero(sub.any(axis=1))
+    if len(rows) < 20:
+        raise InputError("the subject in the profile photo is too small", source=source or None,
+                         field="--profile")
+    left = np.array([np.argmax(sub[r]) for r in rows], float)
+    right = np.array([w - 1 - np.argmax(sub[r, ::-1]) for r in rows], float)
+    k = len(rows)
+    mid = slice(k // 4, 3 * k // 4)
+    window = max(k // 6, 3)
+    bump_left = np.max((ndimage.median_filter(left, window, mode="nearest") - left)[mid])
+    bump_right = np.max((right - ndimage.median_filter(right, window, mode="nearest"))[mid])
+    front = -left if bump_left > bump_right else right
+    return ProfileSilhouette(rows.astype(float), front, source)

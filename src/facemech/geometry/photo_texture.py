@@ -1,0 +1,214 @@
+"""A photo painted on the fitted face: texture coordinates, the baked texture and its blend.
+
+The fitted face (:mod:`photo_fit`) keeps the generic grid, whose nodes lie on rows of constant
+height and columns of constant angle around the head. That grid, unrolled, is the texture's
+layout: ``u`` runs with the angle from the right ear (0) to the left ear (1), ``v`` with the
+generic height from the throat (0) to the hairline (1). Every texel is a point of the fitted
+surface; :func:`bake_photo_texture` looks it up in the photo through the fitted camera, and
+blends it into a skin tone taken from the photo where the photo sees the skin at a grazing
+angle or not at all (the sides towards the ears, under the chin).
+
+The renderer lights the texture (:func:`facemech.viz.raster.vertex_light`); a photo is already
+lit. With ``delight`` the photo is divided by the renderer's own light at each texel's normal
+(seen from the front), so that a frontal re-render gives the photo's colours back.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import generic
+from .appearance import Appearance
+from .mesh import vertex_normals
+from .photo_fit import PhotoFit
+
+#: texels of the baked texture, (height, width)
+TEXTURE_SIZE = (1024, 1024)
+#: the cosine between the skin's normal and the view to the camera under which the photo is not
+#: used, and over which it is used alone (a smooth step between)
+GRAZING = (0.15, 0.45)
+#: the renderer's skin gloss (strength, exponent), as :func:`facemech.viz.face_parts.skin_part`
+SKIN_GLOSS = (0.10, 16.0)
+#: the width of the blend inside the face's outline in the photo, a share of the jaw's width
+FEATHER = 0.04
+#: the weakest renderer light a texel is divided by (deep shadow would blow the colour up)
+MIN_LIGHT = 0.3
+
+
+@dataclass(frozen=True)
+class BakedTexture:
+    """The texture of a photo face.
+
+    Attributes
+    ----------
+    appearance : the :class:`Appearance`: per-corner texture coordinates of the fitted surface's
+        triangles and the baked image
+    coverage : (h, w) float in [0, 1], how much of each texel is the photo (the rest is skin)
+    skin : (3,) uint8, the skin tone the unseen parts are painted with (sRGB)
+    """
+
+    appearance: Appearance
+    coverage: np.ndarray
+    skin: np.ndarray
+
+
+def grid_uv(fit: PhotoFit) -> np.ndarray:
+    """Texture coordinates (n, 2) of the fitted face's nodes (OpenGL: u right, v up)."""
+    g = fit.generic_vertices * 1e3
+    w = generic._width(np.clip(g[:, 1], generic.Y_BOTTOM, generic.Y_TOP))
+    e = 2.0 / generic.SUPERELLIPSE_N
+    s = np.clip(g[:, 0] / w, -1.0, 1.0)
+    theta = np.arcsin(np.sign(s) * np.abs(s) ** (1.0 / e))
+    tmax = np.abs(theta).max()
+    u = 0.5 + 0.5 * theta / tmax
+    v = (g[:, 1] - generic.Y_BOTTOM) / (generic.Y_TOP - generic.Y_BOTTOM)
+    return np.clip(np.column_stack([u, v]), 0.0, 1.0)
+
+
+def bake_photo_texture(fit: PhotoFit, photo: np.ndarray, *, delight: bool = True,
+                       source: str = "", size: tuple[int, int] = TEXTURE_SIZE) -> BakedTexture:
+    """Bake the photo onto the fitted face's texture.
+
+    Parameters
+    ----------
+    fit : the generic face fitted to the photo
+    photo : (h, w, 3) uint8 sRGB, the photo the fit was made on
+    delight : divide the photo by the renderer's light (see the module's docstring)
+    source : the photo's file, kept as the appearance's source
+    size : (height, width) of the texture, texels
+
+    Returns
+    -------
+    BakedTexture
+    """
+    from scipy.interpolate import RegularGridInterpolator
+    from scipy.ndimage import map_coordinates
+
+    uv = grid_uv(fit)
+    rows, cols = _grid_shape(uv)
+    th, tw = size
+    us = uv[:cols, 0]
+    vs = uv[::cols, 1]
+    order = np.argsort(vs)
+    normals = vertex_normals(fit.vertices, fit.faces)
+    field = np.concatenate([fit.vertices, normals], axis=1).reshape(rows, cols, 6)[order]
+    interp = RegularGridInterpolator((vs[order], us), field, bounds_error=False, fill_value=None)
+    tu = (np.arange(tw) + 0.5) / tw
+    tv = 1.0 - (np.arange(th) + 0.5) / th  # row 0 at the top of the image
+    V, U = np.meshgrid(tv, tu, indexing="ij")
+    vals = interp(np.column_stack([V.ravel(), U.ravel()]))
+    pts, nrm = vals[:, :3], vals[:, 3:]
+    nrm /= np.maximum(np.linalg.norm(nrm, axis=1, keepdims=True), 1e-12)
+    cosine = np.einsum("ij,ij->i", nrm, fit.camera.view_direction(pts))
+    px = fit.camera.project(pts)
+    ph, pw = photo.shape[:2]
+    inside = ((px[:, 0] >= 0.5) & (px[:, 0] <= pw - 0.5) & (px[:, 1] >= 0.5)
+              & (px[:, 1] <= ph - 0.5))
+    lin = _srgb_to_linear(np.asarray(photo[..., :3], float) / 255.0)
+    colour = np.stack([map_coordinates(lin[..., c], [px[:, 1] - 0.5, px[:, 0] - 0.5], order=1,
+                                       mode="nearest") for c in range(3)], axis=1)
+    if delight:
+        diffuse, spec = _renderer_light(nrm)
+        colour = np.clip((colour - spec[:, None]) / np.maximum(diffuse, MIN_LIGHT)[:, None],
+                         0.0, 1.0)
+    lo, hi = GRAZING
+    t = np.clip((cosine - lo) / (hi - lo), 0.0, 1.0)
+    top = float(fit.camera.project(fit.vertices)[:, 1].min())
+    weight = t * t * (3 - 2 * t) * inside * _outline_weight(fit.image_points, (ph, pw), px, top)
+    skin = _skin_tone(colour, weight, pts, fit)
+    out = weight[:, None] * colour + (1 - weight[:, None]) * skin
+    image = np.round(_linear_to_srgb(out) * 255).astype(np.uint8).reshape(th, tw, 3)
+    corner_uv = uv[fit.faces].astype(np.float32)
+    app = Appearance(uv=corner_uv, image=image, source=source)
+    skin_srgb = np.round(_linear_to_srgb(skin) * 255).astype(np.uint8)
+    return BakedTexture(app, weight.reshape(th, tw), skin_srgb)
+
+
+def _outline_weight(points: np.ndarray, size: tuple[int, int], px: np.ndarray,
+                    top: float) -> np.ndarray:
+    """How far (0..1) image points ``px`` (n, 2) lie inside the face's outline in the photo.
+
+    The outline: the jaw line (iBUG 0-16), closed over the forehead by half a super-ellipse
+    (exponent 4, a rounded box) from its ends up to a tenth of the jaw's width over the image
+    row ``top`` (the fitted face's hairline, px); 1 from
+    :data:`FEATHER` of the jaw's width inside it, 0 outside. The photo's background never
+    paints the skin.
+    """
+    from matplotlib.path import Path as Polygon
+    from scipy.ndimage import distance_transform_edt, map_coordinates
+
+    h, w = size
+    jaw = np.asarray(points[:17], float)
+    centre = 0.5 * (jaw[0] + jaw[-1])
+    half = 0.5 * (jaw[-1, 0] - jaw[0, 0])
+    rise = max(centre[1] - top, 1.0) + 0.2 * half
+    a = np.linspace(0.0, np.pi, 33)[1:-1]
+    c, s = np.cos(a), np.sin(a)  # a super-ellipse of exponent 4: a rounded box
+    cap = np.column_stack([centre[0] + half * np.sign(c) * np.sqrt(np.abs(c)),
+                           centre[1] - rise * np.sqrt(s)])
+    poly = np.concatenate([jaw, cap])
+    yy, xx = np.mgrid[0:h, 0:w]
+    inside = Polygon(poly).contains_points(np.column_stack([xx.ravel() + 0.5,
+                                                            yy.ravel() + 0.5])).reshape(h, w)
+    depth = distance_transform_edt(inside)
+    feather = max(FEATHER * float(np.ptp(jaw[:, 0])), 1.0)
+    d = map_coordinates(depth, [px[:, 1] - 0.5, px[:, 0] - 0.5], order=1, mode="constant")
+    t = np.clip(d / feather, 0.0, 1.0)
+    return t * t * (3 - 2 * t)
+
+
+def _grid_shape(uv: np.ndarray) -> tuple[int, int]:
+    """(rows, cols) of the generic grid the fitted face keeps (:data:`PHOTO_RESOLUTION`)."""
+    from .photo_fit import PHOTO_RESOLUTION
+
+    rows, cols = PHOTO_RESOLUTION
+    cols += 1 - cols % 2
+    if rows * cols != len(uv):
+        raise ValueError(f"{len(uv)} nodes is not the generic grid's {rows} x {cols}")
+    return rows, cols
+
+
+def _skin_tone(colour: np.ndarray, weight: np.ndarray, pts: np.ndarray,
+               fit: PhotoFit) -> np.ndarray:
+    """The photo's skin (linear RGB, (3,)): the median of the cheeks it sees face on.
+
+    The cheeks: under the eyes, over the mouth corners, outside the nose (10 mm from the
+    midline) and inside the cheek landmarks.
+    """
+    lm = fit.landmarks
+    eye_y = 0.5 * (lm["eye_left"][1] + lm["eye_right"][1])
+    mouth_y = 0.5 * (lm["mouth_corner_left"][1] + lm["mouth_corner_right"][1])
+    half = 0.5 * abs(lm["cheek_left"][0] - lm["cheek_right"][0])
+    ax = np.abs(pts[:, 0] - 0.5 * (lm["cheek_left"][0] + lm["cheek_right"][0]))
+    cheek = ((pts[:, 1] < eye_y - 0.012) & (pts[:, 1] > mouth_y) & (ax > 0.018) & (ax < half)
+             & (weight > 0.99))
+    if cheek.sum() < 50:
+        cheek = weight > 0.99
+    if not cheek.any():
+        return np.array([0.62, 0.39, 0.27])  # the renderer's skin tone (textures.SKIN), linear
+    return np.median(colour[cheek], axis=0)
+
+
+def _renderer_light(normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Diffuse light and highlight (n,) of the renderer at unit normals seen from the front."""
+    from ..viz.raster import GROUND, LIGHTS, SKY, WRAP, vertex_light
+
+    lights = np.concatenate([LIGHTS[:, :3] / np.linalg.norm(LIGHTS[:, :3], axis=1,
+                                                            keepdims=True), LIGHTS[:, 3:]],
+                            axis=1)
+    gloss = np.tile(np.array(SKIN_GLOSS), (len(normals), 1))
+    light = vertex_light(normals.astype(np.float64), gloss, lights, SKY, GROUND, WRAP)
+    return light[:, 0].astype(float), light[:, 1].astype(float)
+
+
+def _srgb_to_linear(c: np.ndarray) -> np.ndarray:
+    """sRGB in [0, 1] to linear light (IEC 61966-2-1)."""
+    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+
+
+def _linear_to_srgb(c: np.ndarray) -> np.ndarray:
+    """Linear light in [0, 1] to sRGB (IEC 61966-2-1)."""
+    c = np.clip(c, 0.0, 1.0)
+    return np.where(c <= 0.0031308, 12.92 * c, 1.055 * c ** (1 / 2.4) - 0.055)

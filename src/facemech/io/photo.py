@@ -1,0 +1,213 @@
+"""Photos of a face: read, checked, and the face's 68 iBUG landmarks found in them.
+
+The landmarks come from dlib's face detector (histogram of oriented gradients) and its
+68-point shape predictor trained on iBUG 300-W (Kazemi & Sullivan 2014), whose model file
+ships in the ``face-recognition-models`` package: ``pip install facemech[photo]``; nothing is
+downloaded at run time. Both are imported when first needed.
+
+A photo that cannot make a talker is refused with one line naming the file: no face, more
+than one face, a face too small to place landmarks within a few millimetres, a face turned away
+from the camera, or a profile given where the frontal photo belongs (dlib's convolutional
+detector, also in the package, finds a face that the frontal detector does not: a profile).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError, missing_input
+
+#: the smallest face the landmarks are taken from: the detector's box, pixels across. Measured
+#: on tests/test_photo.py's photo of the built-in face scaled down, the fit's worst landmark:
+#: from 155 px up 1.0-3.6 mm (four sizes, 155-385 px); from 129 px down it jumps about,
+#: 2.7-8.7 mm (seven sizes, 62-129 px)
+MIN_FACE_PX = 150
+#: the most a frontal face may be turned (yaw, from the nose between the eyes), degrees
+MAX_YAW_DEG = 20.0
+#: images over this many pixels a side are reduced for detection (the landmarks are found on
+#: the full image)
+DETECT_SIDE = 1600
+#: the frontal detector's score under which a detection is not taken as a face
+MIN_SCORE = 0.0
+
+
+def read_photo(path: str | Path, *, field: str | None = None) -> np.ndarray:
+    """The photo as (h, w, 3) uint8 sRGB, upright (its EXIF orientation applied).
+
+    Raises
+    ------
+    InputError
+        Not a file, not an image, or smaller than 64 pixels a side.
+    """
+    from PIL import Image, ImageOps, UnidentifiedImageError
+
+    path = Path(path)
+    if not path.is_file():
+        raise missing_input(path, field=field, what="photo")
+    try:
+        with Image.open(path) as im:
+            im = ImageOps.exif_transpose(im)
+            rgb = np.asarray(im.convert("RGB"))
+    except (UnidentifiedImageError, OSError, ValueError, Image.DecompressionBombError) as exc:
+        raise InputError(f"not an image that can be read ({type(exc).__name__})",
+                         source=str(path), field=field) from None
+    if min(rgb.shape[:2]) < 64:
+        raise InputError(f"image of {rgb.shape[1]}x{rgb.shape[0]} pixels is too small for a "
+                         f"face", source=str(path), field=field)
+    return np.ascontiguousarray(rgb)
+
+
+@dataclass(frozen=True)
+class Detection:
+    """A face found in a photo.
+
+    Attributes
+    ----------
+    box : (left, top, right, bottom), pixels
+    score : the detector's score
+    points : (68, 2) iBUG landmarks, pixels (x right, y down; pixel centres at integers + 0.5)
+    """
+
+    box: tuple[int, int, int, int]
+    score: float
+    points: np.ndarray
+
+    @property
+    def width(self) -> int:
+        return self.box[2] - self.box[0]
+
+
+class DlibDetector:
+    """dlib's frontal face detector and 68-point shape predictor (the ``photo`` extra)."""
+
+    def __init__(self):
+        try:
+            import dlib
+            import face_recognition_models as models
+        except ImportError:
+            raise InputError("finding a face in a photo needs dlib and its models: "
+                             "pip install 'facemech[photo]'", field="photo") from None
+        self._dlib = dlib
+        self._models = models
+        self._detector = dlib.get_frontal_face_detector()
+        self._predictor = dlib.shape_predictor(models.pose_predictor_model_location())
+        self._cnn = None
+
+    def faces(self, image: np.ndarray) -> list[Detection]:
+        """Every frontal face in an RGB image, with its landmarks."""
+        small, k = _reduced(image, DETECT_SIDE)
+        rects, scores, _ = self._detector.run(small, 1, MIN_SCORE)
+        out = []
+        for r, s in zip(rects, scores, strict=True):
+            box = self._dlib.rectangle(*(int(round(c * k)) for c in (r.left(), r.top(),
+                                                                      r.right(), r.bottom())))
+            shape = self._predictor(image, box)
+            pts = np.array([[p.x + 0.5, p.y + 0.5] for p in shape.parts()], float)
+            out.append(Detection((box.left(), box.top(), box.right(), box.bottom()), float(s),
+                                 pts))
+        return out
+
+    def any_face(self, image: np.ndarray) -> bool:
+        """Whether the convolutional detector finds a face (in any pose, profiles too)."""
+        if self._cnn is None:
+            from pathlib import Path as _P
+
+            folder = _P(self._models.pose_predictor_model_location()).parent
+            self._cnn = self._dlib.cnn_face_detection_model_v1(
+                str(folder / "mmod_human_face_detector.dat"))
+        small, _ = _reduced(image, 480)
+        return len(self._cnn(small, 0)) > 0
+
+
+def _reduced(image: np.ndarray, side: int) -> tuple[np.ndarray, float]:
+    """The image with its longer side at most ``side`` pixels, and the factor back."""
+    h, w = image.shape[:2]
+    k = max(h, w) / side
+    if k <= 1:
+        return np.ascontiguousarray(image), 1.0
+    from PIL import Image
+
+    size = (max(int(round(w / k)), 1), max(int(round(h / k)), 1))
+    small = np.asarray(Image.fromarray(image).resize(size, Image.BILINEAR))
+    return small, w / size[0]
+
+
+def _nose_shift(points: np.ndarray) -> np.ndarray:
+    """The nose line's shift (iBUG 27-30) from the outer eye corners' midpoint (36, 45), along
+    the eye line, over half the corners' distance; points (..., 68, 2)."""
+    p = np.asarray(points, float)
+    a, b = p[..., 36, :], p[..., 45, :]
+    axis = (b - a) / np.linalg.norm(b - a, axis=-1, keepdims=True)
+    nose = p[..., 27:31, :].mean(axis=-2) - 0.5 * (a + b)
+    return (nose * axis).sum(axis=-1) / (0.5 * np.linalg.norm(b - a, axis=-1))
+
+
+def yaw_degrees(points: np.ndarray) -> float:
+    """How far a face is turned from the camera, degrees (positive: to the subject's left).
+
+    A face turned by ``a`` shifts its nose line (iBUG 27-30) from the outer eye corners'
+    midpoint along the eye line; the shift, over half the corners' distance, is read against
+    the generic face's iBUG points turned by -60 to 60 degrees (seen from far).
+
+    Parameters
+    ----------
+    points : (68, 2) image points, px (x right, y down)
+    """
+    from ..geometry.ibug import generic_ibug68
+
+    g = generic_ibug68()
+    angles = np.linspace(-60.0, 60.0, 121)
+    r = np.radians(angles)
+    # the subject turned to its left by a: +z (forward) towards +x (its left), seen from +z;
+    # its left is the image's right (x right) and +y up is the image's up (y down)
+    x = g[:, 0][None] * np.cos(r)[:, None] + g[:, 2][None] * np.sin(r)[:, None]
+    turned = np.stack([x, -np.broadcast_to(g[:, 1], x.shape)], axis=-1)
+    shift = _nose_shift(turned)
+    return float(np.interp(_nose_shift(points), shift, angles))
+
+
+def frontal_landmarks(image: np.ndarray, *, source: str, field: str | None = None,
+                      detector: DlibDetector | None = None) -> Detection:
+    """The one frontal face of a photo, checked; its 68 landmarks.
+
+    Raises
+    ------
+    InputError
+        No face; a profile (a face only the any-pose detector finds, or turned more than
+        :data:`MAX_YAW_DEG`); two faces or more; a face under :data:`MIN_FACE_PX` across.
+    """
+    det = detector or DlibDetector()
+    faces = det.faces(image)
+    if not faces:
+        if det.any_face(image):
+            raise InputError("the face is in profile, not facing the camera: give a frontal "
+                             "photo (a profile goes with --profile)", source=source, field=field)
+        raise InputError("no face found", source=source, field=field)
+    if len(faces) > 1:
+        raise InputError(f"{len(faces)} faces found; crop the photo to one face", source=source,
+                         field=field)
+    face = faces[0]
+    if face.width < MIN_FACE_PX:
+        raise InputError(f"the face is {face.width} px across, under the {MIN_FACE_PX} px "
+                         "needed to place its landmarks within a few millimetres",
+                         source=source, field=field)
+    yaw = yaw_degrees(face.points)
+    if abs(yaw) > MAX_YAW_DEG:
+        raise InputError(f"the face is turned {abs(yaw):.0f} degrees from the camera (at most "
+                         f"{MAX_YAW_DEG:.0f}): give a frontal photo (a profile goes with "
+                         "--profile)", source=source, field=field)
+    return face
+
+
+def check_profile(image: np.ndarray, *, source: str, field: str = "--profile",
+                  detector: DlibDetector | None = None) -> None:
+    """Refuse a frontal photo given as the profile (the frontal detector finds a face looking
+    within :data:`MAX_YAW_DEG` of the camera)."""
+    det = detector or DlibDetector()
+    for face in det.faces(image):
+        if abs(yaw_degrees(face.points)) <= MAX_YAW_DEG:
+            raise InputError("this is a frontal photo, not a profile", source=source,
+                             field=field)
