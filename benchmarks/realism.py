@@ -9,7 +9,9 @@
 - ``crease``: the largest growth of a fold angle outside the lips for a 10-degree jaw opening;
 - ``reachability``: the RMS error of inverting synthetic lip targets with the ranges of real
   speech, the jaw driven from the lower incisor (analysis/reachability.py), with the speech
-  controls and orbicularis oris's marginal part, and with the speech controls alone.
+  controls and orbicularis oris's marginal part, and with the speech controls alone, with the
+  RMS of each component (upper and lower lip vertical and front-back, the lower lip on the jaw,
+  the corners); benchmarks/reachability.py breaks it down by cause.
 
 Usage: python benchmarks/realism.py [--quick]   (--quick: gestures and crease only)
 """
@@ -129,6 +131,7 @@ def main() -> None:
                 "median_frame_rms_mm": round(float(np.median(r.frame_rms)) * 1e3, 3),
                 "largest_mm": round(r.largest * 1e3, 2),
                 "controls_on_a_bound": round(r.activity_on_bound, 2),
+                "components_rms_mm": {k: round(v * 1e3, 3) for k, v in r.components.items()},
                 "wall_s": round(r.wall_seconds, 1)}
     report["wall_s"] = round(time.perf_counter() - t0, 1)
     print(json.dumps(report, indent=2))

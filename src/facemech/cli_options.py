@@ -27,7 +27,7 @@ chin_marker: a jaw marker: its drop gives the jaw
 controls: speech, emg7, all, or listed groups (default: speech, or what the markers determine)
 design: design table (.csv or .toml)
 dt: Euler step of every evaluation, s (default: the preset's)
-effort: see --bend
+effort: see --bend (0; 0.1 when the control pick adds for sign)
 emg: raw EMG (CSV or C3D), 7 channels
 emg_baseline: EMG rest interval START,STOP (s)
 emg_calibration: EMG of maximal gestures

@@ -100,15 +100,31 @@ def _rest_point(face, name: str) -> np.ndarray:
     return face.rest_positions[face.markers[name]]
 
 
+#: the components of :attr:`Reach.components`: (marker group, axis)
+COMPONENTS = {"upper_lip_vertical": ("upper", 1), "upper_lip_front_back": ("upper", 2),
+              "lower_lip_vertical": ("lower", 1), "lower_lip_front_back": ("lower", 2),
+              "corner_lateral": ("corner", 0), "corner_vertical": ("corner", 1),
+              "corner_front_back": ("corner", 2)}
+
+
 @dataclass(frozen=True)
 class Reach:
-    """The result of :func:`reach`: RMS error (m) over frames and fitted markers, per frame."""
+    """The result of :func:`reach`: RMS error (m) over frames and fitted markers, per frame.
+
+    ``components`` (m): the RMS error of one coordinate of one marker group over the frames
+    after the first (:data:`COMPONENTS`), and ``lower_lip_on_jaw_vertical``, the lower lip's
+    vertical error relative to the lower incisor (the model's incisor against the target's).
+    ``share``: each component's share of the summed squared error (the lips' and corners'
+    lateral coordinates make the rest).
+    """
 
     rms: float
     frame_rms: np.ndarray  # (frames,) m
     largest: float  # m, the largest single-marker error
     wall_seconds: float
     activity_on_bound: float  # share of control values at 0 or 1
+    components: dict = None
+    share: dict = None
 
 
 def reach(face, params=None, *, markers: MarkerSet | None = None, jaw: str = "incisor",
@@ -135,8 +151,26 @@ def reach(face, params=None, *, markers: MarkerSet | None = None, jaw: str = "in
     fitted = {n: face.markers[n] for n in ms.names if n not in ("R01", "LI")}
     res = invert(face, ms.select(list(fitted)), fitted, jaw_angle=drive, params=params,
                  controls=controls, **invert_kw)
-    err = np.linalg.norm(res.model_markers[1:] - res.data_markers[1:], axis=2)
+    d = res.model_markers[1:] - res.data_markers[1:]
+    err = np.linalg.norm(d, axis=2)
     frame = np.sqrt(np.mean(err**2, axis=1))
     on = np.mean((res.controls <= 1e-6) | (res.controls >= 1 - 1e-6))
+    names = list(fitted)
+    comps, share = {}, {}
+    total = float(np.sum(d**2))
+    for key, (group, axis) in COMPONENTS.items():
+        v = d[:, [names.index(n) for n in GROUPS[group]], axis]
+        comps[key] = float(np.sqrt(np.mean(v**2)))
+        share[key] = float(np.sum(v**2) / total) if total > 0 else 0.0
+    from ..solvers.jaw import lower_incisor_point, move_points
+
+    tip = lower_incisor_point(face)
+    poses = res.jaw_pose if res.jaw_pose is not None else None
+    if poses is not None:
+        inc = np.stack([move_points(tip, q, face.hinge_point, face.hinge_axis)[0]
+                        for q in poses])[1:, 1]
+        lower = [names.index(n) for n in GROUPS["lower"]]
+        rel = d[:, lower, 1] - (inc - ms.marker("LI")[1:, 1])[:, None]
+        comps["lower_lip_on_jaw_vertical"] = float(np.sqrt(np.mean(rel**2)))
     return Reach(float(np.sqrt(np.mean(err**2))), frame, float(err.max()), res.wall_seconds,
-                 float(on))
+                 float(on), comps, share)

@@ -19,9 +19,33 @@ tenth of full activity), and no more than there are coordinates. An estimated ja
 the markers at least that much is taken first, whatever the muscles could mimic of it: it is
 the largest mover of the face in speech, and the inversion never leaves it silently at rest.
 
+Rank is not enough: activity is bounded to [0, 1] (a muscle only pulls), so a control moves
+the markers one way along its response and never back. Rank alone keeps, for two midsagittal lip
+points, DLI, LLS, OOS and OOSM: nothing of these lifts the lower lip, so every bilabial (the
+lower lip rising on the jaw) is out of reach of the fit. The pick is therefore completed for
+sign (:func:`cover_signs`): each coordinate some candidate moves by at least
+:data:`MIN_NEW_MOTION_MM` per unit one way and some candidate moves that much the other way
+(a *two-way coordinate*) must be moved that much each way by a kept control. While one is not,
+the candidate that covers the most of the uncovered signed coordinates is added (ties: the
+largest summed motion on them); the jaw, whose bounds let it close a little past its first pose,
+counts both ways. This is the coordinate-wise form of a positive spanning set (Davis 1954; the
+cosine measure of Kolda, Lewis & Torczon 2003, SIAM Rev 45:385, restricted to the coordinate
+directions): it asks for what the inversion uses (each marker coordinate driven both ways by
+some muscle), not for every direction of the coordinate space, which the face cannot reach
+alone: on the default face, even with all the candidates, the upper lip is lowered with nothing
+else moving at only 0.07 mm per unit of summed activity (a linear programme on the step
+responses), so a full positive span at 1 mm per unit does not exist and a pick that asked for it
+would keep everything. A coordinate every candidate moves only one way (by 1 mm per unit) is named
+in the note. The sign step adds controls that rank alone holds (their motion is a combination
+of the kept controls' with negative weights): the kept set may exceed the coordinates, and the
+markers do not see an opposing pair's co-contraction, which the workflow's fit draws back with
+a weight on activity (:data:`facemech.inverse.workflow.SIGN_EFFORT`). Never more controls are
+kept than :func:`~facemech.inverse.invert.invert` accepts (3 per marker).
+
 The pick depends on the markers' places and the model, not on the recording: every utterance
-of one sensor layout is inverted with the same controls. For two lip points it takes, for each
-lip, the strongest muscle each way (on the current anatomical preset: LLS, DLI, OOS, OOI).
+of one sensor layout is inverted with the same controls. For two midsagittal lip points it takes
+LLS (upper lip up), OOSM (upper lip down), DLI (lower lip down), OOS, and for sign MEN (the
+lower lip up); see docs/inversion.md for the measured table.
 """
 
 from __future__ import annotations
@@ -34,7 +58,8 @@ import scipy.linalg as sla
 from ..errors import InputError
 from . import uncertainty as U
 
-__all__ = ["MIN_NEW_MOTION_MM", "ControlPick", "pick_controls", "step_response_matrix"]
+__all__ = ["MIN_NEW_MOTION_MM", "ControlPick", "cover_signs", "pick_controls",
+           "signed_motion", "step_response_matrix"]
 
 #: mm per unit of control: the least new marker motion of a kept control
 MIN_NEW_MOTION_MM = U.NOISE_FLOOR_MM / U.IDENTIFIABLE_SE
@@ -53,6 +78,11 @@ class ControlPick:
     new_motion : control -> mm per unit: for a kept control, the motion it adds to those
         before it in pivot order (``|R_kk|``); for a held one, what it adds to all the kept
     coordinates : coordinates per frame the markers give
+    for_sign : (control, signed coordinates it was added for, their motion mm per unit) of the
+        controls the sign step added, in the order added (part of ``order``, after the rank's)
+    one_way : (signed coordinate, best candidate, its motion mm per unit) of the coordinates
+        every candidate moves one way only (by :data:`MIN_NEW_MOTION_MM` per unit); empty when
+        each coordinate the candidates move is moved both ways by the kept
     """
 
     muscles: tuple[str, ...]
@@ -61,22 +91,37 @@ class ControlPick:
     order: tuple[str, ...]
     new_motion: dict
     coordinates: int
+    for_sign: tuple = ()
+    one_way: tuple = ()
 
     def note(self, n_markers: int, midsagittal: bool = False) -> str:
         """One line: what was kept and held, and why."""
         k = len(self.order)
+        signed = [c for c, _, _ in self.for_sign]
+        rank = [c for c in self.order if c not in signed]
         axes = " (y and z: midsagittal)" if midsagittal else ""
-        kept = ", ".join(f"{c} {self.new_motion[c]:.1f}" for c in self.order)
+        kept = ", ".join(f"{c} {self.new_motion[c]:.1f}" for c in rank)
         held = ", ".join(f"{c} {self.new_motion[c]:.1f}" for c in self.held)
         why = ("the kept span every coordinate, so each of these moves the markers only as a "
-               "combination of them" if k == self.coordinates else
+               "combination of them" if len(rank) == self.coordinates else
                f"each of these adds less than {MIN_NEW_MOTION_MM:.0f} mm per unit to them")
+        sign = ""
+        if self.for_sign:
+            added = ", ".join(
+                f"{c} ({', '.join(f'{d} {v:.1f}' for d, v in zip(dirs, mm, strict=True))})"
+                for c, dirs, mm in self.for_sign)
+            sign = (f"; and, as activity only pulls, for a coordinate those move one way only "
+                    f"(motion that way, mm per unit): {added}")
+        one = ""
+        if self.one_way:
+            one = (f"; no candidate moves {MIN_NEW_MOTION_MM:.0f} mm per unit (the best, mm per "
+                   "unit): " + ", ".join(f"{d} ({c} {m:.1f})" for d, c, m in self.one_way))
         return (f"controls: {n_markers} markers give {self.coordinates} coordinates{axes} for "
                 f"the {k + len(self.held)} candidate controls (the default set, and "
                 f"orbicularis oris's marginal part where the face has it); kept the {k} they "
                 f"determine best "
                 f"(QR with column pivoting of their 100-ms step responses; new marker motion, "
-                f"mm per unit): {kept}; held at rest: {held} ({why})")
+                f"mm per unit): {kept}{sign}{one}; held at rest: {held} ({why})")
 
 
 def step_response_matrix(face, params, nodes, gmat, *, estimate_jaw: bool,
@@ -107,9 +152,77 @@ def step_response_matrix(face, params, nodes, gmat, *, estimate_jaw: bool,
         return U.step_responses(advance, rest, np.asarray(nodes), nm + (1 if estimate_jaw else 0))
 
 
+def signed_motion(s: np.ndarray, two_way=()) -> np.ndarray:
+    """Motion of each signed coordinate under each control (2 coordinates, controls), mm per
+    unit, >= 0: row ``2 i`` is how far a control moves coordinate ``i`` up (``s[i] > 0``), row
+    ``2 i + 1`` how far down; the controls in ``two_way`` (indices: the jaw) move both ways.
+
+    Parameters
+    ----------
+    s : (coordinates, controls) step responses, mm per unit
+    two_way : columns whose control is bounded on both sides of its start
+    """
+    s = np.asarray(s, float)
+    up, down = np.maximum(s, 0.0), np.maximum(-s, 0.0)
+    for j in two_way:
+        up[:, j] = down[:, j] = np.abs(s[:, j])
+    out = np.empty((2 * s.shape[0], s.shape[1]))
+    out[0::2], out[1::2] = up, down
+    return out
+
+
+def cover_signs(s: np.ndarray, kept, *, two_way=(), limit: int | None = None,
+                threshold: float = MIN_NEW_MOTION_MM) -> tuple[list, list, list]:
+    """Complete a pick so that every two-way coordinate is moved each way by a kept control.
+
+    A signed coordinate is *covered* by a control that moves it at least ``threshold`` (mm per
+    unit) that way; a coordinate is *two-way* when the candidates cover both of its signs.
+    While a signed coordinate of a two-way coordinate is not covered by the kept, the candidate
+    covering the most such signed coordinates is added (ties: the largest summed motion on
+    them, then the first column). Greedy set cover (Chvatal 1979: within a factor
+    ``1 + ln(2 coordinates)`` of the fewest controls).
+
+    Parameters
+    ----------
+    s : (coordinates, controls) step responses, mm per unit
+    kept : columns already kept (the rank's pick)
+    two_way : columns moving both ways (:func:`signed_motion`)
+    limit : the most columns kept in all (None: no limit)
+    threshold : mm per unit
+
+    Returns
+    -------
+    added : the columns added, in order
+    covers : for each added column, the signed-coordinate rows it was added for
+    one_way : signed-coordinate rows no candidate covers whose opposite a candidate covers
+    """
+    m = signed_motion(s, two_way)
+    can = m >= threshold
+    coverable = can.any(axis=1)
+    opposite = coverable.reshape(-1, 2)[:, ::-1].ravel()
+    want = coverable & opposite  # the signed coordinates of the two-way coordinates
+    kept = list(kept)
+    added, covers = [], []
+    while limit is None or len(kept) < limit:
+        open_ = want & ~can[:, kept].any(axis=1) if kept else want.copy()
+        if not open_.any():
+            break
+        gain = can[open_].sum(axis=0)
+        gain[kept] = 0
+        if gain.max() == 0:
+            break
+        score = np.where(gain == gain.max(), np.where(can, m, 0.0)[open_].sum(axis=0), -1.0)
+        best = int(np.argmax(score))
+        kept.append(best)
+        added.append(best)
+        covers.append([int(i) for i in np.flatnonzero(open_ & can[:, best])])
+    one_way = [int(i) for i in np.flatnonzero(~coverable & opposite)]
+    return added, covers, one_way
+
+
 def pick_controls(face, params, nodes, candidates, *, estimate_jaw: bool,
                   jaw_start=(0.0, 0.0, 0.0), axes=(0, 1, 2), dt: float | None = None,
-                  responses: np.ndarray | None = None) -> ControlPick:
+                  responses: np.ndarray | None = None, labels=None) -> ControlPick:
     """Pick the controls that markers at ``nodes`` determine (see the module doc).
 
     Parameters
@@ -125,6 +238,7 @@ def pick_controls(face, params, nodes, candidates, *, estimate_jaw: bool,
     dt : the inversion's step (s; None: the preset's ``fast_dt``)
     responses : (3 markers, controls) step responses, mm per unit, instead of simulating them
         (:func:`step_response_matrix`)
+    labels : (markers,) the markers' names, for the note (None: "marker 1", ...)
 
     Returns
     -------
@@ -168,7 +282,23 @@ def pick_controls(face, params, nodes, candidates, *, estimate_jaw: bool,
     q, _ = np.linalg.qr(s[:, kept])
     for j in (j for j in range(len(cols)) if j not in kept):
         new[cols[j]] = float(np.linalg.norm(s[:, j] - q @ (q.T @ s[:, j])))
+    # the sign step: what the rank kept moves some coordinates one way only
+    added, covers, one_way = cover_signs(s, kept, two_way=[jaw] if estimate_jaw else [],
+                                         limit=3 * len(nodes))
+    kept += added
+    m = signed_motion(s, [jaw] if estimate_jaw else [])
+    names_ = labels if labels is not None else [f"marker {i + 1}" for i in range(len(nodes))]
+    coord = [f"{names_[i // len(axes)]} {'xyz'[axes[i % len(axes)]]}" for i in range(coords)]
+
+    def signed(row):
+        return coord[row // 2] + ("+" if row % 2 == 0 else "-")
+
+    for_sign = tuple((cols[j], tuple(signed(r) for r in rows),
+                      tuple(float(m[r, j]) for r in rows))
+                     for j, rows in zip(added, covers, strict=True))
+    one = tuple((signed(r), cols[int(np.argmax(m[r]))], float(m[r].max())) for r in one_way)
     return ControlPick(muscles=tuple(c for j, c in enumerate(names) if j in kept),
                        jaw=estimate_jaw and len(names) in kept,
                        held=tuple(c for j, c in enumerate(cols) if j not in kept),
-                       order=tuple(cols[j] for j in kept), new_motion=new, coordinates=coords)
+                       order=tuple(cols[j] for j in kept), new_motion=new, coordinates=coords,
+                       for_sign=for_sign, one_way=one)

@@ -69,7 +69,8 @@ def invert_markers(
     method, positive : "lsq" or "powell"; activity kept >= 0
     controls : "speech", "emg7", "all" or comma-separated groups, an error if the markers give
         fewer coordinates than that; None (default): "speech", or the part of it the markers
-        determine when they give fewer coordinates (:mod:`facemech.inverse.control_pick`)
+        determine when they give fewer coordinates (:mod:`facemech.inverse.control_pick`;
+        when its sign step adds controls, ``effort`` is :data:`SIGN_EFFORT` unless given)
     chin_marker : a skin jaw marker: its vertical drop gives the jaw angle, ``jaw_lead``
         frames early, estimated further with the muscles unless ``jaw_fixed``
     jaw_second_marker : a second point on the mandible with ``chin_marker``: the two markers'
@@ -129,8 +130,11 @@ def invert_markers(
     jaw, jaw_source = _jaw_drive(ms, model, prm, mapping, src, lead, chin_marker,
                                  jaw_second_marker, incisor, molar, by_role)
     estimate = None if jaw is None else (not jaw_fixed and jaw.ndim == 1)
-    ctrl, jaw, estimate, jaw_source, pick_note = _controls(
+    ctrl, jaw, estimate, jaw_source, pick_note, signed = _controls(
         controls, model, prm, skin, mapping, jaw, estimate, jaw_source, midsagittal, dt, src)
+    if signed:
+        solver, effort_note = _effort_for_sign(solver, options)
+        pick_note += effort_note
     res = invert(model, skin, mapping, method=solver, positive=positive, controls=ctrl,
                  jaw_angle=jaw, estimate_jaw=estimate, jaw_source=jaw_source, params=prm,
                  dt=dt, noise_mm=noise, progress=progress)
@@ -265,6 +269,27 @@ def _jaw_drive(ms, model, prm, mapping, src, lead, chin_marker, second, incisor,
     return None, None
 
 
+#: mm per unit: the weight of activity (``effort``) when the sign step of a control pick kept
+#: more controls than the markers determine: an opposing pair (MEN lifting the lower lip, DLI
+#: lowering it) then has a co-contraction the markers barely see, along which the fit would
+#: drift at little cost; this weight draws it back to the least activity at a rate of
+#: (0.1 / 0.3)^2 = 11 % a frame against the default ``smooth`` (0.3), and shrinks a control
+#: moving a marker 3 mm per unit by (0.1 / 3)^2 = 0.1 % of its activity (measured on the lips'
+#: twin of tests/test_control_pick.py: it halves MEN's unseen activity, 0.66 -> 0.32)
+SIGN_EFFORT = 0.1
+
+
+def _effort_for_sign(solver, options):
+    """(the method with :data:`SIGN_EFFORT` unless an effort was given, the note's clause)."""
+    from .methods import LeastSquares
+
+    if not isinstance(solver, LeastSquares) or (options or {}).get("effort") is not None:
+        return solver, ""
+    return (replace(solver, effort=SIGN_EFFORT),
+            f"; effort {SIGN_EFFORT} mm per unit, so that an opposing pair does not co-contract "
+            "unseen (set --effort to change it)")
+
+
 def pick_candidates(model) -> tuple[str, ...]:
     """The groups a control pick chooses from: the speech controls and, on a face that has it,
     orbicularis oris's marginal part (what lowers the upper lip and lifts the lower lip on the
@@ -279,7 +304,7 @@ def pick_candidates(model) -> tuple[str, ...]:
 def _controls(controls, model, prm, skin, mapping, jaw, estimate, jaw_source, midsagittal, dt,
               src):
     """(controls for :func:`invert`, jaw series, estimate the jaw, jaw source, the note of
-    controls picked or None)."""
+    controls picked or None, whether the pick's sign step added controls)."""
     from ..solvers.jaw import jaw_poses
     from .control_pick import pick_controls
     from .invert import control_matrix
@@ -293,7 +318,7 @@ def _controls(controls, model, prm, skin, mapping, jaw, estimate, jaw_source, mi
     coords = per * len(names)
     n_controls = len(control_matrix(ctrl, model)[0]) + (1 if estimate in (None, True) else 0)
     if coords >= n_controls or not names:
-        return ctrl, jaw, estimate, jaw_source, None
+        return ctrl, jaw, estimate, jaw_source, None, False
     if given:
         raise InputError(f"{len(names)} markers give {coords} coordinates"
                          f"{' (y, z: midsagittal)' if midsagittal else ''} for {n_controls} "
@@ -308,9 +333,10 @@ def _controls(controls, model, prm, skin, mapping, jaw, estimate, jaw_source, mi
     estimated = estimate in (None, True)
     pick = pick_controls(model, prm, np.array([mapping[n] for n in names]),
                          pick_candidates(model), estimate_jaw=estimated, jaw_start=start,
-                         axes=(1, 2) if midsagittal else (0, 1, 2), dt=dt)
+                         axes=(1, 2) if midsagittal else (0, 1, 2), dt=dt, labels=names)
     if estimated and not pick.jaw:
         held = np.full(len(skin.positions), start[0]) if jaw is None else jaw
         jaw, estimate = held, False
         jaw_source = f"{jaw_source or 'the jaw at rest'} (held: the markers do not determine it)"
-    return list(pick.muscles), jaw, estimate, jaw_source, pick.note(len(names), midsagittal)
+    return (list(pick.muscles), jaw, estimate, jaw_source, pick.note(len(names), midsagittal),
+            bool(pick.for_sign))
