@@ -32,6 +32,10 @@ VARIANTS = {
     "fibre_vmax20": {"fv_vmax": 20.0, **ITO},
     "fibre_vmax20_12_steps": {"fv_vmax": 20.0, **ITO, "substeps": 12},
     "no_force_velocity": {"f4": 0.0},
+    # nearly incompressible tissue (Poisson's ratio 0.49 instead of 0.45): the deep prisms
+    # under the nose and the chin no longer give way under full LLS and DLI (issue 27's creep)
+    "poisson_049": {"poisson": 0.49},
+    "poisson_049_fibre_vmax20": {"poisson": 0.49, "fv_vmax": 20.0, **ITO},
 }
 
 
