@@ -40,14 +40,21 @@ demo: $(STAMP)
 lint: $(STAMP)
 	$(BIN)/ruff check src tests benchmarks tools
 
+# the suite on two worker processes (pytest-xdist): under 15 minutes on 2 cores. Each worker is
+# a process of its own with conftest's one thread for the force kernels, so the numbers are those
+# of a plain `pytest` run; a module's tests that share a module-scoped fixture stay on one worker
+# (conftest's xdist_group, --dist loadgroup). JOBS=0 runs it in one process.
+JOBS   ?= 2
+XDIST  := -n $(JOBS) --dist loadgroup
+
 test: $(STAMP) chromium lint
-	MPLBACKEND=Agg $(BIN)/python -m pytest -q
+	MPLBACKEND=Agg $(BIN)/python -m pytest -q $(XDIST)
 
 # the suite on the oldest versions that pyproject's ranges allow (constraints-lowest.txt), in
 # .venv-lowest; no lint (an old ruff knows other rules); numba's cache apart, so that the two
 # numba versions do not overwrite each other's compiled kernels in src/
 test-lowest: $(LOW_STAMP) chromium
-	NUMBA_CACHE_DIR=$(LOW_VENV)/numba-cache MPLBACKEND=Agg $(LOW_BIN)/python -m pytest -q
+	NUMBA_CACHE_DIR=$(LOW_VENV)/numba-cache MPLBACKEND=Agg $(LOW_BIN)/python -m pytest -q $(XDIST)
 
 # the numeric tests once more under another OpenBLAS kernel (CI runs it after `make test`):
 # results must not hang on the last bit of the BLAS (docs/reproducibility.md)
@@ -56,7 +63,7 @@ PORTABLE_TESTS := tests/test_inverse.py tests/test_inversion_rolls.py tests/test
 	tests/test_calibrate.py tests/test_speak.py tests/test_docs_tables.py
 CORETYPE ?= Prescott
 test-portable: $(STAMP)
-	OPENBLAS_CORETYPE=$(CORETYPE) MPLBACKEND=Agg $(BIN)/python -m pytest -q $(PORTABLE_TESTS)
+	OPENBLAS_CORETYPE=$(CORETYPE) MPLBACKEND=Agg $(BIN)/python -m pytest -q $(XDIST) $(PORTABLE_TESTS)
 
 # the numeric tables of docs/*.md, regenerated in place from the commands that produce them
 # (tools/docs_tables.py; 15-40 minutes on 2 shared cores, Powell's Experiment 1 and

@@ -1,5 +1,7 @@
 """Shared fixtures. Caches of matplotlib and Mesa go to a temporary folder, never ~/.cache;
-the force kernels run on one thread."""
+the force kernels run on one thread. Under pytest-xdist (``make test``: two workers, ``--dist
+loadgroup``) the tests of a module that share a module-scoped fixture run on one worker, so
+that the fixture is built once."""
 
 from __future__ import annotations
 
@@ -25,6 +27,30 @@ import pytest  # noqa: E402
 
 from facemech import MUSCLE_GROUPS, default_face  # noqa: E402
 from facemech.cli import main  # noqa: E402
+
+
+def pytest_configure(config):
+    # pytest-xdist registers it too; here so that a run without xdist (-p no:xdist) knows it
+    config.addinivalue_line("markers", "xdist_group(name): run on one worker under "
+                            "pytest-xdist's --dist loadgroup")
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_collection_modifyitems(config, items):
+    """A test that uses a module-, class- or package-scoped fixture joins its module's group
+    (``xdist_group``): under ``--dist loadgroup`` a group runs on one worker, so that the fixture
+    (a built head, a simulation) is built once, not once per worker. Other tests are handed out
+    one by one; session fixtures are built once per worker. Without xdist the groups change
+    nothing. Runs before xdist's own hook (in each worker), which reads the groups."""
+    for item in items:
+        info = getattr(item, "_fixtureinfo", None)
+        if info is None or item.get_closest_marker("xdist_group") is not None:
+            continue
+        # the last definition of each name is the one the test gets (a module may override)
+        shared = any(defs and defs[-1].scope in ("module", "class", "package")
+                     for defs in info.name2fixturedefs.values())
+        if shared and getattr(item, "module", None) is not None:
+            item.add_marker(pytest.mark.xdist_group(item.module.__name__))
 
 
 @pytest.fixture(scope="session")

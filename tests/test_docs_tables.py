@@ -160,6 +160,9 @@ def generated():
     return dt.generate(dt.select(fast=not ALL), jobs=2)
 
 
+# one worker under pytest-xdist: the tables are generated once (conftest's groups see only the
+# fixtures a test names, not getfixturevalue's)
+@pytest.mark.xdist_group("test_docs_tables")
 @pytest.mark.parametrize("table", dt.TABLES, ids=lambda t: t.name)
 def test_docs_table_matches_its_command(table, request):
     if table.slow and not ALL:
