@@ -12,7 +12,9 @@ from .look import FaceLook
 
 @dataclass(frozen=True)
 class Part:
-    """A mesh of the scene. ``motion``: 'skin' (the results' nodes), 'skull' or 'jaw'."""
+    """A mesh of the scene. ``motion``: 'skin' (the results' nodes), 'skull', 'jaw',
+    'skirt' (from the skin's edge inwards), 'follow' (the head closing the skin, its edge
+    ring the skin's edge nodes), 'eye' (turns with the gaze) or 'lid' (closes with the blink)."""
 
     name: str
     rest: np.ndarray  # (n, 3) m
@@ -27,6 +29,8 @@ class Part:
     tex_mask: np.ndarray | None = None  # (f,) bool: which triangles use the texture
     two_sided: np.ndarray | None = None  # (f,) bool: also draw the inner side (dark)
     skirt_nodes: np.ndarray | None = None  # motion 'skirt': the skin's edge nodes
+    follow: object | None = None  # motion 'follow': a :class:`.closure.Closure`
+    pivot: np.ndarray | None = None  # motion 'eye' / 'lid': the eyeball's centre, m
 
 
 def sphere(n_lat: int, n_lon: int):

@@ -27,7 +27,7 @@ import numpy as np
 from ..geometry.builder import vertex_normals
 from ..solvers.jaw import rotation_matrix
 from .face_parts import MAX_TEXTURE, eye_parts, mouth_parts, skin_part
-from .head import SKIRT_DEPTH, ear_parts, head_centre, head_shell, skirt_part
+from .head import SKIRT_DEPTH, closed_head, ear_parts, head_centre, head_shell, skirt_part
 from .look import FaceLook, look_from_dataset, look_from_model
 from .mesh import Part
 from .raster import srgb_to_linear
@@ -53,6 +53,7 @@ class Scene:
     offsets: np.ndarray  # (parts + 1,) vertex offsets
     rest_normals: tuple = ()  # per part, (n, 3) unit normals at rest
     centre: np.ndarray = field(default_factory=lambda: np.zeros(3))  # of the head, m
+    joint_faces: np.ndarray | None = None  # skin + closure faces over [skin, closure] vertices
     framing: dict = field(default_factory=dict)
 
     def frame(self, skin: np.ndarray, jaw_angle=0.0) -> tuple[np.ndarray, np.ndarray]:
@@ -68,12 +69,24 @@ class Scene:
         verts, norms = [], []
         skin = np.asarray(skin, float)
         skin_normals = None
+        closure = next((p for p in self.parts if p.motion == "follow"), None)
+        if closure is not None:
+            # skin and head are one surface: their normals are the joint mesh's
+            cv = closure.follow.place(skin, look.rest)
+            joint = vertex_normals(np.concatenate([skin, cv]), self.joint_faces)
+            n_skin = len(skin)
+            e = len(closure.follow.loop)
+            skin_normals = joint[:n_skin]
+            closure_normals = joint[n_skin:]
+            closure_normals[:e] = skin_normals[closure.follow.loop]
         for p, n_rest in zip(self.parts, self.rest_normals, strict=True):
             if p.motion == "skin":
                 v = skin
-                n = vertex_normals(v, p.faces)
                 if skin_normals is None:  # the skin's own (the first part); others share nodes
-                    skin_normals = n
+                    skin_normals = vertex_normals(v, p.faces)
+                n = skin_normals
+            elif p.motion == "follow":
+                v, n = cv, closure_normals
             elif p.motion == "skirt":  # from the skin's edge nodes in towards the head's centre
                 nodes = p.skirt_nodes
                 edge = skin[nodes]
@@ -111,8 +124,11 @@ def build_scene(look: FaceLook, *, eyes: bool = True, mouth: bool = True,
     if mouth:
         parts += mouth_parts(look)
     if head:
-        shell = head_shell(look)
-        if shell is not None:
+        closed = None if look.textured else closed_head(look)
+        if closed is not None:
+            parts.append(closed[0])
+            parts += ear_parts(look)
+        elif (shell := head_shell(look)) is not None:
             parts.append(shell)
             skirt = skirt_part(look)
             if skirt is not None:
@@ -169,6 +185,11 @@ def _pack(parts: list[Part], look: FaceLook) -> Scene:
                   tuple(vertex_normals(p.rest, p.faces) for p in parts),
                   head_centre(look)[0])
     object.__setattr__(scene, "framing", _framing(scene))
+    closure = next((p.follow for p in parts if p.motion == "follow"), None)
+    if closure is not None:
+        skin = parts[0]
+        object.__setattr__(scene, "joint_faces", np.concatenate(
+            [skin.faces, closure.joint_faces(len(skin.rest))]))
     return scene
 
 
