@@ -28,7 +28,7 @@ RAY_ORIGIN = np.array([0.0, -0.045, 0.0])  #: m, the rays' origin from the head'
 #: lower than the centre, so that the rays down the neck do not graze its sides
 RINGS = 40  #: rings from the skin's edge to the back of the head
 BLEND_DEG = 35.0  #: degrees over which the closure relaxes from the skin's edge to the cranium
-SMOOTHING_STEPS = 0  #: Taubin iterations over the closure (away from the skin's edge)
+SMOOTHING_STEPS = 10  #: Taubin iterations over the closure (away from the skin's edge)
 MAX_SLOPE = 0.08  #: m/rad, the edge slope continued into the closure is clipped to this
 
 
@@ -207,7 +207,7 @@ def build_closure(rest: np.ndarray, triangles: np.ndarray, cranium: Cranium,
     p = rings * e
     faces.append(np.stack([(rings - 1) * e + j, (rings - 1) * e + i, np.full(e, p)], 1))
     faces = np.concatenate(faces).astype(np.int64)
-    verts = _taubin(np.concatenate(verts), faces, fixed=2 * e)
+    verts = _taubin(np.concatenate(verts), faces, fixed=e)
     return Closure(verts, faces, loop, np.concatenate(nodes), np.concatenate(weights),
                    np.concatenate(thetas), np.concatenate(phis))
 
@@ -230,3 +230,38 @@ def _taubin(v: np.ndarray, faces: np.ndarray, fixed: int, steps: int = SMOOTHING
             lap = a @ v / deg[:, None] - v
             v[free] += k * lap[free]
     return v
+
+
+def closed_surface(skin: np.ndarray, closure: Closure, triangles: np.ndarray,
+                   skin_rest: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The head as one closed surface: skin and closure, with the mouth cut closed.
+
+    "Closed" means: the skin's nodes and the closure's vertices (its edge ring being the skin's
+    edge nodes), with the twin nodes of the mouth cut (the lips' edges, which coincide at rest)
+    merged into one, as the lips are at rest. The palpebral fissures are cut out of the skin's
+    texture, not its mesh, so they need nothing. The eyeballs, the mouth's interior, the ears
+    and the hair are separate parts and not in it.
+
+    Parameters
+    ----------
+    skin : (n, 3) m, the skin's node positions of a frame
+    closure : the :class:`Closure` of the skin
+    triangles : (f, 3) the skin's triangles
+    skin_rest : (n, 3) m, the skin at rest (finds the twins)
+
+    Returns
+    -------
+    vertices (n + m - e, 3) m and triangles (k, 3), counter-clockwise seen from outside
+    """
+    n = len(skin)
+    q = np.round(skin_rest / 1e-7).astype(np.int64)
+    _, first, group = np.unique(q, axis=0, return_index=True, return_inverse=True)
+    merge = first[group.ravel()]  # each node -> the lowest node at its rest position
+    e = len(closure.loop)
+    verts = np.concatenate([skin, closure.place(skin, skin_rest)[e:]])
+    faces = np.concatenate([triangles, closure.joint_faces(n) - np.where(
+        closure.joint_faces(n) >= n, e, 0)])
+    remap = np.concatenate([merge, np.arange(n, len(verts))])
+    faces = remap[faces]
+    used, inv = np.unique(faces, return_inverse=True)
+    return verts[used], inv.reshape(-1, 3)

@@ -18,7 +18,9 @@ TONGUE = np.array([0.74, 0.40, 0.40])
 EYE_RADIUS = 0.012  #: m
 
 
-def skin_part(look: FaceLook) -> Part:
+def skin_part(look: FaceLook, painted_hair: bool = True) -> Part:
+    """The skin. ``painted_hair``: paint the scalp hair over the skin's top band (for a head
+    without the hair layer of :mod:`.hair`)."""
     n = len(look.rest)
     gloss = (0.10, 16.0)
     if look.image is not None and look.uv is not None:
@@ -35,8 +37,9 @@ def skin_part(look: FaceLook) -> Part:
                     "skin", two_sided=_inner_side(look))
     xy = look.rest[:, :2]
     lo, hi = xy.min(axis=0), xy.max(axis=0)
-    hair = hair_on_skin(look)
-    image, (x0, y0) = T.skin_texture(look.landmarks, (lo[0], hi[0], lo[1], hi[1]), hair=hair)
+    hair = hair_on_skin(look) if painted_hair else (lambda x, y: np.zeros(np.shape(x)))
+    image, (x0, y0) = T.skin_texture(look.landmarks, (lo[0], hi[0], lo[1], hi[1]),
+                                     hair=hair if painted_hair else None)
     corner = xy[look.triangles]  # (f, 3, 2)
     uv = np.empty_like(corner)
     uv[..., 0] = (corner[..., 0] - x0) / T.SKIN_TEXEL

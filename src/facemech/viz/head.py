@@ -14,6 +14,7 @@ import numpy as np
 from . import textures as T
 from .closure import Closure, boundary_loops, build_closure
 from .cranium import Cranium
+from .hair import hair_part
 from .look import FaceLook
 from .mesh import Part, grid_faces, skin_depth
 from .raster import rasterise
@@ -149,56 +150,24 @@ def cranium_of(look: FaceLook) -> Cranium:
     return Cranium(c, throat)
 
 
-def closed_head(look: FaceLook) -> tuple[Part, Closure] | None:
-    """The head that closes the skin into one surface (:mod:`.closure`), with hair above
-    :func:`hairline` in a texture over the polar map about the back of the head; None where
-    the skin's edge does not allow it (the caller falls back to :func:`head_shell`)."""
+def closed_head(look: FaceLook) -> list[Part] | None:
+    """The head that closes the skin into one surface (:mod:`.closure`, skin-coloured, its
+    inner side drawn dark) and the hair over it (:mod:`.hair`); None where the skin's edge
+    does not allow it (the caller falls back to :func:`head_shell`)."""
     closure = build_closure(look.rest, look.triangles, cranium_of(look))
     if closure is None:
         return None
     c, top, nasion = head_centre(look)
-    tex, uv = _closure_texture(closure, c, top, nasion[1])
     albedo = np.tile(T.SKIN, (len(closure.rest), 1))
     # its inner side is drawn dark, as the skin's: a line of sight through a palpebral fissure
     # or the parted lips ends on the inside of the head
-    part = Part("head", closure.rest, closure.faces, albedo, SKIN_GLOSS, "follow", uv, tex,
+    head = Part("head", closure.rest, closure.faces, albedo, SKIN_GLOSS, "follow",
                 follow=closure, two_sided=np.ones(len(closure.faces), bool))
-    return part, closure
-
-
-TEXELS_PER_DEGREE = 2  #: of the closure's texture over its polar map
-
-
-def _closure_texture(closure: Closure, c, top: float, nasion_y: float):
-    """RGBA texture of the closure over its polar map (X, Y) = theta (cos phi, sin phi) in
-    degrees, and the per-corner texel coordinates (f, 3, 2) of its faces."""
-    from scipy.interpolate import LinearNDInterpolator, NearestNDInterpolator
-
-    tpd = TEXELS_PER_DEGREE
-    th, ph = np.degrees(closure.theta), closure.phi
-    xy = np.stack([th * np.cos(ph), th * np.sin(ph)], -1)
-    extent = float(th.max()) + 2.0
-    n = int(np.ceil(2 * extent * tpd))
-    g = (np.arange(n) + 0.5) / tpd - extent
-    X, Y = np.meshgrid(g, -g)
-    q = np.stack([X.ravel(), Y.ravel()], -1)
-    pts = closure.rest
-    height = LinearNDInterpolator(xy, pts[:, 1])(q)
-    lon = LinearNDInterpolator(xy, np.degrees(np.arctan2(pts[:, 0] - c[0], pts[:, 2] - c[2])))
-    lon_q = lon(q)
-    bad = ~np.isfinite(height) | ~np.isfinite(lon_q)
-    if bad.any():
-        height[bad] = NearestNDInterpolator(xy, pts[:, 1])(q[bad])
-        lon_q[bad] = NearestNDInterpolator(xy, np.degrees(np.arctan2(
-            pts[:, 0] - c[0], pts[:, 2] - c[2])))(q[bad])
-    height, lon_q = height.reshape(n, n), lon_q.reshape(n, n)
-    rng = np.random.default_rng(11)
-    strands = 0.85 + 0.3 * rng.random((n, n))
-    m = np.clip((height - hairline(lon_q, top, nasion_y)) / 0.003 + 0.5, 0.0, 1.0)[..., None]
-    rgb = (1 - m) * T.SKIN + m * HAIR * strands[..., None]
-    tex = np.concatenate([np.clip(rgb, 0, 1), np.ones((n, n, 1))], axis=-1)
-    uv = np.stack([(xy[:, 0] + extent) * tpd, (extent - xy[:, 1]) * tpd], -1)[closure.faces]
-    return tex, uv
+    n = len(look.rest)
+    verts = np.concatenate([look.rest, closure.rest])
+    faces = np.concatenate([look.triangles, closure.joint_faces(n)])
+    hair = hair_part(verts, faces, c, lambda lon: hairline(lon, top, nasion[1]))
+    return [head, hair]
 
 
 def head_shell(look: FaceLook) -> Part | None:

@@ -118,16 +118,15 @@ def jaw_pose_of(jaw) -> tuple[float, np.ndarray]:
 def build_scene(look: FaceLook, *, eyes: bool = True, mouth: bool = True,
                 head: bool = True) -> Scene:
     """Assemble and pack the parts of a face's scene."""
-    parts = [skin_part(look)]
+    closed = closed_head(look) if head and not look.textured else None
+    parts = [skin_part(look, painted_hair=closed is None)]
     if eyes and not look.textured:
         parts += eye_parts(look)
     if mouth:
         parts += mouth_parts(look)
     if head:
-        closed = None if look.textured else closed_head(look)
         if closed is not None:
-            parts.append(closed[0])
-            parts += ear_parts(look)
+            parts += [*closed, *ear_parts(look)]
         elif (shell := head_shell(look)) is not None:
             parts.append(shell)
             skirt = skirt_part(look)
@@ -209,7 +208,7 @@ def _touches_cutout(uv: np.ndarray, atlas: np.ndarray) -> np.ndarray:
 def _framing(scene: Scene) -> dict:
     """What the views frame: the head from its top to 35 mm under the menton, and the mouth."""
     look = scene.look
-    allv = np.concatenate([p.rest for p in scene.parts if p.name in ("skin", "head")])
+    allv = np.concatenate([p.rest for p in scene.parts if p.name in ("skin", "head", "hair")])
     top = allv[:, 1].max()
     lm = look.landmarks
     bottom = (lm["menton"][1] if "menton" in lm else look.rest[:, 1].min()) - 0.035

@@ -202,7 +202,7 @@ def scene_block(scene) -> dict:
                 "start": int(scene.offsets[i]), "count": len(p.rest),
                 "faceStart": face, "faceCount": len(p.faces),
                 "gloss": [float(g) for g in p.gloss],
-                "framed": p.name in ("skin", "head")}
+                "framed": p.name in ("skin", "head", "hair")}
         if p.motion == "skirt":  # from the skin's edge nodes in towards the head's centre
             part.update(nodes=_b64(p.skirt_nodes, "u4"),
                         centre=[float(v) for v in scene.centre], depth=SKIRT_DEPTH)
