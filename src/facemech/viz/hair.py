@@ -19,7 +19,7 @@ from . import textures as T
 from .mesh import Part
 from .raster import rasterise
 
-STEP_DEG = 2.0  #: grid step of the hair layer, degrees of longitude and latitude
+STEP_DEG = 2.5  #: grid step of the hair layer, degrees of longitude and latitude
 TEXELS_PER_DEGREE = 4  #: of the strand texture
 THICKNESS = 0.009  #: m, the hair's thickness on the crown and the back
 LIFT = 0.0004  #: m, the hair's thickness at the hairline
@@ -86,11 +86,20 @@ def hair_part(verts: np.ndarray, faces: np.ndarray, centre: np.ndarray, hairline
     f = grid_faces(n_lat, n_lon)  # columns run towards +x from the front: outward
     keep = (above.ravel()[f] > -FRINGE).any(axis=1)
     f = f[keep]
-    tex, fringe = _strand_texture(lat, lon, above)
+    tex, _ = _strand_texture(lat, lon, above)
     tpd = TEXELS_PER_DEGREE
     u = (np.broadcast_to(lon[None, :], (n_lat, n_lon)) - lon[0]) * tpd
     v = (lat[-1] - np.broadcast_to(lat[:, None], (n_lat, n_lon))) * tpd
     uv = np.stack([u.ravel(), v.ravel()], -1)[f]
+    # the texture folded in two (the subject's right half above the left), so that the atlas
+    # it joins stays narrow; no triangle crosses longitude 0, a column of the grid
+    th, tw = tex.shape[:2]
+    half = (tw - 1) // 2
+    left = (lon[f % n_lon] >= 0).all(axis=1)
+    uv[left, :, 0] -= half
+    uv[left, :, 1] += th + 2
+    tex = np.concatenate([tex[:, :half + 1], np.repeat(tex[-1:, :half + 1], 2, axis=0),
+                          tex[:, half:]])
     albedo = np.tile(T.HAIR, (n_lat * n_lon, 1))
     part = Part("hair", pts.reshape(-1, 3), f, albedo, HAIR_GLOSS, "skull", uv, tex,
                 alpha_test=True)
