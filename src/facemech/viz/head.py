@@ -167,7 +167,10 @@ def closed_head(look: FaceLook) -> list[Part] | None:
     verts = np.concatenate([look.rest, closure.rest])
     faces = np.concatenate([look.triangles, closure.joint_faces(n)])
     hair = hair_part(verts, faces, c, lambda lon: hairline(lon, top, nasion[1]))
-    return [head, hair]
+    from ..geometry.mesh import vertex_normals
+    from .ears import ear_parts as auricles
+
+    return [head, hair, *auricles(verts, vertex_normals(verts, faces), nasion)]
 
 
 def head_shell(look: FaceLook) -> Part | None:

@@ -126,7 +126,7 @@ def build_scene(look: FaceLook, *, eyes: bool = True, mouth: bool = True,
         parts += mouth_parts(look)
     if head:
         if closed is not None:
-            parts += [*closed, *ear_parts(look)]
+            parts += closed
         elif (shell := head_shell(look)) is not None:
             parts.append(shell)
             skirt = skirt_part(look)
