@@ -29,7 +29,7 @@ RAY_ORIGIN = np.array([0.0, -0.045, 0.0])  #: m, the rays' origin from the head'
 RINGS = 30  #: rings from the skin's edge to the back of the head
 BLEND_DEG = 35.0  #: degrees over which the closure relaxes from the skin's edge to the cranium
 SMOOTHING_STEPS = 10  #: Taubin iterations over the closure (away from the skin's edge)
-MAX_SLOPE = 0.08  #: m/rad, the edge slope continued into the closure is clipped to this
+MAX_SLOPE = 0.03  #: m/rad, the edge slope continued into the closure is clipped to this
 
 
 @dataclass(frozen=True)
@@ -45,6 +45,11 @@ class Closure:
     weights : (m,) float in [0, 1], how much of that node's displacement it takes (1 on the
         edge)
     theta, phi : (m,) rad, polar coordinates of each vertex about the back of the head
+    inner : (m,) int, the skin node one step inside the skin from ``nodes``
+    reach : (m,) float, how far (in steps from ``inner`` to ``nodes``) the skin's motion
+        across its edge is carried on past it (0 on the edge, fading within 20 degrees): the
+        closure near the edge turns with the skin, so that the slope stays continuous as
+        the jaw opens
     """
 
     rest: np.ndarray
@@ -54,10 +59,14 @@ class Closure:
     weights: np.ndarray
     theta: np.ndarray
     phi: np.ndarray
+    inner: np.ndarray
+    reach: np.ndarray
 
     def place(self, skin: np.ndarray, skin_rest: np.ndarray) -> np.ndarray:
         """Vertices (m, 3) for skin node positions ``skin`` (n, 3); the edge ring exactly."""
-        return self.rest + self.weights[:, None] * (skin[self.nodes] - skin_rest[self.nodes])
+        d = skin[self.nodes] - skin_rest[self.nodes]
+        d_in = skin[self.inner] - skin_rest[self.inner]
+        return self.rest + self.weights[:, None] * d + self.reach[:, None] * (d - d_in)
 
     def joint_faces(self, n_skin: int) -> np.ndarray:
         """The closure's faces indexing ``[skin nodes (n_skin), closure vertices]``: the edge
@@ -126,7 +135,9 @@ def outer_loop(rest: np.ndarray, triangles: np.ndarray, centre: np.ndarray):
 
 def _edge_slope(rest, triangles, loop, centre, theta_loop):
     """dr/dalpha (e,) m/rad of the skin at its edge nodes: the radius's change per radian of
-    angle away from the face, from the edge's neighbours inside the skin."""
+    angle away from the face, from the edge's neighbours inside the skin; and for each edge
+    node its neighbour furthest inside (e,) and that neighbour's angle from it (e,) rad (the
+    edge node itself and 0 where it has none)."""
     f = np.asarray(triangles, np.int64)
     edges = np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]])
     edges = np.concatenate([edges, edges[:, ::-1]])
@@ -135,8 +146,9 @@ def _edge_slope(rest, triangles, loop, centre, theta_loop):
     rel = rest - centre
     r = np.linalg.norm(rel, axis=1)
     theta, _ = back_polar(rel / r[:, None])
-    slope = np.zeros(len(loop))
     pos = {int(n): i for i, n in enumerate(loop)}
+    inner = np.array(loop, np.int64)
+    beta = np.zeros(len(loop))
     keep = on_edge[edges[:, 0]] & ~on_edge[edges[:, 1]]
     sums = np.zeros(len(loop))
     wsum = np.zeros(len(loop))
@@ -147,8 +159,10 @@ def _edge_slope(rest, triangles, loop, centre, theta_loop):
             w = dth
             sums[i] += w * (r[a] - r[b]) / dth
             wsum[i] += w
+            if dth > beta[i]:
+                inner[i], beta[i] = b, dth
     slope = np.where(wsum > 0, sums / np.maximum(wsum, 1e-12), 0.0)
-    return np.clip(slope, -MAX_SLOPE, MAX_SLOPE)
+    return np.clip(slope, -MAX_SLOPE, MAX_SLOPE), inner, beta
 
 
 def _smooth_loop(x: np.ndarray, sigma: float) -> np.ndarray:
@@ -169,9 +183,10 @@ def build_closure(rest: np.ndarray, triangles: np.ndarray, cranium: Cranium,
     rel = rest[loop] - c
     r_edge = np.linalg.norm(rel, axis=1)
     th0, ph0 = back_polar(rel / r_edge[:, None])
-    slope = _edge_slope(rest, triangles, loop, c, th0)
+    slope, inner, beta = _edge_slope(rest, triangles, loop, c, th0)
     delta = r_edge - cranium.radius(rel / r_edge[:, None], c)
     verts, nodes, weights, thetas, phis = [rest[loop]], [loop], [np.ones(e)], [th0], [ph0]
+    inners, reach = [inner], [np.zeros(e)]
     a0 = np.radians(BLEND_DEG)
     for k in range(1, rings):
         th = th0 * (1.0 - k / rings)
@@ -188,12 +203,16 @@ def build_closure(rest: np.ndarray, triangles: np.ndarray, cranium: Cranium,
         verts.append(c + d * rad[:, None])
         nodes.append(loop)
         weights.append(g)
+        inners.append(inner)
+        reach.append(np.where(beta > 0, lean / np.maximum(beta, 1e-9), 0.0))
         thetas.append(th)
         phis.append(ph0)
     pole = np.array([[0.0, 0.0, -1.0]])
     verts.append(c + pole * cranium.radius(pole, c)[:, None])
     nodes.append(loop[:1])
     weights.append(np.zeros(1))
+    inners.append(loop[:1])
+    reach.append(np.zeros(1))
     thetas.append(np.zeros(1))
     phis.append(np.zeros(1))
     # faces: the skin's edge runs a -> b, so the closure's first strip has b -> a
@@ -209,7 +228,8 @@ def build_closure(rest: np.ndarray, triangles: np.ndarray, cranium: Cranium,
     faces = np.concatenate(faces).astype(np.int64)
     verts = _taubin(np.concatenate(verts), faces, fixed=e)
     return Closure(verts, faces, loop, np.concatenate(nodes), np.concatenate(weights),
-                   np.concatenate(thetas), np.concatenate(phis))
+                   np.concatenate(thetas), np.concatenate(phis), np.concatenate(inners),
+                   np.concatenate(reach))
 
 
 def _taubin(v: np.ndarray, faces: np.ndarray, fixed: int, steps: int = SMOOTHING_STEPS):

@@ -9,6 +9,7 @@ import numpy as np
 from ..solvers.jaw import LOWER_ARCH_SETBACK, LOWER_EDGE_ABOVE_STOMION
 from . import textures as T
 from .head import HAIR, hair_on_skin
+from .lids import lid_mesh, lid_of
 from .look import FaceLook
 from .mesh import Part, fit_inside, grid_faces, skin_depth, sphere
 
@@ -111,8 +112,12 @@ def eye_parts(look: FaceLook) -> list[Part]:
         uvv[..., 1] = (0.5 - loc[..., 1] * 0.5) * ni
         front = unit[faces][..., 2].min(axis=1) > 0
         albedo = np.tile(T.SCLERA, (len(v), 1))
-        parts.append(Part(name, v, faces, albedo, (0.7, 90.0), "skull", uvv, iris,
-                          tex_mask=front))
+        parts.append(Part(name, v, faces, albedo, (0.7, 90.0), "eye", uvv, iris,
+                          tex_mask=front, pivot=centre))
+        lid = lid_of(e, centre, radii, side)
+        lv, lf, lalb = lid_mesh(lid)
+        parts.append(Part(name.replace("eye", "lid"), lv, lf, lalb, (0.10, 16.0), "lid",
+                          follow=lid, pivot=centre))
         # the socket's lining (conjunctiva), seen past the eyeball from the side
         lining = fit_inside(centre + np.array([0, 0, 0.003]), unit,
                              radii * np.array([1.5, 1.35, 1.7]), depth, 0.0005)

@@ -28,6 +28,7 @@ from ..geometry.builder import vertex_normals
 from ..solvers.jaw import rotation_matrix
 from .face_parts import MAX_TEXTURE, eye_parts, mouth_parts, skin_part
 from .head import SKIRT_DEPTH, closed_head, ear_parts, head_centre, head_shell, skirt_part
+from .lids import gaze_rotation
 from .look import FaceLook, look_from_dataset, look_from_model
 from .mesh import Part
 from .raster import srgb_to_linear
@@ -56,13 +57,19 @@ class Scene:
     joint_faces: np.ndarray | None = None  # skin + closure faces over [skin, closure] vertices
     framing: dict = field(default_factory=dict)
 
-    def frame(self, skin: np.ndarray, jaw_angle=0.0) -> tuple[np.ndarray, np.ndarray]:
+    def frame(self, skin: np.ndarray, jaw_angle=0.0, blink: float = 0.0,
+              gaze=(0.0, 0.0)) -> tuple[np.ndarray, np.ndarray]:
         """Vertices (N, 3) and unit normals (N, 3) of every part for one frame (model axes).
 
         ``jaw_angle``: the jaw's angle (rad), or its pose (3,) (angle rad, shift_y m, shift_z
-        m): the mandible's parts turn about the hinge and move with its shift.
+        m): the mandible's parts turn about the hinge and move with its shift. ``blink``: the
+        upper lids' closure, 0 open .. 1 closed; ``gaze``: (yaw, pitch) rad of both eyes,
+        yaw > 0 towards the subject's left, pitch > 0 up (:mod:`.lids`).
         """
         look = self.look
+        yaw, pitch = (float(g) for g in gaze)
+        turned = yaw != 0.0 or pitch != 0.0
+        eye_rot = gaze_rotation(yaw, pitch) if turned else None
         angle, shift = jaw_pose_of(jaw_angle)
         moved = angle != 0.0 or shift[1] != 0.0 or shift[2] != 0.0
         rot = rotation_matrix(look.hinge_axis, angle)
@@ -87,6 +94,17 @@ class Scene:
                 n = skin_normals
             elif p.motion == "follow":
                 v, n = cv, closure_normals
+            elif p.motion == "eye":
+                v, n = p.rest, n_rest
+                if turned:
+                    v = (p.rest - p.pivot) @ eye_rot.T + p.pivot
+                    n = n_rest @ eye_rot.T
+            elif p.motion == "lid":
+                if blink == 0.0 and pitch >= 0.0:
+                    v, n = p.rest, n_rest
+                else:
+                    v = p.follow.place(blink, pitch)
+                    n = vertex_normals(v, p.faces)
             elif p.motion == "skirt":  # from the skin's edge nodes in towards the head's centre
                 nodes = p.skirt_nodes
                 edge = skin[nodes]
