@@ -47,8 +47,23 @@ def skin_part(look: FaceLook, painted_hair: bool = True) -> Part:
     uv[..., 1] = (y0 - corner[..., 1]) / T.SKIN_TEXEL
     h = hair(look.rest[:, 0], look.rest[:, 1])[:, None]
     albedo = h * HAIR + (1 - h) * T.SKIN
-    return Part("skin", look.rest, look.triangles, albedo, gloss, "skin", uv, image, True,
-                two_sided=_inner_side(look))
+    return Part("skin", look.rest, look.triangles, albedo, _moist_lips(look, gloss), "skin",
+                uv, image, True, two_sided=_inner_side(look))
+
+
+LIP_GLOSS = (0.40, 60.0)  #: specular strength and exponent of the moist vermilion
+
+
+def _moist_lips(look: FaceLook, gloss) -> np.ndarray:
+    """Per-vertex gloss (n, 2): the skin's, and on the vermilion (:func:`.textures.
+    vermilion_mask` at rest) the sharper, stronger highlight of a moist lip."""
+    g = np.tile(np.asarray(gloss, float), (len(look.rest), 1))
+    lm = look.landmarks
+    need = ("mouth_corner_left", "mouth_corner_right", "upper_lip_center", "lower_lip_center")
+    if not all(k in lm for k in need):
+        return g
+    m = T.vermilion_mask(look.rest[:, 0], look.rest[:, 1], lm)[:, None]
+    return (1 - m) * g + m * np.asarray(LIP_GLOSS)
 
 
 MAX_TEXTURE = 2048  #: texels along a scan texture's longer side in the renderer's atlas

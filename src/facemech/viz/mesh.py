@@ -20,7 +20,8 @@ class Part:
     rest: np.ndarray  # (n, 3) m
     faces: np.ndarray  # (f, 3)
     albedo: np.ndarray  # (n, 3) sRGB
-    gloss: tuple[float, float]  # specular strength, Blinn-Phong exponent
+    gloss: tuple[float, float] | np.ndarray  # specular strength, Blinn-Phong exponent; or
+    # per vertex (n, 2)
     motion: str = "skull"
     uv: np.ndarray | None = None  # (f, 3, 2) texel coordinates in ``texture``
     texture: np.ndarray | None = None  # (h, w, 4) sRGB + alpha

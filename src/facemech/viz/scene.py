@@ -192,7 +192,8 @@ def _pack(parts: list[Part], look: FaceLook) -> Scene:
         alpha.append(cut)
         two.append(np.zeros(len(f), bool) if p.two_sided is None else p.two_sided)
         albedo.append(srgb_to_linear(np.clip(p.albedo, 0, 1)))
-        gloss.append(np.tile(np.array(p.gloss, np.float32), (len(p.rest), 1)))
+        g = np.asarray(p.gloss, np.float32)
+        gloss.append(g if g.ndim == 2 else np.tile(g, (len(p.rest), 1)))
         offs.append(base + len(p.rest))
     scene = Scene(tuple(parts), look, np.concatenate(tris).astype(np.int32),
                   np.concatenate(uv).astype(np.float32), np.concatenate(tex),
