@@ -5,14 +5,17 @@
   brows, lashes, hairline), with the palpebral fissures cut out and its inner side drawn dark
   (:mod:`.face_parts`);
 * **eyes**: eyeballs (sclera, iris, pupil) set behind the fissures, as far forward as the lids
-  allow, in socket linings (:mod:`.face_parts`);
+  allow, in socket linings, turned by the gaze, and upper lids that close with the blink and
+  follow the gaze down (:mod:`.face_parts`, :mod:`.lids`);
 * **mouth**: a dark oral cavity, the upper dental arch fixed to the skull, the lower arch and
   the tongue moving with the mandible (the results' jaw angle about the model's hinge, plus the
   hinge's shift), and a dark seal across the slit between the lips' edges, facing into the
   mouth (it moves with the skin) (:mod:`.face_parts`);
-* **head**: a closed head shell with hair and neck, ears, and a skirt from the skin's edge into
-  the shell, for a face surface that stops at the hairline, the ears or the throat
-  (:mod:`.head`).
+* **head**: for a face without its own texture, the closure that makes skin and head one
+  surface from the crown to the neck, its edge ring the skin's edge nodes (:mod:`.closure`,
+  :mod:`.cranium`), hair with volume and a strand fringe (:mod:`.hair`) and ears with relief
+  (:mod:`.ears`); for a scan with its own colours, a head shell with hair, ears and a skirt
+  from the skin's edge into the shell (:mod:`.head`).
 
 :func:`build_scene` packs the parts for the rasteriser (one vertex array, one texture atlas);
 :meth:`Scene.frame` places them for one time step.
