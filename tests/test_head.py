@@ -209,7 +209,6 @@ def test_hair_has_volume_and_a_soft_irregular_hairline(head):
     scene, _ = head
     names = [p.name for p in scene.parts]
     hair = scene.parts[names.index("hair")]
-    c = scene.centre
     # the hair stands 8 to 10 mm off the scalp on the crown
     top = hair.rest[np.argmax(hair.rest[:, 1])]
     scalp_top = max(scene.look.rest[:, 1].max(), scene.parts[names.index("head")].rest[:, 1].max())

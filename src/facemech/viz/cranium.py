@@ -1,9 +1,10 @@
 """The shape of an adult head and neck where the face surface stops: an implicit solid.
 
 A smooth union of a head ellipsoid (150 x 230 x 190 mm, adult means) about the head's centre
-and a neck: a cylinder of superelliptic section (exponent 3), 112 mm wide and 116 mm deep, leaning 15 degrees forward as it
-goes down (the cervical spine's lordosis seen from outside), whose front passes through the
-throat where the face surface stops, cut 300 mm under the head's centre. The head surface that
+and a neck: a cylinder of superelliptic section (exponent 3: flatter in front than an
+ellipse), 112 mm wide and 116 mm deep, leaning 15 degrees forward as it goes down (the
+cervical spine's lordosis seen from outside), whose front passes through the throat where the
+face surface stops, cut 300 mm under the head's centre. The head surface that
 closes the skin (:mod:`.closure`) takes its radius from here away from the skin's edge.
 """
 

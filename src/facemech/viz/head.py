@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import textures as T
-from .closure import Closure, boundary_loops, build_closure
+from .closure import boundary_loops, build_closure
 from .cranium import Cranium
 from .hair import hair_part
 from .look import FaceLook
