@@ -8,7 +8,8 @@ run from the crown down the meridians. Towards the hairline the strands thin out
 is kept where its own random threshold lies under the hair's density, which ramps from 0
 3 mm under the hairline to 1 3 mm above it, so the hairline breaks into strand tips over
 skin rather than a painted band's edge; the hairline itself wanders by up to 2 mm
-(low-frequency noise) round :func:`.head.hairline`. The strands' cut-outs are alpha-tested, only in that band.
+(low-frequency noise) round :func:`.head.hairline`. The strands' cut-outs are alpha-tested,
+only in that band.
 """
 
 from __future__ import annotations
