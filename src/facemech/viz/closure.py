@@ -26,7 +26,7 @@ from .cranium import Cranium
 
 RAY_ORIGIN = np.array([0.0, -0.045, 0.0])  #: m, the rays' origin from the head's centre:
 #: lower than the centre, so that the rays down the neck do not graze its sides
-RINGS = 30  #: rings from the skin's edge to the back of the head
+RINGS = 26  #: rings from the skin's edge to the back of the head
 BLEND_DEG = 35.0  #: degrees over which the closure relaxes from the skin's edge to the cranium
 SMOOTHING_STEPS = 10  #: Taubin iterations over the closure (away from the skin's edge)
 MAX_SLOPE = 0.03  #: m/rad, the edge slope continued into the closure is clipped to this

@@ -1,11 +1,13 @@
 """Auricles with relief: helix, scapha, antihelix, concha, tragus and lobe.
 
 Each ear is a sheet 62 mm tall and 32 mm wide (adult means, Farkas), seen from both sides,
-spanned between its root (attached along a vertical line on the head, sunk 3 mm into it) and
+spanned between its root (attached along a vertical line on the head, sunk 1.5 mm into it) and
 its rim (the helix's outline, an oval that narrows into the lobe). Over that sheet a relief in
 millimetres off the head (:func:`relief`) gives:
 
-* the flare: 0 at the root to 16 mm at the rim (the ear stands off the head behind it);
+* the flare: 0 at the root to 16 mm at the rim (the ear stands off the head behind it),
+  growing out of the head at the helix's root and the lobe's front (no gap between ear and
+  head seen from the front);
 * the helix: a 2.5-mm roll along the rim, curled forward;
 * the scapha: a 1.5-mm groove inside the helix, in the upper two-thirds;
 * the antihelix: a 3-mm ridge inside the scapha, from the upper crus down to the antitragus;
@@ -27,11 +29,16 @@ from .mesh import Part, grid_faces
 HEIGHT, WIDTH = 0.062, 0.032  #: m
 BEHIND_NASION = 0.095  #: m from the nasion back to the ear's root
 TOP_ABOVE_NASION = 0.008  #: m
-N_S, N_T = 14, 48  #: samples root -> rim and round the rim
+N_S, N_T = 12, 36  #: samples root -> rim and round the rim
 
 
 def _bump(x):
     return np.exp(-0.5 * x * x)
+
+
+def _smoothstep(x):
+    x = np.clip(x, 0.0, 1.0)
+    return x * x * (3.0 - 2.0 * x)
 
 
 def outline(t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -49,7 +56,9 @@ def relief(s: np.ndarray, t: np.ndarray) -> np.ndarray:
     """Height (mm) off the head at (s: 0 root .. 1 rim, t: 0 top front .. 1 lobe)."""
     lobe = np.clip((t - 0.72) / 0.12, 0.0, 1.0)
     cart = 1.0 - lobe  # cartilage
-    flare = -3.0 + 19.0 * s ** 1.2 * (1.0 - 0.4 * lobe)
+    # the helix's root (t = 0) and the lobe's front (t = 1) grow out of the head
+    taper = _smoothstep(t / 0.15) * _smoothstep((1.0 - t) / 0.12)
+    flare = -1.5 + 17.5 * s ** 1.2 * (1.0 - 0.4 * lobe) * taper
     upper = np.clip((0.62 - t) / 0.1, 0.0, 1.0)
     helix = 2.5 * _bump((s - 0.93) / 0.05)
     scapha = -1.5 * _bump((s - 0.76) / 0.06) * upper
@@ -94,12 +103,24 @@ def ear_parts(rest: np.ndarray, normals: np.ndarray, nasion: np.ndarray) -> list
         x_mm = s * rx
         y_mm = root_y + s * (ry - root_y)
         h = relief(s, t)
+        # the root follows the head's side (it narrows towards the jaw): each line from the
+        # root to the rim moves out or in by the head's lateral offset at its root
+        root = a + 1e-3 * (root_y[0] - 2.0)[:, None] * up  # (N_T, 3) at s = 0
+        lateral = np.empty(N_T)
+        for j, q in enumerate(root):
+            ring = (side * rest[:, 0] > 0.03) & (np.hypot(rest[:, 1] - q[1],
+                                                          rest[:, 2] - q[2]) < 0.006)
+            lateral[j] = (side * rest[ring, 0].max() - side * a[0]) if ring.any() else 0.0
+        shift = lateral[None, :] / max(abs(out[0]), 0.5)
         pts = (a + 1e-3 * (x_mm[..., None] * back + (y_mm - 2.0)[..., None] * up
-                           + h[..., None] * out))
+                           + h[..., None] * out) + shift[..., None] * out)
         # the helix's roll curls forward over the scapha
         pts += 1e-3 * (-1.5 * _bump((s - 0.97) / 0.04))[..., None] * back
+        # a strip from the root 4 mm further into the head seals the sulcus behind the ear
+        pts = np.concatenate([pts[:1] - 0.004 * out, pts])
+        h = np.concatenate([h[:1] - 4.0, h])
         v = pts.reshape(-1, 3)
-        f = grid_faces(N_S, N_T)
+        f = grid_faces(N_S + 1, N_T)
         # outward (lateral) faces: flip for the subject's right, whose lateral side is -x
         lateral = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]]) @ out
         f = f if np.median(lateral) > 0 else f[:, ::-1]

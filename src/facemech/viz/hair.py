@@ -1,7 +1,8 @@
 """Scalp hair with volume and a soft, irregular hairline.
 
 The hair is one layer over the head (skin and closure, :mod:`.closure`), lifted off the scalp
-by the hair's thickness: 0.4 mm at the hairline, growing over 25 mm above it to 9 mm on the
+by the hair's thickness: 0.2 mm up to the top of the fringe (below), growing over 25 mm above
+it to 9 mm on the
 crown and the back (a short haircut's volume, which moves the silhouette out as real hair
 does). Its texture over (longitude, latitude) about the head's centre is made of strands that
 run from the crown down the meridians. Towards the hairline the strands thin out: a strand
@@ -9,7 +10,8 @@ is kept where its own random threshold lies under the hair's density, which ramp
 3 mm under the hairline to 1 3 mm above it, so the hairline breaks into strand tips over
 skin rather than a painted band's edge; the hairline itself wanders by up to 2 mm
 (low-frequency noise) round :func:`.head.hairline`. The strands' cut-outs are alpha-tested,
-only in that band.
+only in that band, over a skin-coloured strip half way to the scalp (so that at the head's
+silhouette the gaps show skin, not the background).
 """
 
 from __future__ import annotations
@@ -23,11 +25,12 @@ from .raster import rasterise
 STEP_DEG = 2.5  #: grid step of the hair layer, degrees of longitude and latitude
 TEXELS_PER_DEGREE = 4  #: of the strand texture
 THICKNESS = 0.009  #: m, the hair's thickness on the crown and the back
-LIFT = 0.0004  #: m, the hair's thickness at the hairline
+LIFT = 0.0002  #: m, the hair's thickness at the hairline
 RAMP = 0.025  #: m above the hairline over which the thickness grows
 FRINGE = 0.006  #: m across the hairline over which the strands' density grows from 0 to 1
 WANDER = 0.002  #: m, the hairline's low-frequency wander
 HAIR_GLOSS = (0.12, 18.0)  #: specular strength and exponent of hair
+SKIN_GLOSS = (0.10, 16.0)  #: of the strip under the fringe (the skin's)
 
 
 def surface_radius(verts: np.ndarray, faces: np.ndarray, centre: np.ndarray, lat: np.ndarray,
@@ -61,8 +64,9 @@ def surface_radius(verts: np.ndarray, faces: np.ndarray, centre: np.ndarray, lat
     return z[idx[0], idx[1]].astype(float)
 
 
-def hair_part(verts: np.ndarray, faces: np.ndarray, centre: np.ndarray, hairline) -> Part:
-    """The hair layer over a closed head.
+def hair_parts(verts: np.ndarray, faces: np.ndarray, centre: np.ndarray,
+               hairline) -> list[Part]:
+    """The hair layer over a closed head, and the skin-coloured strip under its fringe.
 
     Parameters
     ----------
@@ -78,7 +82,9 @@ def hair_part(verts: np.ndarray, faces: np.ndarray, centre: np.ndarray, hairline
     y = centre[1] + r * d[..., 1]
     line = hairline(lon)[None, :] + _wander(lon)[None, :]
     above = y - line
-    s = np.clip(above / RAMP, 0.0, 1.0)
+    # the layer lifts off only above the fringe: where its strands are cut out it lies on the
+    # scalp, so that what shows between them is skin, also at the head's silhouette
+    s = np.clip((above - 0.5 * FRINGE) / RAMP, 0.0, 1.0)
     thick = LIFT + (THICKNESS - LIFT) * s * s * (3 - 2 * s)
     pts = centre + d * (r + thick)[..., None]
     n_lat, n_lon = len(lat), len(lon)
@@ -102,9 +108,15 @@ def hair_part(verts: np.ndarray, faces: np.ndarray, centre: np.ndarray, hairline
     tex = np.concatenate([tex[:, :half + 1], np.repeat(tex[-1:, :half + 1], 2, axis=0),
                           tex[:, half:]])
     albedo = np.tile(T.HAIR, (n_lat * n_lon, 1))
-    part = Part("hair", pts.reshape(-1, 3), f, albedo, HAIR_GLOSS, "skull", uv, tex,
+    hair = Part("hair", pts.reshape(-1, 3), f, albedo, HAIR_GLOSS, "skull", uv, tex,
                 alpha_test=True)
-    return part
+    # under the fringe, half way to the scalp, a skin-coloured strip: between the strands one
+    # sees skin, also where the fringe stands against the background at the head's silhouette
+    fringe = f[(above.ravel()[f] < 0.5 * FRINGE + 0.002).any(axis=1)]
+    under = centre + d * (r + 0.5 * LIFT)[..., None]
+    strip = Part("hair_under", under.reshape(-1, 3), fringe, np.tile(T.SKIN, (n_lat * n_lon, 1)),
+                 SKIN_GLOSS, "skull")
+    return [hair, strip]
 
 
 def _wander(lon: np.ndarray) -> np.ndarray:

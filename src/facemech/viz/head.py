@@ -19,7 +19,7 @@ import numpy as np
 from . import textures as T
 from .closure import boundary_loops, build_closure
 from .cranium import Cranium
-from .hair import hair_part
+from .hair import hair_parts
 from .look import FaceLook
 from .mesh import Part, grid_faces, skin_depth
 from .raster import rasterise
@@ -171,11 +171,11 @@ def closed_head(look: FaceLook) -> list[Part] | None:
     n = len(look.rest)
     verts = np.concatenate([look.rest, closure.rest])
     faces = np.concatenate([look.triangles, closure.joint_faces(n)])
-    hair = hair_part(verts, faces, c, lambda lon: hairline(lon, top, nasion[1]))
+    hair = hair_parts(verts, faces, c, lambda lon: hairline(lon, top, nasion[1]))
     from ..geometry.mesh import vertex_normals
     from .ears import ear_parts as auricles
 
-    return [head, hair, *auricles(verts, vertex_normals(verts, faces), nasion)]
+    return [head, *hair, *auricles(verts, vertex_normals(verts, faces), nasion)]
 
 
 def head_shell(look: FaceLook) -> Part | None:
