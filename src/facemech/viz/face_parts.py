@@ -40,7 +40,8 @@ def skin_part(look: FaceLook, painted_hair: bool = True) -> Part:
     lo, hi = xy.min(axis=0), xy.max(axis=0)
     hair = hair_on_skin(look) if painted_hair else (lambda x, y: np.zeros(np.shape(x)))
     image, (x0, y0) = T.skin_texture(look.landmarks, (lo[0], hi[0], lo[1], hi[1]),
-                                     hair=hair if painted_hair else None)
+                                     hair=hair if painted_hair else None,
+                                     edge_fade=None if painted_hair else _edge_fade(look))
     corner = xy[look.triangles]  # (f, 3, 2)
     uv = np.empty_like(corner)
     uv[..., 0] = (corner[..., 0] - x0) / T.SKIN_TEXEL
@@ -49,6 +50,29 @@ def skin_part(look: FaceLook, painted_hair: bool = True) -> Part:
     albedo = h * HAIR + (1 - h) * T.SKIN
     return Part("skin", look.rest, look.triangles, albedo, _moist_lips(look, gloss), "skin",
                 uv, image, True, two_sided=_inner_side(look))
+
+
+EDGE_FADE = 0.012  #: m (frontal) over which the skin's mottle and cheek colour fade out
+
+
+def _edge_fade(look: FaceLook):
+    """Weight (x, y) -> [0, 1] of the skin texture's mottle and cheek colour: 0 on the skin's
+    outer edge, 1 from :data:`EDGE_FADE` inside it (frontal distance), so that the skin meets
+    the plain head that goes on from its edge (:mod:`.closure`) in the same colour."""
+    from scipy.spatial import cKDTree
+
+    from .closure import boundary_loops
+
+    loop = boundary_loops(look.triangles)[0]
+    a = look.rest[loop, :2]
+    b = np.roll(a, -1, axis=0)
+    k = np.linspace(0.0, 1.0, 12, endpoint=False)[None, :, None]
+    tree = cKDTree((a[:, None] + k * (b - a)[:, None]).reshape(-1, 2))
+
+    def fade(x, y):
+        d, _ = tree.query(np.stack([np.ravel(x), np.ravel(y)], -1))
+        return np.clip(d / EDGE_FADE, 0.0, 1.0).reshape(np.shape(x))
+    return fade
 
 
 LIP_GLOSS = (0.40, 60.0)  #: specular strength and exponent of the moist vermilion

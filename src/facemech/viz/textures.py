@@ -89,7 +89,8 @@ def vermilion_mask(x: np.ndarray, y: np.ndarray, lm: dict) -> np.ndarray:
     return _smooth(d, 5e-4)
 
 
-def skin_texture(landmarks: dict, bounds: tuple[float, float, float, float], hair=None):
+def skin_texture(landmarks: dict, bounds: tuple[float, float, float, float], hair=None,
+                 edge_fade=None):
     """The RGBA skin texture of a face without its own, and its texel mapping.
 
     Parameters
@@ -97,6 +98,8 @@ def skin_texture(landmarks: dict, bounds: tuple[float, float, float, float], hai
     landmarks : name -> (3,) m rest positions (lip, eye and brow landmarks are used if present)
     bounds : (xmin, xmax, ymin, ymax) m of the frontal region the texture covers
     hair : optional function (x, y) -> hair coverage in [0, 1] (scalp hair over the forehead)
+    edge_fade : optional function (x, y) -> weight in [0, 1] of the mottle and cheek colour
+        (0 where the skin must be plain skin tone: at its edge, where a plain head goes on)
 
     Returns
     -------
@@ -120,6 +123,8 @@ def skin_texture(landmarks: dict, bounds: tuple[float, float, float, float], hai
             c = landmarks[name]
             k = 0.55 * np.exp(-0.5 * (((x - c[0]) / 0.016) ** 2 + ((y - c[1]) / 0.013) ** 2))
             rgb += k[..., None] * (CHEEK - SKIN)
+    if edge_fade is not None:
+        rgb = SKIN + (rgb - SKIN) * edge_fade(x, y)[..., None]
     if all(k in landmarks for k in ("mouth_corner_left", "mouth_corner_right",
                                     "upper_lip_center", "lower_lip_center")):
         m = vermilion_mask(x, y, landmarks)[..., None]
