@@ -75,7 +75,7 @@ def _edge_fade(look: FaceLook):
     return fade
 
 
-LIP_GLOSS = (0.40, 60.0)  #: specular strength and exponent of the moist vermilion
+LIP_GLOSS = (0.18, 40.0)  #: specular strength and exponent of the moist vermilion
 
 
 def _moist_lips(look: FaceLook, gloss) -> np.ndarray:
