@@ -6,7 +6,14 @@ split into the scene update, the rasterisation and the shading/resolve passes fo
 ``--mesa`` also runs ``benchmarks/render_mesa.py`` (moderngl on Mesa's llvmpipe) in the same
 session for the comparison in docs/rendering.md.
 
+``--against SRC`` instead compares this tree with another checkout's ``src`` folder (e.g. the
+main branch's, for a before/after ratio): the frontal 720p frame with 2x2 anti-aliasing is
+timed in both, one subprocess each, alternately for ``--rounds`` rounds (so that both see the
+same load), and the medians over all rounds (wall clock and process CPU time) and their
+ratios are printed.
+
     python benchmarks/render.py [--frames 15] [--mesa]
+    python benchmarks/render.py --against ../main/src [--rounds 5] [--frames 9]
 """
 
 from __future__ import annotations
@@ -39,7 +46,12 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--frames", type=int, default=15)
     ap.add_argument("--mesa", action="store_true")
+    ap.add_argument("--against", help="another checkout's src folder to compare with")
+    ap.add_argument("--rounds", type=int, default=5)
+    ap.add_argument("--skin", help=argparse.SUPPRESS)  # child: time one tree on this skin
     args = ap.parse_args()
+    if args.skin:
+        return _frontal_child(args.skin, args.frames)
 
     from facemech.geometry.builder import default_face
     from facemech.params import MUSCLE_GROUPS
@@ -55,6 +67,8 @@ def main() -> None:
     jaw = np.radians(12.0) * np.linspace(0, 1, n)
     sim = simulate(face, act, jaw)
     skin, angle = sim.positions[-1], float(jaw[-1])
+    if args.against:
+        return _compare(args, skin, angle)
     t0 = time.perf_counter()
     scene = build_scene(look_from_model(face))
     build_s = time.perf_counter() - t0
@@ -120,6 +134,54 @@ def main() -> None:
             out["mesa"] = json.loads(run.stdout)
         except json.JSONDecodeError:
             out["mesa"] = {"available": False, "why": run.stderr.strip()[-300:]}
+    print(json.dumps(out, indent=2))
+
+
+def _frontal_child(path: str, frames: int) -> None:
+    """Print {"wall_ms", "cpu_ms"}: medians of the frontal 720p 2x2 frame of this tree."""
+    from facemech.geometry.builder import default_face
+    from facemech.viz import render as R
+    from facemech.viz.scene import build_scene, look_from_model
+
+    data = np.load(path)
+    skin, angle = data["skin"], float(data["angle"])
+    r = R.Renderer(build_scene(look_from_model(default_face())), "frontal", (720, 1280))
+    with threadpool_limits(1):
+        r(skin, angle)
+        wall, cpu = [], []
+        for _ in range(frames):
+            t, c = time.perf_counter(), time.process_time()
+            r(skin, angle)
+            wall.append(time.perf_counter() - t)
+            cpu.append(time.process_time() - c)
+    print(json.dumps({"wall_ms": 1e3 * float(np.median(wall)),
+                      "cpu_ms": 1e3 * float(np.median(cpu))}))
+
+
+def _compare(args, skin, angle) -> None:
+    """This tree against ``args.against``, alternately (see the module text)."""
+    import tempfile
+
+    here = str(Path(__file__).resolve().parents[1] / "src")
+    trees = {"this": here, "against": str(Path(args.against).resolve())}
+    runs = {k: [] for k in trees}
+    with tempfile.TemporaryDirectory() as tmp:
+        path = str(Path(tmp) / "skin.npz")
+        np.savez(path, skin=skin, angle=angle)
+        for _ in range(args.rounds):
+            for name, src in trees.items():
+                env = {**os.environ, "PYTHONPATH": src,
+                       "NUMBA_CACHE_DIR": str(Path(tmp) / f"numba-{name}")}
+                run = subprocess.run([sys.executable, __file__, "--skin", path, "--frames",
+                                      str(args.frames)], capture_output=True, text=True,
+                                     env=env, check=True)
+                runs[name].append(json.loads(run.stdout.strip().splitlines()[-1]))
+    out = {"frame": "720p frontal aa2", "rounds": args.rounds, "frames_per_round": args.frames,
+           "trees": trees}
+    for key in ("wall_ms", "cpu_ms"):
+        med = {k: round(float(np.median([r[key] for r in v])), 1) for k, v in runs.items()}
+        out[key] = med
+        out[key.replace("_ms", "_ratio")] = round(med["this"] / med["against"], 3)
     print(json.dumps(out, indent=2))
 
 

@@ -9,6 +9,7 @@ import numpy as np
 from ..solvers.jaw import LOWER_ARCH_SETBACK, LOWER_EDGE_ABOVE_STOMION
 from . import textures as T
 from .head import HAIR, hair_on_skin
+from .lids import lid_mesh, lid_of
 from .look import FaceLook
 from .mesh import Part, fit_inside, grid_faces, skin_depth, sphere
 
@@ -18,7 +19,9 @@ TONGUE = np.array([0.74, 0.40, 0.40])
 EYE_RADIUS = 0.012  #: m
 
 
-def skin_part(look: FaceLook) -> Part:
+def skin_part(look: FaceLook, painted_hair: bool = True) -> Part:
+    """The skin. ``painted_hair``: paint the scalp hair over the skin's top band (for a head
+    without the hair layer of :mod:`.hair`)."""
     n = len(look.rest)
     gloss = (0.10, 16.0)
     if look.image is not None and look.uv is not None:
@@ -35,16 +38,56 @@ def skin_part(look: FaceLook) -> Part:
                     "skin", two_sided=_inner_side(look))
     xy = look.rest[:, :2]
     lo, hi = xy.min(axis=0), xy.max(axis=0)
-    hair = hair_on_skin(look)
-    image, (x0, y0) = T.skin_texture(look.landmarks, (lo[0], hi[0], lo[1], hi[1]), hair=hair)
+    hair = hair_on_skin(look) if painted_hair else (lambda x, y: np.zeros(np.shape(x)))
+    image, (x0, y0) = T.skin_texture(look.landmarks, (lo[0], hi[0], lo[1], hi[1]),
+                                     hair=hair if painted_hair else None,
+                                     edge_fade=None if painted_hair else _edge_fade(look))
     corner = xy[look.triangles]  # (f, 3, 2)
     uv = np.empty_like(corner)
     uv[..., 0] = (corner[..., 0] - x0) / T.SKIN_TEXEL
     uv[..., 1] = (y0 - corner[..., 1]) / T.SKIN_TEXEL
     h = hair(look.rest[:, 0], look.rest[:, 1])[:, None]
     albedo = h * HAIR + (1 - h) * T.SKIN
-    return Part("skin", look.rest, look.triangles, albedo, gloss, "skin", uv, image, True,
-                two_sided=_inner_side(look))
+    return Part("skin", look.rest, look.triangles, albedo, _moist_lips(look, gloss), "skin",
+                uv, image, True, two_sided=_inner_side(look))
+
+
+EDGE_FADE = 0.012  #: m (frontal) over which the skin's mottle and cheek colour fade out
+
+
+def _edge_fade(look: FaceLook):
+    """Weight (x, y) -> [0, 1] of the skin texture's mottle and cheek colour: 0 on the skin's
+    outer edge, 1 from :data:`EDGE_FADE` inside it (frontal distance), so that the skin meets
+    the plain head that goes on from its edge (:mod:`.closure`) in the same colour."""
+    from scipy.spatial import cKDTree
+
+    from .closure import boundary_loops
+
+    loop = boundary_loops(look.triangles)[0]
+    a = look.rest[loop, :2]
+    b = np.roll(a, -1, axis=0)
+    k = np.linspace(0.0, 1.0, 12, endpoint=False)[None, :, None]
+    tree = cKDTree((a[:, None] + k * (b - a)[:, None]).reshape(-1, 2))
+
+    def fade(x, y):
+        d, _ = tree.query(np.stack([np.ravel(x), np.ravel(y)], -1))
+        return np.clip(d / EDGE_FADE, 0.0, 1.0).reshape(np.shape(x))
+    return fade
+
+
+LIP_GLOSS = (0.18, 40.0)  #: specular strength and exponent of the moist vermilion
+
+
+def _moist_lips(look: FaceLook, gloss) -> np.ndarray:
+    """Per-vertex gloss (n, 2): the skin's, and on the vermilion (:func:`.textures.
+    vermilion_mask` at rest) the sharper, stronger highlight of a moist lip."""
+    g = np.tile(np.asarray(gloss, float), (len(look.rest), 1))
+    lm = look.landmarks
+    need = ("mouth_corner_left", "mouth_corner_right", "upper_lip_center", "lower_lip_center")
+    if not all(k in lm for k in need):
+        return g
+    m = T.vermilion_mask(look.rest[:, 0], look.rest[:, 1], lm)[:, None]
+    return (1 - m) * g + m * np.asarray(LIP_GLOSS)
 
 
 MAX_TEXTURE = 2048  #: texels along a scan texture's longer side in the renderer's atlas
@@ -108,8 +151,12 @@ def eye_parts(look: FaceLook) -> list[Part]:
         uvv[..., 1] = (0.5 - loc[..., 1] * 0.5) * ni
         front = unit[faces][..., 2].min(axis=1) > 0
         albedo = np.tile(T.SCLERA, (len(v), 1))
-        parts.append(Part(name, v, faces, albedo, (0.7, 90.0), "skull", uvv, iris,
-                          tex_mask=front))
+        parts.append(Part(name, v, faces, albedo, (0.7, 90.0), "eye", uvv, iris,
+                          tex_mask=front, pivot=centre))
+        lid = lid_of(e, centre, radii, side)
+        lv, lf, lalb = lid_mesh(lid)
+        parts.append(Part(name.replace("eye", "lid"), lv, lf, lalb, (0.10, 16.0), "lid",
+                          follow=lid, pivot=centre))
         # the socket's lining (conjunctiva), seen past the eyeball from the side
         lining = fit_inside(centre + np.array([0, 0, 0.003]), unit,
                              radii * np.array([1.5, 1.35, 1.7]), depth, 0.0005)

@@ -1,10 +1,15 @@
-"""The head round a face surface: a closed head shell with hair and neck, the hairline shared
-with the skin, the ears, and the skirt that joins the skin's moving edge to the shell.
+"""The head round a face surface.
 
-The head shell is a radial surface about the head's centre: behind the skin it follows the skin
-a little inside it and sinks deep under the face, and where the skin stops it continues as an
-adult head (ellipsoid 150 x 230 x 190 mm) and a neck (cylinder of 52 mm radius), blended so that
-it meets the skin's edge.
+For a face without its own texture (the built-in face), :func:`closed_head`: the closure that
+makes skin and head one surface (:mod:`.closure`), the hair over it (:mod:`.hair`) and the ears
+(:mod:`.ears`).
+
+For a scan with its own colours, the earlier head: a closed head shell with hair and neck, the
+hairline shared with the skin, the ears, and the skirt that joins the skin's moving edge to the
+shell. The shell is a radial surface about the head's centre: behind the skin it follows the
+skin a little inside it and sinks deep under the face, and where the skin stops it continues as
+an adult head (ellipsoid 150 x 230 x 190 mm) and a neck (cylinder of 52 mm radius), blended so
+that it meets the skin's edge.
 """
 
 from __future__ import annotations
@@ -12,11 +17,15 @@ from __future__ import annotations
 import numpy as np
 
 from . import textures as T
+from .closure import boundary_loops, build_closure
+from .cranium import Cranium
+from .hair import hair_parts
 from .look import FaceLook
 from .mesh import Part, grid_faces, skin_depth
 from .raster import rasterise
 
 HAIR = T.HAIR
+SKIN_GLOSS = (0.10, 16.0)  #: specular strength and exponent of the skin and the head
 SKIRT_DEPTH = 0.008  #: m, how far the skirt runs in from the skin's edge
 
 
@@ -134,6 +143,39 @@ def hair_on_skin(look: FaceLook):
         lon = np.degrees(np.arctan2(x - c[0], z - c[2]))
         return np.clip((y - hairline(lon, top, nasion[1])) / 0.003 + 0.5, 0.0, 1.0)
     return cover
+
+
+def cranium_of(look: FaceLook) -> Cranium:
+    """The adult head and neck (:class:`.cranium.Cranium`) about the head's centre, its neck's
+    front through the skin's throat (the front-most node of the skin's lowest edge)."""
+    c = head_centre(look)[0]
+    edge = look.rest[boundary_loops(look.triangles)[0]]
+    low = edge[edge[:, 1] < edge[:, 1].min() + 0.003]
+    throat = low[np.argmax(low[:, 2])]
+    return Cranium(c, throat)
+
+
+def closed_head(look: FaceLook) -> list[Part] | None:
+    """The head that closes the skin into one surface (:mod:`.closure`, skin-coloured, its
+    inner side drawn dark) and the hair over it (:mod:`.hair`); None where the skin's edge
+    does not allow it (the caller falls back to :func:`head_shell`)."""
+    closure = build_closure(look.rest, look.triangles, cranium_of(look))
+    if closure is None:
+        return None
+    c, top, nasion = head_centre(look)
+    albedo = np.tile(T.SKIN, (len(closure.rest), 1))
+    # its inner side is drawn dark, as the skin's: a line of sight through a palpebral fissure
+    # or the parted lips ends on the inside of the head
+    head = Part("head", closure.rest, closure.faces, albedo, SKIN_GLOSS, "follow",
+                follow=closure, two_sided=np.ones(len(closure.faces), bool))
+    n = len(look.rest)
+    verts = np.concatenate([look.rest, closure.rest])
+    faces = np.concatenate([look.triangles, closure.joint_faces(n)])
+    hair = hair_parts(verts, faces, c, lambda lon: hairline(lon, top, nasion[1]))
+    from ..geometry.mesh import vertex_normals
+    from .ears import ear_parts as auricles
+
+    return [head, *hair, *auricles(verts, vertex_normals(verts, faces), nasion)]
 
 
 def head_shell(look: FaceLook) -> Part | None:

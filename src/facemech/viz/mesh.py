@@ -12,13 +12,16 @@ from .look import FaceLook
 
 @dataclass(frozen=True)
 class Part:
-    """A mesh of the scene. ``motion``: 'skin' (the results' nodes), 'skull' or 'jaw'."""
+    """A mesh of the scene. ``motion``: 'skin' (the results' nodes), 'skull', 'jaw',
+    'skirt' (from the skin's edge inwards), 'follow' (the head closing the skin, its edge
+    ring the skin's edge nodes), 'eye' (turns with the gaze) or 'lid' (closes with the blink)."""
 
     name: str
     rest: np.ndarray  # (n, 3) m
     faces: np.ndarray  # (f, 3)
     albedo: np.ndarray  # (n, 3) sRGB
-    gloss: tuple[float, float]  # specular strength, Blinn-Phong exponent
+    gloss: tuple[float, float] | np.ndarray  # specular strength, Blinn-Phong exponent; or
+    # per vertex (n, 2)
     motion: str = "skull"
     uv: np.ndarray | None = None  # (f, 3, 2) texel coordinates in ``texture``
     texture: np.ndarray | None = None  # (h, w, 4) sRGB + alpha
@@ -27,6 +30,8 @@ class Part:
     tex_mask: np.ndarray | None = None  # (f,) bool: which triangles use the texture
     two_sided: np.ndarray | None = None  # (f,) bool: also draw the inner side (dark)
     skirt_nodes: np.ndarray | None = None  # motion 'skirt': the skin's edge nodes
+    follow: object | None = None  # motion 'follow': a :class:`.closure.Closure`
+    pivot: np.ndarray | None = None  # motion 'eye' / 'lid': the eyeball's centre, m
 
 
 def sphere(n_lat: int, n_lon: int):

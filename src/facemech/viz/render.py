@@ -118,10 +118,12 @@ class Renderer:
             raise InputError("supersample must be 1 to 4", field="supersample")
         self.supersample = supersample
 
-    def __call__(self, skin: np.ndarray, jaw_angle=0.0) -> np.ndarray:
+    def __call__(self, skin: np.ndarray, jaw_angle=0.0, blink: float = 0.0,
+                 gaze=(0.0, 0.0)) -> np.ndarray:
         """(h, w, 4) uint8 frame of skin node positions (n, 3) m and a jaw angle (rad) or pose
-        (3,) (angle rad, shift_y m, shift_z m)."""
-        verts, norms = self.scene.frame(skin, jaw_angle)
+        (3,) (angle rad, shift_y m, shift_z m); ``blink`` 0 (open) .. 1 (closed) and ``gaze``
+        (yaw, pitch) rad move the eyes and lids (:meth:`.scene.Scene.frame`)."""
+        verts, norms = self.scene.frame(skin, jaw_angle, blink, gaze)
         return np.concatenate([render_panel(self.scene, verts, norms, cam,
                                             background=self.background,
                                             supersample=self.supersample)

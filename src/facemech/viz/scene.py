@@ -5,14 +5,17 @@
   brows, lashes, hairline), with the palpebral fissures cut out and its inner side drawn dark
   (:mod:`.face_parts`);
 * **eyes**: eyeballs (sclera, iris, pupil) set behind the fissures, as far forward as the lids
-  allow, in socket linings (:mod:`.face_parts`);
+  allow, in socket linings, turned by the gaze, and upper lids that close with the blink and
+  follow the gaze down (:mod:`.face_parts`, :mod:`.lids`);
 * **mouth**: a dark oral cavity, the upper dental arch fixed to the skull, the lower arch and
   the tongue moving with the mandible (the results' jaw angle about the model's hinge, plus the
   hinge's shift), and a dark seal across the slit between the lips' edges, facing into the
   mouth (it moves with the skin) (:mod:`.face_parts`);
-* **head**: a closed head shell with hair and neck, ears, and a skirt from the skin's edge into
-  the shell, for a face surface that stops at the hairline, the ears or the throat
-  (:mod:`.head`).
+* **head**: for a face without its own texture, the closure that makes skin and head one
+  surface from the crown to the neck, its edge ring the skin's edge nodes (:mod:`.closure`,
+  :mod:`.cranium`), hair with volume and a strand fringe (:mod:`.hair`) and ears with relief
+  (:mod:`.ears`); for a scan with its own colours, a head shell with hair, ears and a skirt
+  from the skin's edge into the shell (:mod:`.head`).
 
 :func:`build_scene` packs the parts for the rasteriser (one vertex array, one texture atlas);
 :meth:`Scene.frame` places them for one time step.
@@ -27,7 +30,8 @@ import numpy as np
 from ..geometry.builder import vertex_normals
 from ..solvers.jaw import rotation_matrix
 from .face_parts import MAX_TEXTURE, eye_parts, mouth_parts, skin_part
-from .head import SKIRT_DEPTH, ear_parts, head_centre, head_shell, skirt_part
+from .head import SKIRT_DEPTH, closed_head, ear_parts, head_centre, head_shell, skirt_part
+from .lids import gaze_rotation
 from .look import FaceLook, look_from_dataset, look_from_model
 from .mesh import Part
 from .raster import srgb_to_linear
@@ -53,27 +57,57 @@ class Scene:
     offsets: np.ndarray  # (parts + 1,) vertex offsets
     rest_normals: tuple = ()  # per part, (n, 3) unit normals at rest
     centre: np.ndarray = field(default_factory=lambda: np.zeros(3))  # of the head, m
+    joint_faces: np.ndarray | None = None  # skin + closure faces over [skin, closure] vertices
     framing: dict = field(default_factory=dict)
 
-    def frame(self, skin: np.ndarray, jaw_angle=0.0) -> tuple[np.ndarray, np.ndarray]:
+    def frame(self, skin: np.ndarray, jaw_angle=0.0, blink: float = 0.0,
+              gaze=(0.0, 0.0)) -> tuple[np.ndarray, np.ndarray]:
         """Vertices (N, 3) and unit normals (N, 3) of every part for one frame (model axes).
 
         ``jaw_angle``: the jaw's angle (rad), or its pose (3,) (angle rad, shift_y m, shift_z
-        m): the mandible's parts turn about the hinge and move with its shift.
+        m): the mandible's parts turn about the hinge and move with its shift. ``blink``: the
+        upper lids' closure, 0 open .. 1 closed; ``gaze``: (yaw, pitch) rad of both eyes,
+        yaw > 0 towards the subject's left, pitch > 0 up (:mod:`.lids`).
         """
         look = self.look
+        yaw, pitch = (float(g) for g in gaze)
+        turned = yaw != 0.0 or pitch != 0.0
+        eye_rot = gaze_rotation(yaw, pitch) if turned else None
         angle, shift = jaw_pose_of(jaw_angle)
         moved = angle != 0.0 or shift[1] != 0.0 or shift[2] != 0.0
         rot = rotation_matrix(look.hinge_axis, angle)
         verts, norms = [], []
         skin = np.asarray(skin, float)
         skin_normals = None
+        closure = next((p for p in self.parts if p.motion == "follow"), None)
+        if closure is not None:
+            # skin and head are one surface: their normals are the joint mesh's
+            cv = closure.follow.place(skin, look.rest)
+            joint = vertex_normals(np.concatenate([skin, cv]), self.joint_faces)
+            n_skin = len(skin)
+            e = len(closure.follow.loop)
+            skin_normals = joint[:n_skin]
+            closure_normals = joint[n_skin:]
+            closure_normals[:e] = skin_normals[closure.follow.loop]
         for p, n_rest in zip(self.parts, self.rest_normals, strict=True):
             if p.motion == "skin":
                 v = skin
-                n = vertex_normals(v, p.faces)
                 if skin_normals is None:  # the skin's own (the first part); others share nodes
-                    skin_normals = n
+                    skin_normals = vertex_normals(v, p.faces)
+                n = skin_normals
+            elif p.motion == "follow":
+                v, n = cv, closure_normals
+            elif p.motion == "eye":
+                v, n = p.rest, n_rest
+                if turned:
+                    v = (p.rest - p.pivot) @ eye_rot.T + p.pivot
+                    n = n_rest @ eye_rot.T
+            elif p.motion == "lid":
+                if blink == 0.0 and pitch >= 0.0:
+                    v, n = p.rest, n_rest
+                else:
+                    v = p.follow.place(blink, pitch)
+                    n = vertex_normals(v, p.faces)
             elif p.motion == "skirt":  # from the skin's edge nodes in towards the head's centre
                 nodes = p.skirt_nodes
                 edge = skin[nodes]
@@ -105,14 +139,16 @@ def jaw_pose_of(jaw) -> tuple[float, np.ndarray]:
 def build_scene(look: FaceLook, *, eyes: bool = True, mouth: bool = True,
                 head: bool = True) -> Scene:
     """Assemble and pack the parts of a face's scene."""
-    parts = [skin_part(look)]
+    closed = closed_head(look) if head and not look.textured else None
+    parts = [skin_part(look, painted_hair=closed is None)]
     if eyes and not look.textured:
         parts += eye_parts(look)
     if mouth:
         parts += mouth_parts(look)
     if head:
-        shell = head_shell(look)
-        if shell is not None:
+        if closed is not None:
+            parts += closed
+        elif (shell := head_shell(look)) is not None:
             parts.append(shell)
             skirt = skirt_part(look)
             if skirt is not None:
@@ -159,7 +195,8 @@ def _pack(parts: list[Part], look: FaceLook) -> Scene:
         alpha.append(cut)
         two.append(np.zeros(len(f), bool) if p.two_sided is None else p.two_sided)
         albedo.append(srgb_to_linear(np.clip(p.albedo, 0, 1)))
-        gloss.append(np.tile(np.array(p.gloss, np.float32), (len(p.rest), 1)))
+        g = np.asarray(p.gloss, np.float32)
+        gloss.append(g if g.ndim == 2 else np.tile(g, (len(p.rest), 1)))
         offs.append(base + len(p.rest))
     scene = Scene(tuple(parts), look, np.concatenate(tris).astype(np.int32),
                   np.concatenate(uv).astype(np.float32), np.concatenate(tex),
@@ -169,6 +206,11 @@ def _pack(parts: list[Part], look: FaceLook) -> Scene:
                   tuple(vertex_normals(p.rest, p.faces) for p in parts),
                   head_centre(look)[0])
     object.__setattr__(scene, "framing", _framing(scene))
+    closure = next((p.follow for p in parts if p.motion == "follow"), None)
+    if closure is not None:
+        skin = parts[0]
+        object.__setattr__(scene, "joint_faces", np.concatenate(
+            [skin.faces, closure.joint_faces(len(skin.rest))]))
     return scene
 
 
@@ -188,7 +230,7 @@ def _touches_cutout(uv: np.ndarray, atlas: np.ndarray) -> np.ndarray:
 def _framing(scene: Scene) -> dict:
     """What the views frame: the head from its top to 35 mm under the menton, and the mouth."""
     look = scene.look
-    allv = np.concatenate([p.rest for p in scene.parts if p.name in ("skin", "head")])
+    allv = np.concatenate([p.rest for p in scene.parts if p.name in ("skin", "head", "hair")])
     top = allv[:, 1].max()
     lm = look.landmarks
     bottom = (lm["menton"][1] if "menton" in lm else look.rest[:, 1].min()) - 0.035

@@ -1,7 +1,8 @@
 """Procedural textures of the face's render-only parts, drawn from its landmarks (sRGB, RGBA).
 
-* the skin of a face without its own texture: skin tone, cheek colour, lip vermilion, brows,
-  upper-lid lashes and crease, and the palpebral fissures cut out (alpha 0);
+* the skin of a face without its own texture: skin tone, cheek colour, lip vermilion, brows
+  (hair-like strokes), upper-lid lashes and crease, and the palpebral fissures cut out
+  (alpha 0);
 * the front of an eyeball: sclera, iris, limbus and pupil;
 * a dental arch: crowns with their interproximal lines and a scalloped gum line.
 
@@ -88,7 +89,8 @@ def vermilion_mask(x: np.ndarray, y: np.ndarray, lm: dict) -> np.ndarray:
     return _smooth(d, 5e-4)
 
 
-def skin_texture(landmarks: dict, bounds: tuple[float, float, float, float], hair=None):
+def skin_texture(landmarks: dict, bounds: tuple[float, float, float, float], hair=None,
+                 edge_fade=None):
     """The RGBA skin texture of a face without its own, and its texel mapping.
 
     Parameters
@@ -96,6 +98,8 @@ def skin_texture(landmarks: dict, bounds: tuple[float, float, float, float], hai
     landmarks : name -> (3,) m rest positions (lip, eye and brow landmarks are used if present)
     bounds : (xmin, xmax, ymin, ymax) m of the frontal region the texture covers
     hair : optional function (x, y) -> hair coverage in [0, 1] (scalp hair over the forehead)
+    edge_fade : optional function (x, y) -> weight in [0, 1] of the mottle and cheek colour
+        (0 where the skin must be plain skin tone: at its edge, where a plain head goes on)
 
     Returns
     -------
@@ -119,12 +123,15 @@ def skin_texture(landmarks: dict, bounds: tuple[float, float, float, float], hai
             c = landmarks[name]
             k = 0.55 * np.exp(-0.5 * (((x - c[0]) / 0.016) ** 2 + ((y - c[1]) / 0.013) ** 2))
             rgb += k[..., None] * (CHEEK - SKIN)
+    if edge_fade is not None:
+        rgb = SKIN + (rgb - SKIN) * edge_fade(x, y)[..., None]
     if all(k in landmarks for k in ("mouth_corner_left", "mouth_corner_right",
                                     "upper_lip_center", "lower_lip_center")):
         m = vermilion_mask(x, y, landmarks)[..., None]
         rgb = rgb * (1 - m) + m * VERMILION * (1.0 + 0.03 * rng.standard_normal((h, w, 1)))
         _, hl, _ = _lip_frame(x, y, landmarks)  # the line where the lips meet, darker
         rgb *= (1.0 - 0.35 * m * np.exp(-0.5 * (hl / 3.5e-4) ** 2)[..., None])
+    hairs = _brow_hairs(h, w, rng)
     for side, eye_name, brow_name in ((1, "eye_left", "brow_left"),
                                       (-1, "eye_right", "brow_right")):
         if brow_name in landmarks:
@@ -133,8 +140,8 @@ def skin_texture(landmarks: dict, bounds: tuple[float, float, float, float], hai
             centre = b[1] + 0.0012 - 0.0035 * (s - 0.2) ** 2
             half = 0.0024 * (1.0 - 0.5 * (s + 1) / 2)
             d = np.minimum(half - np.abs(y - centre), 0.004 * (1.0 - np.abs(s)))
-            strand = 0.75 + 0.25 * rng.random((h, w))
-            m = (_smooth(d, 8e-4) * strand)[..., None] * 0.9
+            m = (_smooth(d + 4e-4 * hairs, 6e-4) * np.clip(0.75 + 0.45 * hairs, 0, 1))
+            m = m[..., None] * 0.95
             rgb = rgb * (1 - m) + m * BROW
         if eye_name in landmarks:
             e = landmarks[eye_name]
@@ -154,6 +161,16 @@ def skin_texture(landmarks: dict, bounds: tuple[float, float, float, float], hai
         rgb = rgb * (1 - m) + m * HAIR * (0.85 + 0.3 * rng.random((h, w, 1)))
     image = np.concatenate([np.clip(rgb, 0, 1), alpha[..., None]], axis=-1)
     return image, (x0, y1)
+
+
+def _brow_hairs(h: int, w: int, rng) -> np.ndarray:
+    """Unit-variance noise (h, w) drawn out into hairs: 1.5 mm along x, 0.15 mm across, at the
+    skin texture's texel (:data:`SKIN_TEXEL`); the brows are these strokes, not a smooth
+    band, and their edges break up along them."""
+    from scipy.ndimage import gaussian_filter
+
+    n = gaussian_filter(rng.standard_normal((h, w)), (0.6, 6.0))
+    return n / max(float(n.std()), 1e-12)
 
 
 def iris_texture(n: int = 192) -> np.ndarray:

@@ -39,9 +39,14 @@ albedo          base64 uint8, (N, 3) sRGB colour of the untextured triangles' ve
 atlas           ``{"width", "height", "color", "alpha"}``: the texture atlas as data URIs, an
                 sRGB PNG (a JPEG when the PNG's URI would pass 2 MB) and a grey PNG of its alpha
                 (null when all opaque), at most 4096 texels a side
-parts           ``[{"name", "motion": "skin"|"skull"|"jaw"|"skirt", "inward", "start", "count",
-                "faceStart", "faceCount", "gloss": [strength, exponent], "framed"}]``: each
-                part's vertex and triangle ranges
+parts           ``[{"name", "motion": "skin"|"skull"|"jaw"|"skirt"|"follow", "inward", "start",
+                "count", "faceStart", "faceCount", "gloss": [strength, exponent],
+                "framed"}]``: each part's vertex and triangle ranges (a part whose gloss varies
+                per vertex adds base64 float32 ``glossVertex`` (count, 2), its mean in
+                ``gloss``; 'eye' and 'lid' parts stay at rest: the viewer shows the eyes
+                open and looking ahead); a 'follow' part (the
+                head closing the skin) also has base64 ``nodes``, ``inner`` (uint32) and
+                ``weights``, ``reach`` (float32) per vertex (:class:`.closure.Closure`)
 hinge           ``{"point": [x, y, z] m, "axis": [x, y, z]}``: 'jaw' parts turn about it by
                 the frame's jaw angle (positive opens the mouth), then move by its shift
 frameY          [bottom, top] m: the views fit the ``framed`` parts between these heights
@@ -198,14 +203,21 @@ def scene_block(scene) -> dict:
     uv = np.round(np.clip(uv, 0.0, 1.0) * _UV_ONE)
     parts, face = [], 0
     for i, p in enumerate(scene.parts):
+        g = np.asarray(p.gloss, float)
         part = {"name": p.name, "motion": p.motion, "inward": bool(p.inward),
                 "start": int(scene.offsets[i]), "count": len(p.rest),
                 "faceStart": face, "faceCount": len(p.faces),
-                "gloss": [float(g) for g in p.gloss],
-                "framed": p.name in ("skin", "head")}
+                "gloss": [float(v) for v in (g if g.ndim == 1 else g.mean(axis=0))],
+                "framed": p.name in ("skin", "head", "hair")}
         if p.motion == "skirt":  # from the skin's edge nodes in towards the head's centre
             part.update(nodes=_b64(p.skirt_nodes, "u4"),
                         centre=[float(v) for v in scene.centre], depth=SKIRT_DEPTH)
+        if g.ndim == 2:  # per vertex (the skin's moist lips)
+            part["glossVertex"] = _b64(g, "f4")
+        if p.motion == "follow":  # the head closing the skin (:mod:`.closure`)
+            c = p.follow
+            part.update(nodes=_b64(c.nodes, "u4"), inner=_b64(c.inner, "u4"),
+                        weights=_b64(c.weights, "f4"), reach=_b64(c.reach, "f4"))
         parts.append(part)
         face += len(p.faces)
     rest = np.concatenate([p.rest for p in scene.parts])
@@ -262,7 +274,9 @@ def decode_scene(block: dict) -> dict:
     uv = np.zeros((len(tris), 3, 2))
     uv[tex] = decode(block["uv"], "u2", (-1, 3, 2)) / _UV_ONE * np.array([w, h])
     parts = block["parts"]
-    gloss = np.concatenate([np.tile(np.float32(p["gloss"]), (p["count"], 1)) for p in parts])
+    gloss = np.concatenate([decode(p["glossVertex"], "f4", (-1, 2)) if "glossVertex" in p
+                            else np.tile(np.float32(p["gloss"]), (p["count"], 1))
+                            for p in parts])
     return {"rest": decode(block["rest"], "f4", (n, 3)), "tris": tris, "tex": tex,
             "alpha_test": (flags & 2) > 0, "two_sided": (flags & 4) > 0, "uv": uv,
             "albedo": srgb_to_linear(decode(block["albedo"], "u1", (n, 3)) / 255.0),
