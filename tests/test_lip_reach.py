@@ -93,16 +93,6 @@ def test_the_marginal_part_lowers_the_upper_lip_3_mm(face, runs):
     assert d[2] < 0.0  # the red lip turns in
 
 
-#: issue 32's stable contacts (solvers/contacts.py) took part of this reach away: measured 6.56 mm
-#: with the bone contact chattering in the explicit remainder, 5.55 mm once it is stepped on its
-#: own. The chatter pumped the lip's deep surface off the teeth; the reach must come from the
-#: muscles now (issue 27, open).
-REACH_LOST = ("issue 27, not met since issue 32's stable contacts: the lower lip rises 5.55 mm on "
-              "the jaw (6.56 mm before, with the bone contact chattering), the lips stay 1.2 mm "
-              "apart under OOSM + OOIM + MEN (pressed 0.75 mm before)")
-
-
-@pytest.mark.xfail(strict=True, raises=AssertionError, reason=REACH_LOST)
 def test_the_marginal_part_lifts_the_lower_lip_6_mm_on_the_jaw(face, runs):
     ll = face.landmarks["lower_lip_center"]
     d = (runs["OOIM"][ll] - runs["jaw"][ll]) * 1e3
@@ -110,7 +100,6 @@ def test_the_marginal_part_lifts_the_lower_lip_6_mm_on_the_jaw(face, runs):
     assert d[2] < 0.0
 
 
-@pytest.mark.xfail(strict=True, raises=AssertionError, reason=REACH_LOST)
 def test_the_lips_close_and_press_with_the_jaw_open_10_degrees(face, runs):
     """The midline pair of the lip line: open by about 12 mm with the jaw alone; closed and
     pressed (gap < 0, so the lip contact pushes back) under OOSM + OOIM + MEN."""

@@ -58,20 +58,16 @@ def command(group: typer.Typer = app, name: str | None = None, args: tuple[str, 
     return register
 
 LOOK = ("view", "size", "background", "aa")
-
 class _Workflows:
     """``wf.markers`` is :mod:`facemech.workflows.markers`, imported on first use."""
     def __getattr__(self, name: str):
         return importlib.import_module(f"facemech.workflows.{name}")
-
 wf, progress = _Workflows(), importlib.import_module("facemech.progress")
 _log: list = []  # the running command's log lines (output not a terminal)
-
 def _version(value: bool) -> None:
     if value:
         print(f"facemech {importlib.import_module('facemech._version').__version__}")
         raise typer.Exit()
-
 @app.callback()
 def _root(ctx: typer.Context, version: bool = typer.Option(
         False, "--version", help="print the version", callback=_version, is_eager=True),
@@ -88,7 +84,6 @@ def _staged(run, **options):
     lines with their heartbeat; one bar per stage."""
     if err.is_terminal:
         from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
-
         shown = Progress(TextColumn("{task.description}"), BarColumn(), TextColumn(
             "{task.completed}/{task.total}"), TimeElapsedColumn(), console=err, transient=True)
     else:
@@ -119,11 +114,9 @@ def face_build(surface: Path, landmarks: Path, output: Path = ..., units: str = 
     return _staged(wf.faces.build_face_file, **locals())
 
 @command(face_app, "from-photo")
-def face_from_photo(front: Path, output: Path = ..., profile: Path | None = None,
-                    ipd: float | None = None, distance: float = 1.0, name: str | None = None,
-                    tissue: str = "anatomical"):
-    """A talker from a frontal photo (and a profile): the generic face fitted to its landmarks,
-    the photo as its skin (docs/photo.md); the scale used on stderr."""
+def face_from_photo(front: Path, output: Path = ..., profile: Path | None = None, ipd: float | None
+                    = None, distance: float = 1.0, name: str | None = None, tissue="anatomical"):
+    """A talker from a frontal photo (and a profile), the photo as its skin (docs/photo.md)."""
     return _staged(wf.photo.face_from_photo_file, **locals())
 
 @command(face_app, "info", args=("face",))
@@ -352,6 +345,5 @@ def main() -> None:
         sys.exit(2)
     finally:
         restore()
-
 if __name__ == "__main__":
     main()

@@ -142,6 +142,11 @@ class Parameters:
     tether: float = 0.0  # N/m^3, stiffness per area holding the sliding deep surface (continuum)
     incisive_area_cm2: float = 0.10  # cm^2, each incisive bundle of orbicularis oris (estimate)
     k_bone_contact: float = 0.0  # N/m^3, one-sided contact of the sliding surface with the bone
+    #: the implicit methods step the bone and lip contacts on their own, after the global solve
+    #: (solvers/contacts.py); False keeps them in the force as penalties (they chatter at 4 steps
+    #: per frame: docs/model.md). Not the default yet: the anatomical preset's lips were tuned
+    #: with the penalties (issues 27, 32).
+    implicit_contacts: bool = False
     # how a jaw angle alone moves the mandible (JAW_KINEMATICS): the seeds' hinge, or the hinge
     # with the condyle's coupled glide of glide_rate (m/rad) along glide_slope (rad below the
     # horizontal)

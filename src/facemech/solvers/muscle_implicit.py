@@ -31,7 +31,6 @@ from ..physics.assembly import bead_positions, muscle_bundle
 from ..physics.kinds import SPHINCTER
 from ..physics.muscle import force_length
 
-
 #: half-width, as a share of a muscle's rest length, of the band over which the Jacobian takes
 #: up the passive stiffness (the tension's kink at the rest length, eq. 7): well above the
 #: rounding of a length (1e-16) and of a rest geometry built on another BLAS (1e-13), well below

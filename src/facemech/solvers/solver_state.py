@@ -76,13 +76,14 @@ def solver_state(physics: Physics, n_steps: int,
                  system: ImplicitSystem | None = None) -> SolverState:
     """The :class:`SolverState` of a model stepped ``n_steps`` times per frame.
 
-    With an implicit ``system`` and the continuum's tissue, the bone and lip contacts leave the
-    force kernel and are stepped implicitly after each solve (:mod:`.contacts`)."""
+    With an implicit ``system``, the continuum's tissue and ``params.implicit_contacts``, the
+    bone and lip contacts leave the force kernel and are stepped implicitly after each solve
+    (:mod:`.contacts`)."""
     p = physics.params
     frame = 1.0 / p.frame_rate
     forces = force_bundles(physics)
     contacts = ImplicitContacts.empty()
-    if system is not None and p.is_continuum:
+    if system is not None and p.is_continuum and p.implicit_contacts:
         forces, contacts = split_contacts(forces)
     return SolverState(
         forces=forces, contacts=contacts, jaw=jaw_bundle(physics), dynamic=physics.dynamic,
