@@ -206,3 +206,25 @@ def test_bilinear_volume_is_the_mean_of_the_two_splits():
         p = _prism(rng) + rng.normal(0, 5e-4, (6, 3))  # warped sides
         mean = 0.5 * (split_volume(p, PRISM_TRIANGLES) + split_volume(p, PRISM_TRIANGLES_ALT))
         assert symmetric_volume(p) == pytest.approx(mean, rel=1e-12)
+
+
+def test_bead_jacobian_takes_up_the_passive_stiffness_continuously_at_the_rest_length():
+    """The passive branch's stiffness enters the Jacobian over a narrow band about l0, not at a
+    sharp ``l > l0``: every muscle starts at its rest length to the last bit, and a sharp switch
+    made the step (and a whole run, by 3e-7 m) hang on the rounding of that length (OpenBLAS's
+    kernels flipped it)."""
+    from facemech.solvers.muscle_implicit import PASSIVE_STIFFNESS_BAND, hill_derivatives
+
+    p = preset("anatomical")
+    l0, kp, m = 0.03, 10.0, 2.0
+
+    def d_len(length):
+        return hill_derivatives(m, length, l0, 0.0, kp, p.f1, p.f2, p.f3, p.f4)[1]
+
+    below, at, above = d_len(l0 * (1 - 1e-15)), d_len(l0), d_len(l0 * (1 + 1e-15))
+    assert abs(above - below) < 1e-6 * kp
+    assert abs(at - (d_len(l0 * (1 - 3e-6)) + d_len(l0 * (1 + 3e-6))) / 2) < 1e-3 * kp
+    # beyond the band (no activity: the passive branch alone): the law's exact slope
+    passive = [hill_derivatives(0.0, l0 * (1 + s * PASSIVE_STIFFNESS_BAND), l0, 0.0, kp, p.f1,
+                                p.f2, p.f3, p.f4)[1] for s in (-2.0, 0.0, 2.0)]
+    assert passive == [0.0, 0.5 * kp, kp]

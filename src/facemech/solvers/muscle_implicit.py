@@ -31,6 +31,12 @@ from ..physics.assembly import bead_positions, muscle_bundle
 from ..physics.kinds import SPHINCTER
 from ..physics.muscle import force_length
 
+#: half-width, as a share of a muscle's rest length, of the band over which the Jacobian takes
+#: up the passive stiffness (the tension's kink at the rest length, eq. 7): well above the
+#: rounding of a length (1e-16) and of a rest geometry built on another BLAS (1e-13), well below
+#: any motion that matters (30 nm on a 3-cm muscle)
+PASSIVE_STIFFNESS_BAND = 1e-6
+
 
 @nb.njit(cache=True, inline="always")
 def hill_derivatives(m_filtered, length, rest_length, velocity, k_passive, f1, f2, f3, f4):
@@ -47,9 +53,17 @@ def hill_derivatives(m_filtered, length, rest_length, velocity, k_passive, f1, f
     fv = f1 + f2 * np.arctan(arg)
     tension = m_filtered * fl * fv
     d_len = m_filtered * dfl * fv
-    if length > rest_length:
-        tension += k_passive * (length - rest_length)
+    stretch = length - rest_length
+    if stretch > 0.0:
+        tension += k_passive * stretch
+    # the passive branch's stiffness, blended over a narrow band about the rest length: the
+    # step's matrix is then continuous in the state (a sharp switch at l = l0 flipped on a
+    # rounding difference, since every muscle starts at its rest length to the last bit)
+    band = PASSIVE_STIFFNESS_BAND * rest_length
+    if stretch >= band:
         d_len += k_passive
+    elif stretch > -band:
+        d_len += k_passive * (0.5 + 0.5 * stretch / band)
     d_vel = m_filtered * fl * f2 * f4 / (1.0 + arg * arg)
     return tension, d_len, d_vel
 
