@@ -348,7 +348,7 @@ def anatomical(scales: dict | None = None) -> Parameters:
         k_restore=0.0, k_lip_contact=1e5, fixed_skull_contact=False,
         areas_cm2=ANATOMICAL_AREA_CM2, incisive_area_cm2=0.25, tether=0.0,
         k_bone_contact=1e7, jaw_kinematics="glide", glide_rate=GLIDE_RATE,
-        glide_slope=GLIDE_SLOPE,
+        glide_slope=GLIDE_SLOPE, implicit_contacts=True,
     )
 
 
