@@ -65,7 +65,9 @@ def test_amplitude_half_moves_lips_half(ds):
     for k in ("upper_lip_center", "lower_lip_center"):
         ratio = d2.landmarks[k].peak_displacement / d1.landmarks[k].peak_displacement
         assert abs(ratio - 0.5) < 0.05 * 0.5
-        assert d1.landmarks[k].peak_displacement > 1.0  # mm: the lips do move
+        # mm: the lips do move (measured: upper lip 0.90 mm, since the contacts are stepped on
+        # their own, issue 32; 1.1 before)
+        assert d1.landmarks[k].peak_displacement > 0.5
     # frame by frame, the whole face at 0.5: every displacement halves, the jaw angle too
     half = st.scale_amplitude(ds, 0.5)
     rest = ds["rest_positions"].values

@@ -21,11 +21,13 @@ the largest mover of the face in speech, and the inversion never leaves it silen
 
 Rank is not enough: activity is bounded to [0, 1] (a muscle only pulls), so a control moves
 the markers one way along its response and never back. Rank alone keeps, for two midsagittal lip
-points, DLI, LLS, OOS and OOSM: nothing of these lifts the lower lip, so every bilabial (the
-lower lip rising on the jaw) is out of reach of the fit. The pick is therefore completed for
+points, DLI, LLS, OOS and OOSM: of these only OOS lifts the lower lip, 1.3 mm per unit beside
+4 mm of the upper lip forward, so every bilabial (the lower lip rising on the jaw) is out of
+reach of the fit. The pick is therefore completed for
 sign (:func:`cover_signs`): each coordinate some candidate moves by at least
 :data:`MIN_NEW_MOTION_MM` per unit one way and some candidate moves that much the other way
-(a *two-way coordinate*) must be moved that much each way by a kept control. While one is not,
+(a *two-way coordinate*) must be moved each way by a kept control, that much and at least
+:data:`COVER_SHARE` of the most any candidate moves it that way. While one is not,
 the candidate that covers the most of the uncovered signed coordinates is added (ties: the
 largest summed motion on them); the jaw, whose bounds let it close a little past its first pose,
 counts both ways. This is the coordinate-wise form of a positive spanning set (Davis 1954; the
@@ -63,6 +65,15 @@ __all__ = ["MIN_NEW_MOTION_MM", "ControlPick", "cover_signs", "pick_controls",
 
 #: mm per unit of control: the least new marker motion of a kept control
 MIN_NEW_MOTION_MM = U.NOISE_FLOOR_MM / U.IDENTIFIABLE_SE
+
+#: the least share of the best candidate's motion along a signed coordinate that a kept control
+#: must make to cover it (:func:`cover_signs`). A kept control that moves a coordinate a little
+#: that way (over the 1-mm threshold) reaches it only near full activity and with its own large
+#: motions elsewhere, which the bounded fit cannot cancel: with the contacts stepped on their own
+#: (issue 32) OOS lifts the lower lip 1.3 mm per unit beside 4.0 mm of the upper lip forward,
+#: while mentalis lifts it 3.1 mm; counting OOS as the lifter left a twin of closing lips 0.38 mm
+#: RMS off (tests/test_control_pick.py). Half: the weaker of two comparable movers still counts.
+COVER_SHARE = 0.5
 
 
 @dataclass(frozen=True)
@@ -172,11 +183,13 @@ def signed_motion(s: np.ndarray, two_way=()) -> np.ndarray:
 
 
 def cover_signs(s: np.ndarray, kept, *, two_way=(), limit: int | None = None,
-                threshold: float = MIN_NEW_MOTION_MM) -> tuple[list, list, list]:
+                threshold: float = MIN_NEW_MOTION_MM,
+                share: float = COVER_SHARE) -> tuple[list, list, list]:
     """Complete a pick so that every two-way coordinate is moved each way by a kept control.
 
-    A signed coordinate is *covered* by a control that moves it at least ``threshold`` (mm per
-    unit) that way; a coordinate is *two-way* when the candidates cover both of its signs.
+    A signed coordinate is *covered* by a control that moves it that way at least ``threshold``
+    (mm per unit) and at least ``share`` of the most any candidate moves it that way; a
+    coordinate is *two-way* when the candidates cover both of its signs.
     While a signed coordinate of a two-way coordinate is not covered by the kept, the candidate
     covering the most such signed coordinates is added (ties: the largest summed motion on
     them, then the first column). Greedy set cover (Chvatal 1979: within a factor
@@ -189,6 +202,8 @@ def cover_signs(s: np.ndarray, kept, *, two_way=(), limit: int | None = None,
     two_way : columns moving both ways (:func:`signed_motion`)
     limit : the most columns kept in all (None: no limit)
     threshold : mm per unit
+    share : the least share of the best candidate's motion that covers (see
+        :data:`COVER_SHARE`)
 
     Returns
     -------
@@ -197,7 +212,10 @@ def cover_signs(s: np.ndarray, kept, *, two_way=(), limit: int | None = None,
     one_way : signed-coordinate rows no candidate covers whose opposite a candidate covers
     """
     m = signed_motion(s, two_way)
-    can = m >= threshold
+    # a signed coordinate is covered by a control moving it at least the threshold and at
+    # least ``share`` of what the best candidate moves it that way
+    best_motion = m.max(axis=1, keepdims=True) if m.size else m
+    can = m >= np.maximum(threshold, share * best_motion)
     coverable = can.any(axis=1)
     opposite = coverable.reshape(-1, 2)[:, ::-1].ravel()
     want = coverable & opposite  # the signed coordinates of the two-way coordinates
