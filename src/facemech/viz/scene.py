@@ -33,7 +33,7 @@ from .face_parts import MAX_TEXTURE, eye_parts, mouth_parts, skin_part
 from .head import SKIRT_DEPTH, closed_head, ear_parts, head_centre, head_shell, skirt_part
 from .lids import gaze_rotation
 from .look import FaceLook, look_from_dataset, look_from_model
-from .mesh import Part
+from .mesh import Part, VertexNormals
 from .raster import srgb_to_linear
 
 __all__ = ["FaceLook", "MAX_TEXTURE", "Part", "SKIRT_DEPTH", "Scene", "build_scene",
@@ -58,6 +58,7 @@ class Scene:
     rest_normals: tuple = ()  # per part, (n, 3) unit normals at rest
     centre: np.ndarray = field(default_factory=lambda: np.zeros(3))  # of the head, m
     joint_faces: np.ndarray | None = None  # skin + closure faces over [skin, closure] vertices
+    joint_normals: VertexNormals | None = None  # of the joint mesh
     framing: dict = field(default_factory=dict)
 
     def frame(self, skin: np.ndarray, jaw_angle=0.0, blink: float = 0.0,
@@ -83,7 +84,7 @@ class Scene:
         if closure is not None:
             # skin and head are one surface: their normals are the joint mesh's
             cv = closure.follow.place(skin, look.rest)
-            joint = vertex_normals(np.concatenate([skin, cv]), self.joint_faces)
+            joint = self.joint_normals(np.concatenate([skin, cv]))
             n_skin = len(skin)
             e = len(closure.follow.loop)
             skin_normals = joint[:n_skin]
@@ -209,8 +210,10 @@ def _pack(parts: list[Part], look: FaceLook) -> Scene:
     closure = next((p.follow for p in parts if p.motion == "follow"), None)
     if closure is not None:
         skin = parts[0]
-        object.__setattr__(scene, "joint_faces", np.concatenate(
-            [skin.faces, closure.joint_faces(len(skin.rest))]))
+        joint = np.concatenate([skin.faces, closure.joint_faces(len(skin.rest))])
+        object.__setattr__(scene, "joint_faces", joint)
+        object.__setattr__(scene, "joint_normals",
+                           VertexNormals(joint, len(skin.rest) + len(closure.rest)))
     return scene
 
 
