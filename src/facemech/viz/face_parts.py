@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..solvers.jaw import LOWER_ARCH_SETBACK, LOWER_EDGE_ABOVE_STOMION
+from . import dentition
 from . import textures as T
 from .head import HAIR, hair_on_skin
 from .lids import lid_mesh, lid_of
@@ -234,10 +235,9 @@ def mouth_parts(look: FaceLook) -> list[Part]:
                       skin_depth(look), 0.001)
     cavity = Part("cavity", cav, faces[:, ::-1], np.tile(CAVITY, (len(cav), 1)), (0.0, 1.0),
                   "skull", inward=True)
-    tr = np.array([0.018, 0.0065, 0.019])
-    tongue = Part("tongue", np.array([st[0], st[1] - 0.0085, front_z - 0.021]) + unit * tr,
-                  faces, np.tile(TONGUE, (len(unit), 1)), (0.25, 30.0), "jaw")
-    parts = [cavity, _arch(look, True), _arch(look, False), tongue]
+    upper_teeth, upper_gum = dentition.arch(look, True)
+    lower_teeth, lower_gum = dentition.arch(look, False)
+    parts = [cavity, upper_teeth, lower_teeth, dentition.tongue(look), upper_gum, lower_gum]
     seal = mouth_seal(look)
     return parts if seal is None else [*parts, seal]
 

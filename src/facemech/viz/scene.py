@@ -233,7 +233,8 @@ def _touches_cutout(uv: np.ndarray, atlas: np.ndarray) -> np.ndarray:
 def _framing(scene: Scene) -> dict:
     """What the views frame: the head from its top to 35 mm under the menton, and the mouth."""
     look = scene.look
-    allv = np.concatenate([p.rest for p in scene.parts if p.name in ("skin", "head", "hair")])
+    outer = [p.rest for p in scene.parts if p.name in ("skin", "head", "hair")]
+    allv = np.concatenate(outer or [p.rest for p in scene.parts])  # or a scene of inner parts
     top = allv[:, 1].max()
     lm = look.landmarks
     bottom = (lm["menton"][1] if "menton" in lm else look.rest[:, 1].min()) - 0.035
