@@ -189,6 +189,46 @@ def test_gaze_turns_the_eyes_and_the_lid_follows_down(head):
     assert np.allclose(drop, 0.8 * 0.25)
 
 
+def test_the_lower_lid_rises_looking_up_and_in_a_blink(head):
+    """The lower lids: open and looking ahead they have no area; looking up 0.3 rad the
+    fissure's lower edge rises at its middle by LOWER_FOLLOW x 0.3 rad on the eyeball (1.3
+    mm measured; within 0.4 mm); looking down it stays (the cut fissure cannot open further,
+    one pixel); half a blink lifts it too (0.7 mm measured)."""
+    from facemech.viz.lids import LOWER_FOLLOW
+
+    scene, _ = head
+    look = scene.look
+    names = [p.name for p in scene.parts]
+    verts, _ = scene.frame(look.rest, 0.0)
+    for name in ("lower_lid_left", "lower_lid_right"):
+        i = names.index(name)
+        v = verts[scene.offsets[i]:scene.offsets[i + 1]]
+        f = scene.parts[i].faces
+        area = np.linalg.norm(np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]]),
+                              axis=1).sum() / 2
+        assert area < 1e-5  # m^2: a 2-degree strip behind the skin
+    ahead, m = _eye_crop(scene, look)
+    h, w = ahead.shape[:2]
+    skin = ahead[h // 2 + 60:h // 2 + 70, w // 2 - 20:w // 2 + 20].reshape(-1, 3).mean(axis=0)
+
+    def lower_edge(img):
+        """Image row (y down) of the first skin-coloured pixel under the fissure's middle."""
+        column = img[:, w // 2 - 3:w // 2 + 4].mean(axis=1)
+        eye = np.abs(column - skin).max(axis=-1) > 0.12
+        assert eye[h // 2], "the fissure's middle is covered"
+        return h // 2 + int(np.argmin(eye[h // 2:]))
+
+    rows = {k: lower_edge(_eye_crop(scene, look, *k)[0])
+            for k in ((0.0, (0.0, 0.0)), (0.0, (0.0, 0.3)), (0.0, (0.0, -0.3)),
+                      (0.5, (0.0, 0.0)))}
+    lid = next(p.follow for p in scene.parts if p.name == "lower_lid_left")
+    want = LOWER_FOLLOW * 0.3 * lid.radii[1]  # m
+    rise = (rows[0.0, (0.0, 0.0)] - rows[0.0, (0.0, 0.3)]) * m
+    assert abs(rise - want) < 0.4e-3, (rise, want)
+    assert abs(rows[0.0, (0.0, 0.0)] - rows[0.0, (0.0, -0.3)]) <= 1
+    assert (rows[0.0, (0.0, 0.0)] - rows[0.5, (0.0, 0.0)]) * m > 0.4e-3
+
+
 def test_ears_have_relief():
     from facemech.viz.ears import relief
 

@@ -10,7 +10,7 @@ from ..solvers.jaw import LOWER_ARCH_SETBACK, LOWER_EDGE_ABOVE_STOMION
 from . import dentition
 from . import textures as T
 from .head import HAIR, hair_on_skin
-from .lids import lid_mesh, lid_of
+from .lids import lid_mesh, lid_of, lower_lid_of
 from .look import FaceLook
 from .mesh import Part, fit_inside, grid_faces, skin_depth, sphere
 
@@ -158,6 +158,10 @@ def eye_parts(look: FaceLook) -> list[Part]:
         lv, lf, lalb = lid_mesh(lid)
         parts.append(Part(name.replace("eye", "lid"), lv, lf, lalb, (0.10, 16.0), "lid",
                           follow=lid, pivot=centre))
+        lower = lower_lid_of(lid)
+        lv, lf, lalb = lid_mesh(lower)
+        parts.append(Part(name.replace("eye", "lower_lid"), lv, lf, lalb, (0.10, 16.0), "lid",
+                          follow=lower, pivot=centre))
         # the socket's lining (conjunctiva), seen past the eyeball from the side
         lining = fit_inside(centre + np.array([0, 0, 0.003]), unit,
                              radii * np.array([1.5, 1.35, 1.7]), depth, 0.0005)

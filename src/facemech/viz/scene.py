@@ -5,12 +5,13 @@
   brows, lashes, hairline), with the palpebral fissures cut out and its inner side drawn dark
   (:mod:`.face_parts`);
 * **eyes**: eyeballs (sclera, iris, pupil) set behind the fissures, as far forward as the lids
-  allow, in socket linings, turned by the gaze, and upper lids that close with the blink and
-  follow the gaze down (:mod:`.face_parts`, :mod:`.lids`);
-* **mouth**: a dark oral cavity, the upper dental arch fixed to the skull, the lower arch and
-  the tongue moving with the mandible (the results' jaw angle about the model's hinge, plus the
-  hinge's shift), and a dark seal across the slit between the lips' edges, facing into the
-  mouth (it moves with the skin) (:mod:`.face_parts`);
+  allow, in socket linings, turned by the gaze, upper lids that close with the blink and
+  follow the gaze down, and lower lids that rise a little in a blink and looking up
+  (:mod:`.face_parts`, :mod:`.lids`);
+* **mouth**: a dark oral cavity, the upper teeth and gums fixed to the skull, the lower teeth,
+  gums and the tongue moving with the mandible (the results' jaw angle about the model's
+  hinge, plus the hinge's shift) (:mod:`.dentition`), and a dark seal across the slit between
+  the lips' edges, facing into the mouth (it moves with the skin) (:mod:`.face_parts`);
 * **head**: for a face without its own texture, the closure that makes skin and head one
   surface from the crown to the neck, its edge ring the skin's edge nodes (:mod:`.closure`,
   :mod:`.cranium`), hair with volume and a strand fringe (:mod:`.hair`) and ears with relief
@@ -67,7 +68,7 @@ class Scene:
 
         ``jaw_angle``: the jaw's angle (rad), or its pose (3,) (angle rad, shift_y m, shift_z
         m): the mandible's parts turn about the hinge and move with its shift. ``blink``: the
-        upper lids' closure, 0 open .. 1 closed; ``gaze``: (yaw, pitch) rad of both eyes,
+        lids' closure, 0 open .. 1 closed; ``gaze``: (yaw, pitch) rad of both eyes,
         yaw > 0 towards the subject's left, pitch > 0 up (:mod:`.lids`).
         """
         look = self.look
@@ -104,7 +105,7 @@ class Scene:
                     v = (p.rest - p.pivot) @ eye_rot.T + p.pivot
                     n = n_rest @ eye_rot.T
             elif p.motion == "lid":
-                if blink == 0.0 and pitch >= 0.0:
+                if p.follow.at_rest(blink, pitch):
                     v, n = p.rest, n_rest
                 else:
                     v = p.follow.place(blink, pitch)
