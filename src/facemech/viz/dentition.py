@@ -198,7 +198,7 @@ def _gingiva(slots, frame, edge_y: float, sign: float, upper: bool) -> Part:
     """The gum over the crowns' necks: a band along the arch, its margin scalloped."""
     s, pts, nrm = frame
     reach = max(abs(c) + 0.5 * t.width for t, c in slots)
-    cols = np.linspace(-reach, reach, 241)
+    cols = np.linspace(-reach, reach, 161)
     # the margin's height above the edge: over each crown 78 % of its height, coming down
     # 2.2 mm between crowns (the papillae)
     margin = np.empty_like(cols)
