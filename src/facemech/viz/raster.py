@@ -184,18 +184,6 @@ def _scan(f, label, px, py, pz, tris, uv, test, atlas, zbuf, tid, bary, cx0, cx1
             w1 += a1
 
 
-@nb.njit(cache=True, fastmath=True)
-def _bilinear(atlas, u, v, out):
-    h, w = atlas.shape[0], atlas.shape[1]
-    u = min(max(u - 0.5, 0.0), w - 1.001)
-    v = min(max(v - 0.5, 0.0), h - 1.001)
-    iu, iv = int(u), int(v)
-    fu, fv = u - iu, v - iv
-    for c in range(3):
-        out[c] = ((1 - fu) * (1 - fv) * atlas[iv, iu, c] + fu * (1 - fv) * atlas[iv, iu + 1, c]
-                  + (1 - fu) * fv * atlas[iv + 1, iu, c] + fu * fv * atlas[iv + 1, iu + 1, c])
-
-
 def vertex_light(normals: np.ndarray, gloss: np.ndarray, lights: np.ndarray, sky: float,
                  ground: float, wrap: float) -> np.ndarray:
     """Diffuse light and specular highlight at each vertex, (n, 2) float32 (Gouraud shading).
@@ -234,25 +222,36 @@ def _vertex_light(n, gloss, lights, half, sky, ground, wrap, out):
 
 
 @nb.njit(cache=True, inline="always", fastmath=True)
-def _shade_sample(f, w0, w1, tris, light, albedo, uv, tex, atlas, col):
-    """Linear RGB of one sample of triangle ``f`` at barycentric weights (w0, w1), into col."""
+def _shade_sample(f, w0, w1, tris, light, albedo, uv, tex, atlas):
+    """Linear (r, g, b) of one sample of triangle ``f`` at barycentric weights (w0, w1): the
+    albedo (bilinear in the atlas, or per vertex) times the diffuse light, plus the highlight.
+    A tuple, not an array: the three stay in registers."""
     if f >= tris.shape[0]:  # the inside of a two-sided surface: unlit, dark
-        for c in range(3):
-            col[c] = INSIDE[c]
-        return
+        return INSIDE[0], INSIDE[1], INSIDE[2]
     w2 = 1.0 - w0 - w1
     i0, i1, i2 = tris[f, 0], tris[f, 1], tris[f, 2]
     diff = w0 * light[i0, 0] + w1 * light[i1, 0] + w2 * light[i2, 0]
     spec = w0 * light[i0, 1] + w1 * light[i1, 1] + w2 * light[i2, 1]
     if tex[f]:
+        h, w = atlas.shape[0], atlas.shape[1]
         u = w0 * uv[f, 0, 0] + w1 * uv[f, 1, 0] + w2 * uv[f, 2, 0]
         v = w0 * uv[f, 0, 1] + w1 * uv[f, 1, 1] + w2 * uv[f, 2, 1]
-        _bilinear(atlas, u, v, col)
-        for c in range(3):
-            col[c] = col[c] * diff + spec
-    else:
-        for c in range(3):
-            col[c] = (w0 * albedo[i0, c] + w1 * albedo[i1, c] + w2 * albedo[i2, c]) * diff + spec
+        u = min(max(u - 0.5, 0.0), w - 1.001)
+        v = min(max(v - 0.5, 0.0), h - 1.001)
+        iu, iv = int(u), int(v)
+        fu, fv = u - iu, v - iv
+        k00, k01 = (1 - fu) * (1 - fv), fu * (1 - fv)
+        k10, k11 = (1 - fu) * fv, fu * fv
+        r = (k00 * atlas[iv, iu, 0] + k01 * atlas[iv, iu + 1, 0] + k10 * atlas[iv + 1, iu, 0]
+             + k11 * atlas[iv + 1, iu + 1, 0])
+        g = (k00 * atlas[iv, iu, 1] + k01 * atlas[iv, iu + 1, 1] + k10 * atlas[iv + 1, iu, 1]
+             + k11 * atlas[iv + 1, iu + 1, 1])
+        b = (k00 * atlas[iv, iu, 2] + k01 * atlas[iv, iu + 1, 2] + k10 * atlas[iv + 1, iu, 2]
+             + k11 * atlas[iv + 1, iu + 1, 2])
+        return r * diff + spec, g * diff + spec, b * diff + spec
+    return ((w0 * albedo[i0, 0] + w1 * albedo[i1, 0] + w2 * albedo[i2, 0]) * diff + spec,
+            (w0 * albedo[i0, 1] + w1 * albedo[i1, 1] + w2 * albedo[i2, 1]) * diff + spec,
+            (w0 * albedo[i0, 2] + w1 * albedo[i1, 2] + w2 * albedo[i2, 2]) * diff + spec)
 
 
 @nb.njit(cache=True, fastmath=True)
@@ -266,7 +265,6 @@ def shade_resolve(tid, bary, s, tris, light, albedo, uv, tex, atlas, background,
     and alpha; alpha 0 gives a transparent background with the coverage in the alpha channel.
     """
     h, w = rgba.shape[0], rgba.shape[1]
-    col = np.empty(3, np.float32)
     ns = s * s
     ids = np.empty(ns, np.int32)  # an edge pixel's triangles, their sample counts and weights
     cnt = np.empty(ns, np.float32)
@@ -289,8 +287,9 @@ def shade_resolve(tid, bary, s, tris, light, albedo, uv, tex, atlas, background,
                     for i in range(s):
                         a0 += bary[yy * s + j, xx * s + i, 0]
                         a1 += bary[yy * s + j, xx * s + i, 1]
-                _shade_sample(t0, a0 / ns, a1 / ns, tris, light, albedo, uv, tex, atlas, col)
-                r, g, b, cov = col[0] * ns, col[1] * ns, col[2] * ns, float(ns)
+                cr, cg, cb = _shade_sample(t0, a0 / ns, a1 / ns, tris, light, albedo, uv, tex,
+                                           atlas)
+                r, g, b, cov = cr * ns, cg * ns, cb * ns, float(ns)
             elif not same:
                 # shade each triangle the pixel's samples see once, at the mean of its
                 # samples' weights, weighted by their number (as multisampling does)
@@ -313,11 +312,11 @@ def shade_resolve(tid, bary, s, tris, light, albedo, uv, tex, atlas, background,
                         wa[q] += bary[yy * s + j, xx * s + i, 0]
                         wb[q] += bary[yy * s + j, xx * s + i, 1]
                 for q in range(k):
-                    _shade_sample(ids[q], wa[q] / cnt[q], wb[q] / cnt[q], tris, light, albedo,
-                                  uv, tex, atlas, col)
-                    r += col[0] * cnt[q]
-                    g += col[1] * cnt[q]
-                    b += col[2] * cnt[q]
+                    cr, cg, cb = _shade_sample(ids[q], wa[q] / cnt[q], wb[q] / cnt[q], tris,
+                                               light, albedo, uv, tex, atlas)
+                    r += cr * cnt[q]
+                    g += cg * cnt[q]
+                    b += cb * cnt[q]
                     cov += cnt[q]
             a_bg = background[3]
             if cov > 0:
