@@ -266,6 +266,19 @@ def test_culling_the_inner_sides_by_tiles_changes_no_sample(head, view):
         np.testing.assert_allclose(z0, z1, rtol=1e-6)
 
 
+def test_the_joint_normals_are_the_meshs_vertex_normals(head):
+    """The scene's sparse operator gives the joint mesh's area-weighted vertex normals
+    (geometry.mesh.vertex_normals) to rounding, with the jaw open."""
+    from facemech.geometry.mesh import vertex_normals
+
+    scene, frames = head
+    skin, _ = frames[1]
+    closure = next(p for p in scene.parts if p.motion == "follow")
+    v = np.concatenate([skin, closure.follow.place(skin, scene.look.rest)])
+    np.testing.assert_allclose(scene.joint_normals(v), vertex_normals(v, scene.joint_faces),
+                               atol=1e-12)
+
+
 def test_ears_have_relief():
     from facemech.viz.ears import relief
 
