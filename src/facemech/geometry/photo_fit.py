@@ -336,15 +336,24 @@ class ProfileSilhouette:
     source: str = ""
 
     def nasion_and_tip(self) -> tuple[int, int]:
-        """Indices of the pronasale (the most forward point of the middle of the outline) and
-        the nasion (the deepest point between it and the brow above)."""
+        """Indices of the nasion and the pronasale.
+
+        The pronasale is the most forward point of the middle of the outline. The nasion is
+        the bottom of the notch above it: the point furthest behind the outline's forward
+        hull (the upper convex hull of (row, front)) between the pronasale and the hull's next
+        corner above it. The hull, not a window of rows, keeps the answer on the face whatever
+        the head carries above it: a forehead that recedes into hair lies on or near the hull,
+        and the notch between brow and nose is the deepest place under it.
+        """
         k = len(self.rows)
         mid = slice(k // 5, 4 * k // 5)
         tip = mid.start + int(np.argmax(self.front[mid]))
-        above = self.front[:tip]
-        lo = max(tip - k // 4, 0)
-        nasion = lo + int(np.argmin(above[lo:])) if tip > lo else tip
-        return nasion, tip
+        if tip == 0:
+            return tip, tip
+        r, f = self.rows[:tip + 1], self.front[:tip + 1]
+        hull = _upper_hull(r, f)
+        chord = np.interp(r, r[hull], f[hull])
+        return int(np.argmax(chord - f)), tip
 
     def depth_correction(self, vertices: np.ndarray, faces: np.ndarray,
                          ibug: np.ndarray) -> DepthCorrection:
@@ -407,6 +416,21 @@ class ProfileSilhouette:
             (top + 0.004 - grid) / 0.008, 0, 1)
         return DepthCorrection(grid, dg * ramp, width=0.018)
 
+
+
+def _upper_hull(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Indices of the upper convex hull of the points (x, y), x increasing (Andrew's monotone
+    chain)."""
+    hull: list[int] = []
+    for i in range(len(x)):
+        while len(hull) >= 2:
+            a, b = hull[-2], hull[-1]
+            if (x[b] - x[a]) * (y[i] - y[a]) - (y[b] - y[a]) * (x[i] - x[a]) >= 0:
+                hull.pop()
+            else:
+                break
+        hull.append(i)
+    return np.array(hull)
 
 def _midline_depth(vertices: np.ndarray, faces: np.ndarray, heights: np.ndarray) -> np.ndarray:
     """Depth (m) of the surface where the plane x = 0 cuts it, at each height (nan off it)."""

@@ -7,9 +7,10 @@ from __future__ import annotations
 import numpy as np
 
 from ..solvers.jaw import LOWER_ARCH_SETBACK, LOWER_EDGE_ABOVE_STOMION
+from . import dentition
 from . import textures as T
 from .head import HAIR, hair_on_skin
-from .lids import lid_mesh, lid_of
+from .lids import lid_mesh, lid_of, lower_lid_of
 from .look import FaceLook
 from .mesh import Part, fit_inside, grid_faces, skin_depth, sphere
 
@@ -157,6 +158,10 @@ def eye_parts(look: FaceLook) -> list[Part]:
         lv, lf, lalb = lid_mesh(lid)
         parts.append(Part(name.replace("eye", "lid"), lv, lf, lalb, (0.10, 16.0), "lid",
                           follow=lid, pivot=centre))
+        lower = lower_lid_of(lid)
+        lv, lf, lalb = lid_mesh(lower)
+        parts.append(Part(name.replace("eye", "lower_lid"), lv, lf, lalb, (0.10, 16.0), "lid",
+                          follow=lower, pivot=centre))
         # the socket's lining (conjunctiva), seen past the eyeball from the side
         lining = fit_inside(centre + np.array([0, 0, 0.003]), unit,
                              radii * np.array([1.5, 1.35, 1.7]), depth, 0.0005)
@@ -234,10 +239,9 @@ def mouth_parts(look: FaceLook) -> list[Part]:
                       skin_depth(look), 0.001)
     cavity = Part("cavity", cav, faces[:, ::-1], np.tile(CAVITY, (len(cav), 1)), (0.0, 1.0),
                   "skull", inward=True)
-    tr = np.array([0.018, 0.0065, 0.019])
-    tongue = Part("tongue", np.array([st[0], st[1] - 0.0085, front_z - 0.021]) + unit * tr,
-                  faces, np.tile(TONGUE, (len(unit), 1)), (0.25, 30.0), "jaw")
-    parts = [cavity, _arch(look, True), _arch(look, False), tongue]
+    upper_teeth, upper_gum = dentition.arch(look, True)
+    lower_teeth, lower_gum = dentition.arch(look, False)
+    parts = [cavity, upper_teeth, lower_teeth, dentition.tongue(look), upper_gum, lower_gum]
     seal = mouth_seal(look)
     return parts if seal is None else [*parts, seal]
 

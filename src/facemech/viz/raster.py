@@ -51,12 +51,21 @@ def _atlas_alpha(atlas, u, v):
     return atlas[iv, iu, 3]
 
 
+TILE = 8  #: samples per side of the tiles whose nearest depth culls the inner sides
+
+
 @nb.njit(cache=True)
 def rasterise(px, py, pz, tris, uv, tex, alpha_test, two_sided, atlas, zbuf, tid, bary):
     """Scan-convert triangles into a visibility buffer (in place).
 
     Back faces are skipped, except those of ``two_sided`` triangles, which are recorded as
     triangle ``f + len(tris)`` (the inside of the skin, seen through the lips or the lids).
+    The inner sides are drawn after every front face, tile by tile (:data:`TILE` samples a
+    side), skipping the tiles whose nearest depth so far lies in front of the triangle's
+    nearest corner: from outside, a closed head's inner side shows only through its openings,
+    and most of it (the back of the head, behind the face) need not be scanned at all. The
+    depth test is the same either way; the result differs from drawing in index order only
+    where two triangles share a sample's depth exactly.
 
     Parameters
     ----------
@@ -73,75 +82,106 @@ def rasterise(px, py, pz, tris, uv, tex, alpha_test, two_sided, atlas, zbuf, tid
     """
     h, w = zbuf.shape
     nt = tris.shape[0]
+    inner = np.zeros(nt, np.bool_)
+    n_inner = 0
     for f in range(nt):
         i0, i1, i2 = tris[f, 0], tris[f, 1], tris[f, 2]
-        x0, y0, x1, y1, x2, y2 = px[i0], py[i0], px[i1], py[i1], px[i2], py[i2]
-        area = (x1 - x0) * (y2 - y0) - (x2 - x0) * (y1 - y0)
+        area = (px[i1] - px[i0]) * (py[i2] - py[i0]) - (px[i2] - px[i0]) * (py[i1] - py[i0])
         # y points down: front faces have negative area
-        if abs(area) < 1e-9 or (area > 0 and not two_sided[f]):
+        if abs(area) < 1e-9:
             continue
-        label = f if area < 0 else f + nt
-        xmin = max(int(np.floor(min(x0, min(x1, x2)))), 0)
-        xmax = min(int(np.ceil(max(x0, max(x1, x2)))), w - 1)
-        ymin = max(int(np.floor(min(y0, min(y1, y2)))), 0)
-        ymax = min(int(np.ceil(max(y0, max(y1, y2)))), h - 1)
-        if xmin > xmax or ymin > ymax:
+        if area > 0:
+            if two_sided[f]:
+                inner[f] = True
+                n_inner += 1
             continue
-        inv = 1.0 / area
+        _scan(f, f, px, py, pz, tris, uv, alpha_test[f], atlas, zbuf, tid, bary,
+              0, w - 1, 0, h - 1)
+    if n_inner == 0:
+        return
+    th, tw = (h + TILE - 1) // TILE, (w + TILE - 1) // TILE
+    nearest = np.full((th, tw), np.inf, np.float32)  # the smallest depth so far in each tile
+    for yy in range(h):
+        ty = yy // TILE
+        for xx in range(w):
+            z = zbuf[yy, xx]
+            if z < nearest[ty, xx // TILE]:
+                nearest[ty, xx // TILE] = z
+    for f in range(nt):
+        if not inner[f]:
+            continue
+        i0, i1, i2 = tris[f, 0], tris[f, 1], tris[f, 2]
         z0, z1, z2 = pz[i0], pz[i1], pz[i2]
-        test = alpha_test[f] and area < 0  # a cut-out shows the inside of its rim
-        # barycentric weights are affine in x: on each row, solve for the span where all three
-        # are >= 0 and step them along it
-        a0 = (y1 - y2) * inv
-        a1 = (y2 - y0) * inv
-        a2 = -a0 - a1
-        for yy in range(ymin, ymax + 1):
-            fy = yy + 0.5
-            fx = xmin + 0.5
-            w0 = ((x1 - fx) * (y2 - fy) - (x2 - fx) * (y1 - fy)) * inv
-            w1 = ((x2 - fx) * (y0 - fy) - (x0 - fx) * (y2 - fy)) * inv
-            lo, hi = xmin, xmax
-            empty = False
-            for wk, ak in ((w0, a0), (w1, a1), (1.0 - w0 - w1, a2)):
-                if ak > 1e-12:
-                    lo = max(lo, xmin + int(np.ceil((-EDGE_EPS - wk) / ak - 1e-6)))
-                elif ak < -1e-12:
-                    hi = min(hi, xmin + int(np.floor((-EDGE_EPS - wk) / ak + 1e-6)))
-                elif wk < -EDGE_EPS:
-                    empty = True
-            if empty or lo > hi:
-                continue
-            w0 += a0 * (lo - xmin)
-            w1 += a1 * (lo - xmin)
-            for xx in range(lo, hi + 1):
-                w2 = 1.0 - w0 - w1
-                if w0 >= -EDGE_EPS and w1 >= -EDGE_EPS and w2 >= -EDGE_EPS:
-                    z = w0 * z0 + w1 * z1 + w2 * z2
-                    if z > zbuf[yy, xx]:
-                        keep = True
-                        if test:
-                            u = w0 * uv[f, 0, 0] + w1 * uv[f, 1, 0] + w2 * uv[f, 2, 0]
-                            v = w0 * uv[f, 0, 1] + w1 * uv[f, 1, 1] + w2 * uv[f, 2, 1]
-                            keep = _atlas_alpha(atlas, u, v) >= 0.5
-                        if keep:
-                            zbuf[yy, xx] = z
-                            tid[yy, xx] = label
-                            bary[yy, xx, 0] = w0
-                            bary[yy, xx, 1] = w1
-                w0 += a0
-                w1 += a1
+        # a sample's weights may undershoot by EDGE_EPS: a margin keeps the cull conservative
+        top = max(z0, max(z1, z2)) + 1e-5 * (abs(z0) + abs(z1) + abs(z2)) + 1e-9
+        xmin = max(int(np.floor(min(px[i0], min(px[i1], px[i2])))), 0)
+        xmax = min(int(np.ceil(max(px[i0], max(px[i1], px[i2])))), w - 1)
+        ymin = max(int(np.floor(min(py[i0], min(py[i1], py[i2])))), 0)
+        ymax = min(int(np.ceil(max(py[i0], max(py[i1], py[i2])))), h - 1)
+        for ty in range(ymin // TILE, ymax // TILE + 1):
+            for tx in range(xmin // TILE, xmax // TILE + 1):
+                if nearest[ty, tx] >= top:
+                    continue
+                _scan(f, f + nt, px, py, pz, tris, uv, False, atlas, zbuf, tid, bary,
+                      max(xmin, tx * TILE), min(xmax, tx * TILE + TILE - 1),
+                      max(ymin, ty * TILE), min(ymax, ty * TILE + TILE - 1))
 
 
-@nb.njit(cache=True, fastmath=True)
-def _bilinear(atlas, u, v, out):
-    h, w = atlas.shape[0], atlas.shape[1]
-    u = min(max(u - 0.5, 0.0), w - 1.001)
-    v = min(max(v - 0.5, 0.0), h - 1.001)
-    iu, iv = int(u), int(v)
-    fu, fv = u - iu, v - iv
-    for c in range(3):
-        out[c] = ((1 - fu) * (1 - fv) * atlas[iv, iu, c] + fu * (1 - fv) * atlas[iv, iu + 1, c]
-                  + (1 - fu) * fv * atlas[iv + 1, iu, c] + fu * fv * atlas[iv + 1, iu + 1, c])
+@nb.njit(cache=True, inline="always")
+def _scan(f, label, px, py, pz, tris, uv, test, atlas, zbuf, tid, bary, cx0, cx1, cy0, cy1):
+    """Scan-convert triangle ``f`` inside the sample rectangle [cx0, cx1] x [cy0, cy1],
+    recording ``label``; ``test``: discard samples on texels of alpha < 0.5."""
+    i0, i1, i2 = tris[f, 0], tris[f, 1], tris[f, 2]
+    x0, y0, x1, y1, x2, y2 = px[i0], py[i0], px[i1], py[i1], px[i2], py[i2]
+    area = (x1 - x0) * (y2 - y0) - (x2 - x0) * (y1 - y0)
+    xmin = max(int(np.floor(min(x0, min(x1, x2)))), cx0)
+    xmax = min(int(np.ceil(max(x0, max(x1, x2)))), cx1)
+    ymin = max(int(np.floor(min(y0, min(y1, y2)))), cy0)
+    ymax = min(int(np.ceil(max(y0, max(y1, y2)))), cy1)
+    if xmin > xmax or ymin > ymax:
+        return
+    inv = 1.0 / area
+    z0, z1, z2 = pz[i0], pz[i1], pz[i2]
+    # barycentric weights are affine in x: on each row, solve for the span where all three
+    # are >= 0 and step them along it
+    a0 = (y1 - y2) * inv
+    a1 = (y2 - y0) * inv
+    a2 = -a0 - a1
+    for yy in range(ymin, ymax + 1):
+        fy = yy + 0.5
+        fx = xmin + 0.5
+        w0 = ((x1 - fx) * (y2 - fy) - (x2 - fx) * (y1 - fy)) * inv
+        w1 = ((x2 - fx) * (y0 - fy) - (x0 - fx) * (y2 - fy)) * inv
+        lo, hi = xmin, xmax
+        empty = False
+        for wk, ak in ((w0, a0), (w1, a1), (1.0 - w0 - w1, a2)):
+            if ak > 1e-12:
+                lo = max(lo, xmin + int(np.ceil((-EDGE_EPS - wk) / ak - 1e-6)))
+            elif ak < -1e-12:
+                hi = min(hi, xmin + int(np.floor((-EDGE_EPS - wk) / ak + 1e-6)))
+            elif wk < -EDGE_EPS:
+                empty = True
+        if empty or lo > hi:
+            continue
+        w0 += a0 * (lo - xmin)
+        w1 += a1 * (lo - xmin)
+        for xx in range(lo, hi + 1):
+            w2 = 1.0 - w0 - w1
+            if w0 >= -EDGE_EPS and w1 >= -EDGE_EPS and w2 >= -EDGE_EPS:
+                z = w0 * z0 + w1 * z1 + w2 * z2
+                if z > zbuf[yy, xx]:
+                    keep = True
+                    if test:
+                        u = w0 * uv[f, 0, 0] + w1 * uv[f, 1, 0] + w2 * uv[f, 2, 0]
+                        v = w0 * uv[f, 0, 1] + w1 * uv[f, 1, 1] + w2 * uv[f, 2, 1]
+                        keep = _atlas_alpha(atlas, u, v) >= 0.5
+                    if keep:
+                        zbuf[yy, xx] = z
+                        tid[yy, xx] = label
+                        bary[yy, xx, 0] = w0
+                        bary[yy, xx, 1] = w1
+            w0 += a0
+            w1 += a1
 
 
 def vertex_light(normals: np.ndarray, gloss: np.ndarray, lights: np.ndarray, sky: float,
@@ -153,55 +193,83 @@ def vertex_light(normals: np.ndarray, gloss: np.ndarray, lights: np.ndarray, sky
     intensities. Diffuse: a sky/ground hemisphere plus each light wrapped by ``wrap``;
     highlights of the first (key) light only.
     """
-    n = normals
-    t = 0.5 * (n[:, 1] + 1.0)
-    diff = sky * t + ground * (1.0 - t)
-    for lx, ly, lz, li in lights:
-        d = n[:, 0] * lx + n[:, 1] * ly + n[:, 2] * lz
-        diff = diff + li * np.clip((d + wrap) / (1.0 + wrap), 0.0, None)
-    key = lights[0]
+    key = np.asarray(lights[0], float)
     half = key[:3] + np.array([0.0, 0.0, 1.0])
     half = half / np.linalg.norm(half)
-    c = np.clip(n @ half, 0.0, 1.0)
-    facing = (n @ key[:3]) > 0
-    spec = np.where(facing, key[3] * gloss[:, 0] * c ** gloss[:, 1], 0.0)
-    return np.stack([diff, spec], axis=1).astype(np.float32)
+    out = np.empty((len(normals), 2), np.float32)
+    _vertex_light(np.ascontiguousarray(normals, np.float64),
+                  np.ascontiguousarray(gloss, np.float64),
+                  np.ascontiguousarray(lights, np.float64), half, float(sky), float(ground),
+                  float(wrap), out)
+    return out
+
+
+@nb.njit(cache=True)
+def _vertex_light(n, gloss, lights, half, sky, ground, wrap, out):
+    for i in range(n.shape[0]):
+        nx, ny, nz = n[i, 0], n[i, 1], n[i, 2]
+        t = 0.5 * (ny + 1.0)
+        diff = sky * t + ground * (1.0 - t)
+        for k in range(lights.shape[0]):
+            d = nx * lights[k, 0] + ny * lights[k, 1] + nz * lights[k, 2]
+            diff += lights[k, 3] * max((d + wrap) / (1.0 + wrap), 0.0)
+        spec = 0.0
+        if nx * lights[0, 0] + ny * lights[0, 1] + nz * lights[0, 2] > 0:
+            c = min(max(nx * half[0] + ny * half[1] + nz * half[2], 0.0), 1.0)
+            spec = lights[0, 3] * gloss[i, 0] * c ** gloss[i, 1]
+        out[i, 0] = diff
+        out[i, 1] = spec
 
 
 @nb.njit(cache=True, inline="always", fastmath=True)
-def _shade_sample(f, w0, w1, tris, light, albedo, uv, tex, atlas, col):
-    """Linear RGB of one sample of triangle ``f`` at barycentric weights (w0, w1), into col."""
+def _shade_sample(f, w0, w1, tris, light, albedo, uv, tex, atlas):
+    """Linear (r, g, b) of one sample of triangle ``f`` at barycentric weights (w0, w1): the
+    albedo (bilinear in the atlas, or per vertex) times the diffuse light, plus the highlight.
+    A tuple, not an array: the three stay in registers."""
     if f >= tris.shape[0]:  # the inside of a two-sided surface: unlit, dark
-        for c in range(3):
-            col[c] = INSIDE[c]
-        return
+        return INSIDE[0], INSIDE[1], INSIDE[2]
     w2 = 1.0 - w0 - w1
     i0, i1, i2 = tris[f, 0], tris[f, 1], tris[f, 2]
     diff = w0 * light[i0, 0] + w1 * light[i1, 0] + w2 * light[i2, 0]
     spec = w0 * light[i0, 1] + w1 * light[i1, 1] + w2 * light[i2, 1]
     if tex[f]:
+        h, w = atlas.shape[0], atlas.shape[1]
         u = w0 * uv[f, 0, 0] + w1 * uv[f, 1, 0] + w2 * uv[f, 2, 0]
         v = w0 * uv[f, 0, 1] + w1 * uv[f, 1, 1] + w2 * uv[f, 2, 1]
-        _bilinear(atlas, u, v, col)
-        for c in range(3):
-            col[c] = col[c] * diff + spec
-    else:
-        for c in range(3):
-            col[c] = (w0 * albedo[i0, c] + w1 * albedo[i1, c] + w2 * albedo[i2, c]) * diff + spec
+        u = min(max(u - 0.5, 0.0), w - 1.001)
+        v = min(max(v - 0.5, 0.0), h - 1.001)
+        iu, iv = int(u), int(v)
+        fu, fv = u - iu, v - iv
+        k00, k01 = (1 - fu) * (1 - fv), fu * (1 - fv)
+        k10, k11 = (1 - fu) * fv, fu * fv
+        r = (k00 * atlas[iv, iu, 0] + k01 * atlas[iv, iu + 1, 0] + k10 * atlas[iv + 1, iu, 0]
+             + k11 * atlas[iv + 1, iu + 1, 0])
+        g = (k00 * atlas[iv, iu, 1] + k01 * atlas[iv, iu + 1, 1] + k10 * atlas[iv + 1, iu, 1]
+             + k11 * atlas[iv + 1, iu + 1, 1])
+        b = (k00 * atlas[iv, iu, 2] + k01 * atlas[iv, iu + 1, 2] + k10 * atlas[iv + 1, iu, 2]
+             + k11 * atlas[iv + 1, iu + 1, 2])
+        return r * diff + spec, g * diff + spec, b * diff + spec
+    return ((w0 * albedo[i0, 0] + w1 * albedo[i1, 0] + w2 * albedo[i2, 0]) * diff + spec,
+            (w0 * albedo[i0, 1] + w1 * albedo[i1, 1] + w2 * albedo[i2, 1]) * diff + spec,
+            (w0 * albedo[i0, 2] + w1 * albedo[i1, 2] + w2 * albedo[i2, 2]) * diff + spec)
 
 
 @nb.njit(cache=True, fastmath=True)
 def shade_resolve(tid, bary, s, tris, light, albedo, uv, tex, atlas, background, lut, rgba):
     """Shade the samples and box-filter s x s of them per pixel into sRGB uint8 RGBA.
 
-    A pixel whose samples all show one triangle is shaded once, at the mean of their weights
-    (as multisampling does); edge pixels are shaded per sample. ``light`` (n, 2) is
+    Each triangle a pixel's samples show is shaded once, at the mean of those samples'
+    weights, and weighted by their number (as multisampling does): a pixel inside a triangle
+    is shaded once, one on an edge once per triangle. ``light`` (n, 2) is
     :func:`vertex_light`'s, ``albedo`` (n, 3) linear RGB. ``background`` is (4,) linear RGB
     and alpha; alpha 0 gives a transparent background with the coverage in the alpha channel.
     """
     h, w = rgba.shape[0], rgba.shape[1]
-    col = np.empty(3, np.float32)
     ns = s * s
+    ids = np.empty(ns, np.int32)  # an edge pixel's triangles, their sample counts and weights
+    cnt = np.empty(ns, np.float32)
+    wa = np.empty(ns, np.float32)
+    wb = np.empty(ns, np.float32)
     m = lut.shape[0] - 1
     for yy in range(h):
         for xx in range(w):
@@ -219,20 +287,37 @@ def shade_resolve(tid, bary, s, tris, light, albedo, uv, tex, atlas, background,
                     for i in range(s):
                         a0 += bary[yy * s + j, xx * s + i, 0]
                         a1 += bary[yy * s + j, xx * s + i, 1]
-                _shade_sample(t0, a0 / ns, a1 / ns, tris, light, albedo, uv, tex, atlas, col)
-                r, g, b, cov = col[0] * ns, col[1] * ns, col[2] * ns, float(ns)
+                cr, cg, cb = _shade_sample(t0, a0 / ns, a1 / ns, tris, light, albedo, uv, tex,
+                                           atlas)
+                r, g, b, cov = cr * ns, cg * ns, cb * ns, float(ns)
             elif not same:
+                # shade each triangle the pixel's samples see once, at the mean of its
+                # samples' weights, weighted by their number (as multisampling does)
+                k = 0
                 for j in range(s):
                     for i in range(s):
                         f = tid[yy * s + j, xx * s + i]
-                        if f >= 0:
-                            _shade_sample(f, bary[yy * s + j, xx * s + i, 0],
-                                          bary[yy * s + j, xx * s + i, 1], tris, light,
-                                          albedo, uv, tex, atlas, col)
-                            r += col[0]
-                            g += col[1]
-                            b += col[2]
-                            cov += 1.0
+                        if f < 0:
+                            continue
+                        q = 0
+                        while q < k and ids[q] != f:
+                            q += 1
+                        if q == k:
+                            ids[k] = f
+                            cnt[k] = 0.0
+                            wa[k] = 0.0
+                            wb[k] = 0.0
+                            k += 1
+                        cnt[q] += 1.0
+                        wa[q] += bary[yy * s + j, xx * s + i, 0]
+                        wb[q] += bary[yy * s + j, xx * s + i, 1]
+                for q in range(k):
+                    cr, cg, cb = _shade_sample(ids[q], wa[q] / cnt[q], wb[q] / cnt[q], tris,
+                                               light, albedo, uv, tex, atlas)
+                    r += cr * cnt[q]
+                    g += cg * cnt[q]
+                    b += cb * cnt[q]
+                    cov += cnt[q]
             a_bg = background[3]
             if cov > 0:
                 if a_bg > 0:

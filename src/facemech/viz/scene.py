@@ -5,12 +5,13 @@
   brows, lashes, hairline), with the palpebral fissures cut out and its inner side drawn dark
   (:mod:`.face_parts`);
 * **eyes**: eyeballs (sclera, iris, pupil) set behind the fissures, as far forward as the lids
-  allow, in socket linings, turned by the gaze, and upper lids that close with the blink and
-  follow the gaze down (:mod:`.face_parts`, :mod:`.lids`);
-* **mouth**: a dark oral cavity, the upper dental arch fixed to the skull, the lower arch and
-  the tongue moving with the mandible (the results' jaw angle about the model's hinge, plus the
-  hinge's shift), and a dark seal across the slit between the lips' edges, facing into the
-  mouth (it moves with the skin) (:mod:`.face_parts`);
+  allow, in socket linings, turned by the gaze, upper lids that close with the blink and
+  follow the gaze down, and lower lids that rise a little in a blink and looking up
+  (:mod:`.face_parts`, :mod:`.lids`);
+* **mouth**: a dark oral cavity, the upper teeth and gums fixed to the skull, the lower teeth,
+  gums and the tongue moving with the mandible (the results' jaw angle about the model's
+  hinge, plus the hinge's shift) (:mod:`.dentition`), and a dark seal across the slit between
+  the lips' edges, facing into the mouth (it moves with the skin) (:mod:`.face_parts`);
 * **head**: for a face without its own texture, the closure that makes skin and head one
   surface from the crown to the neck, its edge ring the skin's edge nodes (:mod:`.closure`,
   :mod:`.cranium`), hair with volume and a strand fringe (:mod:`.hair`) and ears with relief
@@ -33,7 +34,7 @@ from .face_parts import MAX_TEXTURE, eye_parts, mouth_parts, skin_part
 from .head import SKIRT_DEPTH, closed_head, ear_parts, head_centre, head_shell, skirt_part
 from .lids import gaze_rotation
 from .look import FaceLook, look_from_dataset, look_from_model
-from .mesh import Part
+from .mesh import Part, VertexNormals
 from .raster import srgb_to_linear
 
 __all__ = ["FaceLook", "MAX_TEXTURE", "Part", "SKIRT_DEPTH", "Scene", "build_scene",
@@ -58,6 +59,7 @@ class Scene:
     rest_normals: tuple = ()  # per part, (n, 3) unit normals at rest
     centre: np.ndarray = field(default_factory=lambda: np.zeros(3))  # of the head, m
     joint_faces: np.ndarray | None = None  # skin + closure faces over [skin, closure] vertices
+    joint_normals: VertexNormals | None = None  # of the joint mesh
     framing: dict = field(default_factory=dict)
 
     def frame(self, skin: np.ndarray, jaw_angle=0.0, blink: float = 0.0,
@@ -66,7 +68,7 @@ class Scene:
 
         ``jaw_angle``: the jaw's angle (rad), or its pose (3,) (angle rad, shift_y m, shift_z
         m): the mandible's parts turn about the hinge and move with its shift. ``blink``: the
-        upper lids' closure, 0 open .. 1 closed; ``gaze``: (yaw, pitch) rad of both eyes,
+        lids' closure, 0 open .. 1 closed; ``gaze``: (yaw, pitch) rad of both eyes,
         yaw > 0 towards the subject's left, pitch > 0 up (:mod:`.lids`).
         """
         look = self.look
@@ -83,7 +85,7 @@ class Scene:
         if closure is not None:
             # skin and head are one surface: their normals are the joint mesh's
             cv = closure.follow.place(skin, look.rest)
-            joint = vertex_normals(np.concatenate([skin, cv]), self.joint_faces)
+            joint = self.joint_normals(np.concatenate([skin, cv]))
             n_skin = len(skin)
             e = len(closure.follow.loop)
             skin_normals = joint[:n_skin]
@@ -103,7 +105,7 @@ class Scene:
                     v = (p.rest - p.pivot) @ eye_rot.T + p.pivot
                     n = n_rest @ eye_rot.T
             elif p.motion == "lid":
-                if blink == 0.0 and pitch >= 0.0:
+                if p.follow.at_rest(blink, pitch):
                     v, n = p.rest, n_rest
                 else:
                     v = p.follow.place(blink, pitch)
@@ -209,8 +211,10 @@ def _pack(parts: list[Part], look: FaceLook) -> Scene:
     closure = next((p.follow for p in parts if p.motion == "follow"), None)
     if closure is not None:
         skin = parts[0]
-        object.__setattr__(scene, "joint_faces", np.concatenate(
-            [skin.faces, closure.joint_faces(len(skin.rest))]))
+        joint = np.concatenate([skin.faces, closure.joint_faces(len(skin.rest))])
+        object.__setattr__(scene, "joint_faces", joint)
+        object.__setattr__(scene, "joint_normals",
+                           VertexNormals(joint, len(skin.rest) + len(closure.rest)))
     return scene
 
 
@@ -230,7 +234,8 @@ def _touches_cutout(uv: np.ndarray, atlas: np.ndarray) -> np.ndarray:
 def _framing(scene: Scene) -> dict:
     """What the views frame: the head from its top to 35 mm under the menton, and the mouth."""
     look = scene.look
-    allv = np.concatenate([p.rest for p in scene.parts if p.name in ("skin", "head", "hair")])
+    outer = [p.rest for p in scene.parts if p.name in ("skin", "head", "hair")]
+    allv = np.concatenate(outer or [p.rest for p in scene.parts])  # or a scene of inner parts
     top = allv[:, 1].max()
     lm = look.landmarks
     bottom = (lm["menton"][1] if "menton" in lm else look.rest[:, 1].min()) - 0.035
