@@ -52,13 +52,17 @@ def result(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def open_mouth(tmp_path_factory):
-    """The jaw alone opening to 14 degrees (held over the last quarter), on the coarse face."""
+    """The jaw opening to 14 degrees (held over the last quarter) with the open vowel's lower
+    lip (DLI 0.3, speech/visemes.py), on the coarse face. (The jaw alone showed 28 pixels of
+    teeth since the contacts are stepped on their own: the lower lip rides the jaw less and
+    covers the lower incisors, docs/model.md.)"""
     import facemech as fm
     from facemech.io.results import to_dataset
 
-    jaw = np.radians(14.0) * np.clip(np.linspace(0.0, 1.35, OPEN_FRAMES), 0.0, 1.0)
-    sim = fm.simulate(fm.default_face("default-coarse"),
-                      np.zeros((OPEN_FRAMES, len(MUSCLE_GROUPS))), jaw)
+    ramp = np.clip(np.linspace(0.0, 1.35, OPEN_FRAMES), 0.0, 1.0)
+    act = np.zeros((OPEN_FRAMES, len(MUSCLE_GROUPS)))
+    act[:, MUSCLE_GROUPS.index("DLI")] = 0.3 * ramp
+    sim = fm.simulate(fm.default_face("default-coarse"), act, np.radians(14.0) * ramp)
     return write_viewer(to_dataset(sim), tmp_path_factory.mktemp("open") / "open.html")
 
 

@@ -375,16 +375,14 @@ class Table:
     tolerance: tuple[tuple, ...] = ()
 
 
-#: how far the numbers of the checked tables may move (:func:`differences`): the spread that
-#: tools/spread.py measured over OpenBLAS's kernels (the machine's, Prescott, Nehalem), its
-#: threads and 1e-12 changes of the markers (docs/reproducibility.md), about 1.5 times over.
-#: Experiment 1: activity correlations +-0.05 under lucero1999 and +-0.22 under anatomical,
-#: the 3-D correlation counts by 2 and the lowest by 0.32, median errors by 100 % (lucero1999,
-#: printed as 0.001 or 0.002 mm) and 59 % (anatomical), the largest ones by 84 % (anatomical),
-#: frame steps by 20 %, the synthetic movement by 1 %
-E1_TOLERANCE = ((2, 0.08, 0.0), (2, 0.35, 0.0, "**anatomical**"), (3, 0.45, 0.15),
-                (4, 0.005, 0.6), (4, 0.005, 1.0, "**anatomical**"), (5, 0.0, 0.30),
-                (6, 0.0, 0.02))
+#: how far the numbers of the checked tables may move (:func:`differences`). tools/spread.py
+#: measured Experiment 1 the same under this machine's OpenBLAS kernels, Prescott's, Nehalem's
+#: and with the markers moved by 1e-12, to 1e-6 (docs/reproducibility.md, since the skull band
+#: and the contacts stepped on their own): the bounds are issue 32's, activity correlations and
+#: the lowest 3-D correlation +-0.02 (the 3-D counts exactly), median and largest errors 10 %
+#: (at least 0.0005 mm, half the printed digit), frame steps 5 %, the synthetic movement 1 %
+E1_TOLERANCE = ((2, 0.02, 0.0), (3, 0.02, 0.0), (4, 0.0005, 0.10), (5, 0.0, 0.05),
+                (6, 0.0, 0.01))
 #: the viseme targets: lip gap, protrusion and width by up to 0.09 mm (a bilabial's closure)
 VISEMES_TOLERANCE = tuple((c, 0.15, 0.0) for c in (4, 5, 6, 7))
 #: the lags: 6 ms and 0.12 mm; /m/ between two /u:/ with the leads sits at the closure's
