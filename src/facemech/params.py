@@ -456,7 +456,7 @@ def write_preset(path, name: str, scales: dict, extra: dict | None = None, *,
     """
     import json
 
-    from .io.atomic import atomic_path
+    from .atomic import atomic_path
 
     check_jaw_kinematics(jaw_kinematics, glide_rate, glide_slope)
     data = {"format": "facemech-preset", "version": 1, "name": name, "base": "anatomical",

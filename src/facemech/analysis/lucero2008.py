@@ -163,7 +163,7 @@ class RegionAnalysis:
 
 def write(result: RegionAnalysis | Lucero2008, path: str | Path) -> Path:
     """Write ``result.as_dict()`` as JSON (``summary.json``), atomically."""
-    from ..io.atomic import atomic_path
+    from ..atomic import atomic_path
 
     with atomic_path(path, suffix=".json") as tmp:
         tmp.write_text(json.dumps(result.as_dict(), indent=2))

@@ -67,7 +67,7 @@ def face_arrays(model: FaceModel) -> dict[str, np.ndarray]:
 
 def write_face(model: FaceModel, path: str | Path) -> None:
     """Write ``model`` to a ``.npz`` face file, atomically (temporary file, then rename)."""
-    from ..io.atomic import atomic_path
+    from ..atomic import atomic_path
 
     arrays = face_arrays(model)
     with atomic_path(path, suffix=".npz") as tmp, open(tmp, "wb") as fh:

@@ -23,10 +23,10 @@ from pathlib import Path
 
 import numpy as np
 
+from ..kinematics import stats
 from ..markerset import MarkerSet
 from ..params import MUSCLE_GROUPS, Parameters, default_parameters
 from ..waveforms import cosine_bump
-from . import stats
 from .invert import invert
 
 __all__ = ["CrossTalkerExperiment", "CrossTalkerRun", "NoiseFreeScore", "SyntheticExperiment",
@@ -320,7 +320,7 @@ def draw_synthetic(result: SyntheticExperiment, folder: str | Path) -> list[Path
 
 def write(result: SyntheticExperiment | CrossTalkerExperiment, path: str | Path) -> Path:
     """Write an experiment's tables (``result.as_dict()``) as JSON, atomically."""
-    from ..io.atomic import atomic_path
+    from ..atomic import atomic_path
 
     with atomic_path(path, suffix=".json") as tmp:
         tmp.write_text(json.dumps(result.as_dict(), indent=2))

@@ -87,8 +87,8 @@ class Inversion:
 
     def error_summary(self) -> dict:
         """Median and maximum per-frame error (mm), with warnings (see
-        :func:`facemech.inverse.stats.error_summary`)."""
-        from .stats import error_summary
+        :func:`facemech.kinematics.stats.error_summary`)."""
+        from ..kinematics.stats import error_summary
 
         return error_summary(self.rms_error, float(self.params.frame_rate), time_s=self.time)
 

@@ -32,9 +32,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ..atomic import atomic_path
 from ..errors import InputError, missing_input
 from ..params import FRAME_RATE_HZ, MUSCLE_GROUPS
-from .atomic import atomic_path
 
 
 def file_hash(path: str | Path) -> str:

@@ -181,7 +181,7 @@ def speak(
         "files": {k: p.name for k, p in files.items()},
         "stimulus": desc,
     }
-    from ..io.atomic import atomic_path
+    from ..atomic import atomic_path
 
     with atomic_path(files["manifest"]) as tmp:
         tmp.write_text(json.dumps(manifest, indent=2, default=_json_default))

@@ -200,7 +200,7 @@ def run_batch(manifest: str | Path, output: str | Path, *, workers: int | None =
         cannot be written or is an input, a scheduler that cannot be reached, ``workers``
         given with ``scheduler`` (or ``client``).
     """
-    from ..io.atomic import check_output
+    from ..atomic import check_output
 
     if workers is not None and (scheduler is not None or client is not None):
         raise InputError("give the number of local workers or a scheduler, not both",

@@ -32,8 +32,8 @@ def run(output: str | Path, *, integrator: str | None = None, video: bool = True
     -------
     Written : ``data`` the :class:`facemech.demo.DemoSummary`, its line :func:`summary_text`
     """
+    from ..atomic import check_output
     from ..demo import run_demo
-    from ..io.atomic import check_output
 
     check_output(output, [preset if Path(str(preset)).suffix else None], folder=True,
                  field="-o")

@@ -21,8 +21,8 @@ Progress = Callable[[str, int, int], None]
 
 def _check(output: str | Path | None, preset: str | None, *, folder: bool) -> None:
     """Check the output (if any) before the experiment's minutes of work: never the preset
-    file, and writable (:func:`facemech.io.atomic.check_output`)."""
-    from ..io.atomic import check_output
+    file, and writable (:func:`facemech.atomic.check_output`)."""
+    from ..atomic import check_output
 
     if output is not None:
         check_output(output, [preset if preset and Path(preset).suffix else None],

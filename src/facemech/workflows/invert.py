@@ -51,8 +51,8 @@ def invert(markers: str | Path, output: str | Path, *, face: str | Path = "defau
     -------
     facemech.inverse.result.Inversion
     """
+    from ..atomic import check_output
     from ..inverse.workflow import invert_markers
-    from ..io.atomic import check_output
     from ..io.results import file_hash
 
     inputs = [markers, map_file, face if Path(str(face)).suffix else None]

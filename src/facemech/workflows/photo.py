@@ -116,8 +116,8 @@ def face_from_photo_file(front: str | Path, output: str | Path, *,
     Written : ``data`` the :class:`PhotoFace`; its line gives the scale and where it came
         from, the share of the skin painted from the photo, and the model's counts
     """
+    from ..atomic import check_output
     from ..errors import InputError
-    from ..io.atomic import check_output
     from ..io.photo import DlibDetector, check_profile, frontal_landmarks, read_photo
 
     front = Path(front)

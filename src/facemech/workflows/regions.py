@@ -131,7 +131,7 @@ def regions(files: Sequence[str | Path], output: str | Path, *, k: int | None = 
     facemech.analysis.lucero2008.RegionAnalysis, with its figures
     """
     from ..analysis.lucero2008 import analyse, draw, write
-    from ..io.atomic import check_output
+    from ..atomic import check_output
 
     check_output(output, [*files, None if str(neutral) == "first" else neutral], folder=True,
                  field="-o")

@@ -276,7 +276,7 @@ def simulate_files(output: str | Path, controls: Controls, jaw: JawSource = JawS
     prm = get_preset(preset)
     if jaw_kinematics is not None:
         prm = prm.with_(jaw_kinematics=jaw_kinematics)
-    from ..io.atomic import check_output
+    from ..atomic import check_output
 
     given = [controls.activity, controls.emg, controls.emg_calibration, jaw.angles, jaw.markers,
              face if Path(str(face)).suffix else None]

@@ -20,7 +20,7 @@ def speak(output: str | Path, text: str | None = None, *, video: bool = True,
     ``voice``, ``rate_wpm``, ``word_tier``, ``phone_tier``, ``face``, ``preset``, ``strength``,
     ``progress``), the MP4 with ``video`` (:func:`.pictures.render_options` of ``view``, ``size``,
     ``background``, ``aa``). Returns its :class:`~facemech.speech.speak.Spoken`."""
-    from ..io.atomic import check_output
+    from ..atomic import check_output
     from ..speech.speak import speak as run
 
     named = [options.get(k) for k in ("face", "preset")]  # built-in names or files
@@ -72,7 +72,7 @@ def stimuli(design: str | Path, output: str | Path, *, video: bool = True,
     ``background``
     and ``aa``; ``progress`` is callable(stage, done, total). Returns the
     :class:`~facemech.speech.design.DesignReport`."""
-    from ..io.atomic import check_output
+    from ..atomic import check_output
     from ..speech.design import run_design
     from ..speech.speak import text_items
 

@@ -24,8 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..atomic import atomic_path, check_output
 from ..errors import InputError
-from ..io.atomic import atomic_path, check_output
 from .outcome import Written
 
 __all__ = ["Subject", "analyse", "make_subject", "read_subject", "usable_head"]
@@ -260,7 +260,7 @@ def make_subject(face: str | Path, markers: str | Path, output: str | Path, *,
                              field="landmarks")
         import tempfile
 
-        from ..io.atomic import pending_folder
+        from ..atomic import pending_folder
         from .faces import build_face_file
 
         with tempfile.TemporaryDirectory() as tmp, pending_folder(tmp):  # gone if interrupted
