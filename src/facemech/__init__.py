@@ -63,7 +63,7 @@ _PUBLIC = {
     "fill_gaps": "facemech.kinematics.gaps",
     "find_gaps": "facemech.kinematics.gaps",
     "head_correct": "facemech.kinematics.rigid",
-    "jaw_angles_from_marker": "facemech.solvers.jaw",
+    "jaw_angles_from_marker": "facemech.solvers.jaw_drive",
     "load_face": "facemech.geometry.builder",
     "preset": "facemech.params",
     "process_emg": "facemech.emg",

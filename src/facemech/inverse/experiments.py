@@ -443,7 +443,7 @@ def run_crosstalker(face, *, frames: int = 120, dt: float | None = None, params=
     from ..geometry.builder import for_tissue
     from ..kinematics.mapping import scale_adapt, warp_face
     from ..solvers.forward import simulate
-    from ..solvers.jaw import jaw_angles_from_marker
+    from ..solvers.jaw_drive import jaw_angles_from_marker
 
     params = params or default_parameters()
     dt = params.fast_dt if dt is None else dt

@@ -236,8 +236,9 @@ def _jaw_drive(ms, model, prm, mapping, src, lead, chin_marker, second, incisor,
                by_role):
     """(the jaw series: None, (frames,) angles or (frames, 3) poses; what it is, for the
     notes)."""
-    from ..solvers.jaw import jaw_angles_from_marker, jaw_poses_from_points
+    from ..solvers.jaw import jaw_poses_from_points
     from ..solvers.jaw_bone import jaw_poses_from_bone, protrusion_of
+    from ..solvers.jaw_drive import jaw_angles_from_marker
 
     if incisor is not None:
         poses = jaw_poses_from_bone(ms.marker(incisor), model, prm,

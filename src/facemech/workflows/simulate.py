@@ -127,9 +127,9 @@ def jaw_from_chin(path: str | Path, marker: str, model, params, times: np.ndarra
                   units: str | None = None) -> np.ndarray:
     """Jaw angles (frames,) rad at ``times`` (s) from the vertical trajectory of a chin marker
     in a marker file (model axes), 33 ms early
-    (:func:`facemech.solvers.jaw.jaw_angles_from_marker`); the marker is the face's node of
+    (:func:`facemech.solvers.jaw_drive.jaw_angles_from_marker`); the marker is the face's node of
     that name, or its chin landmark. The file must cover ``times``."""
-    from ..solvers.jaw import jaw_angles_from_marker
+    from ..solvers.jaw_drive import jaw_angles_from_marker
     from .markers import trajectories
 
     y = trajectories(path, [marker], units=units, times=times,
