@@ -159,3 +159,133 @@ def test_the_bump_is_the_ramp_mirrored_about_its_centre():
     assert cosine_bump(0.4, 0.4, 0.7) == 1.0 and cosine_bump(0.05, 0.4, 0.7) == 0.0
     np.testing.assert_allclose(cosine_ramp([-1.0, 0.0, 0.5, 1.0, 3.0]), [0, 0, 0.5, 1, 1],
                                atol=1e-15)
+
+
+# ---- the layers (issue 28): every import runs downward ------------------------------------------
+ARCHITECTURE = Path(__file__).resolve().parents[1] / "docs" / "architecture.md"
+#: the one cycle allowed: imports for type checking only
+TYPE_CHECKING_CYCLE = frozenset({"facemech.solvers.implicit", "facemech.solvers.solver_state"})
+
+
+def _layers() -> dict[str, int]:
+    """Folder or module name -> layer number, from docs/architecture.md's list."""
+    text = ARCHITECTURE.read_text()
+    block = text.split("<!-- layers -->", 1)[1].split("<!-- /layers -->", 1)[0]
+    out = {}
+    for line in block.strip().splitlines():
+        number, rest = line.split(".", 1)
+        names = rest.split("--", 1)[0].split("**")[2]
+        for name in names.replace("`", " ").split():
+            out[name.rstrip("/")] = int(number)
+    return out
+
+
+def _module_name(path: Path) -> str:
+    parts = list(path.relative_to(SRC.parent).with_suffix("").parts)
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def _is_module(name: str) -> bool:
+    rel = Path(*name.split("."))
+    return (SRC.parent / rel).with_suffix(".py").is_file() or (SRC.parent / rel).is_dir()
+
+
+def _imports_of(path: Path, tree: ast.Module) -> list[tuple[str, int, bool]]:
+    """(module imported, line, for type checking only) of every facemech import in a module,
+    at its top or inside a function."""
+    name = _module_name(path)
+    package = name if path.name == "__init__.py" else name.rsplit(".", 1)[0]
+    checking = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
+            checking.update(id(n) for n in ast.walk(node))
+    out = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            targets = [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                up = package.split(".")[: len(package.split(".")) - node.level + 1]
+                base = ".".join(up + ([node.module] if node.module else []))
+            # ``from . import params``: the submodule, else the module itself
+            targets = [f"{base}.{a.name}" if _is_module(f"{base}.{a.name}") else base
+                       for a in node.names]
+        else:
+            continue
+        out += [(t, node.lineno, id(node) in checking) for t in set(targets)
+                if t.split(".")[0] == "facemech"]
+    return out
+
+
+def _layer_of(module: str, layers: dict[str, int]) -> int | None:
+    parts = module.split(".")
+    if len(parts) == 1:
+        return 1  # the package root: it imports only _version (ground)
+    return layers.get(parts[1])
+
+
+def _import_graph():
+    graph = {}
+    for path, tree in _modules():
+        graph[_module_name(path)] = _imports_of(path, tree)
+    return graph
+
+
+def test_the_layer_list_names_every_folder_and_module():
+    layers = _layers()
+    names = {p.stem if p.is_file() else p.name for p in SRC.iterdir()
+             if (p.suffix == ".py" and p.stem != "__init__") or (p / "__init__.py").is_file()}
+    assert names == set(layers), (sorted(names - set(layers)), sorted(set(layers) - names))
+
+
+def test_every_import_runs_downward():
+    layers = _layers()
+    upward = []
+    for module, imports in _import_graph().items():
+        here = _layer_of(module, layers)
+        for target, line, _ in imports:
+            there = _layer_of(target, layers)
+            if there is not None and here is not None and there > here:
+                upward.append(f"{module}:{line} -> {target} (layer {here} -> {there})")
+    assert not upward, "\n".join(upward)
+
+
+def test_no_import_cycle_but_the_type_checking_one():
+    graph = {m: {t for t, _, _ in imports if t != m} for m, imports in _import_graph().items()}
+    checking = {(m, t) for m, imports in _import_graph().items() for t, _, tc in imports if tc}
+    # Tarjan's strongly connected components
+    index, low, stack, on, cycles = {}, {}, [], set(), []
+
+    def visit(v):
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on.add(v)
+        for w in graph.get(v, ()):
+            if w not in graph:
+                continue
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = set()
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                comp.add(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                cycles.append(comp)
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    bad = [sorted(c) for c in cycles if c != TYPE_CHECKING_CYCLE]
+    assert not bad, bad
+    # and the allowed one closes only through imports for type checking
+    for comp in cycles:
+        a, b = sorted(comp)
+        assert (a, b) in checking or (b, a) in checking, comp

@@ -15,10 +15,11 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..batch.execute import Outcome, run_item, skipped
-from ..batch.manifest import Item, read_manifest
+from ..batch.execute import Outcome, skipped
+from ..batch.manifest import Item
 from ..batch.records import remove_partial, up_to_date, write_summary
 from ..errors import InputError
+from .batch_jobs import read_manifest, run_job
 
 __all__ = ["BatchReport", "report", "run_batch"]
 
@@ -263,7 +264,7 @@ def _run_on_dask(todo: list[Item], out: Path, finished: Callable[[Outcome], None
         # in the manifest's order), so that no long item starts last while the other workers
         # sit idle
         size = {item.id: _input_bytes(item) for item in todo}
-        futures = {client.submit(run_item, item, str(out), key=f"facemech-{item.id}-{run_id}",
+        futures = {client.submit(run_job, item, str(out), key=f"facemech-{item.id}-{run_id}",
                                  pure=False, priority=size[item.id]): item
                    for item in sorted(todo, key=lambda i: size[i.id], reverse=True)}
         for fut in as_completed(futures, loop=client.loop):
