@@ -289,3 +289,12 @@ def test_no_import_cycle_but_the_type_checking_one():
     for comp in cycles:
         a, b = sorted(comp)
         assert (a, b) in checking or (b, a) in checking, comp
+
+
+def test_importing_facemech_changes_no_environment_variable_nor_thread_count():
+    out = _run("import os, numba; before = (dict(os.environ), numba.get_num_threads()); "
+               "import facemech, facemech.physics.threads, facemech.solvers.forward; "
+               "from facemech import simulate, Parameters; "
+               "print(before == (dict(os.environ), numba.get_num_threads()))",
+               drop=("NUMBA_CACHE_DIR",))
+    assert out.stdout.strip() == "True"

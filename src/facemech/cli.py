@@ -5,6 +5,7 @@ are declared as plain parameters; :func:`command` gives them help, names and ran
 import functools
 import importlib
 import inspect
+import os
 import sys
 from pathlib import Path
 
@@ -38,6 +39,8 @@ def command(group: typer.Typer = app, name: str | None = None, args: tuple[str, 
     def register(fn):
         @functools.wraps(fn)
         def run(**kw):
+            from .physics.threads import set_threads
+            set_threads(_threads[0])  # numba's, for this command (--threads, FACEMECH_THREADS)
             for key, value in kw.items():
                 if isinstance(value, int | float) and not isinstance(value, bool):
                     name = opts.NAMES.get(key, ("--" + key.replace("_", "-"),))[-1]
@@ -64,6 +67,7 @@ class _Workflows:
         return importlib.import_module(f"facemech.workflows.{name}")
 wf, progress = _Workflows(), importlib.import_module("facemech.progress")
 _log: list = []  # the running command's log lines (output not a terminal)
+_threads: list = [None]  # --threads, or None: default_threads()
 def _version(value: bool) -> None:
     if value:
         print(f"facemech {importlib.import_module('facemech._version').__version__}")
@@ -73,8 +77,7 @@ def _root(ctx: typer.Context, version: bool = typer.Option(
         False, "--version", help="print the version", callback=_version, is_eager=True),
           threads: int | None = typer.Option(None, help=opts.HELP["threads"])) -> None:
     """Physics and kinematics of the speaking face."""
-    if threads is not None or "FACEMECH_THREADS" in importlib.import_module("os").environ:
-        importlib.import_module("facemech.physics.threads").set_threads(threads)  # numba's
+    _threads[0] = threads
     if not err.is_terminal:  # log lines, and a heartbeat for the whole command
         _log[:] = [ctx.with_resource(progress.LogProgress(ctx.invoked_subcommand or "facemech"))]
         ctx.call_on_close(_log.clear)
@@ -336,7 +339,10 @@ def batch(manifest: Path, output: Path = ..., workers: int | None = None,
 
 def main() -> None:
     """Run the app: a FacemechError is one line on stderr, exit 2; SIGINT/SIGTERM: 130/143."""
-    restore = importlib.import_module("facemech.interrupts").install()
+    from . import _numba_cache_dir, interrupts
+    cache = _numba_cache_dir(str(Path(__file__).parent), os.environ, lambda d: os.access(d, os.W_OK))
+    os.environ.update({} if cache is None else {"NUMBA_CACHE_DIR": cache})  # before numba starts
+    restore = interrupts.install()
     try:
         app()
     except FacemechError as exc:
