@@ -340,7 +340,8 @@ def batch(manifest: Path, output: Path = ..., workers: int | None = None,
 def main() -> None:
     """Run the app: a FacemechError is one line on stderr, exit 2; SIGINT/SIGTERM: 130/143."""
     from . import _numba_cache_dir, interrupts
-    cache = _numba_cache_dir(str(Path(__file__).parent), os.environ, lambda d: os.access(d, os.W_OK))
+    cache = _numba_cache_dir(os.path.dirname(__file__), os.environ,
+                             lambda d: os.access(d, os.W_OK))
     os.environ.update({} if cache is None else {"NUMBA_CACHE_DIR": cache})  # before numba starts
     restore = interrupts.install()
     try:

@@ -1,13 +1,13 @@
 """The command line's options, as data: each option's help (:data:`HELP`), its names where
 they are not ``--the-parameter`` (:data:`NAMES`) and the interval its numbers must lie in
-(:data:`RANGES`), with :func:`check_number`, which :mod:`facemech.cli` applies to every number
-a command is given before it runs. Pure Python: importing it costs nothing."""
+(:data:`RANGES`, from the one table of :mod:`facemech.checks`), with :func:`check_number`, which
+:mod:`facemech.cli` applies to every number a command is given before it runs. Pure Python:
+importing it costs nothing."""
 
 from __future__ import annotations
 
-import math
-
-from .errors import InputError
+from .checks import RANGES as _RANGES
+from .checks import check_number
 
 __all__ = ["HELP", "NAMES", "RANGES", "check_number", "help_for"]
 
@@ -189,39 +189,12 @@ NAMES: dict[str, tuple[str, ...]] = {
     "rate_wpm": ("--rate",), "noise_mm": ("--noise",), "map_file": ("--map",), "k": ("-k",),
     "aa": ("--aa",)}
 
-#: parameter -> the interval its value must lie in; NaN and infinities never pass. Units as in
-#: the help: rates Hz, times and steps s, noise and weights mm
-RANGES: dict[str, str] = {
-    "rate": "(0, 1e5]", "dt": "(0, 0.01]", "max_gap": "(0, 3600]", "time": "[0, inf)",
-    "noise": "[0, 100]", "noise_mm": "[0, 100]", "tol": "(0, 100]", "bend": "[0, 1e6]",
-    "smooth": "[0, 1e6]", "effort": "[0, 1e6]", "window": "[1, 1000]", "substeps": "[1, 1e5]",
-    "reference": "[0, inf)", "frames": "[2, 1e6]", "utterances": "[1, 1e4]", "k": "[1, 1000]",
-    "aa": "[1, 4]", "rate_wpm": "[80, 450]", "strength": "[0, 10]", "jaw_lead": "[0, 600]",
-    "max_evaluations": "[1, 1e7]", "lowpass": "[0, 1000]",
-    "workers": "[1, 1024]", "ipd": "[50, 80]", "distance": "[0.3, 20]"}
+#: parameter -> the interval its value must lie in, for the numbers that are options of a
+#: command: the rows of the one table (:mod:`facemech.checks`) that the Python API checks too
+RANGES: dict[str, str] = {k: v for k, v in _RANGES.items()
+                          if k in HELP or any(h.endswith("." + k) for h in HELP)}
 
 
 def help_for(command: str, parameter: str) -> str | None:
     """The help of ``parameter`` in the command whose function is named ``command``."""
     return HELP.get(f"{command}.{parameter}", HELP.get(parameter))
-
-
-def check_number(option: str, value: float, interval: str | None = None) -> None:
-    """Refuse ``value`` unless it is finite and lies in ``interval``.
-
-    Parameters
-    ----------
-    option : the option's name, for the message (e.g. ``--dt``)
-    value : the number given
-    interval : ``"(lo, hi]"`` style, bounds may be ``inf``; None: any finite number
-
-    Raises
-    ------
-    InputError : naming ``option``, the interval and the value
-    """
-    lo, hi = (float(v) for v in interval[1:-1].split(",")) if interval else (-math.inf, math.inf)
-    above = interval is None or (lo < value if interval[0] == "(" else lo <= value)
-    below = interval is None or (value < hi if interval[-1] == ")" else value <= hi)
-    if not (math.isfinite(value) and above and below):
-        within = f" in {interval}" if interval else ""
-        raise InputError(f"must be a finite number{within}, got {value}", source=f"option {option}")

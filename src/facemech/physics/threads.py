@@ -10,8 +10,8 @@ so it may change between steps.
 Importing the package leaves numba's count as it is (numba's default: every CPU, or
 ``NUMBA_NUM_THREADS``); a command of the command line runs on :func:`default_threads`, the cores
 it may run on (``FACEMECH_THREADS`` in the environment, or ``--threads``, sets it instead), and a
-program calls :func:`set_threads` for the same. On a machine busy with other work, threads that wait for
-each other at every step cost more than they save: set one there.
+program calls :func:`set_threads` for the same. On a machine busy with other work, threads that
+wait for each other at every step cost more than they save: set one there.
 """
 
 from __future__ import annotations
