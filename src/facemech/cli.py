@@ -3,7 +3,6 @@ library (:mod:`facemech.workflows`) and prints what it did; bad input: one line,
 are declared as plain parameters; :func:`command` gives them help, names and ranges."""
 
 import functools
-import importlib
 import inspect
 import os
 import sys
@@ -13,6 +12,9 @@ import typer
 from rich.console import Console
 
 from . import cli_options as opts
+from . import progress
+from . import workflows as wf
+from ._version import __version__
 from .errors import FacemechError
 
 app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_enable=False,
@@ -31,11 +33,12 @@ def _option(fn, p: inspect.Parameter, args: tuple[str, ...]) -> inspect.Paramete
     return p.replace(default=typer.Option(p.default, *opts.NAMES.get(p.name, ()), help=help))
 
 def command(group: typer.Typer = app, name: str | None = None, args: tuple[str, ...] = (),
-            look: tuple | None = None):
+            look: tuple | None = None, groups: tuple[str, ...] = ()):
     """Register the function as the command ``name`` of ``group``: parameters become options
     (:mod:`facemech.cli_options`; no default or in ``args``: arguments; ``...``: required),
     numbers are checked first, what it returns is printed (``warnings`` on stderr); ``look``:
-    defaults of ``--view --size --background --aa``, passed as one ``render``."""
+    defaults of ``--view --size --background --aa``, passed as one ``render``; ``groups``: the
+    parameters that take options of :data:`~facemech.cli_options.GROUPS` as one dict each."""
     def register(fn):
         @functools.wraps(fn)
         def run(**kw):
@@ -45,6 +48,7 @@ def command(group: typer.Typer = app, name: str | None = None, args: tuple[str, 
                 if isinstance(value, int | float) and not isinstance(value, bool):
                     name = opts.NAMES.get(key, ("--" + key.replace("_", "-"),))[-1]
                     opts.check_number(name, value, opts.RANGES.get(key))
+            kw.update({g: {k: kw.pop(k) for k in opts.GROUPS[g]} for g in groups})
             if look:
                 kw["render"] = wf.pictures.render_options(*(kw.pop(k) for k in LOOK))
             if isinstance(shown := fn(**kw), list):  # lines, or what it wrote and warnings
@@ -52,25 +56,22 @@ def command(group: typer.Typer = app, name: str | None = None, args: tuple[str, 
             elif shown is not None:  # file names and notes are not markup
                 out.print(shown, markup=False, highlight=False)
                 err.print(getattr(shown, "warnings", ""), end="")
-        sig = inspect.signature(fn)
-        extra = [inspect.Parameter(k, inspect.Parameter.KEYWORD_ONLY, default=d, annotation=type(
-            d)) for k, d in zip(LOOK, look or (), strict=False)]
+        sig, key = inspect.signature(fn), inspect.Parameter.KEYWORD_ONLY
+        extra = [inspect.Parameter(k, key, default=d, annotation=type(d))
+                 for k, d in zip(LOOK, look or (), strict=False)]
+        extra += [inspect.Parameter(k, key, default=d, annotation=a)
+                  for g in groups for k, (a, d) in opts.GROUPS[g].items()]
         run.__signature__ = sig.replace(parameters=[_option(fn, p, args) for p in (
-            *sig.parameters.values(), *extra) if p.name != "render"])
+            *sig.parameters.values(), *extra) if p.name not in ("render", *groups)])
         return group.command(name)(run)
     return register
 
 LOOK = ("view", "size", "background", "aa")
-class _Workflows:
-    """``wf.markers`` is :mod:`facemech.workflows.markers`, imported on first use."""
-    def __getattr__(self, name: str):
-        return importlib.import_module(f"facemech.workflows.{name}")
-wf, progress = _Workflows(), importlib.import_module("facemech.progress")
 _log: list = []  # the running command's log lines (output not a terminal)
 _threads: list = [None]  # --threads, or None: default_threads()
 def _version(value: bool) -> None:
     if value:
-        print(f"facemech {importlib.import_module('facemech._version').__version__}")
+        print(f"facemech {__version__}")
         raise typer.Exit()
 @app.callback()
 def _root(ctx: typer.Context, version: bool = typer.Option(
@@ -182,25 +183,18 @@ def markers_fill_gaps(source: Path, output: Path = ..., units: str | None = None
     """Fill interior gaps up to --max-gap with a cubic spline; filled samples are flagged."""
     return wf.markers.fill_gaps_file(**locals())
 
-@command(look=("frontal+profile", "1280x720", "#2a2c33", 2))
-def simulate(
-        output: Path = ..., face: str = "default", activity: Path | None = None,
-        emg: Path | None = None, units: str | None = None, emg_baseline: str | None = None,
-        emg_calibration: Path | None = None, jaw_chin: Path | None = None,
-        chin_marker: str | None = None, jaw_second_marker: str | None = None,
-        jaw_incisor: str | None = None, jaw_molar: str | None = None, jaw_angle: Path | None = None,
-        bite_block: bool = False, jaw_kinematics: str | None = None, preset: str = "anatomical",
-        integrator: str | None = None, substeps: int | None = None, dt: float | None = None,
-        jaw_drive: str = "ramp", video: Path | None = None, audio: Path | None = None, render=None):
+@command(look=("frontal+profile", "1280x720", "#2a2c33", 2), groups=(
+    "controls", "jaw_source", "solver"))
+def simulate(output: Path = ..., face: str = "default", preset: str = "anatomical",
+             video: Path | None = None, audio: Path | None = None, render=None,
+             controls=None, jaw_source=None, solver=None):
     """Simulate the face driven by muscle activity or EMG and a jaw trajectory."""
-    sim, movie = wf.simulate, video and (video, audio, render)
-    return (_staged(
-        sim.simulate_files, output=output, movie=movie,
-        controls=sim.Controls(activity, emg, emg_baseline, emg_calibration),
-        jaw=sim.JawSource(jaw_angle, jaw_chin, chin_marker, jaw_second_marker, units, bite_block,
-                          jaw_incisor, jaw_molar),
-        face=face, preset=preset, jaw_kinematics=jaw_kinematics, integrator=integrator,
-        substeps=substeps, dt=dt, jaw_drive=jaw_drive))
+    sim, j = wf.simulate, jaw_source
+    return _staged(sim.simulate_files, output=output, movie=video and (video, audio, render),
+                   controls=sim.Controls(**controls), jaw=sim.JawSource(
+                       j["jaw_angle"], j["jaw_chin"], j["chin_marker"], j["jaw_second_marker"],
+                       j["units"], j["bite_block"], j["jaw_incisor"], j["jaw_molar"]),
+                   face=face, preset=preset, **solver)
 
 @command(look=("frontal+profile", "1280x720", "#2a2c33", 2))
 def render(result: Path, output: Path = ..., audio: Path | None = None, render=None):
@@ -231,15 +225,14 @@ def view(result: Path, output: Path = ..., units: str | None = None,
     """Write an interactive viewer: one self-contained HTML page (WebGL, works offline)."""
     return wf.pictures.view_file(result, output, markers=markers, units=units, title=title)
 
-@command(args=("text",))
+@command(args=("text",), look=("frontal+profile", "1280x720", "#2a2c33", 2), groups=("tiers",))
 def speak(text: str | None = None, output: Path = Path("speak-output"),
           audio: Path | None = None, textgrid: Path | None = None, voice: str = "en-us",
-          rate_wpm: int = 160, word_tier: str | None = None, phone_tier: str | None = None,
-          strength: float = 1.0, face: str = "default", preset: str = "anatomical",
-          video: bool = True, view: str = "frontal+profile", size: str = "1280x720",
-          background: str = "#2a2c33", aa: int = 2):
+          rate_wpm: int = 160, strength: float = 1.0, face: str = "default",
+          preset: str = "anatomical", video: bool = True, render=None, tiers=None):
     """Make the face say TEXT (eSpeak NG), or speak in sync with a recorded voice (--audio)."""
-    _say(wf.speech.speak_report(_staged(wf.speech.speak, **locals()), output))
+    kw = {**locals(), "tiers": (tiers["word_tier"], tiers["phone_tier"])}
+    _say(wf.speech.speak_report(_staged(wf.speech.speak, **kw), output))
 
 @command()
 def describe(result: Path, as_json: bool = False, series: bool = False):
@@ -267,18 +260,17 @@ def experiment_lucero2008(output: Path = Path("lucero2008"), frames: int = 60,
     """Lucero & Munhall (2008) on the embedded corpus, our numbers beside the paper's."""
     _say(wf.experiments.lucero2008_report(_staged(wf.experiments.lucero2008, **locals()), output))
 
-@command()
+@command(groups=("marker_file", "model", "jaw_markers", "fit"))
 def invert(markers: Path = ..., output: Path = ..., face: str = "default", method: str = "lsq",
-           map_file: Path | None = None, preset: str = "anatomical", figure: Path | None = None,
-           positive: bool = True, controls: str | None = None, chin_marker: str | None = None,
-           jaw_second_marker: str | None = None, jaw_incisor: str | None = None,
-           jaw_molar: str | None = None, jaw_fixed: bool = False, jaw_lead: int | None = None,
-           noise: float | None = None, window: int | None = None, tol: float | None = None,
-           bend: float | None = None, smooth: float | None = None, effort: float | None = None,
-           max_evaluations: int | None = None, scale_pair: str | None = None,
-           jaw_kinematics: str | None = None, dt: float | None = None, units: str | None = None):
+           figure: Path | None = None, positive: bool = True, controls: str | None = None,
+           noise: float | None = None, marker_file=None, model=None, jaw_markers=None, fit=None):
     """Recover muscle activity and the jaw frame by frame from markers; re-animate the face."""
-    res = _staged(wf.invert.invert, **locals())
+    from .inverse.workflow import JawMarkers
+    m, wi = marker_file, wf.invert
+    res = _staged(wi.invert, markers=wi.MarkerFile(markers, m["units"], m["map_file"], m[
+        "scale_pair"]), output=output, face=face, params=wi.parameters(**model), method=method,
+        options=fit, positive=positive, controls=controls, jaw=JawMarkers(**jaw_markers),
+        noise=noise, figure=figure)
     _say(wf.invert.report(res, output, figure))
     _say(wf.invert.notes(res), True)
 
@@ -321,13 +313,14 @@ def subject(face: str, markers: Path = ..., output: Path = ..., head: str | None
     """Make a subject folder: a face (built-in, face file or scan) fitted to rest markers."""
     return _staged(wf.subject.make_subject, **locals())
 
-@command()
-def analyse(subject: Path, recording: Path, output: Path = ..., units: str | None = None,
-            max_gap: float = 0.1, lowpass: float | None = 12.0, method: str = "lsq",
-            controls: str = "speech", noise: float | None = None, window: int | None = 3,
-            smooth: float | None = 1.0, preset: str = "anatomical", video: bool = False):
+@command(groups=("preparation", "lsq"))
+def analyse(subject: Path, recording: Path, output: Path = ..., method: str = "lsq",
+            controls: str = "speech", noise: float | None = None, preset: str = "anatomical",
+            video: bool = False, preparation=None, lsq=None):
     """A recording against a subject: head motion, frame, gaps, inversion, statistics, movie."""
-    return _staged(wf.subject.analyse, **locals())
+    kw = dict(locals(), preparation=wf.subject.Preparation(**preparation), lsq=None,
+              options=lsq if method == "lsq" else {})
+    return _staged(wf.subject.analyse, **{k: v for k, v in kw.items() if k != "lsq"})
 
 @command()
 def batch(manifest: Path, output: Path = ..., workers: int | None = None,

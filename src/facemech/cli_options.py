@@ -6,6 +6,8 @@ importing it costs nothing."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 from .checks import RANGES as _RANGES
 from .checks import check_number
 
@@ -188,6 +190,37 @@ NAMES: dict[str, tuple[str, ...]] = {
     "output": ("-o", "--output"), "as_json": ("--json",), "fmt": ("--format",),
     "rate_wpm": ("--rate",), "noise_mm": ("--noise",), "map_file": ("--map",), "k": ("-k",),
     "aa": ("--aa",)}
+
+#: option groups: options that a command takes as one parameter, a dict of them, which it hands
+#: to the object that takes them (group -> option -> (type, default)), so that no command has
+#: more than 12 parameters (issue 28). The options keep their names, help and order of checks
+_JAW = {k: (str | None, None) for k in ("chin_marker", "jaw_second_marker", "jaw_incisor",
+                                         "jaw_molar")}
+GROUPS: dict[str, dict[str, tuple]] = {
+    # facemech.workflows.simulate.Controls and JawSource, and the solver's options
+    "controls": {"activity": (Path | None, None), "emg": (Path | None, None),
+                 "emg_baseline": (str | None, None), "emg_calibration": (Path | None, None)},
+    "jaw_source": {"jaw_angle": (Path | None, None), "jaw_chin": (Path | None, None), **_JAW,
+                   "bite_block": (bool, False), "units": (str | None, None)},
+    "solver": {"jaw_kinematics": (str | None, None), "integrator": (str | None, None),
+               "substeps": (int | None, None), "dt": (float | None, None),
+               "jaw_drive": (str, "ramp")},
+    # facemech.inverse.workflow.JawMarkers, the method's options, the marker file and preset
+    "jaw_markers": {**_JAW, "jaw_fixed": (bool, False), "jaw_lead": (int | None, None)},
+    "fit": {"window": (int | None, None), "tol": (float | None, None),
+            "bend": (float | None, None), "smooth": (float | None, None),
+            "effort": (float | None, None), "max_evaluations": (int | None, None)},
+    "marker_file": {"map_file": (Path | None, None), "scale_pair": (str | None, None),
+                    "units": (str | None, None)},
+    "model": {"preset": (str, "anatomical"), "jaw_kinematics": (str | None, None),
+              "dt": (float | None, None)},
+    # facemech.workflows.subject.analyse: Preparation and the lsq options
+    "preparation": {"units": (str | None, None), "max_gap": (float, 0.1),
+                    "lowpass": (float | None, 12.0)},
+    "lsq": {"window": (int | None, 3), "smooth": (float | None, 1.0)},
+    # facemech.speech.speak's TextGrid tiers
+    "tiers": {"word_tier": (str | None, None), "phone_tier": (str | None, None)},
+}
 
 #: parameter -> the interval its value must lie in, for the numbers that are options of a
 #: command: the rows of the one table (:mod:`facemech.checks`) that the Python API checks too

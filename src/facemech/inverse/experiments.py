@@ -252,7 +252,7 @@ def run_synthetic(face, *, methods=("lsq",), dt: float | None = None, noise: flo
             label = f"{method}, {'positive' if positive else 'no constraint'}"
             t0 = time.perf_counter()
             res = _invert_quietly(face, data, used, label, progress, method=method,
-                                  positive=positive, dt=dt, params=params,
+                                  positive=positive, params=params.with_(fast_dt=dt),
                                   jaw_angle=np.zeros(data.n_frames))  # the jaw at rest
             wall = time.perf_counter() - t0
             model = res.positions[:, all_nodes]
@@ -469,7 +469,8 @@ def run_crosstalker(face, *, frames: int = 120, dt: float | None = None, params=
         label = f"lsq, positive, {adaptation}"
         t0 = time.perf_counter()
         res = _invert_quietly(model, adapted, used, label, progress, positive=True,
-                              jaw_angle=jaw_est, dt=dt, params=params)
+                              jaw_angle=jaw_est,
+                              params=params if dt is None else params.with_(fast_dt=dt))
         idx = [mapping_all[n] for n in names]
         mod = res.positions[:, idx]
         table6 = {n: float(stats.corr3d(mod[:, m], adapted.positions[:, m]))

@@ -51,19 +51,22 @@ def _simulate(o: dict, folder: Path):
             str(run).splitlines())
 
 
-_INVERT_KEYS = ("face", "method", "positive", "controls", "chin_marker", "jaw_second_marker",
-                "jaw_incisor", "jaw_molar", "jaw_fixed", "jaw_lead", "noise", "window", "tol",
-                "bend", "smooth", "effort",
-                "max_evaluations", "scale_pair", "preset", "jaw_kinematics", "dt", "units")
-
-
 def _invert(o: dict, folder: Path):
+    from ..inverse.workflow import JawMarkers
     from . import invert as wf
 
     figure = folder / "inversion.png" if o.get("figure") else None
     out = folder / "result.nc"
-    res = wf.invert(o["markers"], out, map_file=o.get("map"), figure=figure,
-                    **{k: o[k] for k in _INVERT_KEYS if k in o})
+    jaw = ("chin_marker", "jaw_second_marker", "jaw_incisor", "jaw_molar", "jaw_fixed",
+           "jaw_lead")
+    fit = ("window", "tol", "bend", "smooth", "effort", "max_evaluations")
+    res = wf.invert(
+        wf.MarkerFile(o["markers"], o.get("units"), o.get("map"), o.get("scale_pair")), out,
+        params=wf.parameters(o.get("preset", "anatomical"), o.get("jaw_kinematics"),
+                             o.get("dt")),
+        options={k: o.get(k) for k in fit}, jaw=JawMarkers(**{k: o[k] for k in jaw if k in o}),
+        figure=figure, **{k: o[k] for k in ("face", "method", "positive", "controls", "noise")
+                          if k in o})
     s = res.error_summary()
     return ({"frames": len(res.time), "median_error_mm": round(float(s["median_mm"]), 4),
              "max_error_mm": round(float(s["max_mm"]), 4), "markers": len(res.marker_names)},
@@ -71,14 +74,15 @@ def _invert(o: dict, folder: Path):
 
 
 def _speak(o: dict, folder: Path):
+    from .pictures import render_options
     from .speech import speak, speak_report
 
-    keys = ("audio", "textgrid", "voice", "word_tier", "phone_tier", "strength", "face", "preset",
-            "video", *_RENDER)
+    keys = ("audio", "textgrid", "voice", "strength", "face", "preset", "video")
     kw = {k: o[k] for k in keys if k in o}
     if "rate" in o:
         kw["rate_wpm"] = o["rate"]
-    res = speak(folder, o.get("text"), **kw)
+    res = speak(folder, o.get("text"), tiers=(o.get("word_tier"), o.get("phone_tier")),
+                render=render_options(**{k: o[k] for k in _RENDER if k in o}), **kw)
     return ({"frames": len(res.simulation.time), "phones": len(res.alignment.phones),
              "duration_s": round(float(res.alignment.duration), 3)},
             speak_report(res, folder.name))

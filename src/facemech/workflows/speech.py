@@ -12,14 +12,14 @@ __all__ = ["describe_file", "describe_report", "describe_text", "speak",
            "speak_report", "stimuli", "stimuli_report"]
 
 
-def speak(output: str | Path, text: str | None = None, *, video: bool = True,
-          view: str = "frontal+profile", size: str = "1280x720", background: str = "#2a2c33",
-          aa: int = 2, **options):
+def speak(output: str | Path, text: str | None = None, *, video: bool = True, render=None,
+          **options):
     """Make the face say ``text``, or speak in sync with a recorded voice, into the folder
     ``output``: :func:`facemech.speech.speak.speak` (its keywords: ``audio``, ``textgrid``,
-    ``voice``, ``rate_wpm``, ``word_tier``, ``phone_tier``, ``face``, ``preset``, ``strength``,
-    ``progress``), the MP4 with ``video`` (:func:`.pictures.render_options` of ``view``, ``size``,
-    ``background``, ``aa``). Returns its :class:`~facemech.speech.speak.Spoken`."""
+    ``voice``, ``rate_wpm``, ``tiers``, ``face``, ``preset``, ``strength``, ``progress``), the
+    MP4 with ``video``, drawn with ``render`` (a :class:`facemech.viz.video.RenderOptions`,
+    :func:`.pictures.render_options`; None: frontal+profile, 1280x720). Returns its
+    :class:`~facemech.speech.speak.Spoken`."""
     from ..atomic import check_output
     from ..speech.speak import speak as run
 
@@ -27,8 +27,8 @@ def speak(output: str | Path, text: str | None = None, *, video: bool = True,
     check_output(output, [options.get("audio"), options.get("textgrid"),
                           *(n for n in named if n and Path(str(n)).suffix)],
                  folder=True, field="-o")
-    opts = render_options(view, size, background, aa) if video else None
-    return run(output, text, video=video, render_options=opts, **options)
+    look = render or render_options()
+    return run(output, text, video=look if video else False, **options)
 
 
 def speak_report(res, output: str | Path) -> list[str]:
