@@ -124,18 +124,18 @@ def invert_markers(
     jaw = jaw or JawMarkers()
     chin_marker, jaw_second_marker = jaw.chin_marker, jaw.jaw_second_marker
     jaw_fixed, jaw_lead = jaw.jaw_fixed, jaw.jaw_lead
-    prm = params or default_parameters()
+    params = params or default_parameters()
     ms = markers if isinstance(markers, MarkerSet) else read_markers(markers)
     src = ms.meta.get("source") or str(markers)
     incisor, molar, by_role = bone_points(ms, incisor=jaw.jaw_incisor, molar=jaw.jaw_molar,
                                           skin_jaw=chin_marker)
     molar, dropped = _usable_molar(ms, molar, by_role)
-    ms, resampled = _at_frame_rate(ms, prm.frame_rate)
+    ms, resampled = _at_frame_rate(ms, params.frame_rate)
     ms, filled = _bone_gaps_filled(ms, (incisor, molar), by_role)
     if jaw_fixed and chin_marker is None and incisor is None:
         raise InputError("--jaw-fixed needs a jaw recording (--chin-marker or --jaw-incisor)",
                          field="jaw-fixed")
-    model = load_face(face, tissue=prm.tissue)
+    model = load_face(face, tissue=params.tissue)
     midsagittal = is_midsagittal(ms)
     skin, mapping, notes = _skin_markers(ms, model, map_file, (incisor, molar), midsagittal)
     notes = resampled + dropped + filled + notes
@@ -143,17 +143,17 @@ def invert_markers(
         a, _, b = scale_pair.partition(",")
         skin = scale_adapt(skin, model, mapping, (a.strip(), b.strip())).markers
     lead = jaw_lead if jaw_lead is not None else (0 if incisor is not None else SKIN_JAW_LEAD)
-    drive, jaw_source = _jaw_drive(ms, model, prm, mapping, src, lead, chin_marker,
+    drive, jaw_source = _jaw_drive(ms, model, params, mapping, src, lead, chin_marker,
                                    jaw_second_marker, incisor, molar, by_role)
     estimate = None if drive is None else (not jaw_fixed and drive.ndim == 1)
     ctrl, drive, estimate, jaw_source, pick_note, signed = _controls(
-        controls, model, prm, skin, mapping, drive, estimate, jaw_source, midsagittal, None,
+        controls, model, params, skin, mapping, drive, estimate, jaw_source, midsagittal, None,
         src)
     if signed:
         solver, effort_note = _effort_for_sign(solver, options)
         pick_note += effort_note
     res = invert(model, skin, mapping, method=solver, positive=positive, controls=ctrl,
-                 jaw_angle=JawRecording(drive, estimate, jaw_source), params=prm,
+                 jaw_angle=JawRecording(drive, estimate, jaw_source), params=params,
                  noise_mm=noise, progress=progress)
     return replace(res, notes=[*res.notes, *notes, *([pick_note] if pick_note else [])])
 
@@ -249,7 +249,7 @@ def _skin_markers(ms, model, map_file, bone, midsagittal):
     return skin, mapping, notes
 
 
-def _jaw_drive(ms, model, prm, mapping, src, lead, chin_marker, second, incisor, molar,
+def _jaw_drive(ms, model, params, mapping, src, lead, chin_marker, second, incisor, molar,
                by_role):
     """(the jaw series: None, (frames,) angles or (frames, 3) poses; what it is, for the
     notes)."""
@@ -258,10 +258,10 @@ def _jaw_drive(ms, model, prm, mapping, src, lead, chin_marker, second, incisor,
     from ..solvers.jaw_drive import jaw_angles_from_marker
 
     if incisor is not None:
-        poses = jaw_poses_from_bone(ms.marker(incisor), model, prm,
+        poses = jaw_poses_from_bone(ms.marker(incisor), model, params,
                                     molar=None if molar is None else ms.marker(molar),
                                     lead=lead, names=(incisor, molar or "molar"), source=src)
-        pro = protrusion_of(poses, prm) * 1e3
+        pro = protrusion_of(poses, params) * 1e3
         what = (f"the bone point{'s' if molar else ''} {incisor} (lower incisor"
                 f"{f') and {molar} (molar' if molar else ''}){' by role' if by_role else ''}: "
                 f"angle {np.degrees(poses[:, 0].min()):.1f} to "
@@ -281,7 +281,7 @@ def _jaw_drive(ms, model, prm, mapping, src, lead, chin_marker, second, incisor,
         if node is None:
             raise InputError("chin marker has no node (not in the file or not mapped)",
                              source=src, field=chin_marker)
-        jaw = jaw_angles_from_marker(model, prm, node, ms.marker(chin_marker)[:, 1],
+        jaw = jaw_angles_from_marker(model, params, node, ms.marker(chin_marker)[:, 1],
                                      lead=lead, source=src)
         return jaw, f"chin marker {chin_marker} ({lead}-frame lead)"
     return None, None
@@ -319,7 +319,7 @@ def pick_candidates(model) -> tuple[str, ...]:
     return SPEECH_CONTROLS + tuple(g for g in MARGINAL_GROUPS if g in present)
 
 
-def _controls(controls, model, prm, skin, mapping, jaw, estimate, jaw_source, midsagittal, dt,
+def _controls(controls, model, params, skin, mapping, jaw, estimate, jaw_source, midsagittal, dt,
               src):
     """(controls for :func:`invert`, jaw series, estimate the jaw, jaw source, the note of
     controls picked or None, whether the pick's sign step added controls)."""
@@ -347,9 +347,9 @@ def _controls(controls, model, prm, skin, mapping, jaw, estimate, jaw_source, mi
     elif jaw.ndim == 2:
         start = jaw[0]
     else:
-        start = jaw_poses(np.atleast_1d(jaw[0]), prm)[0]
+        start = jaw_poses(np.atleast_1d(jaw[0]), params)[0]
     estimated = estimate in (None, True)
-    pick = pick_controls(model, prm, np.array([mapping[n] for n in names]),
+    pick = pick_controls(model, params, np.array([mapping[n] for n in names]),
                          pick_candidates(model), estimate_jaw=estimated, jaw_start=start,
                          axes=(1, 2) if midsagittal else (0, 1, 2), dt=dt, labels=names)
     if estimated and not pick.jaw:

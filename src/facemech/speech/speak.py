@@ -115,7 +115,7 @@ def speak(
                 Path(given).name in FILES.values():
             raise InputError("an input would be overwritten by an output of the same name",
                              source=str(given), field="output")
-    prm = load_preset(preset)
+    params = load_preset(preset)
     files = {k: out / v for k, v in FILES.items()}
     inputs: dict = {}
     if text is not None:
@@ -139,16 +139,16 @@ def speak(
                              source=str(textgrid), field="time")
         inputs["audio"] = file_hash(audio)
         inputs["textgrid"] = file_hash(textgrid)
-    model = load_face(face, tissue=prm.tissue)  # after the inputs are checked: it takes a while
+    model = load_face(face, tissue=params.tissue)  # after the inputs are checked: it takes a while
     out.mkdir(parents=True, exist_ok=True)
     write_wav(files["audio"], samples, rate)
     write_textgrid(files["textgrid"], alignment)
     write_alignment_csv(files["alignment"], alignment)
-    t, act, jaw = controls_from_alignment(alignment, frame_rate=prm.frame_rate,
+    t, act, jaw = controls_from_alignment(alignment, frame_rate=params.frame_rate,
                                           strength=strength)
     write_activity(files["controls"], t, np.column_stack([act, jaw]),
                    (*MUSCLE_GROUPS, "jaw_angle"))
-    sim = simulate(model, act, jaw, params=prm,
+    sim = simulate(model, act, jaw, params=params,
                    progress=None if progress is None else
                    (lambda d, n: progress("simulate", d, n)))
     ds = to_dataset(sim, inputs)
@@ -168,14 +168,14 @@ def speak(
         "text": text,
         "voice": voice if text is not None else None,
         "rate_wpm": rate_wpm if text is not None else None,
-        "face": str(face), "preset": prm.name, "strength": strength,
+        "face": str(face), "preset": params.name, "strength": strength,
         "inputs": inputs,
         "alignment": {"notation": alignment.notation, "duration_s": alignment.duration,
                       "words": [w.label for w in alignment.words],
                       "phones": len(alignment.phones), "source": alignment.source,
                       **{k: v for k, v in alignment.meta.items()
                          if isinstance(v, (str, int, float))}},
-        "frames": int(len(t)), "frame_rate_hz": float(prm.frame_rate),
+        "frames": int(len(t)), "frame_rate_hz": float(params.frame_rate),
         "audio_sample_rate_hz": int(rate),
         "files": {k: p.name for k, p in files.items()},
         "stimulus": desc,

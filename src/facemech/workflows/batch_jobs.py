@@ -52,25 +52,26 @@ def _simulate(o: dict, folder: Path):
 
 
 def _invert(o: dict, folder: Path):
-    from ..inverse.workflow import JawMarkers
-    from . import invert as wf
+    from . import invert
 
     figure = folder / "inversion.png" if o.get("figure") else None
     out = folder / "result.nc"
     jaw = ("chin_marker", "jaw_second_marker", "jaw_incisor", "jaw_molar", "jaw_fixed",
            "jaw_lead")
     fit = ("window", "tol", "bend", "smooth", "effort", "max_evaluations")
-    res = wf.invert(
-        wf.MarkerFile(o["markers"], o.get("units"), o.get("map"), o.get("scale_pair")), out,
-        params=wf.parameters(o.get("preset", "anatomical"), o.get("jaw_kinematics"),
-                             o.get("dt")),
-        options={k: o.get(k) for k in fit}, jaw=JawMarkers(**{k: o[k] for k in jaw if k in o}),
+    res = invert.invert(
+        invert.MarkerFile(o["markers"], o.get("units"), o.get("map"), o.get("scale_pair")), out,
+        params=invert.parameters(o.get("preset", "anatomical"), o.get("jaw_kinematics"),
+                                 o.get("dt")),
+        options={k: o.get(k) for k in fit},
+        jaw=invert.JawMarkers(**{k: o[k] for k in jaw if k in o}),
         figure=figure, **{k: o[k] for k in ("face", "method", "positive", "controls", "noise")
                           if k in o})
     s = res.error_summary()
     return ({"frames": len(res.time), "median_error_mm": round(float(s["median_mm"]), 4),
              "max_error_mm": round(float(s["max_mm"]), 4), "markers": len(res.marker_names)},
-            wf.report(res, out.name, None if figure is None else figure.name) + wf.notes(res))
+            invert.report(res, out.name, None if figure is None else figure.name)
+            + invert.notes(res))
 
 
 def _speak(o: dict, folder: Path):

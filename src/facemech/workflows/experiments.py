@@ -33,8 +33,8 @@ def _face_and_params(preset: str):
     from ..geometry.builder import default_face
     from ..params import preset as get_preset
 
-    prm = get_preset(preset)
-    return default_face(tissue=prm.tissue), prm
+    params = get_preset(preset)
+    return default_face(tissue=params.tissue), params
 
 
 def synthetic(output: str | Path | None = None, *, method: str = "lsq", noise_mm: float = 0.0,
@@ -62,9 +62,9 @@ def synthetic(output: str | Path | None = None, *, method: str = "lsq", noise_mm
     if method not in ("lsq", "powell", "both"):
         raise InputError("method must be lsq, powell or both", field="method")
     _check(output, preset, folder=True)
-    face, prm = _face_and_params(preset)
+    face, params = _face_and_params(preset)
     res = run_synthetic(face, methods=("lsq", "powell") if method == "both" else (method,),
-                        noise=noise_mm * 1e-3, params=prm, dt=dt, progress=progress)
+                        noise=noise_mm * 1e-3, params=params, dt=dt, progress=progress)
     if output is not None:
         if figures:
             draw_synthetic(res, output)
@@ -127,8 +127,8 @@ def crosstalker(output: str | Path | None = None, *, frames: int = 120,
     if frames < 8:
         raise InputError("needs at least 8 frames", field="frames")
     _check(output, preset, folder=False)
-    face, prm = _face_and_params(preset)
-    res = run_crosstalker(face, frames=frames, params=prm, dt=dt, progress=progress)
+    face, params = _face_and_params(preset)
+    res = run_crosstalker(face, frames=frames, params=params, dt=dt, progress=progress)
     if output is not None:
         write(res, output)
     return res

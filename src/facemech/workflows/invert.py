@@ -9,8 +9,9 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
+from ..inverse.workflow import JawMarkers
 
-__all__ = ["MarkerFile", "draw", "invert", "notes", "parameters", "report"]
+__all__ = ["JawMarkers", "MarkerFile", "draw", "invert", "notes", "parameters", "report"]
 
 
 @dataclass(frozen=True)
@@ -38,10 +39,10 @@ def parameters(preset: str | Path = "anatomical", jaw_kinematics: str | None = N
     step ``dt`` (s; its ``fast_dt``)."""
     from ..params import preset as load_preset
 
-    prm = load_preset(preset)
+    params = load_preset(preset)
     if jaw_kinematics is not None:
-        prm = prm.with_(jaw_kinematics=jaw_kinematics)
-    return prm if dt is None else prm.with_(fast_dt=dt)
+        params = params.with_(jaw_kinematics=jaw_kinematics)
+    return params if dt is None else params.with_(fast_dt=dt)
 
 
 def invert(markers: MarkerFile | str | Path, output: str | Path, *,

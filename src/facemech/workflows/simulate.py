@@ -273,9 +273,9 @@ def simulate_files(output: str | Path, controls: Controls, jaw: JawSource = JawS
     from ..geometry.builder import load_face
     from ..params import preset as get_preset
 
-    prm = get_preset(preset)
+    params = get_preset(preset)
     if jaw_kinematics is not None:
-        prm = prm.with_(jaw_kinematics=jaw_kinematics)
+        params = params.with_(jaw_kinematics=jaw_kinematics)
     from ..atomic import check_output
 
     given = [controls.activity, controls.emg, controls.emg_calibration, jaw.angles, jaw.markers,
@@ -285,15 +285,15 @@ def simulate_files(output: str | Path, controls: Controls, jaw: JawSource = JawS
         from .pictures import check_movie
 
         movie = check_movie(movie, [*given, output], field="video")
-    times, act, inputs = read_controls(controls, prm.frame_rate)  # before the slow face
-    model = load_face(face, tissue=prm.tissue)
-    jaw_angles, jaw_inputs = jaw_series(jaw, model, prm, times)
+    times, act, inputs = read_controls(controls, params.frame_rate)  # before the slow face
+    model = load_face(face, tissue=params.tissue)
+    jaw_angles, jaw_inputs = jaw_series(jaw, model, params, times)
     inputs.update(jaw_inputs)
     src = str(controls.activity if controls.activity is not None else controls.emg)
-    run = simulate_to_file(output, model, act, jaw_angles, inputs=inputs, params=prm,
+    run = simulate_to_file(output, model, act, jaw_angles, inputs=inputs, params=params,
                            integrator=integrator, substeps=substeps, dt=dt, jaw_drive=jaw_drive,
-                           source=src, progress=stage(progress,
-                                                      f"simulate ({integrator or prm.integrator})"))
+                           source=src, progress=stage(
+                               progress, f"simulate ({integrator or params.integrator})"))
     written = None
     if movie:  # from the file: the whole run in memory (rendering does not stream)
         from .pictures import render_movie

@@ -472,9 +472,9 @@ def analyse(subject: str | Path, recording: str | Path, output: str | Path, *,
     subj = read_subject(subject)
     say = progress or (lambda *a: None)
     say("prepare", 0, 1)
-    prm = invert.parameters(preset)
+    params = invert.parameters(preset)
     ms, notes = prepare(subj, read_markers(recording, units=preparation.units),
-                        max_gap=preparation.max_gap, rate=prm.frame_rate, source=src,
+                        max_gap=preparation.max_gap, rate=params.frame_rate, source=src,
                         lowpass_hz=preparation.lowpass)
     invert.check_marker_set(ms, src)  # what would stop the inversion: before anything is written
     write_markers(out / "markers.csv", ms, units="mm")
@@ -491,7 +491,7 @@ def analyse(subject: str | Path, recording: str | Path, output: str | Path, *,
     if options is None:
         options = ANALYSE_LSQ if method == "lsq" else {}
     res = invert.invert(invert.MarkerFile(out / "markers.csv", "mm", out / "mapping.csv"),
-                        out / "result.nc", face=subj.face, params=prm, method=method,
+                        out / "result.nc", face=subj.face, params=params, method=method,
                         options=options, controls=controls,
                         jaw=JawMarkers(chin_marker=jaw[0], jaw_second_marker=jaw[1]),
                         noise=noise, figure=out / "controls.png", progress=progress)
