@@ -218,7 +218,7 @@ GROUPS: dict[str, dict[str, tuple]] = {
     "preparation": {"units": (str | None, None), "max_gap": (float, 0.1),
                     "lowpass": (float | None, 12.0)},
     "lsq": {"window": (int | None, 3), "smooth": (float | None, 1.0)},
-    # facemech.speech.speak's TextGrid tiers
+    # facemech.workflows.speak's TextGrid tiers
     "tiers": {"word_tier": (str | None, None), "phone_tier": (str | None, None)},
 }
 

@@ -34,13 +34,14 @@ if TYPE_CHECKING:
         pictures,
         regions,
         simulate,
+        speak,
         speech,
         subject,
     )
 
 __all__ = ["batch", "batch_jobs", "calibrate", "compare", "demo", "emg", "experiments", "faces",
            "invert", "landmarks", "markers", "outcome", "photo", "pictures", "regions",
-           "simulate", "speech", "subject"]
+           "simulate", "speak", "speech", "subject"]
 
 
 def __getattr__(name: str):

@@ -15,13 +15,13 @@ __all__ = ["describe_file", "describe_report", "describe_text", "speak",
 def speak(output: str | Path, text: str | None = None, *, video: bool = True, render=None,
           **options):
     """Make the face say ``text``, or speak in sync with a recorded voice, into the folder
-    ``output``: :func:`facemech.speech.speak.speak` (its keywords: ``audio``, ``textgrid``,
+    ``output``: :func:`facemech.workflows.speak.speak` (its keywords: ``audio``, ``textgrid``,
     ``voice``, ``rate_wpm``, ``tiers``, ``face``, ``preset``, ``strength``, ``progress``), the
     MP4 with ``video``, drawn with ``render`` (a :class:`facemech.viz.video.RenderOptions`,
     :func:`.pictures.render_options`; None: frontal+profile, 1280x720). Returns its
-    :class:`~facemech.speech.speak.Spoken`."""
+    :class:`~facemech.workflows.speak.Spoken`."""
     from ..atomic import check_output
-    from ..speech.speak import speak as run
+    from .speak import speak as run
 
     named = [options.get(k) for k in ("face", "preset")]  # built-in names or files
     check_output(output, [options.get("audio"), options.get("textgrid"),
@@ -34,7 +34,7 @@ def speak(output: str | Path, text: str | None = None, *, video: bool = True, re
 def speak_report(res, output: str | Path) -> list[str]:
     """What ``facemech speak`` prints: the phones and words, the duration and the files.
 
-    ``res`` is the :class:`~facemech.speech.speak.Spoken` that :func:`speak` returns.
+    ``res`` is the :class:`~facemech.workflows.speak.Spoken` that :func:`speak` returns.
     """
     words = " ".join(w.label for w in res.alignment.words)
     return [f"{len(res.alignment.phones)} phones ({words}), {res.alignment.duration:.2f} s "
@@ -74,7 +74,7 @@ def stimuli(design: str | Path, output: str | Path, *, video: bool = True,
     :class:`~facemech.speech.design.DesignReport`."""
     from ..atomic import check_output
     from ..speech.design import run_design
-    from ..speech.speak import text_items
+    from .speak import text_items
 
     check_output(output, [design], folder=True, field="-o")
     return run_design(design, output, text_items(Path(output) / "items"),

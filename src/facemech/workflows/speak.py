@@ -94,9 +94,9 @@ def speak(
     from ..params import MUSCLE_GROUPS
     from ..params import preset as load_preset
     from ..solvers.forward import simulate
-    from .alignment_io import read_textgrid, write_alignment_csv, write_textgrid
-    from .coarticulation import controls_from_alignment
-    from .wav import read_wav, write_wav
+    from ..speech.alignment_io import read_textgrid, write_alignment_csv, write_textgrid
+    from ..speech.coarticulation import controls_from_alignment
+    from ..speech.wav import read_wav, write_wav
 
     if (text is None) == (audio is None):
         raise InputError("give either text or --audio with --textgrid", field="text")
@@ -119,7 +119,7 @@ def speak(
     files = {k: out / v for k, v in FILES.items()}
     inputs: dict = {}
     if text is not None:
-        from .tts import synthesize
+        from ..speech.tts import synthesize
 
         report(progress, "synthesise", 0, 1)
         speech = synthesize(text, voice=voice, rate_wpm=rate_wpm)
@@ -192,7 +192,7 @@ def _padded(samples, rate: int, alignment, before: float, after: float):
     """Audio with ``before`` and ``after`` s of silence, and its alignment shifted to match."""
     from dataclasses import replace
 
-    from .alignment import Segment
+    from ..speech.alignment import Segment
 
     k0, k1 = int(round(before * rate)), int(round(after * rate))
     audio = np.concatenate([np.zeros(k0, np.float32), np.asarray(samples, np.float32),
