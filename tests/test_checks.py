@@ -92,3 +92,16 @@ def test_the_solver_options_of_a_run_are_checked_too():
         with pytest.raises(InputError) as exc:
             solver_from_options("implicit", preset("anatomical"), **{option: value})
         assert exc.value.field == option
+
+
+def test_the_inversions_and_analyses_objects_refuse_what_the_command_line_refuses():
+    from facemech.inverse.workflow import JawMarkers
+    from facemech.workflows.subject import Preparation
+
+    for make, name, value in ((JawMarkers, "jaw_lead", 601), (JawMarkers, "jaw_lead", -1),
+                              (Preparation, "max_gap", 0.0), (Preparation, "max_gap", 1e4),
+                              (Preparation, "lowpass", -1.0), (Preparation, "lowpass", 2e3)):
+        with pytest.raises(InputError):
+            make(**{name: value})
+        with pytest.raises(InputError):
+            cli_options.check_number("--" + name, value, cli_options.RANGES[name])

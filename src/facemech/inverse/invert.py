@@ -26,6 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..checks import check_value
 from ..errors import InputError
 from ..markerset import MarkerSet
 from ..params import EMG_CHANNELS, MUSCLE_GROUPS, Parameters, default_parameters
@@ -152,6 +153,8 @@ def invert(
                          f"{method!r})", field="method")
     if noise_mm is not None and not (np.isfinite(noise_mm) and noise_mm > 0):
         raise InputError(f"noise must be > 0 mm (got {noise_mm})", field="noise")
+    if noise_mm is not None:  # the command line's interval (facemech.checks)
+        check_value("noise_mm", noise_mm)
     params = params or default_parameters()
     dt = params.fast_dt
     src = markers.meta.get("source")

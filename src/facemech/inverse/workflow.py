@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..checks import check_value
 from ..errors import InputError
 from ..markerset import MarkerSet
 from ..params import Parameters, default_parameters
@@ -65,6 +66,8 @@ class JawMarkers:
         if self.jaw_lead is not None and self.jaw_lead < 0:
             raise InputError(f"jaw lead must be >= 0 frames (got {self.jaw_lead})",
                              field="jaw-lead")
+        if self.jaw_lead is not None:  # the command line's interval (facemech.checks)
+            check_value("jaw_lead", self.jaw_lead)
 
 
 def invert_markers(

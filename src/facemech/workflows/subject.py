@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from ..atomic import atomic_path, check_output
+from ..checks import check_value
 from ..errors import InputError
 from .outcome import Written
 
@@ -426,6 +427,11 @@ class Preparation:
     units: str | None = None
     max_gap: float = 0.1
     lowpass: float | None = LOWPASS_HZ
+
+    def __post_init__(self):  # the command line's intervals (facemech.checks)
+        check_value("max_gap", self.max_gap)
+        if self.lowpass is not None:
+            check_value("lowpass", self.lowpass)
 
 
 #: the lsq inversion's options in :func:`analyse`: longer and stronger than the method's own
