@@ -27,6 +27,10 @@ import pytest  # noqa: E402
 
 from facemech import MUSCLE_GROUPS, default_face  # noqa: E402
 from facemech.cli import main  # noqa: E402
+from facemech.physics.threads import set_threads  # noqa: E402
+
+# importing facemech sets no thread count (issue 28): this process's kernels on the count above
+set_threads()
 
 
 def pytest_configure(config):

@@ -129,7 +129,7 @@ def test_a_results_file_holding_nan_is_refused_on_reading(tmp_path):
 
 # ---- outputs -----------------------------------------------------------------------------------
 def test_an_output_equal_to_an_input_is_refused(tmp_path):
-    from facemech.io.atomic import check_output
+    from facemech.atomic import check_output
 
     src = tmp_path / "in.csv"
     src.write_text("x")
@@ -147,7 +147,7 @@ def test_an_output_equal_to_an_input_is_refused(tmp_path):
 
 
 def test_an_output_where_it_cannot_be_written_is_refused(tmp_path):
-    from facemech.io.atomic import check_output
+    from facemech.atomic import check_output
 
     (tmp_path / "file").write_text("x")
     (tmp_path / "folder").mkdir()
@@ -162,7 +162,7 @@ def test_an_output_where_it_cannot_be_written_is_refused(tmp_path):
 
 
 def test_pending_temporary_files_are_removed(tmp_path):
-    from facemech.io.atomic import atomic_path, remove_pending
+    from facemech.atomic import atomic_path, remove_pending
 
     with pytest.raises(RuntimeError), atomic_path(tmp_path / "out.csv") as tmp:
         tmp.write_text("half")
@@ -180,7 +180,7 @@ def test_a_signal_removes_temporary_files_and_exits_with_the_shell_status(tmp_pa
     code = f"""
 import os, signal
 from facemech.interrupts import install
-from facemech.io.atomic import atomic_path
+from facemech.atomic import atomic_path
 install()
 with atomic_path({str(tmp_path / 'out.nc')!r}) as tmp:
     tmp.write_text("half written")

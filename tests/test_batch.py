@@ -15,11 +15,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from facemech.batch import jobs
-from facemech.batch.manifest import read_manifest
 from facemech.batch.records import DONE, read_done
 from facemech.errors import InputError
 from facemech.workflows import batch as wb
+from facemech.workflows import batch_jobs as jobs
+from facemech.workflows.batch_jobs import read_manifest
 
 
 def write_activity(path: Path, level: float, frames: int = 10) -> Path:

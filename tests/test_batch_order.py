@@ -3,8 +3,8 @@ must not overlap test_batch's, whose client is dask's default while that module 
 
 from __future__ import annotations
 
-from facemech.batch.manifest import read_manifest
 from facemech.workflows import batch as wb
+from facemech.workflows.batch_jobs import read_manifest
 from test_batch import write_activity
 
 

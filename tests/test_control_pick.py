@@ -8,6 +8,7 @@ import pytest
 
 from conftest import run_cli as cli
 from facemech import MUSCLE_GROUPS
+from facemech.geometry.teeth import lower_incisor_point
 from facemech.inverse.control_pick import (
     MIN_NEW_MOTION_MM,
     cover_signs,
@@ -18,7 +19,7 @@ from facemech.inverse.workflow import pick_candidates
 from facemech.io.results import read_results
 from facemech.params import preset
 from facemech.solvers.forward import simulate
-from facemech.solvers.jaw import lower_incisor_point, move_points
+from facemech.solvers.jaw import move_points
 from facemech.solvers.jaw_bone import poses_with_protrusion
 
 #: synthetic step responses (mm per unit) of two midsagittal markers (rows: m1 x y z, m2 x y z)

@@ -7,8 +7,9 @@ import numpy as np
 import pytest
 
 from conftest import activity
+from facemech.geometry.teeth import lower_incisor_point
 from facemech.solvers.forward import simulate
-from facemech.solvers.jaw import lower_incisor_point, rotate_about
+from facemech.solvers.jaw import rotate_about
 from facemech.viz import dentition as D
 from facemech.viz.camera import Camera, view_camera
 from facemech.viz.raster import rasterise

@@ -12,8 +12,8 @@ import pytest
 from conftest import activity
 from conftest import run_cli as cli
 from facemech import simulate
-from facemech.inverse import stats
 from facemech.io.results import write_results
+from facemech.kinematics import stats
 from facemech.params import preset
 
 

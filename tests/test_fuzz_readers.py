@@ -277,7 +277,7 @@ def _design_read(path):
 
 
 def _manifest_read(path):
-    from facemech.batch.manifest import read_manifest
+    from facemech.workflows.batch_jobs import read_manifest
 
     return read_manifest(path)
 

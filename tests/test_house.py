@@ -7,6 +7,7 @@ fails here, naming the module and the line.
 from __future__ import annotations
 
 import ast
+import inspect
 import os
 import subprocess
 import sys
@@ -111,41 +112,47 @@ def test_the_cli_is_short():
     assert lines < MAX_CLI_LINES, f"cli.py has {lines} lines"
 
 
-def _public_entry_point(node: ast.FunctionDef, exported: set[str]) -> bool:
-    """A command of the command line, or a name in ``__all__`` with a numpydoc Parameters list."""
-    doc = ast.get_docstring(node) or ""
-    command = any(isinstance(d, ast.Call) and "command" in (getattr(d.func, "attr", None),
-                  getattr(d.func, "id", None)) for d in node.decorator_list)
-    if command:
-        return bool(doc)
-    return node.name in exported and "Parameters\n----------" in doc
-
-
-def _exported(tree: ast.Module) -> set[str]:
-    for node in tree.body:
-        if (isinstance(node, ast.Assign) and any(isinstance(t, ast.Name) and t.id == "__all__"
-                                                 for t in node.targets)):
-            try:
-                return set(ast.literal_eval(node.value))
-            except ValueError:
-                return set()
-    return set()
-
-
 def test_no_function_takes_more_than_twelve_parameters():
-    root_all = set(_run("import facemech; print(' '.join(facemech.__all__))").stdout.split())
+    """Every function of the library, the command line's commands included (issue 28: a
+    command takes a group of options as one parameter, cli_options.GROUPS)."""
     offenders = []
     for path, tree in _modules():
-        exported = _exported(tree) | root_all
         for node in ast.walk(tree):
             if not isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
                 continue
             a = node.args
             count = (len(a.posonlyargs) + len(a.args) + len(a.kwonlyargs)
                      + (a.vararg is not None) + (a.kwarg is not None))
-            if count > MAX_PARAMETERS and not _public_entry_point(node, exported):
+            if count > MAX_PARAMETERS:
                 offenders.append(f"{path.relative_to(SRC)}:{node.lineno} {node.name} ({count})")
     assert not offenders, offenders
+
+
+def test_the_commands_keep_their_options():
+    """The groups give each command the options it had before them (names and defaults)."""
+    from facemech import cli
+
+    got = {}
+    for group in (cli.app, cli.face_app, cli.emg_app, cli.markers_app, cli.experiment_app):
+        for info in group.registered_commands:
+            got[info.callback.__wrapped__.__name__] = set(
+                inspect.signature(info.callback).parameters)
+    assert got["simulate"] == {
+        "output", "face", "activity", "emg", "units", "emg_baseline", "emg_calibration",
+        "jaw_chin", "chin_marker", "jaw_second_marker", "jaw_incisor", "jaw_molar", "jaw_angle",
+        "bite_block", "jaw_kinematics", "preset", "integrator", "substeps", "dt", "jaw_drive",
+        "video", "audio", "view", "size", "background", "aa"}
+    assert got["invert"] == {
+        "markers", "output", "face", "method", "map_file", "preset", "figure", "positive",
+        "controls", "chin_marker", "jaw_second_marker", "jaw_incisor", "jaw_molar", "jaw_fixed",
+        "jaw_lead", "noise", "window", "tol", "bend", "smooth", "effort", "max_evaluations",
+        "scale_pair", "jaw_kinematics", "dt", "units"}
+    assert got["speak"] == {
+        "text", "output", "audio", "textgrid", "voice", "rate_wpm", "word_tier", "phone_tier",
+        "strength", "face", "preset", "video", "view", "size", "background", "aa"}
+    assert got["analyse"] == {
+        "subject", "recording", "output", "units", "max_gap", "lowpass", "method", "controls",
+        "noise", "window", "smooth", "preset", "video"}
 
 
 def test_the_bump_is_the_ramp_mirrored_about_its_centre():
@@ -159,3 +166,142 @@ def test_the_bump_is_the_ramp_mirrored_about_its_centre():
     assert cosine_bump(0.4, 0.4, 0.7) == 1.0 and cosine_bump(0.05, 0.4, 0.7) == 0.0
     np.testing.assert_allclose(cosine_ramp([-1.0, 0.0, 0.5, 1.0, 3.0]), [0, 0, 0.5, 1, 1],
                                atol=1e-15)
+
+
+# ---- the layers (issue 28): every import runs downward ------------------------------------------
+ARCHITECTURE = Path(__file__).resolve().parents[1] / "docs" / "architecture.md"
+#: the one cycle allowed: imports for type checking only
+TYPE_CHECKING_CYCLE = frozenset({"facemech.solvers.implicit", "facemech.solvers.solver_state"})
+
+
+def _layers() -> dict[str, int]:
+    """Folder or module name -> layer number, from docs/architecture.md's list."""
+    text = ARCHITECTURE.read_text()
+    block = text.split("<!-- layers -->", 1)[1].split("<!-- /layers -->", 1)[0]
+    out = {}
+    for line in block.strip().splitlines():
+        number, rest = line.split(".", 1)
+        names = rest.split("--", 1)[0].split("**")[2]
+        for name in names.replace("`", " ").split():
+            out[name.rstrip("/")] = int(number)
+    return out
+
+
+def _module_name(path: Path) -> str:
+    parts = list(path.relative_to(SRC.parent).with_suffix("").parts)
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def _is_module(name: str) -> bool:
+    rel = Path(*name.split("."))
+    return (SRC.parent / rel).with_suffix(".py").is_file() or (SRC.parent / rel).is_dir()
+
+
+def _imports_of(path: Path, tree: ast.Module) -> list[tuple[str, int, bool]]:
+    """(module imported, line, for type checking only) of every facemech import in a module,
+    at its top or inside a function."""
+    name = _module_name(path)
+    package = name if path.name == "__init__.py" else name.rsplit(".", 1)[0]
+    checking = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
+            checking.update(id(n) for n in ast.walk(node))
+    out = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            targets = [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                up = package.split(".")[: len(package.split(".")) - node.level + 1]
+                base = ".".join(up + ([node.module] if node.module else []))
+            # ``from . import params``: the submodule, else the module itself
+            targets = [f"{base}.{a.name}" if _is_module(f"{base}.{a.name}") else base
+                       for a in node.names]
+        else:
+            continue
+        out += [(t, node.lineno, id(node) in checking) for t in set(targets)
+                if t.split(".")[0] == "facemech"]
+    return out
+
+
+def _layer_of(module: str, layers: dict[str, int]) -> int | None:
+    parts = module.split(".")
+    if len(parts) == 1:
+        return 1  # the package root: it imports only _version (ground)
+    return layers.get(parts[1])
+
+
+def _import_graph():
+    graph = {}
+    for path, tree in _modules():
+        graph[_module_name(path)] = _imports_of(path, tree)
+    return graph
+
+
+def test_the_layer_list_names_every_folder_and_module():
+    layers = _layers()
+    names = {p.stem if p.is_file() else p.name for p in SRC.iterdir()
+             if (p.suffix == ".py" and p.stem != "__init__") or (p / "__init__.py").is_file()}
+    assert names == set(layers), (sorted(names - set(layers)), sorted(set(layers) - names))
+
+
+def test_every_import_runs_downward():
+    layers = _layers()
+    upward = []
+    for module, imports in _import_graph().items():
+        here = _layer_of(module, layers)
+        for target, line, _ in imports:
+            there = _layer_of(target, layers)
+            if there is not None and here is not None and there > here:
+                upward.append(f"{module}:{line} -> {target} (layer {here} -> {there})")
+    assert not upward, "\n".join(upward)
+
+
+def test_no_import_cycle_but_the_type_checking_one():
+    graph = {m: {t for t, _, _ in imports if t != m} for m, imports in _import_graph().items()}
+    checking = {(m, t) for m, imports in _import_graph().items() for t, _, tc in imports if tc}
+    # Tarjan's strongly connected components
+    index, low, stack, on, cycles = {}, {}, [], set(), []
+
+    def visit(v):
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on.add(v)
+        for w in graph.get(v, ()):
+            if w not in graph:
+                continue
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = set()
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                comp.add(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                cycles.append(comp)
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    bad = [sorted(c) for c in cycles if c != TYPE_CHECKING_CYCLE]
+    assert not bad, bad
+    # and the allowed one closes only through imports for type checking
+    for comp in cycles:
+        a, b = sorted(comp)
+        assert (a, b) in checking or (b, a) in checking, comp
+
+
+def test_importing_facemech_changes_no_environment_variable_nor_thread_count():
+    out = _run("import os, numba; before = (dict(os.environ), numba.get_num_threads()); "
+               "import facemech, facemech.physics.threads, facemech.solvers.forward; "
+               "from facemech import simulate, Parameters; "
+               "print(before == (dict(os.environ), numba.get_num_threads()))",
+               drop=("NUMBA_CACHE_DIR",))
+    assert out.stdout.strip() == "True"

@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 
 from facemech import InputError, MarkerSet, read_results, simulate, write_markers
-from facemech.inverse import stats
 from facemech.inverse.experiments import synthetic_data, triangle_sequence
 from facemech.inverse.frame import FrameProblem
 from facemech.inverse.invert import control_matrix, invert
 from facemech.inverse.methods import LeastSquares
+from facemech.kinematics import stats
 from facemech.params import MUSCLE_GROUPS, Parameters
 from facemech.physics.assembly import Physics
 from facemech.solvers.state import State

@@ -9,6 +9,7 @@ from scipy.optimize import brentq
 from conftest import activity
 from conftest import run_cli as cli
 from facemech.errors import InputError
+from facemech.geometry.teeth import lower_incisor_point
 from facemech.io.results import read_results, to_dataset, write_results
 from facemech.params import GLIDE_RATE, GLIDE_SLOPE, Parameters, preset, read_preset, write_preset
 from facemech.solvers.forward import simulate
@@ -16,7 +17,6 @@ from facemech.solvers.jaw import (
     condyle_glide,
     jaw_poses,
     jaw_poses_from_points,
-    lower_incisor_point,
     move_points,
 )
 from facemech.solvers.mandible import JawBundle, place_jaw

@@ -8,6 +8,7 @@ import pytest
 from conftest import run_cli as cli
 from facemech import MUSCLE_GROUPS
 from facemech.errors import InputError
+from facemech.geometry.teeth import lower_incisor_point
 from facemech.inverse.control_pick import MIN_NEW_MOTION_MM, pick_controls
 from facemech.inverse.invert import SPEECH_CONTROLS
 from facemech.inverse.workflow import _at_frame_rate, _bone_gaps_filled, invert_markers
@@ -17,7 +18,7 @@ from facemech.kinematics.roles import bone_points, marker_roles, on_sites
 from facemech.markerset import MarkerSet
 from facemech.params import preset
 from facemech.solvers.forward import simulate
-from facemech.solvers.jaw import angles_from_chin, glide_of, lower_incisor_point, move_points
+from facemech.solvers.jaw import angles_from_chin, glide_of, move_points
 from facemech.solvers.jaw_bone import (
     MAX_BONE_STRETCH,
     eminence_direction,

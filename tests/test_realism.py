@@ -149,7 +149,7 @@ def test_a_full_pulse_returns_to_rest_without_ringing(face, group, landmark, axi
 def test_a_chin_marker_drives_the_jaw_in_the_tissue(face):
     """A chin marker on the skin that drops 6 mm gives the model's chin marker a 6 mm drop once
     the tissue has settled: the jaw angle comes from the skin's own response."""
-    from facemech.solvers.jaw import jaw_angles_from_marker
+    from facemech.solvers.jaw_drive import jaw_angles_from_marker
 
     p = preset("anatomical")
     node = face.markers["R01"]

@@ -7,7 +7,6 @@ import pytest
 from scipy import ndimage
 
 from conftest import activity, run_cli
-from facemech.demo import run_demo
 from facemech.geometry.appearance import Appearance
 from facemech.io.results import read_results, to_dataset
 from facemech.solvers.forward import simulate
@@ -16,6 +15,7 @@ from facemech.viz.raster import srgb_to_linear
 from facemech.viz.render import Renderer
 from facemech.viz.scene import build_scene, look_from_dataset, look_from_model
 from facemech.viz.video import RenderOptions, jaw_poses_of, render_results, still
+from facemech.workflows.demo import run_demo
 
 GREEN = "#00ff00"  # a background no part of the face has
 

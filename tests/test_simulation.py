@@ -224,8 +224,8 @@ def test_collapse_within_a_frame_is_a_blow_up_with_its_frame(seeds_face):
 
 def test_calibrated_preset_moves_experiment1_as_published(seeds_face):
     face = seeds_face
-    from facemech.inverse import stats
     from facemech.inverse.experiments import synthetic_data
+    from facemech.kinematics import stats
     from facemech.params import preset
 
     base, cal = preset("lucero1999"), preset("calibrated")
@@ -242,8 +242,8 @@ def test_calibrated_preset_moves_experiment1_as_published(seeds_face):
 def test_lucero1999_still_moves_experiment1_as_before(seeds_face):
     """The published constants give the seeds' Experiment 1 the same movement as before the
     anatomical preset existed: 0.22 mm (docs/model.md), at the paper's 0.33-ms step."""
-    from facemech.inverse import stats
     from facemech.inverse.experiments import synthetic_data
+    from facemech.kinematics import stats
     from facemech.params import preset
 
     data, _ = synthetic_data(seeds_face, params=preset("lucero1999"), dt=1 / 3000)

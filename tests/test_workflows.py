@@ -9,7 +9,7 @@ import pytest
 from conftest import run_cli
 from facemech import InputError, preset, write_marker_csv
 from facemech.markerset import MarkerSet
-from facemech.solvers.jaw import jaw_angles_from_marker
+from facemech.solvers.jaw_drive import jaw_angles_from_marker
 from facemech.workflows import emg as wemg
 from facemech.workflows import markers as wmarkers
 from facemech.workflows import simulate as wsim

@@ -17,7 +17,9 @@ def _numba_cache_dir(package_dir: str, environ, writable) -> str | None:
     numba caches beside the sources (``__pycache__``), else under the user's cache folder, and
     fails with a traceback when it can write neither. When the installed package cannot be
     written and no ``NUMBA_CACHE_DIR`` is set, a per-user folder in the temporary directory is
-    used instead.
+    used instead. Importing facemech changes no environment variable: the command line
+    (:func:`facemech.cli.main`) sets ``NUMBA_CACHE_DIR`` from this before numba starts; a
+    program that imports the library from a read-only installation sets it itself.
     """
     if environ.get("NUMBA_CACHE_DIR") or writable(package_dir):
         return None
@@ -25,12 +27,6 @@ def _numba_cache_dir(package_dir: str, environ, writable) -> str | None:
 
     return _os.path.join(tempfile.gettempdir(), f"facemech-numba-cache-{_os.getuid()}")
 
-
-_cache = _numba_cache_dir(_os.path.dirname(__file__), _os.environ,
-                          lambda d: _os.access(d, _os.W_OK))
-if _cache is not None:
-    _os.environ["NUMBA_CACHE_DIR"] = _cache
-del _cache
 
 #: every public name and the module that defines it; each module is imported on first use, so
 #: ``import facemech`` (and the command line's start) loads neither numba nor scipy
@@ -63,7 +59,7 @@ _PUBLIC = {
     "fill_gaps": "facemech.kinematics.gaps",
     "find_gaps": "facemech.kinematics.gaps",
     "head_correct": "facemech.kinematics.rigid",
-    "jaw_angles_from_marker": "facemech.solvers.jaw",
+    "jaw_angles_from_marker": "facemech.solvers.jaw_drive",
     "load_face": "facemech.geometry.builder",
     "preset": "facemech.params",
     "process_emg": "facemech.emg",

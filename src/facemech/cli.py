@@ -3,8 +3,8 @@ library (:mod:`facemech.workflows`) and prints what it did; bad input: one line,
 are declared as plain parameters; :func:`command` gives them help, names and ranges."""
 
 import functools
-import importlib
 import inspect
+import os
 import sys
 from pathlib import Path
 
@@ -12,6 +12,8 @@ import typer
 from rich.console import Console
 
 from . import cli_options as opts
+from . import progress, workflows
+from ._version import __version__
 from .errors import FacemechError
 
 app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_enable=False,
@@ -30,51 +32,51 @@ def _option(fn, p: inspect.Parameter, args: tuple[str, ...]) -> inspect.Paramete
     return p.replace(default=typer.Option(p.default, *opts.NAMES.get(p.name, ()), help=help))
 
 def command(group: typer.Typer = app, name: str | None = None, args: tuple[str, ...] = (),
-            look: tuple | None = None):
+            look: tuple | None = None, groups: tuple[str, ...] = ()):
     """Register the function as the command ``name`` of ``group``: parameters become options
     (:mod:`facemech.cli_options`; no default or in ``args``: arguments; ``...``: required),
     numbers are checked first, what it returns is printed (``warnings`` on stderr); ``look``:
-    defaults of ``--view --size --background --aa``, passed as one ``render``."""
+    defaults of ``--view --size --background --aa``, passed as one ``render``; ``groups``: the
+    parameters that take options of :data:`~facemech.cli_options.GROUPS` as one dict each."""
     def register(fn):
         @functools.wraps(fn)
         def run(**kw):
+            from .physics.threads import set_threads
+            set_threads(_threads[0])  # numba's, for this command (--threads, FACEMECH_THREADS)
             for key, value in kw.items():
                 if isinstance(value, int | float) and not isinstance(value, bool):
                     name = opts.NAMES.get(key, ("--" + key.replace("_", "-"),))[-1]
                     opts.check_number(name, value, opts.RANGES.get(key))
+            kw.update({g: {k: kw.pop(k) for k in opts.GROUPS[g]} for g in groups})
             if look:
-                kw["render"] = wf.pictures.render_options(*(kw.pop(k) for k in LOOK))
+                kw["render"] = workflows.pictures.render_options(*(kw.pop(k) for k in LOOK))
             if isinstance(shown := fn(**kw), list):  # lines, or what it wrote and warnings
                 _say(shown)
             elif shown is not None:  # file names and notes are not markup
                 out.print(shown, markup=False, highlight=False)
                 err.print(getattr(shown, "warnings", ""), end="")
-        sig = inspect.signature(fn)
-        extra = [inspect.Parameter(k, inspect.Parameter.KEYWORD_ONLY, default=d, annotation=type(
-            d)) for k, d in zip(LOOK, look or (), strict=False)]
+        sig, key = inspect.signature(fn), inspect.Parameter.KEYWORD_ONLY
+        extra = [inspect.Parameter(k, key, default=d, annotation=type(d))
+                 for k, d in zip(LOOK, look or (), strict=False)]
+        extra += [inspect.Parameter(k, key, default=d, annotation=a)
+                  for g in groups for k, (a, d) in opts.GROUPS[g].items()]
         run.__signature__ = sig.replace(parameters=[_option(fn, p, args) for p in (
-            *sig.parameters.values(), *extra) if p.name != "render"])
+            *sig.parameters.values(), *extra) if p.name not in ("render", *groups)])
         return group.command(name)(run)
     return register
-
 LOOK = ("view", "size", "background", "aa")
-class _Workflows:
-    """``wf.markers`` is :mod:`facemech.workflows.markers`, imported on first use."""
-    def __getattr__(self, name: str):
-        return importlib.import_module(f"facemech.workflows.{name}")
-wf, progress = _Workflows(), importlib.import_module("facemech.progress")
-_log: list = []  # the running command's log lines (output not a terminal)
+# the running command's log lines (output not a terminal); --threads (None: default_threads())
+_log, _threads = [], [None]
 def _version(value: bool) -> None:
     if value:
-        print(f"facemech {importlib.import_module('facemech._version').__version__}")
+        print(f"facemech {__version__}")
         raise typer.Exit()
 @app.callback()
 def _root(ctx: typer.Context, version: bool = typer.Option(
         False, "--version", help="print the version", callback=_version, is_eager=True),
           threads: int | None = typer.Option(None, help=opts.HELP["threads"])) -> None:
     """Physics and kinematics of the speaking face."""
-    if threads is not None or "FACEMECH_THREADS" in importlib.import_module("os").environ:
-        importlib.import_module("facemech.physics.threads").set_threads(threads)  # numba's
+    _threads[0] = threads
     if not err.is_terminal:  # log lines, and a heartbeat for the whole command
         _log[:] = [ctx.with_resource(progress.LogProgress(ctx.invoked_subcommand or "facemech"))]
         ctx.call_on_close(_log.clear)
@@ -104,53 +106,53 @@ def _finish(made: list[str], failed: list[str], code: int):  # a batch's lines, 
 def demo(output: Path = Path("demo-output"), integrator: str | None = None, video: bool = True,
          preset: str = "anatomical", render=None):
     """Simulate a synthetic utterance on the built-in face; write results, plots and a movie."""
-    return _staged(wf.demo.run, **locals())
+    return _staged(workflows.demo.run, **locals())
 
 @command(face_app, "build")
 def face_build(surface: Path, landmarks: Path, output: Path = ..., units: str = "mm",
                axes: str | None = None, name: str | None = None, tissue: str = "anatomical"):
     """Build a three-layer face model from a surface mesh (a textured OBJ or a coloured PLY
     keeps its look) and landmarks; notes (unit inferred, axes turned) on stderr."""
-    return _staged(wf.faces.build_face_file, **locals())
+    return _staged(workflows.faces.build_face_file, **locals())
 
 @command(face_app, "from-photo")
 def face_from_photo(front: Path, output: Path = ..., profile: Path | None = None, ipd: float | None
                     = None, distance: float = 1.0, name: str | None = None, tissue="anatomical"):
     """A talker from a frontal photo (and a profile), the photo as its skin (docs/photo.md)."""
-    return _staged(wf.photo.face_from_photo_file, **locals())
+    return _staged(workflows.photo.face_from_photo_file, **locals())
 
 @command(face_app, "info", args=("face",))
 def face_info(face: str = "default", as_json: bool = False, tissue: str | None = None):
     """Counts of a face model: nodes per layer, springs by kind, prisms, muscles, free fascia."""
-    out.print(wf.faces.face_info(face, tissue=tissue).text(as_json), markup=False)
+    out.print(workflows.faces.face_info(face, tissue=tissue).text(as_json), markup=False)
 
 @command(face_app, "landmarks")
 def face_landmarks(surface: Path, output: Path = ..., units: str = "mm"):
     """Place landmarks on a scan from its geometry alone; write the CSV and a picture."""
-    return wf.landmarks.landmarks_file(**locals())
+    return workflows.landmarks.landmarks_file(**locals())
 
 @command(face_app, "export-default")
 def face_export_default(output: Path = ...):
     """Write the built-in face's surface (OBJ, mm) and landmarks (CSV, mm) as a template."""
-    out.print("wrote {} and {}".format(*wf.faces.export_default_face(output)))
+    out.print("wrote {} and {}".format(*workflows.faces.export_default_face(output)))
 
 @command(emg_app, "process")
 def emg_process(emg: Path, output: Path = ..., rate: float | None = None,
                 baseline: str | None = None, calibration: Path | None = None,
                 calibration_baseline: str | None = None):
     """Rectify, integrate (17-ms trapezoid), downsample and normalise EMG to activity in [0, 1]."""
-    return wf.emg.process_emg_file(**locals())
+    return workflows.emg.process_emg_file(**locals())
 
 @command(markers_app, "info")
 def markers_info(source: Path, units: str | None = None, as_json: bool = False):
     """Rate, units, markers and gaps of a marker file (.c3d .trc .csv .tsv .ema .est .txy)."""
-    out.print(wf.markers.marker_info(source, units=units).text(as_json), markup=False)
+    out.print(workflows.markers.marker_info(source, units=units).text(as_json), markup=False)
 
 @command(markers_app, "convert", args=("target",))
 def markers_convert(source: Path, target: Path | None = None, output: Path | None = None,
                     units: str | None = None, out_units: str | None = None):
     """Convert between C3D, TRC and CSV (read Qualisys TSV and a results file's markers)."""
-    return (wf.markers.convert_markers(source, output or target, units=units,
+    return (workflows.markers.convert_markers(source, output or target, units=units,
                                          out_units=out_units))
 
 @command(markers_app, "head-correct")
@@ -158,97 +160,89 @@ def markers_head_correct(source: Path, output: Path = ..., units: str | None = N
                          head: str = ..., reference: int | None = None,
                          report: Path | None = None):
     """Remove head motion by a per-frame rigid fit of head markers to a reference frame."""
-    return wf.markers.head_correct_file(**locals())
+    return workflows.markers.head_correct_file(**locals())
 
 @command(markers_app, "resample")
 def markers_resample(source: Path, output: Path = ..., rate: float | None = None,
                      units: str | None = None):
     """Resample to a new rate with anti-aliasing (gaps stay gaps)."""
-    return wf.markers.resample_file(**locals())
+    return workflows.markers.resample_file(**locals())
 
 @command(markers_app, "frame")
 def markers_frame(source: Path, output: Path = ..., right: str = ..., left: str = ...,
                   front: str = ..., origin: str | None = None, reference: int = 0,
                   units: str | None = None):
     """Express markers in an anatomical frame: +x right->left, +y up, +z forward."""
-    return wf.markers.frame_file(**locals())
+    return workflows.markers.frame_file(**locals())
 
 @command(markers_app, "fill-gaps")
 def markers_fill_gaps(source: Path, output: Path = ..., units: str | None = None,
                       max_gap: float = 0.1):
     """Fill interior gaps up to --max-gap with a cubic spline; filled samples are flagged."""
-    return wf.markers.fill_gaps_file(**locals())
+    return workflows.markers.fill_gaps_file(**locals())
 
-@command(look=("frontal+profile", "1280x720", "#2a2c33", 2))
-def simulate(
-        output: Path = ..., face: str = "default", activity: Path | None = None,
-        emg: Path | None = None, units: str | None = None, emg_baseline: str | None = None,
-        emg_calibration: Path | None = None, jaw_chin: Path | None = None,
-        chin_marker: str | None = None, jaw_second_marker: str | None = None,
-        jaw_incisor: str | None = None, jaw_molar: str | None = None, jaw_angle: Path | None = None,
-        bite_block: bool = False, jaw_kinematics: str | None = None, preset: str = "anatomical",
-        integrator: str | None = None, substeps: int | None = None, dt: float | None = None,
-        jaw_drive: str = "ramp", video: Path | None = None, audio: Path | None = None, render=None):
+@command(look=("frontal+profile", "1280x720", "#2a2c33", 2), groups=(
+    "controls", "jaw_source", "solver"))
+def simulate(output: Path = ..., face: str = "default", preset: str = "anatomical",
+             video: Path | None = None, audio: Path | None = None, render=None,
+             controls=None, jaw_source=None, solver=None):
     """Simulate the face driven by muscle activity or EMG and a jaw trajectory."""
-    sim, movie = wf.simulate, video and (video, audio, render)
-    return (_staged(
-        sim.simulate_files, output=output, movie=movie,
-        controls=sim.Controls(activity, emg, emg_baseline, emg_calibration),
-        jaw=sim.JawSource(jaw_angle, jaw_chin, chin_marker, jaw_second_marker, units, bite_block,
-                          jaw_incisor, jaw_molar),
-        face=face, preset=preset, jaw_kinematics=jaw_kinematics, integrator=integrator,
-        substeps=substeps, dt=dt, jaw_drive=jaw_drive))
+    sim, j = workflows.simulate, jaw_source
+    return _staged(sim.simulate_files, output=output, movie=video and (video, audio, render),
+                   controls=sim.Controls(**controls), jaw=sim.JawSource(
+                       j["jaw_angle"], j["jaw_chin"], j["chin_marker"], j["jaw_second_marker"],
+                       j["units"], j["bite_block"], j["jaw_incisor"], j["jaw_molar"]),
+                   face=face, preset=preset, **solver)
 
 @command(look=("frontal+profile", "1280x720", "#2a2c33", 2))
 def render(result: Path, output: Path = ..., audio: Path | None = None, render=None):
     """Render a results file to an H.264 MP4 or PNG frames (-o a folder), with eyes and teeth."""
-    return _staged(wf.pictures.render_movie, results=result, movie=(output, audio, render))
+    return _staged(workflows.pictures.render_movie, results=result, movie=(output, audio, render))
 
 @command(look=("frontal", "1280x1280", "#ffffff", 3))
 def still(result: Path, output: Path = ..., time: float | None = None, peak: str | None = None,
           markers: bool = False, labels: bool = False, render=None):
     """A still figure for a paper: one frame at a time or at a gesture's peak (PNG or PDF)."""
-    return wf.pictures.still_file(**locals())
+    return workflows.pictures.still_file(**locals())
 
 @command()
 def export(result: Path, output: Path = ..., units: str | None = None, fmt: str | None = None):
     """Export a result: animated skin as glTF (.glb), a mesh per frame (OBJ/PLY, -o a folder),
     or markers (.trc, .c3d, .csv). --units: meshes m (default) or mm, markers mm (default)."""
-    return wf.pictures.export_file(result, output, fmt=fmt, units=units)
+    return workflows.pictures.export_file(result, output, fmt=fmt, units=units)
 
 @command()
 def plot(result: Path, output: Path = ..., units: str | None = None,
          markers: str = "R03,R05,R07", measured: Path | None = None):
     """Plot displacement and acceleration (vertical, protrusion) of markers, like Figs. 4-6."""
-    return wf.pictures.plot_file(result, output, markers, measured=measured, units=units)
+    return workflows.pictures.plot_file(result, output, markers, measured=measured, units=units)
 
 @command()
 def view(result: Path, output: Path = ..., units: str | None = None,
          markers: Path | None = None, title: str | None = None):
     """Write an interactive viewer: one self-contained HTML page (WebGL, works offline)."""
-    return wf.pictures.view_file(result, output, markers=markers, units=units, title=title)
+    return workflows.pictures.view_file(result, output, markers=markers, units=units, title=title)
 
-@command(args=("text",))
+@command(args=("text",), look=("frontal+profile", "1280x720", "#2a2c33", 2), groups=("tiers",))
 def speak(text: str | None = None, output: Path = Path("speak-output"),
           audio: Path | None = None, textgrid: Path | None = None, voice: str = "en-us",
-          rate_wpm: int = 160, word_tier: str | None = None, phone_tier: str | None = None,
-          strength: float = 1.0, face: str = "default", preset: str = "anatomical",
-          video: bool = True, view: str = "frontal+profile", size: str = "1280x720",
-          background: str = "#2a2c33", aa: int = 2):
+          rate_wpm: int = 160, strength: float = 1.0, face: str = "default",
+          preset: str = "anatomical", video: bool = True, render=None, tiers=None):
     """Make the face say TEXT (eSpeak NG), or speak in sync with a recorded voice (--audio)."""
-    _say(wf.speech.speak_report(_staged(wf.speech.speak, **locals()), output))
+    kw = {**locals(), "tiers": (tiers["word_tier"], tiers["phone_tier"])}
+    _say(workflows.speech.speak_report(_staged(workflows.speech.speak, **kw), output))
 
 @command()
 def describe(result: Path, as_json: bool = False, series: bool = False):
     """Stimulus parameters of a result: lips, jaw, mouth corners, AV offset, settings."""
-    text = wf.speech.describe_text(result, as_json=as_json, series=series)
+    text = workflows.speech.describe_text(result, as_json=as_json, series=series)
     print(text) if as_json else out.print(text, markup=False, highlight=False)
 
 @command()
 def stimuli(design: Path, output: Path = ..., video: bool = True, view: str = "frontal",
             size: str = "1280x720", background: str = "#2a2c33", aa: int = 2):
     """Make the stimuli of a design table (docs/stimuli.md) as results, WAV, MP4, manifest."""
-    made, failed = wf.speech.stimuli_report(_staged(wf.speech.stimuli, **locals()))
+    made, failed = workflows.speech.stimuli_report(_staged(workflows.speech.stimuli, **locals()))
     _finish(made, failed, 2 if failed else 0)
 
 @command()
@@ -256,51 +250,50 @@ def regions(files: list[Path], output: Path = ..., units: str | None = None,
             k: int | None = None, eps: str | None = None, neutral: str = "first",
             train: str | None = None, test: str | None = None, method: str = "qrcp"):
     """Independent markers and eigenregions by QR with column pivoting (Lucero & Munhall 2008)."""
-    _say(wf.regions.report(wf.regions.regions(**locals()), output))
+    _say(workflows.regions.report(workflows.regions.regions(**locals()), output))
 
 @command(experiment_app, "lucero2008")
 def experiment_lucero2008(output: Path = Path("lucero2008"), frames: int = 60,
                           utterances: int = 40, k: int = 10, video: bool = True):
     """Lucero & Munhall (2008) on the embedded corpus, our numbers beside the paper's."""
-    _say(wf.experiments.lucero2008_report(_staged(wf.experiments.lucero2008, **locals()), output))
+    res = _staged(workflows.experiments.lucero2008, **locals())
+    _say(workflows.experiments.lucero2008_report(res, output))
 
-@command()
+@command(groups=("marker_file", "model", "jaw_markers", "fit"))
 def invert(markers: Path = ..., output: Path = ..., face: str = "default", method: str = "lsq",
-           map_file: Path | None = None, preset: str = "anatomical", figure: Path | None = None,
-           positive: bool = True, controls: str | None = None, chin_marker: str | None = None,
-           jaw_second_marker: str | None = None, jaw_incisor: str | None = None,
-           jaw_molar: str | None = None, jaw_fixed: bool = False, jaw_lead: int | None = None,
-           noise: float | None = None, window: int | None = None, tol: float | None = None,
-           bend: float | None = None, smooth: float | None = None, effort: float | None = None,
-           max_evaluations: int | None = None, scale_pair: str | None = None,
-           jaw_kinematics: str | None = None, dt: float | None = None, units: str | None = None):
+           figure: Path | None = None, positive: bool = True, controls: str | None = None,
+           noise: float | None = None, marker_file=None, model=None, jaw_markers=None, fit=None):
     """Recover muscle activity and the jaw frame by frame from markers; re-animate the face."""
-    res = _staged(wf.invert.invert, **locals())
-    _say(wf.invert.report(res, output, figure))
-    _say(wf.invert.notes(res), True)
+    m, wi = marker_file, workflows.invert
+    res = _staged(wi.invert, markers=wi.MarkerFile(markers, m["units"], m["map_file"], m[
+        "scale_pair"]), output=output, face=face, params=wi.parameters(**model), method=method,
+        options=fit, positive=positive, controls=controls, jaw=wi.JawMarkers(**jaw_markers),
+        noise=noise, figure=figure)
+    _say(workflows.invert.report(res, output, figure))
+    _say(workflows.invert.notes(res), True)
 
 @command()
 def compare(a: Path, b: Path, markers: str | None = None, as_json: bool = False,
             units: str | None = None):
     """3-D statistics, per-axis correlations and per-frame errors (RMS, mm) of A against B."""
-    res = wf.compare.compare_files(a, b, markers=markers, units=units)
+    res = workflows.compare.compare_files(a, b, markers=markers, units=units)
     _say([f"warning: {w}" for w in res.warnings], True, markup=False, highlight=False)
-    (print if as_json else out.print)("\n".join(wf.compare.report(res, as_json=as_json)))
+    (print if as_json else out.print)("\n".join(workflows.compare.report(res, as_json=as_json)))
 
 @command(experiment_app, "pitermann2001-synthetic")
 def experiment_pitermann_synthetic(method: str = "lsq", dt: float | None = None,
                                    noise_mm: float = 0.0, preset: str = "anatomical",
                                    figures: bool = True, output: Path | None = None):
     """Pitermann & Munhall (2001) Experiment 1: Tables I, II and the top of Table III."""
-    res = _staged(wf.experiments.synthetic, **locals())
-    _say(wf.experiments.synthetic_report(res, output, figures=figures))
+    res = _staged(workflows.experiments.synthetic, **locals())
+    _say(workflows.experiments.synthetic_report(res, output, figures=figures))
 
 @command(experiment_app, "pitermann2001-crosstalker")
 def experiment_pitermann_crosstalker(frames: int = 120, dt: float | None = None,
                                      preset: str = "anatomical", output: Path | None = None):
     """Experiment 3 analogue: another talker inverted on the default face (Table VI)."""
-    res = _staged(wf.experiments.crosstalker, **locals())
-    return wf.experiments.crosstalker_report(res, output)
+    res = _staged(workflows.experiments.crosstalker, **locals())
+    return workflows.experiments.crosstalker_report(res, output)
 
 @command(args=("gestures",))
 def calibrate(gestures: list[str] | None = None, output: Path = Path("calibrated-preset.json"),
@@ -308,7 +301,8 @@ def calibrate(gestures: list[str] | None = None, output: Path = Path("calibrated
               builtin: bool = False, fit: str = "force,lips", max_evaluations: int = 30,
               name: str | None = None):
     """Fit the anatomical preset's scales to maximal gestures; write a preset file (--preset)."""
-    return wf.calibrate.report(_staged(wf.calibrate.calibrate, **locals()), output, builtin=builtin)
+    res = _staged(workflows.calibrate.calibrate, **locals())
+    return workflows.calibrate.report(res, output, builtin=builtin)
 
 @command()
 def subject(face: str, markers: Path = ..., output: Path = ..., head: str | None = None,
@@ -316,27 +310,33 @@ def subject(face: str, markers: Path = ..., output: Path = ..., head: str | None
             rest: str | None = None, chin_marker: str | None = None,
             jaw_second_marker: str | None = None, warp: bool | None = None):
     """Make a subject folder: a face (built-in, face file or scan) fitted to rest markers."""
-    return _staged(wf.subject.make_subject, **locals())
+    return _staged(workflows.subject.make_subject, **locals())
 
-@command()
-def analyse(subject: Path, recording: Path, output: Path = ..., units: str | None = None,
-            max_gap: float = 0.1, lowpass: float | None = 12.0, method: str = "lsq",
-            controls: str = "speech", noise: float | None = None, window: int | None = 3,
-            smooth: float | None = 1.0, preset: str = "anatomical", video: bool = False):
+@command(groups=("preparation", "lsq"))
+def analyse(subject: Path, recording: Path, output: Path = ..., method: str = "lsq",
+            controls: str = "speech", noise: float | None = None, preset: str = "anatomical",
+            video: bool = False, preparation=None, lsq=None):
     """A recording against a subject: head motion, frame, gaps, inversion, statistics, movie."""
-    return _staged(wf.subject.analyse, **locals())
+    kw = dict(locals(), preparation=workflows.subject.Preparation(**preparation), lsq=None,
+              options=lsq if method == "lsq" else {})
+    return _staged(workflows.subject.analyse, **{k: v for k, v in kw.items() if k != "lsq"})
 
 @command()
 def batch(manifest: Path, output: Path = ..., workers: int | None = None,
           scheduler: str | None = None):
     """Run a manifest of simulate/invert/speak/stimuli/regions items on dask (docs/batch.md)."""
-    rep = wf.batch.run_batch(manifest, output, workers=workers, scheduler=scheduler, on_item=(
-        lambda o, n, t: _say([f"[{n}/{t}] {o.line()}"], True, markup=False, highlight=False)))
-    _finish(*wf.batch.report(rep), rep.exit_code)
+    rep = workflows.batch.run_batch(
+        manifest, output, workers=workers, scheduler=scheduler, on_item=lambda o, n, t: _say(
+            [f"[{n}/{t}] {o.line()}"], True, markup=False, highlight=False))
+    _finish(*workflows.batch.report(rep), rep.exit_code)
 
 def main() -> None:
     """Run the app: a FacemechError is one line on stderr, exit 2; SIGINT/SIGTERM: 130/143."""
-    restore = importlib.import_module("facemech.interrupts").install()
+    from . import _numba_cache_dir, interrupts
+    cache = _numba_cache_dir(os.path.dirname(__file__), os.environ,
+                             lambda d: os.access(d, os.W_OK))
+    os.environ.update({} if cache is None else {"NUMBA_CACHE_DIR": cache})  # before numba starts
+    restore = interrupts.install()
     try:
         app()
     except FacemechError as exc:

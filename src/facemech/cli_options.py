@@ -1,13 +1,15 @@
 """The command line's options, as data: each option's help (:data:`HELP`), its names where
 they are not ``--the-parameter`` (:data:`NAMES`) and the interval its numbers must lie in
-(:data:`RANGES`), with :func:`check_number`, which :mod:`facemech.cli` applies to every number
-a command is given before it runs. Pure Python: importing it costs nothing."""
+(:data:`RANGES`, from the one table of :mod:`facemech.checks`), with :func:`check_number`, which
+:mod:`facemech.cli` applies to every number a command is given before it runs. Pure Python:
+importing it costs nothing."""
 
 from __future__ import annotations
 
-import math
+from pathlib import Path
 
-from .errors import InputError
+from .checks import RANGES as _RANGES
+from .checks import check_number
 
 __all__ = ["HELP", "NAMES", "RANGES", "check_number", "help_for"]
 
@@ -189,39 +191,43 @@ NAMES: dict[str, tuple[str, ...]] = {
     "rate_wpm": ("--rate",), "noise_mm": ("--noise",), "map_file": ("--map",), "k": ("-k",),
     "aa": ("--aa",)}
 
-#: parameter -> the interval its value must lie in; NaN and infinities never pass. Units as in
-#: the help: rates Hz, times and steps s, noise and weights mm
-RANGES: dict[str, str] = {
-    "rate": "(0, 1e5]", "dt": "(0, 0.01]", "max_gap": "(0, 3600]", "time": "[0, inf)",
-    "noise": "[0, 100]", "noise_mm": "[0, 100]", "tol": "(0, 100]", "bend": "[0, 1e6]",
-    "smooth": "[0, 1e6]", "effort": "[0, 1e6]", "window": "[1, 1000]", "substeps": "[1, 1e5]",
-    "reference": "[0, inf)", "frames": "[2, 1e6]", "utterances": "[1, 1e4]", "k": "[1, 1000]",
-    "aa": "[1, 4]", "rate_wpm": "[80, 450]", "strength": "[0, 10]", "jaw_lead": "[0, 600]",
-    "max_evaluations": "[1, 1e7]", "lowpass": "[0, 1000]",
-    "workers": "[1, 1024]", "ipd": "[50, 80]", "distance": "[0.3, 20]"}
+#: option groups: options that a command takes as one parameter, a dict of them, which it hands
+#: to the object that takes them (group -> option -> (type, default)), so that no command has
+#: more than 12 parameters (issue 28). The options keep their names, help and order of checks
+_JAW = {k: (str | None, None) for k in ("chin_marker", "jaw_second_marker", "jaw_incisor",
+                                         "jaw_molar")}
+GROUPS: dict[str, dict[str, tuple]] = {
+    # facemech.workflows.simulate.Controls and JawSource, and the solver's options
+    "controls": {"activity": (Path | None, None), "emg": (Path | None, None),
+                 "emg_baseline": (str | None, None), "emg_calibration": (Path | None, None)},
+    "jaw_source": {"jaw_angle": (Path | None, None), "jaw_chin": (Path | None, None), **_JAW,
+                   "bite_block": (bool, False), "units": (str | None, None)},
+    "solver": {"jaw_kinematics": (str | None, None), "integrator": (str | None, None),
+               "substeps": (int | None, None), "dt": (float | None, None),
+               "jaw_drive": (str, "ramp")},
+    # facemech.inverse.workflow.JawMarkers, the method's options, the marker file and preset
+    "jaw_markers": {**_JAW, "jaw_fixed": (bool, False), "jaw_lead": (int | None, None)},
+    "fit": {"window": (int | None, None), "tol": (float | None, None),
+            "bend": (float | None, None), "smooth": (float | None, None),
+            "effort": (float | None, None), "max_evaluations": (int | None, None)},
+    "marker_file": {"map_file": (Path | None, None), "scale_pair": (str | None, None),
+                    "units": (str | None, None)},
+    "model": {"preset": (str, "anatomical"), "jaw_kinematics": (str | None, None),
+              "dt": (float | None, None)},
+    # facemech.workflows.subject.analyse: Preparation and the lsq options
+    "preparation": {"units": (str | None, None), "max_gap": (float, 0.1),
+                    "lowpass": (float | None, 12.0)},
+    "lsq": {"window": (int | None, 3), "smooth": (float | None, 1.0)},
+    # facemech.workflows.speak's TextGrid tiers
+    "tiers": {"word_tier": (str | None, None), "phone_tier": (str | None, None)},
+}
+
+#: parameter -> the interval its value must lie in, for the numbers that are options of a
+#: command: the rows of the one table (:mod:`facemech.checks`) that the Python API checks too
+RANGES: dict[str, str] = {k: v for k, v in _RANGES.items()
+                          if k in HELP or any(h.endswith("." + k) for h in HELP)}
 
 
 def help_for(command: str, parameter: str) -> str | None:
     """The help of ``parameter`` in the command whose function is named ``command``."""
     return HELP.get(f"{command}.{parameter}", HELP.get(parameter))
-
-
-def check_number(option: str, value: float, interval: str | None = None) -> None:
-    """Refuse ``value`` unless it is finite and lies in ``interval``.
-
-    Parameters
-    ----------
-    option : the option's name, for the message (e.g. ``--dt``)
-    value : the number given
-    interval : ``"(lo, hi]"`` style, bounds may be ``inf``; None: any finite number
-
-    Raises
-    ------
-    InputError : naming ``option``, the interval and the value
-    """
-    lo, hi = (float(v) for v in interval[1:-1].split(",")) if interval else (-math.inf, math.inf)
-    above = interval is None or (lo < value if interval[0] == "(" else lo <= value)
-    below = interval is None or (value < hi if interval[-1] == ")" else value <= hi)
-    if not (math.isfinite(value) and above and below):
-        within = f" in {interval}" if interval else ""
-        raise InputError(f"must be a finite number{within}, got {value}", source=f"option {option}")

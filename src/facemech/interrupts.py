@@ -1,6 +1,6 @@
 """Interrupted commands: SIGINT and SIGTERM end a command cleanly.
 
-The handler removes the temporary files being written (:func:`facemech.io.atomic.remove_pending`),
+The handler removes the temporary files being written (:func:`facemech.atomic.remove_pending`),
 prints ``facemech: interrupted`` on stderr and exits with the shell's status for the signal:
 130 for SIGINT (Ctrl-C), 143 for SIGTERM. Finished outputs are complete files (they were renamed
 into place whole); nothing half-written is left.
@@ -47,7 +47,7 @@ def _quietly(fn) -> None:
 def handle(signum: int, frame=None) -> None:
     """Clean up and exit: run the registered clean-ups (:func:`on_interrupt`), remove pending
     temporary files and folders, say so, exit 128 + ``signum``."""
-    from .io.atomic import remove_pending
+    from .atomic import remove_pending
 
     for sig in EXIT_STATUS:  # a second signal during the clean-up does not cut it short
         signal.signal(sig, signal.SIG_IGN)

@@ -11,6 +11,7 @@ from types import MappingProxyType
 
 import numpy as np
 
+from .checks import check_fields
 from .errors import InputError
 from .units import CM, DYNE, GRAM
 
@@ -76,7 +77,9 @@ GLIDE_SLOPE = float(np.radians(35.0))
 
 @dataclass(frozen=True)
 class Parameters:
-    """Constants of the face model (SI units).
+    """Constants of the face model (SI units), checked when made: every field's kind, interval
+    or choices (:mod:`facemech.checks`; ``Parameters(material="contnuum")`` is an InputError
+    naming ``material``), the jaw's kinematics and the muscle dynamics.
 
     All spring stiffnesses are for a 1-cm spring; a spring of rest length ``l0`` gets
     ``k = k_ref * (1 cm / l0)`` (Lucero & Munhall 1999, section I.A).
@@ -155,6 +158,7 @@ class Parameters:
     glide_slope: float = GLIDE_SLOPE
 
     def __post_init__(self):
+        check_fields(self)  # kinds, intervals and choices: the one table of facemech.checks
         check_jaw_kinematics(self.jaw_kinematics, self.glide_rate, self.glide_slope)
         check_muscle_dynamics(self.fv_vmax, self.fv_curvature, self.tau_activation,
                               self.activation_damping)
@@ -456,7 +460,7 @@ def write_preset(path, name: str, scales: dict, extra: dict | None = None, *,
     """
     import json
 
-    from .io.atomic import atomic_path
+    from .atomic import atomic_path
 
     check_jaw_kinematics(jaw_kinematics, glide_rate, glide_slope)
     data = {"format": "facemech-preset", "version": 1, "name": name, "base": "anatomical",

@@ -159,8 +159,8 @@ def experiment1_movement(face, params) -> float:
     """The movement (mm) of Experiment 1 of Pitermann & Munhall (2001) on a face: 2 x the RMS
     over the 11 right-side markers of their 3-D standard deviation, the 8 perioral pairs driven
     by the triangle sequence."""
-    from ..inverse import stats
     from ..inverse.experiments import PERIORAL, triangle_sequence
+    from ..kinematics import stats
     from ..solvers.forward import simulate
 
     tri = triangle_sequence()

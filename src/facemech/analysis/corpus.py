@@ -151,7 +151,7 @@ def simulate_corpus(n_utterances: int = 40, frames: int = 60, seed: int = 2008,
         if progress is not None:
             progress(k + 1, n_utterances)
     if cache:
-        from ..io.atomic import atomic_path
+        from ..atomic import atomic_path
 
         with atomic_path(path, suffix=".npz") as tmp, open(tmp, "wb") as fh:
             np.savez_compressed(fh, **{f"u{k}": u for k, u in enumerate(out)})

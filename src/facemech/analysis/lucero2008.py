@@ -1,20 +1,19 @@
 """Region analysis runs: on user files (``facemech regions``) and on the embedded corpus
 (``facemech experiment lucero2008``), with the seed's figures and numbers beside ours.
 
-Computing, drawing and writing are separate steps: :func:`analyse` and
+Computing here, drawing and writing in the commands' workflows: :func:`analyse` and
 :func:`run_lucero2008` return frozen dataclasses (:class:`RegionAnalysis`,
-:class:`Lucero2008`) whose ``as_dict()`` is the ``summary.json`` the commands write;
-:func:`draw` and :func:`draw_lucero2008` make the figures (and the MP4) and return the result
-with its ``figures`` recorded; :func:`write` writes the summary.
+:class:`Lucero2008`) whose ``as_dict()`` is the ``summary.json`` the commands write
+(:func:`facemech.workflows.regions.write`); :func:`facemech.workflows.regions.draw` and
+:func:`facemech.workflows.experiments.draw_lucero2008` make the figures (and the MP4) and
+return the result with its ``figures`` recorded.
 """
 
 from __future__ import annotations
 
-import json
 import warnings
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field, replace
-from pathlib import Path
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -23,8 +22,7 @@ from ..params import Parameters
 from .regions import IndependentMarkers
 
 __all__ = ["HeldOutError", "InsertionDistances", "Lucero2008", "RegionAnalysis", "Stability",
-           "TrajectoryError", "analyse", "dense_animation", "draw", "draw_lucero2008",
-           "insertion_distances", "run_lucero2008", "write"]
+           "TrajectoryError", "analyse", "insertion_distances", "run_lucero2008"]
 
 #: What Lucero & Munhall (2008) report for subject S1, to print beside our numbers.
 PAPER = {
@@ -161,15 +159,6 @@ class RegionAnalysis:
         return out
 
 
-def write(result: RegionAnalysis | Lucero2008, path: str | Path) -> Path:
-    """Write ``result.as_dict()`` as JSON (``summary.json``), atomically."""
-    from ..io.atomic import atomic_path
-
-    with atomic_path(path, suffix=".json") as tmp:
-        tmp.write_text(json.dumps(result.as_dict(), indent=2))
-    return Path(path)
-
-
 def analyse(utterances: Sequence[np.ndarray], names: Sequence[str], *,
             k: int | None = None, eps: float | None = None, method: str = "qrcp",
             train: Sequence[int] | None = None, test: Sequence[int] | None = None,
@@ -254,59 +243,6 @@ def analyse(utterances: Sequence[np.ndarray], names: Sequence[str], *,
         rest_mm=rest)
 
 
-def draw(result: RegionAnalysis, folder: str | Path) -> RegionAnalysis:
-    """Draw the analysis' PNG figures into ``folder`` (created): R values (Fig. 2), the first
-    eigenregions and orthogonal regions, and with held-out utterances the errors against k and
-    a predicted trajectory (Fig. 9), and the stability of the R values.
-
-    Returns the result with its ``figures`` (name -> file name).
-    """
-    from ..viz import regions as fig
-
-    out = Path(folder)
-    out.mkdir(parents=True, exist_ok=True)
-    model, full, names = result.model, result.full, list(result.names)
-    figures = {"r_values": fig.r_values_figure(out / "r_values.png", result.r_values_mm,
-                                               result.eps_mm, "R values (Fig. 2)").name}
-    xy = result.rest_mm[:, :2]
-    maps, titles, marks = [], [], []
-    for j in range(min(3, result.k)):
-        vals = np.zeros(len(names))
-        vals[model.secondary_] = model.coef_[j]
-        vals[model.selected_[j]] = 1.0
-        maps.append(vals)
-        titles.append(f"eigenregion of {names[model.selected_[j]]}")
-        marks.append(int(model.selected_[j]))
-    if maps:
-        figures["eigenregions"] = fig.region_maps(out / "eigenregions.png", xy, maps, titles,
-                                                  marks).name
-    r = full.R_
-    omaps, otitles, omarks = [], [], []
-    for j in range(min(3, r.shape[0])):
-        vals = np.zeros(len(names))
-        vals[full.order_] = r[j] / r[j, j]
-        omaps.append(vals)
-        otitles.append(f"orthogonal region {j + 1} ({names[full.order_[j]]})")
-        omarks.append(int(full.order_[j]))
-    figures["orthogonal_regions"] = fig.region_maps(out / "orthogonal_regions.png", xy, omaps,
-                                                    otitles, omarks).name
-    if result.held_out_error is not None:
-        rows = result.held_out_error
-        figures["errors"] = fig.error_figure(
-            out / "errors.png", [r_.k for r_ in rows], [r_.mean_abs_error_mm for r_ in rows],
-            [r_.relative_error for r_ in rows], [r_.pca_mean_abs_error_mm for r_ in rows]).name
-    t = result.trajectory
-    if t is not None:
-        figures["trajectory"] = fig.trajectory_figure(
-            out / "trajectory.png", t.time_s, t.recorded_mm, t.predicted_mm,
-            f"{t.marker}, held-out utterance {t.utterance}, k = {result.k} (Fig. 9)").name
-    if result.stability is not None:
-        figures["stability"] = fig.stability_figure(out / "stability.png",
-                                                    list(result.stability.utterances),
-                                                    result.stability.first_r_values_mm).name
-    return replace(result, figures={k: str(v) for k, v in figures.items()})
-
-
 @dataclass(frozen=True)
 class InsertionDistances:
     """How far markers lie from the nearest muscle insertion, against random picks (mm)."""
@@ -339,26 +275,6 @@ def insertion_distances(face, site_nodes: dict[str, int], selected: Sequence[str
                      for _ in range(draws)])
     return InsertionDistances(float(d[sel].mean()), tuple(d[sel].tolist()), float(rand.mean()),
                               float(np.mean(rand <= d[sel].mean())))
-
-
-def dense_animation(path, face, site_nodes: dict[str, int], displacements: np.ndarray,
-                    progress: Callable[[int, int], None] | None = None) -> Path:
-    """MP4 of the face surface moved by marker displacements (frames, 57, 3) m, interpolated
-    over all epidermal nodes with a thin-plate spline on the rest positions."""
-    from scipy.interpolate import RBFInterpolator
-
-    from ..viz.movie import write_movie
-    from ..viz.scene import build_scene, look_from_model
-
-    names = list(site_nodes)
-    rest = face.rest_positions[: face.n_surface]
-    src = rest[[site_nodes[n] for n in names]]
-    frames = []
-    for d in displacements:
-        rbf = RBFInterpolator(src, d, kernel="thin_plate_spline", smoothing=0.0)
-        frames.append(rest + rbf(rest))
-    return write_movie(path, build_scene(look_from_model(face)), np.array(frames),
-                       progress=progress)
 
 
 @dataclass(frozen=True)
@@ -437,23 +353,3 @@ def run_lucero2008(*, n_utterances: int = 40, frames: int = 60, k: int = 10,
         muscle_insertions=insertion_distances(default_face(), corpus.nodes,
                                               [names[i] for i in full_all.order_[:10]]),
         paper=PAPER, copied_pair=(COPY_SOURCE, COPY_TARGET), corpus=corpus, n_train=n_train)
-
-
-def draw_lucero2008(result: Lucero2008, folder: str | Path, *, video: bool = True,
-                    progress: Callable[[str, int, int], None] | None = None) -> Lucero2008:
-    """The analysis' figures (:func:`draw`) and, with ``video``, ``animation.mp4``: the first
-    held-out utterance predicted from the k independent markers over the whole face.
-
-    Returns the result with its figures recorded."""
-    from ..geometry.builder import default_face
-
-    analysis = draw(result.analysis, folder)
-    if video:
-        model, corpus = analysis.model, result.corpus
-        u = corpus.utterances[result.n_train]
-        pred = model.predict((u - u[0])[:, model.selected_])
-        dense_animation(Path(folder) / "animation.mp4", default_face(), corpus.nodes, pred,
-                        progress=None if progress is None else
-                        (lambda d, n: progress("render", d, n)))
-        analysis = replace(analysis, figures={**analysis.figures, "animation": "animation.mp4"})
-    return replace(result, analysis=analysis)

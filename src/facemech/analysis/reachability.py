@@ -94,7 +94,7 @@ def speech_targets(face, *, posture_s: float = 0.16, transition_s: float = 0.12,
 def _rest_point(face, name: str) -> np.ndarray:
     """Rest position (3,) m of a target: a marker's node, or the lower incisor's tip."""
     if name == "LI":
-        from ..solvers.jaw import lower_incisor_point
+        from ..geometry.teeth import lower_incisor_point
 
         return lower_incisor_point(face)
     return face.rest_positions[face.markers[name]]
@@ -142,7 +142,7 @@ def reach(face, params=None, *, markers: MarkerSet | None = None, jaw: str = "in
 
         drive = jaw_poses_from_incisor(ms.marker("LI"), face, params)
     elif jaw == "chin":
-        from ..solvers.jaw import jaw_angles_from_marker
+        from ..solvers.jaw_drive import jaw_angles_from_marker
 
         drive = jaw_angles_from_marker(face, params, face.markers["R01"],
                                        ms.marker("R01")[:, 1])
@@ -162,7 +162,8 @@ def reach(face, params=None, *, markers: MarkerSet | None = None, jaw: str = "in
         v = d[:, [names.index(n) for n in GROUPS[group]], axis]
         comps[key] = float(np.sqrt(np.mean(v**2)))
         share[key] = float(np.sum(v**2) / total) if total > 0 else 0.0
-    from ..solvers.jaw import lower_incisor_point, move_points
+    from ..geometry.teeth import lower_incisor_point
+    from ..solvers.jaw import move_points
 
     tip = lower_incisor_point(face)
     poses = res.jaw_pose if res.jaw_pose is not None else None

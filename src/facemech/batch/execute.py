@@ -7,7 +7,6 @@ input or any exception): the :class:`Outcome` says ``failed`` with the error's o
 
 from __future__ import annotations
 
-import importlib
 import shutil
 import time
 import traceback
@@ -15,7 +14,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..errors import FacemechError
-from .jobs import JOBS
+from .job import Job
 from .manifest import Item
 from .records import commit_folder, folder_files, new_partial, up_to_date, write_done
 
@@ -33,7 +32,7 @@ class Outcome:
         ``not run`` (the batch stopped before it)
     wall_s : seconds the item took to make (for a skipped item: when it was made)
     cpu_s : CPU seconds of the thread that made it (the same)
-    numbers : its key numbers (frames, errors, ...; see :mod:`.jobs`)
+    numbers : its key numbers (frames, errors, ...; see :mod:`facemech.workflows.batch_jobs`)
     error : the one-line error of a failed item ("" otherwise)
     folder : its output folder (None when failed)
     """
@@ -84,13 +83,14 @@ def _one_line(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {text}{where}"
 
 
-def run_item(item: Item, out_dir: str | Path) -> Outcome:
+def run_item(item: Item, out_dir: str | Path, jobs: dict[str, Job]) -> Outcome:
     """Make ``item`` into ``out_dir/<id>/`` unless its done-record there is up to date.
 
     Parameters
     ----------
     item : a checked manifest item
     out_dir : the batch's output folder
+    jobs : the job kinds, kind -> :class:`~.job.Job` (:data:`facemech.workflows.batch_jobs.JOBS`)
 
     Returns
     -------
@@ -100,6 +100,7 @@ def run_item(item: Item, out_dir: str | Path) -> Outcome:
         ``failed`` (nothing written; the error's one line).
     """
     from .._version import __version__
+    from ..physics.threads import set_threads
 
     final = Path(out_dir) / item.id
     record = up_to_date(final, item.key)
@@ -109,9 +110,9 @@ def run_item(item: Item, out_dir: str | Path) -> Outcome:
     partial = None
     try:
         # one core per item: the workers are the parallelism (docs/batch.md)
-        importlib.import_module("facemech.physics.threads").set_threads(1)
+        set_threads(1)
         partial = new_partial(out_dir, item.id)
-        numbers, lines = JOBS[item.job].run(dict(item.options), partial)
+        numbers, lines = jobs[item.job].run(dict(item.options), partial)
         lines = [str(line).replace(str(partial), str(final)) for line in lines]
         wall, cpu = time.perf_counter() - start, time.thread_time() - cpu
         write_done(partial, {

@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..errors import InputError, missing_input
-from .jobs import JOBS, check_kind
+from .job import Job, check_kind
 
 __all__ = ["Item", "item_key", "parse_item", "read_manifest", "read_rows"]
 
@@ -40,7 +40,7 @@ class Item:
     Attributes
     ----------
     id : the item's id, the name of its output folder
-    job : its job kind (a key of :data:`facemech.batch.jobs.JOBS`)
+    job : its job kind (a key of :data:`facemech.workflows.batch_jobs.JOBS`)
     row : its row in the manifest (1 = the first item)
     options : option name -> value (typed; files as absolute paths, ``files`` a list)
     settings : the options that are not files, as given (typed)
@@ -58,7 +58,7 @@ class Item:
     key: str = ""
 
 
-def read_rows(path: str | Path) -> list[dict]:
+def read_rows(path: str | Path, jobs: dict[str, Job]) -> list[dict]:
     """The rows of a CSV or TOML manifest as dicts of the given cells (values as read), each
     with its row number under ``"_row"``. A manifest that cannot be read raises InputError."""
     path = Path(path)
@@ -71,7 +71,7 @@ def read_rows(path: str | Path) -> list[dict]:
         text = path.read_text(encoding="utf-8-sig")
     except UnicodeDecodeError:
         raise InputError("not a UTF-8 text file", source=str(path)) from None
-    rows = _csv_rows(text, path) if suffix == ".csv" else _toml_rows(text, path)
+    rows = _csv_rows(text, path) if suffix == ".csv" else _toml_rows(text, path, jobs)
     if not rows:
         raise InputError("the manifest lists no items", source=str(path))
     return rows
@@ -97,18 +97,18 @@ def _csv_rows(text: str, path: Path) -> list[dict]:
     return rows
 
 
-def _toml_rows(text: str, path: Path) -> list[dict]:
+def _toml_rows(text: str, path: Path, jobs: dict[str, Job]) -> list[dict]:
     from ..io.tables import toml_tables
 
     items, defaults = toml_tables(text, path, "item")
-    known = {_name(o) for job in JOBS.values() for o in job.options}
+    known = {_name(o) for job in jobs.values() for o in job.options}
     for name in defaults:
         if _name(name) not in known:
             raise InputError("no job kind has this option", source=str(path),
                              field=f"defaults.{name}")
     rows = []
     for k, item in enumerate(items, start=1):
-        job = JOBS.get(str(item.get("job", "")))
+        job = jobs.get(str(item.get("job", "")))
         given = {} if job is None else {n: v for n, v in defaults.items()
                                         if _name(n) in job.options}
         rows.append({**given, **item, "_row": k})
@@ -195,8 +195,9 @@ def item_key(job: str, settings: dict, inputs: dict) -> str:
     return hashlib.sha256(blob.encode()).hexdigest()[:16]
 
 
-def parse_item(row: dict, *, source: str, base: Path) -> Item:
-    """One raw manifest row checked and typed as an :class:`Item` (see :func:`read_rows`)."""
+def parse_item(row: dict, jobs: dict[str, Job], *, source: str, base: Path) -> Item:
+    """One raw manifest row checked and typed as an :class:`Item` (see :func:`read_rows`) of a
+    job kind of ``jobs`` (kind -> :class:`~.job.Job`)."""
     k = row["_row"]
     ident = str(row.get("id", "")).strip()
     if not ident:
@@ -207,7 +208,7 @@ def parse_item(row: dict, *, source: str, base: Path) -> Item:
     if not str(row.get("job", "")).strip():
         raise InputError(f"row {k}: no job kind", source=source, field="job")
     kind = str(row["job"]).strip()
-    job = check_kind(kind, source=source, row=k)
+    job = check_kind(kind, jobs, source=source, row=k)
     options, settings, inputs = {}, {}, {}
     for column, value in row.items():
         if column in ("id", "job", "_row"):
@@ -242,13 +243,15 @@ def parse_item(row: dict, *, source: str, base: Path) -> Item:
     return Item(ident, kind, k, options, settings, inputs, item_key(kind, settings, inputs))
 
 
-def read_manifest(path: str | Path) -> list[Item]:
+def read_manifest(path: str | Path, jobs: dict[str, Job]) -> list[Item]:
     """Read and check a whole manifest: every row's id (unique), job kind, options and input
     files, before anything runs.
 
     Parameters
     ----------
     path : the manifest (``.csv`` or ``.toml``)
+    jobs : its job kinds, kind -> :class:`~.job.Job`
+    (:data:`facemech.workflows.batch_jobs.JOBS`)
 
     Returns
     -------
@@ -264,8 +267,8 @@ def read_manifest(path: str | Path) -> list[Item]:
     base = path.resolve().parent
     items: list[Item] = []
     seen: dict[str, int] = {}
-    for row in read_rows(path):
-        item = parse_item(row, source=str(path), base=base)
+    for row in read_rows(path, jobs):
+        item = parse_item(row, jobs, source=str(path), base=base)
         if item.id in seen:
             raise InputError(f"row {item.row}: id {item.id!r} is also row {seen[item.id]}'s",
                              source=str(path), field="id")

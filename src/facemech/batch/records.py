@@ -48,7 +48,7 @@ def up_to_date(folder: str | Path, key: str) -> dict | None:
 
 def write_done(folder: str | Path, record: dict) -> Path:
     """Write ``record`` as the done-record of ``folder`` (atomically). Returns its path."""
-    from ..io.atomic import atomic_path
+    from ..atomic import atomic_path
 
     path = Path(folder) / DONE
     with atomic_path(path) as tmp:
@@ -98,7 +98,7 @@ def remove_partial(out_dir: str | Path) -> int:
 def write_summary(path: str | Path, rows: list[dict]) -> Path:
     """Write the batch's summary table (CSV, atomically): one row per item, the columns
     :data:`SUMMARY_COLUMNS`, the items' other key numbers, then ``error``."""
-    from ..io.atomic import atomic_path
+    from ..atomic import atomic_path
 
     cols = list(SUMMARY_COLUMNS)
     for row in rows:

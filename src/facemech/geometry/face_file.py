@@ -1,5 +1,10 @@
 """The face file: a :class:`~.model.FaceModel` in a ``.npz`` archive (docs/formats.md).
 
+The format alone, below the model: :func:`write_face` reads the model's fields by name and
+:func:`read_face` hands the fields it read to a constructor that the caller gives
+(:meth:`FaceModel.load <facemech.geometry.model.FaceModel.load>` gives the model's own), so this
+module imports no model.
+
 Arrays are stored under their field names (the muscles' with a ``muscle_`` prefix, the
 surface's with ``surface_``, the appearance's with ``appearance_``); a JSON string ``meta``
 holds the names, node maps and counts: ``{"format": "facemech-face", "version": 2, ...}``.
@@ -9,13 +14,14 @@ Version 1 files (no sliding nodes, tether, beads or appearance) read with their 
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from ..errors import InputError
 from .appearance import Appearance
-from .model import FaceModel, Muscles, empty_nodes
 
 FORMAT = "facemech-face"
 VERSION = 2
@@ -27,7 +33,7 @@ MODEL_ARRAYS = ("rest_positions", "faces", "spring_i", "spring_j", "spring_kind"
 MUSCLE_ARRAYS = ("group", "kind", "origin", "ptr", "nodes", "weights", "rest_length")
 
 
-def face_arrays(model: FaceModel) -> dict[str, np.ndarray]:
+def face_arrays(model) -> dict[str, np.ndarray]:
     """Everything the face file holds, as named arrays (``meta``: a JSON string)."""
     arrays = {k: getattr(model, k) for k in MODEL_ARRAYS}
     m = model.muscles
@@ -65,17 +71,23 @@ def face_arrays(model: FaceModel) -> dict[str, np.ndarray]:
     return arrays
 
 
-def write_face(model: FaceModel, path: str | Path) -> None:
+def write_face(model, path: str | Path) -> None:
     """Write ``model`` to a ``.npz`` face file, atomically (temporary file, then rename)."""
-    from ..io.atomic import atomic_path
+    from ..atomic import atomic_path
 
     arrays = face_arrays(model)
     with atomic_path(path, suffix=".npz") as tmp, open(tmp, "wb") as fh:
         np.savez_compressed(fh, **arrays)
 
 
-def read_face(path: str | Path) -> FaceModel:
+def read_face(path: str | Path, make: Callable[[dict, dict], Any]):
     """Read a face file written by :func:`write_face` (format versions 1 and 2).
+
+    Parameters
+    ----------
+    path : the ``.npz`` file
+    make : make(muscles, fields) -> model: the model of the muscles' keyword arguments and the
+        model's other fields (the arrays in m, the names, maps and counts)
 
     Raises
     ------
@@ -95,18 +107,18 @@ def read_face(path: str | Path) -> FaceModel:
     if meta.get("format") != FORMAT:
         raise InputError("not a facemech face file", source=str(path), field="format")
     try:
-        return _face_from_arrays(data, meta, str(path))
+        return _face_from_arrays(data, meta, str(path), make)
     except (KeyError, TypeError, ValueError) as exc:
         raise InputError(f"incomplete facemech face file ({exc})", source=str(path),
                          field="format") from None
 
 
-def _face_from_arrays(data: dict, meta: dict, source: str) -> FaceModel:
+def _face_from_arrays(data: dict, meta: dict, source: str, make: Callable[[dict, dict], Any]):
     """The model of a face file's arrays and metadata (``data`` is consumed)."""
-    muscles = Muscles(names=tuple(meta["muscle_names"]),
-                      bead=data.pop("muscle_bead", None),
-                      origin_offset=data.pop("muscle_origin_offset", None),
-                      **{k: data.pop(f"muscle_{k}") for k in MUSCLE_ARRAYS})
+    muscles = dict(names=tuple(meta["muscle_names"]),
+                   bead=data.pop("muscle_bead", None),
+                   origin_offset=data.pop("muscle_origin_offset", None),
+                   **{k: data.pop(f"muscle_{k}") for k in MUSCLE_ARRAYS})
     surface = None
     if "surface_vertices" in data:
         surface = {"vertices": data.pop("surface_vertices"),
@@ -125,13 +137,13 @@ def _face_from_arrays(data: dict, meta: dict, source: str) -> FaceModel:
         except InputError as exc:
             raise InputError(exc.message, source=source,
                              field=f"appearance_{exc.field}") from None
-    return FaceModel(muscles=muscles, appearance=appearance, n_surface=int(meta["n_surface"]),
-                     name=meta["name"],
-                     landmarks=meta["landmarks"], markers=meta["markers"],
-                     tissue=meta.get("tissue", "uniform"),
-                     jaw_weights=data.pop("jaw_weights", None),
-                     sliding=data.pop("sliding", empty_nodes()),
-                     sliding_weights=data.pop("sliding_weights", None),
-                     sliding_tether=data.pop("sliding_tether", None),
-                     lip_region=data.pop("lip_region", None), surface=surface,
-                     **{k: data[k] for k in MODEL_ARRAYS})
+    return make(muscles, dict(appearance=appearance, n_surface=int(meta["n_surface"]),
+                              name=meta["name"],
+                              landmarks=meta["landmarks"], markers=meta["markers"],
+                              tissue=meta.get("tissue", "uniform"),
+                              jaw_weights=data.pop("jaw_weights", None),
+                              sliding=data.pop("sliding", np.zeros(0, np.int64)),
+                              sliding_weights=data.pop("sliding_weights", None),
+                              sliding_tether=data.pop("sliding_tether", None),
+                              lip_region=data.pop("lip_region", None), surface=surface,
+                              **{k: data[k] for k in MODEL_ARRAYS}))

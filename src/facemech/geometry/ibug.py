@@ -261,7 +261,7 @@ def is_ibug_file(path: str | Path) -> bool:
 
 def write_pts(path: str | Path, points: np.ndarray) -> None:
     """Write 68 points (metres) as an iBUG ``.pts`` file in mm (3 coordinates a row)."""
-    from ..io.atomic import atomic_path
+    from ..atomic import atomic_path
 
     points = np.asarray(points, float) * 1e3
     with atomic_path(path) as tmp, open(tmp, "w") as fh:

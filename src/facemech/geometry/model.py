@@ -17,6 +17,7 @@ import numpy as np
 
 from ..params import MUSCLE_GROUPS
 from .appearance import Appearance
+from .face_file import read_face, write_face
 from .kinds import (  # noqa: F401  (re-exported: the model's codes, by their old names)
     EPIDERMIS,
     FASCIA,
@@ -210,16 +211,12 @@ class FaceModel:
     # ---- persistence (:mod:`facemech.geometry.face_file`) ----------------------------------
     def save(self, path: str | Path) -> None:
         """Write the model to a ``.npz`` file, atomically (:func:`~.face_file.write_face`)."""
-        from .face_file import write_face
-
         write_face(self, path)
 
     @classmethod
     def load(cls, path: str | Path) -> FaceModel:
         """Read a model written by :meth:`save` (:func:`~.face_file.read_face`)."""
-        from .face_file import read_face
-
-        return read_face(path)
+        return read_face(path, lambda muscles, fields: cls(muscles=Muscles(**muscles), **fields))
 
 
 def _thickness_summary(model: FaceModel) -> dict:

@@ -326,7 +326,7 @@ def _landmark_rows(path: Path, scale: float, required) -> dict[str, np.ndarray]:
 
 def write_landmarks(path: str | Path, landmarks: dict[str, np.ndarray]) -> None:
     """Write landmarks (metres) as a ``name,x,y,z`` CSV in mm."""
-    from ..io.atomic import atomic_path
+    from ..atomic import atomic_path
 
     with atomic_path(path) as tmp, open(tmp, "w", newline="") as fh:
         w = csv.writer(fh)

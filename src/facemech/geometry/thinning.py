@@ -73,7 +73,7 @@ def prism_quality(vertices: np.ndarray, faces: np.ndarray, offset: np.ndarray,
     offset : (n, 3) unit directions out of the face along which the layers lie
     depth : (n,) skull-layer depth, metres; the fascia lies at ``fascia_fraction`` of it
     """
-    from ..physics.volume import rest_geometry
+    from .prism import rest_geometry
 
     n = len(vertices)
     rest = layer_positions(vertices, offset, depth, fascia_fraction)

@@ -109,7 +109,7 @@ def check_prisms(rest: np.ndarray, prism_nodes: np.ndarray, source: str | None =
         A prism has no volume (names where): left after :mod:`thinning` has mended what it can,
         this is skin that folds over itself or a rim sharper than 3 mm of tissue.
     """
-    from ..physics.volume import rest_geometry
+    from .prism import rest_geometry
 
     vols, _ = rest_geometry(rest, prism_nodes)
     if np.any(vols <= 0):

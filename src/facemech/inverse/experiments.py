@@ -8,30 +8,28 @@ closed). The 11 right-side markers (R01-R11) are used for the inversion, the 8 l
 positive constraint. Synthesis and inversion use the same explicit Euler step (1 ms by default).
 
 Each experiment returns a frozen dataclass (:class:`SyntheticExperiment`,
-:class:`CrossTalkerExperiment`) whose ``as_dict()`` is the JSON the command writes; drawing
-(:func:`draw_synthetic`) and writing (:func:`write`) are separate steps.
+:class:`CrossTalkerExperiment`) whose ``as_dict()`` is the JSON the command writes; drawing and
+writing are the command's (:func:`facemech.workflows.experiments.draw_synthetic`,
+:func:`facemech.workflows.experiments.write`).
 """
 
 from __future__ import annotations
 
-import json
 import time
 import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
+from ..kinematics import stats
 from ..markerset import MarkerSet
 from ..params import MUSCLE_GROUPS, Parameters, default_parameters
 from ..waveforms import cosine_bump
-from . import stats
 from .invert import invert
 
 __all__ = ["CrossTalkerExperiment", "CrossTalkerRun", "NoiseFreeScore", "SyntheticExperiment",
-           "SyntheticRun", "draw_synthetic", "figure_name", "run_crosstalker", "run_synthetic",
-           "synthetic_data", "write"]
+           "SyntheticRun", "figure_name", "run_crosstalker", "run_synthetic", "synthetic_data"]
 
 PERIORAL = ("DAO", "DLI", "LAO", "ZYG", "LLS", "MEN", "OOS", "OOI")
 
@@ -252,7 +250,7 @@ def run_synthetic(face, *, methods=("lsq",), dt: float | None = None, noise: flo
             label = f"{method}, {'positive' if positive else 'no constraint'}"
             t0 = time.perf_counter()
             res = _invert_quietly(face, data, used, label, progress, method=method,
-                                  positive=positive, dt=dt, params=params,
+                                  positive=positive, params=params.with_(fast_dt=dt),
                                   jaw_angle=np.zeros(data.n_frames))  # the jaw at rest
             wall = time.perf_counter() - t0
             model = res.positions[:, all_nodes]
@@ -298,33 +296,6 @@ def run_synthetic(face, *, methods=("lsq",), dt: float | None = None, noise: flo
 def figure_name(label: str) -> str:
     """The PNG file name of a run's figure, e.g. ``experiment1_lsq_no-constraint.png``."""
     return f"experiment1_{label.replace(', ', '_').replace(' ', '-')}.png"
-
-
-def draw_synthetic(result: SyntheticExperiment, folder: str | Path) -> list[Path]:
-    """One PNG per run in ``folder``: the inverted against the true activity, and the error.
-
-    Files are named ``experiment1_<method>_<constraint>.png``; returns their paths.
-    """
-    from ..viz.plots import inversion_figure
-
-    folder = Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
-    paths = []
-    for label, r in result.runs.items():
-        path = folder / figure_name(label)
-        paths.append(inversion_figure(path, result.time, r.controls, r.control_names,
-                                      truth=r.true_controls, rms_error=r.rms_error_m,
-                                      title=f"Experiment 1, {label} ({result.preset})"))
-    return paths
-
-
-def write(result: SyntheticExperiment | CrossTalkerExperiment, path: str | Path) -> Path:
-    """Write an experiment's tables (``result.as_dict()``) as JSON, atomically."""
-    from ..io.atomic import atomic_path
-
-    with atomic_path(path, suffix=".json") as tmp:
-        tmp.write_text(json.dumps(result.as_dict(), indent=2))
-    return Path(path)
 
 
 # ---- Experiment 3 analogue: another talker ---------------------------------------------------
@@ -443,7 +414,7 @@ def run_crosstalker(face, *, frames: int = 120, dt: float | None = None, params=
     from ..geometry.builder import for_tissue
     from ..kinematics.mapping import scale_adapt, warp_face
     from ..solvers.forward import simulate
-    from ..solvers.jaw import jaw_angles_from_marker
+    from ..solvers.jaw_drive import jaw_angles_from_marker
 
     params = params or default_parameters()
     dt = params.fast_dt if dt is None else dt
@@ -469,7 +440,8 @@ def run_crosstalker(face, *, frames: int = 120, dt: float | None = None, params=
         label = f"lsq, positive, {adaptation}"
         t0 = time.perf_counter()
         res = _invert_quietly(model, adapted, used, label, progress, positive=True,
-                              jaw_angle=jaw_est, dt=dt, params=params)
+                              jaw_angle=jaw_est,
+                              params=params if dt is None else params.with_(fast_dt=dt))
         idx = [mapping_all[n] for n in names]
         mod = res.positions[:, idx]
         table6 = {n: float(stats.corr3d(mod[:, m], adapted.positions[:, m]))

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..checks import check_value
 from ..errors import InputError
 from ..markerset import MarkerSet
 from ..params import EMG_CHANNELS, MUSCLE_GROUPS, Parameters, default_parameters
@@ -40,7 +41,7 @@ from .frame import JAW_UNIT, FrameProblem
 from .methods import LeastSquares, Powell, method_from_options
 from .result import Inversion
 
-__all__ = ["SPEECH_CONTROLS", "control_matrix", "invert"]
+__all__ = ["SPEECH_CONTROLS", "JawRecording", "control_matrix", "invert"]
 
 ILL_POSED_CONDITION = 1e4  #: Jacobian condition number above which a frame is flagged
 #: rad: the estimated jaw stays within [JAW_CLOSE, MAX_JAW_ANGLE] (closing a little past the
@@ -79,6 +80,25 @@ def control_matrix(controls, model=None) -> tuple[tuple[str, ...], np.ndarray]:
     return tuple(names), g
 
 
+
+@dataclass(frozen=True)
+class JawRecording:
+    """A recorded jaw for :func:`invert`, with how to use it.
+
+    Attributes
+    ----------
+    angle : (frames,) rad, or (frames, 3) poses (angle rad, condyle shift y, z m); None: none
+    estimate : estimate the jaw angle as one more control (None, the default: True without a
+        recording, False with one; with both, the recording is the starting point and a weak
+        prior, ``jaw_prior_weight``). A pose series is always held as given.
+    source : what the recording is, for the notes (e.g. "chin marker R01")
+    """
+
+    angle: np.ndarray | None = None
+    estimate: bool | None = None
+    source: str | None = None
+
+
 def invert(
     face,
     markers: MarkerSet,
@@ -87,11 +107,8 @@ def invert(
     method: str | LeastSquares | Powell = "lsq",
     positive: bool = True,
     controls="speech",
-    jaw_angle: np.ndarray | None = None,
-    estimate_jaw: bool | None = None,
-    jaw_source: str | None = None,
+    jaw_angle: np.ndarray | JawRecording | None = None,
     params: Parameters | None = None,
-    dt: float | None = None,
     prior: np.ndarray | None = None,
     noise_mm: float | None = None,
     progress: Callable[[int, int], None] | None = None,
@@ -112,15 +129,12 @@ def invert(
     positive : activity kept >= 0 (bounds for lsq, the published penalty for powell)
     controls : "speech" (default), "emg7", "all" or a list of groups
     jaw_angle : (frames,) rad, a recorded jaw (e.g. :func:`jaw_angles_from_marker`), or
-        (frames, 3) poses (angle, condyle shift y, z in m) from two jaw markers; None: no
-        recording
-    estimate_jaw : estimate the jaw angle as one more control (default: True without a
-        recording, False with one; with both, the recording is the starting point and a weak
-        prior, ``jaw_prior_weight``). A pose series is always held as given.
-    jaw_source : what the recording is, for the notes (e.g. "chin marker R01")
-    params : Parameters (default: the default preset, ``anatomical``)
-    dt : explicit Euler step used by every evaluation (s; default ``params.fast_dt``); the
-        implicit presets step at their own frame substeps and another ``dt`` is an error there
+        (frames, 3) poses (angle, condyle shift y, z in m) from two jaw markers; or a
+        :class:`JawRecording`: such a series, whether the jaw is estimated from it and what it
+        is; None: no recording (the jaw is estimated)
+    params : Parameters (default: the default preset, ``anatomical``); its ``fast_dt`` is the
+        explicit Euler step of every evaluation (s); the implicit presets step at their own
+        frame substeps and another step is an error there
     prior : (frames, muscle controls) prior activity (e.g. processed EMG) for ``prior_weight``
     noise_mm : marker noise (mm, per coordinate) for the standard errors (default: estimated
         from the fit's residuals)
@@ -139,8 +153,10 @@ def invert(
                          f"{method!r})", field="method")
     if noise_mm is not None and not (np.isfinite(noise_mm) and noise_mm > 0):
         raise InputError(f"noise must be > 0 mm (got {noise_mm})", field="noise")
+    if noise_mm is not None:  # the command line's interval (facemech.checks)
+        check_value("noise_mm", noise_mm)
     params = params or default_parameters()
-    dt = params.fast_dt if dt is None else dt
+    dt = params.fast_dt
     src = markers.meta.get("source")
     if abs(markers.rate - params.frame_rate) > 1e-3 * params.frame_rate:
         raise InputError(f"markers at {markers.rate:g} Hz, the model runs at "
@@ -152,7 +168,8 @@ def invert(
     cnames, gmat = control_matrix(controls, face)
     data = markers.select(names).positions
     frames = len(data)
-    jaw, estimate_jaw, jaw_note = _jaw_plan(jaw_angle, estimate_jaw, jaw_source, frames)
+    rec = jaw_angle if isinstance(jaw_angle, JawRecording) else JawRecording(jaw_angle)
+    jaw, estimate_jaw, jaw_note = _jaw_plan(rec.angle, rec.estimate, rec.source, frames)
     nc = len(cnames) + (1 if estimate_jaw else 0)
     if 3 * len(names) < nc:
         raise InputError(f"{len(names)} markers give {3 * len(names)} coordinates for {nc} "

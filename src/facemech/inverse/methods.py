@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, fields
 
+from ..checks import check_value
 from ..errors import InputError
 
 
@@ -61,6 +62,9 @@ class LeastSquares:
         if not (isinstance(self.max_evaluations, int) and self.max_evaluations >= 1):
             raise InputError(f"max_evaluations must be >= 1 (got {self.max_evaluations!r})",
                              field="max_evaluations")
+        # the command line's intervals (facemech.checks); tol may be 0 here (no stopping rule)
+        for name in ("window", "bend", "smooth", "effort", "max_evaluations"):
+            check_value(name, getattr(self, name))
 
 
 @dataclass(frozen=True)
@@ -84,6 +88,7 @@ class Powell:
         if not (isinstance(self.max_evaluations, int) and self.max_evaluations >= 1):
             raise InputError(f"max_evaluations must be >= 1 (got {self.max_evaluations!r})",
                              field="max_evaluations")
+        check_value("max_evaluations", self.max_evaluations)
         for name in ("xtol", "ftol"):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and value > 0):

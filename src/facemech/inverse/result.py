@@ -80,15 +80,20 @@ class Inversion:
     model_markers = markers
 
     @property
-    def jaw_shift(self) -> np.ndarray | None:
-        """(frames, 2) m, the condyles' shift (y, z) where a pose series drove the jaw; None:
-        it follows the preset's jaw kinematics from the angle."""
-        return None if self.jaw_pose is None else self.jaw_pose[:, 1:]
+    def jaw_shift(self) -> np.ndarray:
+        """(frames, 2) m, the condyles' shift (y, z): the pose series' where one drove the jaw,
+        else the preset's jaw kinematics of the angle (:func:`~facemech.solvers.jaw.jaw_poses`,
+        as the stepper moved it)."""
+        if self.jaw_pose is not None:
+            return self.jaw_pose[:, 1:]
+        from ..solvers.jaw import jaw_poses
+
+        return jaw_poses(self.jaw_angle, self.params)[:, 1:]
 
     def error_summary(self) -> dict:
         """Median and maximum per-frame error (mm), with warnings (see
-        :func:`facemech.inverse.stats.error_summary`)."""
-        from .stats import error_summary
+        :func:`facemech.kinematics.stats.error_summary`)."""
+        from ..kinematics.stats import error_summary
 
         return error_summary(self.rms_error, float(self.params.frame_rate), time_s=self.time)
 

@@ -12,16 +12,18 @@ and midsagittal data are fitted in y and z only.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
+from ..checks import check_value
 from ..errors import InputError
 from ..markerset import MarkerSet
+from ..params import Parameters, default_parameters
 from .result import Inversion
 
-__all__ = ["SKIN_JAW_LEAD", "invert_markers"]
+__all__ = ["SKIN_JAW_LEAD", "JawMarkers", "invert_markers"]
 
 #: frames by which a skin jaw marker's drive is moved earlier by default (33 ms at 60 Hz, the
 #: seeds' lead); a bone point's drive has none
@@ -30,26 +32,56 @@ SKIN_JAW_LEAD = 2
 MAX_BONE_GAP_S = 0.1
 
 
+
+@dataclass(frozen=True)
+class JawMarkers:
+    """The jaw's markers of an inversion (its jaw source), checked when made.
+
+    Attributes
+    ----------
+    chin_marker : a skin jaw marker: its vertical drop gives the jaw angle, ``jaw_lead`` frames
+        early, estimated further with the muscles unless ``jaw_fixed``
+    jaw_second_marker : a second point on the mandible with ``chin_marker``: the two markers'
+        planar rigid motion drives the jaw's three degrees of freedom, held as given
+    jaw_incisor, jaw_molar : a lower-incisor sensor and a molar pellet, points on the bone
+        (default: the sensors of roles ``lower_incisor`` and ``molar``, when there is no
+        ``chin_marker``): they give the jaw's angle, glide and protrusion, held as given, and
+        are not compared with the skin
+    jaw_fixed : hold the recorded jaw as given
+    jaw_lead : frames by which the jaw drive is moved earlier (None: 2 for a skin marker, 0
+        for bone points)
+    """
+
+    chin_marker: str | None = None
+    jaw_second_marker: str | None = None
+    jaw_incisor: str | None = None
+    jaw_molar: str | None = None
+    jaw_fixed: bool = False
+    jaw_lead: int | None = None
+
+    def __post_init__(self):
+        if self.jaw_second_marker is not None and self.chin_marker is None:
+            raise InputError("--jaw-second-marker needs --chin-marker (the first jaw marker)",
+                             field="jaw-second-marker")
+        if self.jaw_lead is not None and self.jaw_lead < 0:
+            raise InputError(f"jaw lead must be >= 0 frames (got {self.jaw_lead})",
+                             field="jaw-lead")
+        if self.jaw_lead is not None:  # the command line's interval (facemech.checks)
+            check_value("jaw_lead", self.jaw_lead)
+
+
 def invert_markers(
     markers: str | Path | MarkerSet,
     *,
     face: str | Path = "default",
     map_file: str | Path | None = None,
-    units: str | None = None,
     scale_pair: str | None = None,
-    preset: str = "anatomical",
-    jaw_kinematics: str | None = None,
+    params: Parameters | None = None,
     method: str = "lsq",
     positive: bool = True,
     controls: str | None = None,
-    chin_marker: str | None = None,
-    jaw_second_marker: str | None = None,
-    jaw_incisor: str | None = None,
-    jaw_molar: str | None = None,
-    jaw_fixed: bool = False,
-    jaw_lead: int | None = None,
+    jaw: JawMarkers | None = None,
     noise: float | None = None,
-    dt: float | None = None,
     options: dict | None = None,
     progress: Callable[[int, int], None] | None = None,
 ) -> Inversion:
@@ -57,32 +89,24 @@ def invert_markers(
 
     Parameters
     ----------
-    markers : marker file (or a :class:`~facemech.markerset.MarkerSet`) in the model's frame, at
-        the preset's frame rate; articulography (``meta["roles"]``) in its own frame and at its
-        own rate: its lips are laid on the face's vermilion points, and it is resampled
+    markers : marker file (read in its own units; or a :class:`~facemech.markerset.MarkerSet`)
+        in the model's frame, at the preset's frame rate; articulography (``meta["roles"]``)
+        in its own frame and at its own rate: its lips are laid on the face's vermilion points,
+        and it is resampled
     face : face file or built-in face name
     map_file : marker,node CSV (default: the closest nodes; articulography's lips: their
         vermilion points)
-    units : length unit of a marker file that carries none
     scale_pair : "A,B": adapt the markers by per-axis scaling from two markers far apart
-    preset : the parameter preset; ``jaw_kinematics`` ("hinge" or "glide") overrides its
+    params : the parameters (default: the default preset); their ``fast_dt`` is the explicit
+        Euler step of every evaluation (s)
     method, positive : "lsq" or "powell"; activity kept >= 0
     controls : "speech", "emg7", "all" or comma-separated groups, an error if the markers give
         fewer coordinates than that; None (default): "speech", or the part of it the markers
         determine when they give fewer coordinates (:mod:`facemech.inverse.control_pick`;
         when its sign step adds controls, ``effort`` is :data:`SIGN_EFFORT` unless given)
-    chin_marker : a skin jaw marker: its vertical drop gives the jaw angle, ``jaw_lead``
-        frames early, estimated further with the muscles unless ``jaw_fixed``
-    jaw_second_marker : a second point on the mandible with ``chin_marker``: the two markers'
-        planar rigid motion drives the jaw's three degrees of freedom, held as given
-    jaw_incisor, jaw_molar : a lower-incisor sensor and a molar pellet, points on the bone
-        (default: the sensors of roles ``lower_incisor`` and ``molar``, when there is no
-        ``chin_marker``): they give the jaw's angle, glide and protrusion, held as given, and
-        are not compared with the skin
-    jaw_lead : frames by which the jaw drive is moved earlier (None: 2 for a skin marker, 0
-        for bone points)
+    jaw : the jaw's markers (:class:`JawMarkers`; None: none given, the sensors of roles
+        ``lower_incisor`` and ``molar`` where the markers have them)
     noise : marker noise for the standard errors, mm (None: from the residuals)
-    dt : explicit Euler step of every evaluation, s (None: the preset's fast step)
     options : the method's options (None: not given; an option of the other method is an
         error)
     progress : callable(done, total)
@@ -92,34 +116,29 @@ def invert_markers(
     Inversion
         Its notes also say how articulography roles were used and which controls were held.
     """
-    from .. import params as P
     from ..geometry.builder import load_face
     from ..io.markers import read_markers
     from ..kinematics.mapping import scale_adapt
     from ..kinematics.roles import bone_points, is_midsagittal
-    from .invert import invert
+    from .invert import JawRecording, invert
     from .methods import method_from_options
 
     solver = method_from_options(method, **(options or {}))
-    if jaw_second_marker is not None and chin_marker is None:
-        raise InputError("--jaw-second-marker needs --chin-marker (the first jaw marker)",
-                         field="jaw-second-marker")
-    if jaw_lead is not None and jaw_lead < 0:
-        raise InputError(f"jaw lead must be >= 0 frames (got {jaw_lead})", field="jaw-lead")
-    prm = P.preset(preset)
-    if jaw_kinematics is not None:
-        prm = prm.with_(jaw_kinematics=jaw_kinematics)
-    ms = markers if isinstance(markers, MarkerSet) else read_markers(markers, units=units)
+    jaw = jaw or JawMarkers()
+    chin_marker, jaw_second_marker = jaw.chin_marker, jaw.jaw_second_marker
+    jaw_fixed, jaw_lead = jaw.jaw_fixed, jaw.jaw_lead
+    params = params or default_parameters()
+    ms = markers if isinstance(markers, MarkerSet) else read_markers(markers)
     src = ms.meta.get("source") or str(markers)
-    incisor, molar, by_role = bone_points(ms, incisor=jaw_incisor, molar=jaw_molar,
+    incisor, molar, by_role = bone_points(ms, incisor=jaw.jaw_incisor, molar=jaw.jaw_molar,
                                           skin_jaw=chin_marker)
     molar, dropped = _usable_molar(ms, molar, by_role)
-    ms, resampled = _at_frame_rate(ms, prm.frame_rate)
+    ms, resampled = _at_frame_rate(ms, params.frame_rate)
     ms, filled = _bone_gaps_filled(ms, (incisor, molar), by_role)
     if jaw_fixed and chin_marker is None and incisor is None:
         raise InputError("--jaw-fixed needs a jaw recording (--chin-marker or --jaw-incisor)",
                          field="jaw-fixed")
-    model = load_face(face, tissue=prm.tissue)
+    model = load_face(face, tissue=params.tissue)
     midsagittal = is_midsagittal(ms)
     skin, mapping, notes = _skin_markers(ms, model, map_file, (incisor, molar), midsagittal)
     notes = resampled + dropped + filled + notes
@@ -127,17 +146,18 @@ def invert_markers(
         a, _, b = scale_pair.partition(",")
         skin = scale_adapt(skin, model, mapping, (a.strip(), b.strip())).markers
     lead = jaw_lead if jaw_lead is not None else (0 if incisor is not None else SKIN_JAW_LEAD)
-    jaw, jaw_source = _jaw_drive(ms, model, prm, mapping, src, lead, chin_marker,
-                                 jaw_second_marker, incisor, molar, by_role)
-    estimate = None if jaw is None else (not jaw_fixed and jaw.ndim == 1)
-    ctrl, jaw, estimate, jaw_source, pick_note, signed = _controls(
-        controls, model, prm, skin, mapping, jaw, estimate, jaw_source, midsagittal, dt, src)
+    drive, jaw_source = _jaw_drive(ms, model, params, mapping, src, lead, chin_marker,
+                                   jaw_second_marker, incisor, molar, by_role)
+    estimate = None if drive is None else (not jaw_fixed and drive.ndim == 1)
+    ctrl, drive, estimate, jaw_source, pick_note, signed = _controls(
+        controls, model, params, skin, mapping, drive, estimate, jaw_source, midsagittal, None,
+        src)
     if signed:
         solver, effort_note = _effort_for_sign(solver, options)
         pick_note += effort_note
     res = invert(model, skin, mapping, method=solver, positive=positive, controls=ctrl,
-                 jaw_angle=jaw, estimate_jaw=estimate, jaw_source=jaw_source, params=prm,
-                 dt=dt, noise_mm=noise, progress=progress)
+                 jaw_angle=JawRecording(drive, estimate, jaw_source), params=params,
+                 noise_mm=noise, progress=progress)
     return replace(res, notes=[*res.notes, *notes, *([pick_note] if pick_note else [])])
 
 
@@ -232,18 +252,19 @@ def _skin_markers(ms, model, map_file, bone, midsagittal):
     return skin, mapping, notes
 
 
-def _jaw_drive(ms, model, prm, mapping, src, lead, chin_marker, second, incisor, molar,
+def _jaw_drive(ms, model, params, mapping, src, lead, chin_marker, second, incisor, molar,
                by_role):
     """(the jaw series: None, (frames,) angles or (frames, 3) poses; what it is, for the
     notes)."""
-    from ..solvers.jaw import jaw_angles_from_marker, jaw_poses_from_points
+    from ..solvers.jaw import jaw_poses_from_points
     from ..solvers.jaw_bone import jaw_poses_from_bone, protrusion_of
+    from ..solvers.jaw_drive import jaw_angles_from_marker
 
     if incisor is not None:
-        poses = jaw_poses_from_bone(ms.marker(incisor), model, prm,
+        poses = jaw_poses_from_bone(ms.marker(incisor), model, params,
                                     molar=None if molar is None else ms.marker(molar),
                                     lead=lead, names=(incisor, molar or "molar"), source=src)
-        pro = protrusion_of(poses, prm) * 1e3
+        pro = protrusion_of(poses, params) * 1e3
         what = (f"the bone point{'s' if molar else ''} {incisor} (lower incisor"
                 f"{f') and {molar} (molar' if molar else ''}){' by role' if by_role else ''}: "
                 f"angle {np.degrees(poses[:, 0].min()):.1f} to "
@@ -263,7 +284,7 @@ def _jaw_drive(ms, model, prm, mapping, src, lead, chin_marker, second, incisor,
         if node is None:
             raise InputError("chin marker has no node (not in the file or not mapped)",
                              source=src, field=chin_marker)
-        jaw = jaw_angles_from_marker(model, prm, node, ms.marker(chin_marker)[:, 1],
+        jaw = jaw_angles_from_marker(model, params, node, ms.marker(chin_marker)[:, 1],
                                      lead=lead, source=src)
         return jaw, f"chin marker {chin_marker} ({lead}-frame lead)"
     return None, None
@@ -301,7 +322,7 @@ def pick_candidates(model) -> tuple[str, ...]:
     return SPEECH_CONTROLS + tuple(g for g in MARGINAL_GROUPS if g in present)
 
 
-def _controls(controls, model, prm, skin, mapping, jaw, estimate, jaw_source, midsagittal, dt,
+def _controls(controls, model, params, skin, mapping, jaw, estimate, jaw_source, midsagittal, dt,
               src):
     """(controls for :func:`invert`, jaw series, estimate the jaw, jaw source, the note of
     controls picked or None, whether the pick's sign step added controls)."""
@@ -329,9 +350,9 @@ def _controls(controls, model, prm, skin, mapping, jaw, estimate, jaw_source, mi
     elif jaw.ndim == 2:
         start = jaw[0]
     else:
-        start = jaw_poses(np.atleast_1d(jaw[0]), prm)[0]
+        start = jaw_poses(np.atleast_1d(jaw[0]), params)[0]
     estimated = estimate in (None, True)
-    pick = pick_controls(model, prm, np.array([mapping[n] for n in names]),
+    pick = pick_controls(model, params, np.array([mapping[n] for n in names]),
                          pick_candidates(model), estimate_jaw=estimated, jaw_start=start,
                          axes=(1, 2) if midsagittal else (0, 1, 2), dt=dt, labels=names)
     if estimated and not pick.jaw:

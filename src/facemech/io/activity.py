@@ -6,10 +6,10 @@ from pathlib import Path
 
 import numpy as np
 
+from ..atomic import atomic_path
 from ..errors import InputError
 from ..params import EMG_CHANNELS, FRAME_RATE_HZ, MUSCLE_GROUPS
 from ..plausibility import check_time_column
-from .atomic import atomic_path
 from .tables import read_table
 
 

@@ -17,10 +17,10 @@ from pathlib import Path
 
 import numpy as np
 
+from ..atomic import atomic_path
 from ..errors import InputError, missing_input
 from ..markerset import MarkerSet
 from ..units import length_scale
-from .atomic import atomic_path
 
 _CHILD = r"""
 import json, sys

@@ -28,10 +28,10 @@ from pathlib import Path
 
 import numpy as np
 
+from ..atomic import atomic_path, pending_folder
 from ..errors import InputError
 from ..params import FRAME_RATE_HZ
 from ..units import length_scale
-from .atomic import atomic_path, pending_folder
 
 GLB_MAGIC = 0x46546C67  # "glTF"
 CHUNK_JSON = 0x4E4F534A  # "JSON"

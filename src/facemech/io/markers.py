@@ -17,10 +17,10 @@ from pathlib import Path
 
 import numpy as np
 
+from ..atomic import atomic_path
 from ..errors import InputError, missing_input
 from ..markerset import MarkerSet
 from ..units import length_scale
-from .atomic import atomic_path
 from .tables import read_table, uniform_rate
 
 FORMATS = {".csv": "csv", ".trc": "trc", ".c3d": "c3d", ".tsv": "tsv", ".nc": "results",

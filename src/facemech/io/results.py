@@ -32,9 +32,12 @@ from pathlib import Path
 
 import numpy as np
 
+from ..atomic import atomic_path
 from ..errors import InputError, missing_input
+
+# the renderer reads the default depth here (re-exported)
+from ..geometry.teeth import TEETH_DEPTH_DEFAULT, teeth_depth  # noqa: F401
 from ..params import FRAME_RATE_HZ, MUSCLE_GROUPS
-from .atomic import atomic_path
 
 
 def file_hash(path: str | Path) -> str:
@@ -54,16 +57,11 @@ def array_hash(*arrays: np.ndarray) -> str:
     return h.hexdigest()[:16]
 
 
-TEETH_DEPTH_DEFAULT = 0.012  #: m, lip surface to the incisors where a file does not say
-
-
 def render_attrs(model) -> dict:
     """Attributes that let a results file render without its face model: the jaw hinge (point,
-    m, and axis) and the depth of the incisors behind the upper lip's surface (m)."""
-    n = model.n_surface
-    ul = model.landmarks.get("upper_lip_center")
-    depth = (TEETH_DEPTH_DEFAULT if ul is None else float(
-        np.linalg.norm(model.rest_positions[ul] - model.rest_positions[ul + 2 * n])))
+    m, and axis) and the depth of the incisors behind the upper lip's surface (m,
+    :func:`~facemech.geometry.teeth.teeth_depth`)."""
+    depth = teeth_depth(model)
     return {"hinge_point_m": json.dumps([float(v) for v in model.hinge_point]),
             "hinge_axis": json.dumps([float(v) for v in model.hinge_axis]),
             "teeth_depth_m": depth}
@@ -128,7 +126,8 @@ def numerics_attrs() -> dict[str, str]:
 
 
 def to_dataset(sim, inputs: dict[str, str] | None = None, extra: dict | None = None):
-    """An :class:`xarray.Dataset` of a :class:`~facemech.solvers.forward.Simulation`."""
+    """An :class:`xarray.Dataset` of a :class:`~facemech.solvers.forward.Simulation` (or any run
+    with the same fields: positions, markers, activity, jaw_angle, jaw_shift, ...)."""
     import xarray as xr
 
     from .._version import __version__
@@ -137,10 +136,8 @@ def to_dataset(sim, inputs: dict[str, str] | None = None, extra: dict | None = N
     model = sim.model
     look, look_coords, look_attrs = dataset_variables(getattr(model, "appearance", None))
     shift = getattr(sim, "jaw_shift", None)
-    if shift is None:  # angles alone: the shift the stepper gave them (the preset's kinematics)
-        from ..solvers.jaw import jaw_poses
-
-        shift = jaw_poses(sim.jaw_angle, sim.params)[:, 1:]
+    if shift is None:  # a run that says nothing of the condyles: a hinge
+        shift = np.zeros((len(sim.jaw_angle), 2))
     ds = xr.Dataset(
         {
             "positions": (("time", "node", "axis"), sim.positions,

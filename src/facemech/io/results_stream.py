@@ -7,7 +7,7 @@ compression), but with ``time`` an unlimited (extendable) dimension; every later
 appended along ``time`` with h5netcdf, and the ``wall_seconds`` attribute is brought up to date.
 :func:`~facemech.io.results.read_results` reads the file exactly as the one written in memory
 (same variables, dimensions, attributes and values, bit for bit). The file is written to a
-temporary path and renamed on success (:func:`~facemech.io.atomic.atomic_path`): an error or an
+temporary path and renamed on success (:func:`~facemech.atomic.atomic_path`): an error or an
 interruption leaves nothing behind.
 """
 
@@ -19,8 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..atomic import atomic_path
 from ..errors import InputError
-from .atomic import atomic_path
 from .results import COMPRESSED_VARIABLES, to_dataset
 
 #: target size (bytes) of one HDF5 chunk of a variable along ``time``

@@ -6,10 +6,10 @@ from pathlib import Path
 
 import numpy as np
 
+from ..atomic import atomic_path
 from ..errors import InputError
 from ..markerset import MarkerSet
 from ..units import length_scale
-from .atomic import atomic_path
 
 
 def read_trc(path: str | Path, *, units: str | None = None) -> MarkerSet:

@@ -35,7 +35,7 @@ from .kinds import (
     SpringKind,
 )
 from .materials import continuum_constants
-from .muscle import fibre_f4, hill_force
+from .muscle import fibre_f4, hill_force, steady_force
 from .slabs import slab_bundles
 from .springs import scaled_stiffness, tension_at
 from .threads import kernel_threads
@@ -197,7 +197,8 @@ class Physics:
 
     def steady_force(self, activity: np.ndarray) -> np.ndarray:
         """M_bar per muscle instance (N) from group activity (groups,) in [0, 1] (eq. 3)."""
-        return self.params.k_force * self.muscle_area * np.asarray(activity)[self.muscle_group]
+        return steady_force(self.params.k_force, self.muscle_area,
+                            np.asarray(activity)[self.muscle_group])
 
 
 @nb.njit(cache=True)

@@ -29,8 +29,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..geometry.model import FaceModel
+from ..geometry.prism import rest_geometry
 from ..params import Parameters
-from .volume import rest_geometry
 
 # the 15 edges of a prism (a, b, c) over (d, e, f), as index pairs into its 6 nodes
 PRISM_EDGES = np.array([(0, 1), (1, 2), (2, 0), (3, 4), (4, 5), (5, 3), (0, 3), (1, 4), (2, 5),

@@ -6,9 +6,16 @@ import numba as nb
 import numpy as np
 
 
+def max_force(k_force: float, area):
+    """The force of full activity k_f S (N) of eq. (3): k_f in N/m^2, S in m^2."""
+    return k_force * np.asarray(area, float)
+
+
 def steady_force(k_force: float, area, activity):
-    """Steady-state force M_bar = k_f S E (eq. 3). k_f in N/m^2, S in m^2, E in [0, 1] -> N."""
-    return k_force * np.asarray(area, float) * np.asarray(activity, float)
+    """Steady-state force M_bar = k_f S E (eq. 3). k_f in N/m^2, S in m^2, E in [0, 1] -> N.
+    The one place of eq. (3): the physics (:meth:`~facemech.physics.assembly.Physics.
+    steady_force`) and the solvers (``SolverState.max_force``) take it from here."""
+    return max_force(k_force, area) * np.asarray(activity, float)
 
 
 @nb.njit(cache=True, inline="always")

@@ -7,9 +7,11 @@ thread's only by the order of their additions (about 1e-16 relative). :func:`set
 the count for the calling thread; the kernels read it at every call (:func:`kernel_threads`),
 so it may change between steps.
 
-A process starts on :func:`default_threads`: the cores it may run on (``FACEMECH_THREADS`` in
-the environment sets it instead). On a machine busy with other work, threads that wait for
-each other at every step cost more than they save: set one there.
+Importing the package leaves numba's count as it is (numba's default: every CPU, or
+``NUMBA_NUM_THREADS``); a command of the command line runs on :func:`default_threads`, the cores
+it may run on (``FACEMECH_THREADS`` in the environment, or ``--threads``, sets it instead), and a
+program calls :func:`set_threads` for the same. On a machine busy with other work, threads that
+wait for each other at every step cost more than they save: set one there.
 """
 
 from __future__ import annotations
@@ -115,12 +117,9 @@ def kernel_threads():
 
 
 # start numba's threads now: that registers the symbol the kernels read (a kernel loaded from
-# numba's cache is not compiled, so nothing else would); then the default count
+# numba's cache is not compiled, so nothing else would). The count stays numba's: importing
+# facemech changes no thread count (the command line and the caller set it, set_threads)
 nb.get_num_threads()
-try:
-    nb.set_num_threads(default_threads())
-except InputError:  # a wrong FACEMECH_THREADS: one thread, and the error where it is asked
-    nb.set_num_threads(1)
 
 __all__ = ["set_threads", "get_threads", "available_cores", "default_threads",
            "kernel_threads"]

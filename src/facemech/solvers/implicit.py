@@ -36,8 +36,8 @@ import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
 from ..errors import InputError
+from ..geometry.prism import volume_gradients
 from ..physics.assembly import Physics, accumulate_forces, rest_anchors
-from ..physics.volume import volume_gradients
 from .contacts import resolve_contacts
 from .muscle_implicit import MuscleJacobian
 from .solver_state import (

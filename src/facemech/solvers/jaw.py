@@ -8,7 +8,8 @@ anatomical preset) couples the condyle's forward and downward glide to the openi
 (:func:`condyle_glide`), ``"hinge"`` (the seeds' presets) keeps the condyles still.
 
 Drives: the angle of each frame from one jaw marker (:func:`angles_from_chin` for a point on
-the bone, :func:`jaw_angles_from_marker` for a chin marker on the skin), applied two 60-Hz
+the bone; :func:`facemech.solvers.jaw_drive.jaw_angles_from_marker`, which runs the simulator,
+for a chin marker on the skin), applied two 60-Hz
 samples (33 ms) early to make up for the delay of propagation from the skull to the skin; or
 the whole pose from two markers on the mandible (:func:`jaw_poses_from_points`). Points on the
 bone itself (a lower-incisor sensor, a molar pellet) give the angle and a free protrusion of
@@ -21,7 +22,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from ..errors import InputError
-from ..params import GLIDE_RATE, GLIDE_SLOPE, MUSCLE_GROUPS
+from ..params import GLIDE_RATE, GLIDE_SLOPE
 
 JAW_LEAD_SAMPLES = 2  #: 33 ms at 60 Hz
 MAX_JAW_ANGLE = np.radians(30.0)
@@ -29,10 +30,6 @@ MAX_JAW_ANGLE = np.radians(30.0)
 MAX_JAW_SHIFT = 0.020
 #: m, the closest two jaw markers may be for a two-marker drive
 MIN_MARKER_SEPARATION = 0.010
-#: the lower arch of the renderer (:mod:`facemech.viz.face_parts`): the incisal edge this far
-#: above the stomion (m) and this far behind the upper incisors (m)
-LOWER_EDGE_ABOVE_STOMION = 0.0005
-LOWER_ARCH_SETBACK = 0.0025
 
 
 def condyle_glide(angle, rate: float = GLIDE_RATE, slope: float = GLIDE_SLOPE):
@@ -99,27 +96,6 @@ def move_points(points: np.ndarray, pose, hinge_point: np.ndarray, hinge_axis: n
     out, _ = moved_anchors(pose, np.asarray(hinge_point, float), np.asarray(hinge_axis, float),
                            w, pts, np.zeros_like(pts))
     return out
-
-
-def lower_incisor_point(model) -> np.ndarray:
-    """Rest position (3,) m of the tip of the lower incisors, midline, as the renderer draws it.
-
-    The renderer's lower arch (:mod:`facemech.viz.face_parts`) has its incisal edge
-    :data:`LOWER_EDGE_ABOVE_STOMION` above the stomion and its front
-    :data:`LOWER_ARCH_SETBACK` behind the upper incisors, which stand ``teeth_depth`` (the
-    tissue's depth under the upper lip's centre, :func:`facemech.io.results.render_attrs`)
-    behind the upper lip's surface. It moves with the mandible (jaw weight 1).
-    """
-    from ..io.results import render_attrs
-
-    rest = model.rest_positions
-    lm = model.landmarks
-    ul = rest[lm["upper_lip_center"]]
-    st = (rest[lm["stomion"]] if "stomion" in lm
-          else 0.5 * (ul + rest[lm["lower_lip_center"]]))
-    depth = float(render_attrs(model)["teeth_depth_m"])
-    return np.array([st[0], st[1] + LOWER_EDGE_ABOVE_STOMION,
-                     ul[2] - depth - LOWER_ARCH_SETBACK])
 
 
 def rotation_matrix(axis: np.ndarray, angle: float) -> np.ndarray:
@@ -196,92 +172,6 @@ def glide_of(params) -> tuple[float, float] | None:
     if params.jaw_kinematics == "glide":
         return params.glide_rate, params.glide_slope
     return None
-
-
-#: the held jaw angles of :func:`skin_drop_curve` (rad) and the frames each is held
-CURVE_ANGLES = np.radians([4.0, 8.0, 13.0, 19.0])
-CURVE_HOLD_FRAMES = 48
-_CURVES: dict = {}
-
-
-def skin_drop_curve(model, params, node: int) -> tuple[np.ndarray, np.ndarray]:
-    """How an epidermal node moves down as the jaw opens, at rest, in the tissue of a preset.
-
-    The jaw is opened in steps (4, 8, 13 and 19 degrees, each held 0.8 s, no muscle active) and
-    the node's vertical displacement read at the end of each hold, where the tissue has settled:
-    (angles rad, drops m, negative down), from 0, increasing. In the seeds' thin tissue the skin
-    moves with the bone under it; in the anatomical tissue (14 mm of it over the chin, whose pad
-    slides on the bone) it does not, so a chin marker on the skin must be matched by the skin's
-    own response. Cached per face, preset and node.
-    """
-    from .forward import simulate
-
-    key = (id(model), repr(params), int(node))
-    hit = _CURVES.get(key)
-    if hit is not None and hit[0] is model:
-        return hit[1], hit[2]
-    angles = np.repeat(CURVE_ANGLES, CURVE_HOLD_FRAMES)
-    angles = np.concatenate([[0.0], angles])
-    sim = simulate(model, np.zeros((len(angles), len(MUSCLE_GROUPS))), angles, params=params)
-    ends = np.arange(1, len(CURVE_ANGLES) + 1) * CURVE_HOLD_FRAMES
-    drop = sim.positions[ends, node, 1] - sim.positions[0, node, 1]
-    out = (np.concatenate([[0.0], CURVE_ANGLES]),
-           np.minimum.accumulate(np.concatenate([[0.0], drop])))
-    _CURVES[key] = (model, *out)
-    if len(_CURVES) > 16:
-        _CURVES.pop(next(iter(_CURVES)))
-    return out
-
-
-def jaw_angles_from_marker(model, params, node: int, marker_y: np.ndarray, *,
-                           lead: int = JAW_LEAD_SAMPLES, bite_block: bool = False,
-                           source: str | None = None) -> np.ndarray:
-    """Jaw angles (rad) per frame from a chin marker's vertical position (m) on the skin.
-
-    ``node`` is the marker's epidermal node. With the seeds' tissue the angle is the one that
-    gives the skull node under the marker the marker's displacement (Lucero & Munhall 1999,
-    :func:`angles_from_chin`); with the anatomical tissue, the one that gives the skin node that
-    displacement in the tissue's quasi-static response to the jaw (:func:`skin_drop_curve`).
-    Both move the jaw as the preset's ``jaw_kinematics`` says (the coupled glide or the hinge),
-    as :func:`~facemech.solvers.forward.simulate` will for the angles returned.
-    Upward displacements (closing past rest) follow the curve's slope at rest. The lead and the
-    bite block act as in :func:`angles_from_chin`.
-    """
-    from ..geometry.builder import for_tissue
-
-    model = for_tissue(model, params.tissue)
-    marker_y = np.asarray(marker_y, float)
-    if not params.is_continuum:
-        return angles_from_chin(marker_y, model.rest_positions[node + 2 * model.n_surface],
-                                model.hinge_point, model.hinge_axis, lead=lead,
-                                bite_block=bite_block, glide=glide_of(params))
-    if marker_y.ndim != 1 or len(marker_y) == 0:
-        raise InputError("chin trajectory must be a non-empty 1-D series", source=source,
-                         field="chin")
-    if not np.all(np.isfinite(marker_y)):
-        bad = int(np.nonzero(~np.isfinite(marker_y))[0][0])
-        raise InputError(f"chin trajectory has a gap at sample {bad}", source=source,
-                         field="chin")
-    angles, drop = skin_drop_curve(model, params, node)
-    d = marker_y - marker_y[0]
-    if d.min() < 1.25 * drop[-1]:
-        raise InputError(f"a chin drop of {-d.min() * 1e3:.1f} mm is more than the jaw opens "
-                         f"({np.degrees(angles[-1]):.0f} degrees drop the chin "
-                         f"{-drop[-1] * 1e3:.1f} mm)", source=source, field="chin")
-    from scipy.interpolate import PchipInterpolator
-
-    # a monotone curve through the settled points; beyond the last, and for rises above rest,
-    # the end slopes carry on
-    curve = PchipInterpolator(-drop, angles, extrapolate=True)
-    slope = (drop[1] - drop[0]) / (angles[1] - angles[0])
-    out = np.where(d <= 0, curve(np.minimum(-d, -drop[-1] * 1.25)), d / slope)
-    if np.any(out < -MAX_JAW_ANGLE):
-        raise InputError("the chin rises more than the jaw can close", source=source,
-                         field="chin")
-    out = _lead(out, lead)
-    if bite_block:
-        out = np.full_like(out, out[0])
-    return out
 
 
 def planar_rigid_fit(before: np.ndarray, after: np.ndarray) -> tuple[float, np.ndarray]:

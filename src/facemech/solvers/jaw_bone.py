@@ -31,7 +31,7 @@ Drives:
   (:func:`jaw_poses_from_bone`).
 
 The recording's first frame is the jaw's rest, and its incisor is laid on the model's own
-(:func:`~facemech.solvers.jaw.lower_incisor_point`): the model's incisor moves by the sensor's
+(:func:`~facemech.geometry.teeth.lower_incisor_point`): the model's incisor moves by the sensor's
 displacement. No lead is applied by default: the sensor is on the bone, and the 33-ms lead of
 a skin marker makes up for the skin's delay behind the bone.
 """
@@ -41,13 +41,13 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InputError
+from ..geometry.teeth import lower_incisor_point
 from .jaw import (
     MAX_JAW_ANGLE,
     MAX_JAW_SHIFT,
     _lead,
     checked_trajectory,
     jaw_poses_from_points,
-    lower_incisor_point,
 )
 
 __all__ = ["MAX_BONE_STRETCH", "bone_stretch", "eminence_direction", "glide_rate_of",
@@ -109,7 +109,7 @@ def jaw_poses_from_incisor(incisor, model, params, *, lead: int = 0, bite_block:
     """Jaw poses (frames, 3) (angle rad, shift_y m, shift_z m) from a lower-incisor sensor.
 
     Each frame's angle and protrusion are the ones that move the model's lower incisor tip
-    (:func:`~facemech.solvers.jaw.lower_incisor_point`) by the sensor's sagittal displacement
+    (:func:`~facemech.geometry.teeth.lower_incisor_point`) by the sensor's sagittal displacement
     from its first sample, with the preset's coupled glide (see the module doc). Write the tip
     relative to the hinge h as r0, the eminence direction e and its normal n = (cos s, sin s)
     (y, z). The glide and the protrusion move the tip along e only, so the angle solves

@@ -20,7 +20,7 @@ import numpy as np
 
 from ..physics.assembly import Physics, force_bundles
 from ..physics.bundles import Anchors, ForceBundles
-from ..physics.muscle import activation_exact_damped
+from ..physics.muscle import activation_exact_damped, max_force
 from .contacts import ImplicitContacts, split_contacts
 from .mandible import JawBundle, jaw_bundle, place_jaw, set_jaw_nodes
 from .state import Controls, State
@@ -88,7 +88,7 @@ def solver_state(physics: Physics, n_steps: int,
     return SolverState(
         forces=forces, contacts=contacts, jaw=jaw_bundle(physics), dynamic=physics.dynamic,
         inv_mass=physics.inv_mass, muscle_group=physics.muscle_group,
-        max_force=p.k_force * physics.muscle_area, tau=p.tau_activation,
+        max_force=max_force(p.k_force, physics.muscle_area), tau=p.tau_activation,
         frame_duration=frame, n_steps=int(n_steps), step=frame / n_steps, system=system,
         zeta=float(p.activation_damping))
 

@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..checks import check_value
 from ..errors import InputError
 from ..params import Parameters
 from ..physics.assembly import Physics
@@ -69,6 +70,9 @@ def solver_from_options(integrator: str | None, params: Parameters, *,
         An unknown name, or an option the method does not take (``field`` names it).
     """
     name = params.integrator if integrator is None else integrator
+    for option, value in (("substeps", substeps), ("dt", dt)):
+        if value is not None:  # the command line's intervals (facemech.checks)
+            check_value(option, value)
     if name not in SOLVERS:
         raise InputError(f"unknown integrator {name!r} (expected one of "
                          f"{', '.join(INTEGRATORS)})", field="integrator")

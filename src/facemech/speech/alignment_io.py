@@ -22,8 +22,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..atomic import atomic_path
 from ..errors import InputError
-from ..io.atomic import atomic_path
 from .alignment import NOTATIONS, Alignment, Segment
 
 __all__ = ["read_textgrid", "write_textgrid", "read_alignment_csv", "write_alignment_csv",

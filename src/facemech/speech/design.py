@@ -554,7 +554,7 @@ def _old_entries(path: Path) -> dict[str, dict]:
 def _write_manifest(out_dir: Path, table: Path, render: dict, entries: list[dict],
                     report: DesignReport) -> None:
     from .._version import __version__
-    from ..io.atomic import atomic_path
+    from ..atomic import atomic_path
     from ..io.results import file_hash
 
     out_dir.mkdir(parents=True, exist_ok=True)

@@ -72,9 +72,10 @@ def incisor_drop(model, jaw_pose) -> np.ndarray:
     """How far (m) the lower incisor tip drops for jaw poses (angle rad, shift_y m, shift_z m).
 
     ``jaw_pose`` : (3,) or (frames, 3); returns a float or (frames,) of downward displacement of
-    :func:`facemech.solvers.jaw.lower_incisor_point`.
+    :func:`facemech.geometry.teeth.lower_incisor_point`.
     """
-    from ..solvers.jaw import lower_incisor_point, move_points
+    from ..geometry.teeth import lower_incisor_point
+    from ..solvers.jaw import move_points
 
     poses = np.atleast_2d(np.asarray(jaw_pose, float))
     tip = lower_incisor_point(model)

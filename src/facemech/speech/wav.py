@@ -9,8 +9,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..atomic import atomic_path
 from ..errors import InputError, missing_input
-from ..io.atomic import atomic_path
 
 
 def write_wav(path: str | os.PathLike, audio: np.ndarray, rate: int) -> Path:

@@ -9,9 +9,9 @@ scallops down between the teeth (the interdental papillae). The tongue is a flat
 front-tapered ellipsoid with a median groove, its tip resting behind the lower incisors.
 
 The upper arch is fixed to the skull; the lower arch, its gums and the tongue move with the
-mandible. The lower incisors' edge stands where :func:`facemech.solvers.jaw.lower_incisor_point`
-puts it (:data:`facemech.solvers.jaw.LOWER_EDGE_ABOVE_STOMION` above the stomion,
-:data:`facemech.solvers.jaw.LOWER_ARCH_SETBACK` behind the upper incisors' labial face).
+mandible. The lower incisors' edge stands where :func:`facemech.geometry.teeth.lower_incisor_point`
+puts it (:data:`facemech.geometry.teeth.LOWER_EDGE_ABOVE_STOMION` above the stomion,
+:data:`facemech.geometry.teeth.LOWER_ARCH_SETBACK` behind the upper incisors' labial face).
 
 Lengths in metres; axes: +x the subject's left, +y up, +z forward.
 """
@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..solvers.jaw import LOWER_ARCH_SETBACK, LOWER_EDGE_ABOVE_STOMION
+from ..geometry.teeth import LOWER_ARCH_SETBACK, LOWER_EDGE_ABOVE_STOMION
 from .look import FaceLook
 from .mesh import Part, grid_faces, sphere
 

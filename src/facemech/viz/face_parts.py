@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..solvers.jaw import LOWER_ARCH_SETBACK, LOWER_EDGE_ABOVE_STOMION
+from ..geometry.teeth import LOWER_ARCH_SETBACK, LOWER_EDGE_ABOVE_STOMION
 from . import dentition
 from . import textures as T
 from .head import HAIR, hair_on_skin
@@ -181,7 +181,7 @@ def _arch(look: FaceLook, upper: bool):
     tex, half = T.arch_texture(widths, crown, gum)
     a_x, a_z = 0.0235, 0.030  # half-width and depth of the arch ellipse (m)
     if not upper:
-        # the lower incisors' edge as solvers.jaw.lower_incisor_point places it
+        # the lower incisors' edge as geometry.teeth.lower_incisor_point places it
         a_x, a_z, front_z = 0.021, 0.027, front_z - LOWER_ARCH_SETBACK
     edge_y = st[1] - 0.0015 if upper else st[1] + LOWER_EDGE_ABOVE_STOMION
     sign = 1.0 if upper else -1.0

@@ -16,8 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..atomic import atomic_path, pending_folder
 from ..errors import InputError
-from ..io.atomic import atomic_path, pending_folder
 from ..params import FRAME_RATE_HZ
 from .render import RenderOptions
 from .scene import Scene

@@ -8,8 +8,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..inverse.stats import acceleration, cross_correlation
-from ..io.atomic import atomic_path
+from ..atomic import atomic_path
+from ..kinematics.stats import acceleration, cross_correlation
 from ..params import FRAME_RATE_HZ
 
 

@@ -95,8 +95,8 @@ def rasterise(px, py, pz, tris, uv, tex, alpha_test, two_sided, atlas, zbuf, tid
                 inner[f] = True
                 n_inner += 1
             continue
-        _scan(f, f, px, py, pz, tris, uv, alpha_test[f], atlas, zbuf, tid, bary,
-              0, w - 1, 0, h - 1)
+        _scan(f, f, (px, py, pz), tris, uv, alpha_test[f], atlas, (zbuf, tid, bary),
+              (0, w - 1, 0, h - 1))
     if n_inner == 0:
         return
     th, tw = (h + TILE - 1) // TILE, (w + TILE - 1) // TILE
@@ -122,15 +122,19 @@ def rasterise(px, py, pz, tris, uv, tex, alpha_test, two_sided, atlas, zbuf, tid
             for tx in range(xmin // TILE, xmax // TILE + 1):
                 if nearest[ty, tx] >= top:
                     continue
-                _scan(f, f + nt, px, py, pz, tris, uv, False, atlas, zbuf, tid, bary,
-                      max(xmin, tx * TILE), min(xmax, tx * TILE + TILE - 1),
-                      max(ymin, ty * TILE), min(ymax, ty * TILE + TILE - 1))
+                _scan(f, f + nt, (px, py, pz), tris, uv, False, atlas, (zbuf, tid, bary),
+                      (max(xmin, tx * TILE), min(xmax, tx * TILE + TILE - 1),
+                       max(ymin, ty * TILE), min(ymax, ty * TILE + TILE - 1)))
 
 
 @nb.njit(cache=True, inline="always")
-def _scan(f, label, px, py, pz, tris, uv, test, atlas, zbuf, tid, bary, cx0, cx1, cy0, cy1):
-    """Scan-convert triangle ``f`` inside the sample rectangle [cx0, cx1] x [cy0, cy1],
-    recording ``label``; ``test``: discard samples on texels of alpha < 0.5."""
+def _scan(f, label, points, tris, uv, test, atlas, buffers, rect):
+    """Scan-convert triangle ``f`` inside the sample rectangle ``rect`` = (cx0, cx1, cy0, cy1),
+    recording ``label``; ``points`` = (px, py, pz) the projected vertices, ``buffers`` = (zbuf,
+    tid, bary); ``test``: discard samples on texels of alpha < 0.5."""
+    px, py, pz = points
+    zbuf, tid, bary = buffers
+    cx0, cx1, cy0, cy1 = rect
     i0, i1, i2 = tris[f, 0], tris[f, 1], tris[f, 2]
     x0, y0, x1, y1, x2, y2 = px[i0], py[i0], px[i1], py[i1], px[i2], py[i2]
     area = (x1 - x0) * (y2 - y0) - (x2 - x0) * (y1 - y0)

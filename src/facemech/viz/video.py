@@ -13,8 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..atomic import atomic_path
 from ..errors import InputError
-from ..io.atomic import atomic_path
 from ..params import FRAME_RATE_HZ
 from .render import Renderer, RenderOptions
 from .scene import Scene, build_scene, look_from_dataset, look_from_model

@@ -70,8 +70,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..atomic import atomic_path
 from ..errors import InputError
-from ..io.atomic import atomic_path
 from ..params import FRAME_RATE_HZ
 
 FORMAT = "facemech-viewer/1"

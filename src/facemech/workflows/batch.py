@@ -15,10 +15,11 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..batch.execute import Outcome, run_item, skipped
-from ..batch.manifest import Item, read_manifest
+from ..batch.execute import Outcome, skipped
+from ..batch.manifest import Item
 from ..batch.records import remove_partial, up_to_date, write_summary
 from ..errors import InputError
+from .batch_jobs import read_manifest, run_job
 
 __all__ = ["BatchReport", "report", "run_batch"]
 
@@ -200,7 +201,7 @@ def run_batch(manifest: str | Path, output: str | Path, *, workers: int | None =
         cannot be written or is an input, a scheduler that cannot be reached, ``workers``
         given with ``scheduler`` (or ``client``).
     """
-    from ..io.atomic import check_output
+    from ..atomic import check_output
 
     if workers is not None and (scheduler is not None or client is not None):
         raise InputError("give the number of local workers or a scheduler, not both",
@@ -263,7 +264,7 @@ def _run_on_dask(todo: list[Item], out: Path, finished: Callable[[Outcome], None
         # in the manifest's order), so that no long item starts last while the other workers
         # sit idle
         size = {item.id: _input_bytes(item) for item in todo}
-        futures = {client.submit(run_item, item, str(out), key=f"facemech-{item.id}-{run_id}",
+        futures = {client.submit(run_job, item, str(out), key=f"facemech-{item.id}-{run_id}",
                                  pure=False, priority=size[item.id]): item
                    for item in sorted(todo, key=lambda i: size[i.id], reverse=True)}
         for fut in as_completed(futures, loop=client.loop):

@@ -60,7 +60,7 @@ def calibrate(gestures: Sequence[str] | None, output: str | Path, *,
     if output.suffix.lower() != ".json":
         raise InputError("the preset file must end in .json", source=str(output),
                          field="output")
-    from ..io.atomic import check_output
+    from ..atomic import check_output
 
     specs = [parse_gesture(spec) for spec in gestures or ()]
     check_output(output, [*(path for path, _ in specs), map_file,

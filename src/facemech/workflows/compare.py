@@ -24,12 +24,12 @@ def compare_files(a: str | Path, b: str | Path, *, markers: str | list[str] | No
 
     Returns
     -------
-    facemech.inverse.stats.Comparison
+    facemech.kinematics.stats.Comparison
         Numbers in mm; its ``warnings`` say when the largest per-frame error exceeds 1 mm or
         5 x the median.
     """
-    from ..inverse.stats import compare
     from ..io.markers import read_markers
+    from ..kinematics.stats import compare
 
     ma, mb = read_markers(a, units=units), read_markers(b, units=units)
     ra, rb = ma.rate, mb.rate
@@ -138,7 +138,7 @@ def report(res, *, as_json: bool = False) -> list[str]:
     """What ``facemech compare`` prints: strict JSON (NaN as null), or a summary line, what was
     skipped for want of data (e.g. "12 of 300 frames without data were skipped") and one line
     per marker (3-D correlation)."""
-    from ..inverse.stats import json_safe
+    from ..kinematics.stats import json_safe
 
     if as_json:
         return [json.dumps(json_safe(res.as_dict()), indent=2)]

@@ -97,7 +97,7 @@ def process_emg_file(emg: str | Path, output: str | Path, *, rate: float | None 
     from .outcome import Written
 
     rate = frame_rate(rate)
-    from ..io.atomic import check_output
+    from ..atomic import check_output
 
     check_output(output, [emg, calibration], field="-o")
     res = emg_activity(emg, rate=rate, baseline=baseline, calibration=calibration,

@@ -8,21 +8,26 @@ it where asked, and returns it; the ``*_report`` functions give the lines the co
 
 from __future__ import annotations
 
+import json
 from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
+
+import numpy as np
 
 from ..errors import InputError
 
-__all__ = ["crosstalker", "crosstalker_report", "lucero2008", "lucero2008_report", "synthetic",
-           "synthetic_report"]
+__all__ = ["crosstalker", "crosstalker_report", "dense_animation", "draw_lucero2008",
+           "draw_synthetic", "lucero2008", "lucero2008_report", "synthetic", "synthetic_report",
+           "write"]
 
 Progress = Callable[[str, int, int], None]
 
 
 def _check(output: str | Path | None, preset: str | None, *, folder: bool) -> None:
     """Check the output (if any) before the experiment's minutes of work: never the preset
-    file, and writable (:func:`facemech.io.atomic.check_output`)."""
-    from ..io.atomic import check_output
+    file, and writable (:func:`facemech.atomic.check_output`)."""
+    from ..atomic import check_output
 
     if output is not None:
         check_output(output, [preset if preset and Path(preset).suffix else None],
@@ -33,8 +38,8 @@ def _face_and_params(preset: str):
     from ..geometry.builder import default_face
     from ..params import preset as get_preset
 
-    prm = get_preset(preset)
-    return default_face(tissue=prm.tissue), prm
+    params = get_preset(preset)
+    return default_face(tissue=params.tissue), params
 
 
 def synthetic(output: str | Path | None = None, *, method: str = "lsq", noise_mm: float = 0.0,
@@ -57,14 +62,14 @@ def synthetic(output: str | Path | None = None, *, method: str = "lsq", noise_mm
     -------
     facemech.inverse.experiments.SyntheticExperiment
     """
-    from ..inverse.experiments import draw_synthetic, run_synthetic, write
+    from ..inverse.experiments import run_synthetic
 
     if method not in ("lsq", "powell", "both"):
         raise InputError("method must be lsq, powell or both", field="method")
     _check(output, preset, folder=True)
-    face, prm = _face_and_params(preset)
+    face, params = _face_and_params(preset)
     res = run_synthetic(face, methods=("lsq", "powell") if method == "both" else (method,),
-                        noise=noise_mm * 1e-3, params=prm, dt=dt, progress=progress)
+                        noise=noise_mm * 1e-3, params=params, dt=dt, progress=progress)
     if output is not None:
         if figures:
             draw_synthetic(res, output)
@@ -122,13 +127,13 @@ def crosstalker(output: str | Path | None = None, *, frames: int = 120,
     -------
     facemech.inverse.experiments.CrossTalkerExperiment
     """
-    from ..inverse.experiments import run_crosstalker, write
+    from ..inverse.experiments import run_crosstalker
 
     if frames < 8:
         raise InputError("needs at least 8 frames", field="frames")
     _check(output, preset, folder=False)
-    face, prm = _face_and_params(preset)
-    res = run_crosstalker(face, frames=frames, params=prm, dt=dt, progress=progress)
+    face, params = _face_and_params(preset)
+    res = run_crosstalker(face, frames=frames, params=params, dt=dt, progress=progress)
     if output is not None:
         write(res, output)
     return res
@@ -167,7 +172,8 @@ def lucero2008(output: str | Path, *, utterances: int = 40, frames: int = 60, k:
     -------
     facemech.analysis.lucero2008.Lucero2008, with its figures
     """
-    from ..analysis.lucero2008 import draw_lucero2008, run_lucero2008, write
+    from ..analysis.lucero2008 import run_lucero2008
+    from .regions import write
 
     _check(output, None, folder=True)
     res = run_lucero2008(n_utterances=utterances, frames=frames, k=k, progress=progress)
@@ -202,3 +208,75 @@ def lucero2008_report(res, output: str | Path) -> list[str]:
                  f"(p = {mi.random_p_value:.3f})")
     lines.append(f"  summary and figures -> {output}/")
     return lines
+
+
+def dense_animation(path, face, site_nodes: dict[str, int], displacements: np.ndarray,
+                    progress: Callable[[int, int], None] | None = None) -> Path:
+    """MP4 of the face surface moved by marker displacements (frames, 57, 3) m, interpolated
+    over all epidermal nodes with a thin-plate spline on the rest positions."""
+    from scipy.interpolate import RBFInterpolator
+
+    from ..viz.movie import write_movie
+    from ..viz.scene import build_scene, look_from_model
+
+    names = list(site_nodes)
+    rest = face.rest_positions[: face.n_surface]
+    src = rest[[site_nodes[n] for n in names]]
+    frames = []
+    for d in displacements:
+        rbf = RBFInterpolator(src, d, kernel="thin_plate_spline", smoothing=0.0)
+        frames.append(rest + rbf(rest))
+    return write_movie(path, build_scene(look_from_model(face)), np.array(frames),
+                       progress=progress)
+
+
+def draw_lucero2008(result, folder: str | Path, *, video: bool = True,
+                    progress: Callable[[str, int, int], None] | None = None):
+    """The :class:`~facemech.analysis.lucero2008.Lucero2008` analysis' figures
+    (:func:`facemech.workflows.regions.draw`) and, with ``video``, ``animation.mp4``: the first
+    held-out utterance predicted from the k independent markers over the whole face.
+
+    Returns the result with its figures recorded."""
+    from ..geometry.builder import default_face
+    from .regions import draw
+
+    analysis = draw(result.analysis, folder)
+    if video:
+        model, corpus = analysis.model, result.corpus
+        u = corpus.utterances[result.n_train]
+        pred = model.predict((u - u[0])[:, model.selected_])
+        dense_animation(Path(folder) / "animation.mp4", default_face(), corpus.nodes, pred,
+                        progress=None if progress is None else
+                        (lambda d, n: progress("render", d, n)))
+        analysis = replace(analysis, figures={**analysis.figures, "animation": "animation.mp4"})
+    return replace(result, analysis=analysis)
+
+
+def draw_synthetic(result, folder: str | Path) -> list[Path]:
+    """One PNG per run of a :class:`~facemech.inverse.experiments.SyntheticExperiment` in
+    ``folder``: the inverted against the true activity, and the error.
+
+    Files are named ``experiment1_<method>_<constraint>.png``; returns their paths.
+    """
+    from ..inverse.experiments import figure_name
+    from ..viz.plots import inversion_figure
+
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for label, r in result.runs.items():
+        path = folder / figure_name(label)
+        paths.append(inversion_figure(path, result.time, r.controls, r.control_names,
+                                      truth=r.true_controls, rms_error=r.rms_error_m,
+                                      title=f"Experiment 1, {label} ({result.preset})"))
+    return paths
+
+
+def write(result, path: str | Path) -> Path:
+    """Write an experiment's tables (``result.as_dict()``: a ``SyntheticExperiment`` or
+    ``CrossTalkerExperiment`` of :mod:`facemech.inverse.experiments`) as JSON, atomically."""
+    from ..atomic import atomic_path
+
+    with atomic_path(path, suffix=".json") as tmp:
+        tmp.write_text(json.dumps(result.as_dict(), indent=2))
+    return Path(path)

@@ -40,9 +40,9 @@ def build_face_file(surface: str | Path, landmarks: str | Path, output: str | Pa
         layer, springs, prisms, muscles and appearance; ``warnings`` the scan's notes
         ("facemech: note: ..." lines: a unit inferred, axes turned, fragments dropped)
     """
+    from ..atomic import check_output
     from ..geometry.builder import build_face, tissue_options
     from ..geometry.scan import load_scan
-    from ..io.atomic import check_output
 
     surface = Path(surface)
     check_output(output, [surface, landmarks], field="-o")
@@ -107,9 +107,9 @@ def export_default_face(folder: str | Path) -> tuple[Path, Path]:
     """
     import trimesh
 
+    from ..atomic import atomic_path
     from ..geometry.builder import default_surface
     from ..geometry.surface_io import write_landmarks
-    from ..io.atomic import atomic_path
 
     folder = Path(folder)
     v, f, lm = default_surface()

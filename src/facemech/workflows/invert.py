@@ -3,47 +3,72 @@
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import InputError
+from ..inverse.workflow import JawMarkers
 
-__all__ = ["draw", "invert", "notes", "report"]
+__all__ = ["JawMarkers", "MarkerFile", "draw", "invert", "notes", "parameters", "report"]
 
 
-def invert(markers: str | Path, output: str | Path, *, face: str | Path = "default",
-           map_file: str | Path | None = None, method: str = "lsq", positive: bool = True,
-           controls: str | None = None, chin_marker: str | None = None,
-           jaw_second_marker: str | None = None, jaw_incisor: str | None = None,
-           jaw_molar: str | None = None, jaw_fixed: bool = False, jaw_lead: int | None = None,
-           noise: float | None = None, window: int | None = None, tol: float | None = None,
-           bend: float | None = None, smooth: float | None = None, effort: float | None = None,
-           max_evaluations: int | None = None, scale_pair: str | None = None,
-           preset: str = "anatomical", jaw_kinematics: str | None = None,
-           dt: float | None = None, units: str | None = None, figure: str | Path | None = None,
+@dataclass(frozen=True)
+class MarkerFile:
+    """The marker file of an inversion and how its markers are laid on the face.
+
+    Attributes
+    ----------
+    path : marker file in the model's frame and frame rate
+    units : length unit of a file that carries none
+    map_file : marker,node CSV (default: the closest nodes)
+    scale_pair : "A,B": adapt the markers by per-axis scaling from two markers far apart
+    """
+
+    path: Path
+    units: str | None = None
+    map_file: Path | None = None
+    scale_pair: str | None = None
+
+
+def parameters(preset: str | Path = "anatomical", jaw_kinematics: str | None = None,
+               dt: float | None = None):
+    """The :class:`~facemech.params.Parameters` of a preset (name or file) with a command's
+    overrides: the jaw's kinematics ("hinge" or "glide") and the inversion's explicit Euler
+    step ``dt`` (s; its ``fast_dt``)."""
+    from ..params import preset as load_preset
+
+    params = load_preset(preset)
+    if jaw_kinematics is not None:
+        params = params.with_(jaw_kinematics=jaw_kinematics)
+    return params if dt is None else params.with_(fast_dt=dt)
+
+
+def invert(markers: MarkerFile | str | Path, output: str | Path, *,
+           face: str | Path = "default", params=None, method: str = "lsq",
+           options: dict | None = None, positive: bool = True, controls: str | None = None,
+           jaw=None, noise: float | None = None, figure: str | Path | None = None,
            progress: Callable[[str, int, int], None] | None = None):
     """Recover muscle activity and the jaw frame by frame from a marker file, write the
     results file (re-animated face, controls, standard errors) and, if asked, the figure.
 
     Parameters
     ----------
-    markers : marker file in the model's frame, at the preset's frame rate
+    markers : the marker file (:class:`MarkerFile`, or its path: its own units, the closest
+        nodes)
     output : results file (.nc), written atomically
-    face, map_file : the face (file or built-in name) and a marker,node CSV (default: the
-        closest nodes)
-    method, positive, controls : "lsq" or "powell"; activity >= 0; "speech", "emg7", "all" or
-        comma-separated groups (None: "speech", or the part of it the markers determine)
-    chin_marker, jaw_second_marker, jaw_incisor, jaw_molar, jaw_fixed, jaw_lead : a jaw
-        recording, on the skin or on the bone (see
-        :func:`facemech.inverse.workflow.invert_markers`), lead in frames (None: 2 for a skin
-        marker, 0 for bone points)
+    face : the face (file or built-in name)
+    params : the :class:`~facemech.params.Parameters` (:func:`parameters`; default: the
+        default preset)
+    method, options : "lsq" or "powell" and its options (``window``, ``tol``, ``bend``,
+        ``smooth``, ``effort``, ``max_evaluations``; None: its default; tol in mm, weights in mm
+        per unit; :func:`~facemech.inverse.methods.method_from_options`)
+    positive, controls : activity >= 0; "speech", "emg7", "all" or comma-separated groups
+        (None: "speech", or the part of it the markers determine)
+    jaw : the jaw's markers, on the skin or on the bone
+        (:class:`facemech.inverse.workflow.JawMarkers`; None: none)
     noise : marker noise for the standard errors, mm (default: from the residuals)
-    window, tol, bend, smooth, effort, max_evaluations : the method's options (None: its
-        default; tol in mm, weights in mm per unit)
-    scale_pair : "A,B": adapt the markers by per-axis scaling from two markers far apart
-    preset, jaw_kinematics, dt : the parameters, "hinge" or "glide", the Euler step (s)
-    units : length unit of a marker file that carries none
     figure : PNG of the inverted controls with +-2 SE bands and the per-frame error
     progress : callable(stage, done, total)
 
@@ -51,31 +76,27 @@ def invert(markers: str | Path, output: str | Path, *, face: str | Path = "defau
     -------
     facemech.inverse.result.Inversion
     """
+    from ..atomic import check_output
     from ..inverse.workflow import invert_markers
-    from ..io.atomic import check_output
     from ..io.results import file_hash
 
-    inputs = [markers, map_file, face if Path(str(face)).suffix else None]
+    src = markers if isinstance(markers, MarkerFile) else MarkerFile(Path(markers))
+    inputs = [src.path, src.map_file, face if Path(str(face)).suffix else None]
     check_output(output, inputs, field="-o")  # before the inversion, which takes minutes
     if figure is not None:
         if Path(figure).resolve() == Path(output).resolve():
             raise InputError("the figure and the results file are the same path",
                              source=str(figure), field="--figure")
         check_output(figure, inputs, field="--figure")
-    ms = check_markers(markers, units=units, scale_pair=scale_pair)  # before the long work
+    ms = check_markers(src.path, units=src.units, scale_pair=src.scale_pair)  # before the work
     label = f"invert ({method})"
     res = invert_markers(
-        ms, face=face, map_file=map_file, units=units, scale_pair=scale_pair,
-        preset=preset, jaw_kinematics=jaw_kinematics, method=method, positive=positive,
-        controls=controls, chin_marker=chin_marker, jaw_second_marker=jaw_second_marker,
-        jaw_incisor=jaw_incisor, jaw_molar=jaw_molar, jaw_fixed=jaw_fixed, jaw_lead=jaw_lead,
-        noise=noise, dt=dt,
-        options=dict(window=window, tol=tol, bend=bend, smooth=smooth, effort=effort,
-                     max_evaluations=max_evaluations),
+        ms, face=face, map_file=src.map_file, scale_pair=src.scale_pair, params=params,
+        method=method, options=options, positive=positive, controls=controls, jaw=jaw, noise=noise,
         progress=None if progress is None else (lambda d, n: progress(label, d, n)))
-    res.write(output, inputs={"markers": file_hash(markers)})
+    res.write(output, inputs={"markers": file_hash(src.path)})
     if figure is not None:
-        draw(res, figure, title=f"{Path(markers).name}: inverted controls ({res.method.name})")
+        draw(res, figure, title=f"{Path(src.path).name}: inverted controls ({res.method.name})")
     return res
 
 

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..io.atomic import atomic_path, check_output
+from ..atomic import atomic_path, check_output
 from .outcome import Written
 
 __all__ = ["landmarks_file"]

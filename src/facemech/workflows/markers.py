@@ -10,8 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..atomic import check_output
 from ..errors import InputError
-from ..io.atomic import check_output
 from .outcome import Written
 
 
@@ -128,7 +128,7 @@ def head_correct_file(source: str | Path, output: str | Path, head: str | Sequen
     Written : ``data`` the :class:`~facemech.kinematics.rigid.HeadCorrection`; a warning names
         the frames with fewer than three usable head markers (left empty)
     """
-    from ..io.atomic import atomic_path
+    from ..atomic import atomic_path
     from ..io.markers import read_markers, write_markers
     from ..kinematics.rigid import head_correct
 

@@ -2,7 +2,7 @@
 
 The photo's face is found and its 68 iBUG landmarks placed (:mod:`facemech.io.photo`, dlib),
 the generic face fitted to them (:mod:`facemech.geometry.photo_fit`), the photo painted on it
-(:mod:`facemech.geometry.photo_texture`), and the result built like a scan
+(:mod:`facemech.viz.photo_texture`), and the result built like a scan
 (:func:`facemech.geometry.builder.build_face`): a face that simulates, renders, speaks and
 exports like any other.
 """
@@ -26,7 +26,7 @@ class PhotoFace:
     ----------
     model : the :class:`~facemech.geometry.model.FaceModel`
     fit : the :class:`~facemech.geometry.photo_fit.PhotoFit` (surface, landmarks, camera)
-    texture : the :class:`~facemech.geometry.photo_texture.BakedTexture`
+    texture : the :class:`~facemech.viz.photo_texture.BakedTexture`
     points : (68, 2) the landmarks found in the frontal photo, px
     """
 
@@ -56,7 +56,7 @@ def face_from_photo(front: np.ndarray, *, profile: np.ndarray | None = None,
     tissue : ``anatomical`` or ``uniform``
     source, profile_source : the photos' names, for errors
     detector : a :class:`~facemech.io.photo.DlibDetector` to reuse (None: one is made)
-    delight : divide the photo by the renderer's light (:mod:`~facemech.geometry.photo_texture`)
+    delight : divide the photo by the renderer's light (:mod:`~facemech.viz.photo_texture`)
     offsets : where the points' detector puts the iBUG points on the generic face:
         ``"dlib"`` (:data:`~facemech.geometry.photo_fit.DLIB_OFFSETS_MM`), None for points in
         facemech's own placement, or a (68, 2) array, mm
@@ -69,8 +69,8 @@ def face_from_photo(front: np.ndarray, *, profile: np.ndarray | None = None,
     """
     from ..geometry.builder import build_face, tissue_options
     from ..geometry.photo_fit import DLIB_OFFSETS_MM, fit_frontal, profile_silhouette
-    from ..geometry.photo_texture import bake_photo_texture
     from ..io.photo import DlibDetector, check_profile, frontal_landmarks
+    from ..viz.photo_texture import bake_photo_texture
 
     opts = tissue_options(tissue)
     if points is None:
@@ -116,8 +116,8 @@ def face_from_photo_file(front: str | Path, output: str | Path, *,
     Written : ``data`` the :class:`PhotoFace`; its line gives the scale and where it came
         from, the share of the skin painted from the photo, and the model's counts
     """
+    from ..atomic import check_output
     from ..errors import InputError
-    from ..io.atomic import check_output
     from ..io.photo import DlibDetector, check_profile, frontal_landmarks, read_photo
 
     front = Path(front)

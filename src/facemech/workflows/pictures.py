@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..io.atomic import check_output
+from ..atomic import check_output
 from ..progress import StagedProgress, stage
 from .outcome import Written
 
@@ -60,7 +60,7 @@ def render_movie(results, movie: Movie | tuple, *, source: str | None = None,
     """Render a results dataset (or file) to ``movie`` (a :class:`Movie`, or its fields as a
     tuple): an H.264 MP4 or PNG frames, with eyes, teeth and tongue, at the results' frame rate.
     Reports the stage ``render`` (frames). The output is checked first (never an input, and
-    writable: :func:`facemech.io.atomic.check_output`)."""
+    writable: :func:`facemech.atomic.check_output`)."""
     from ..viz.video import render_results
 
     movie = check_movie(movie, [results if isinstance(results, (str, Path)) else source])

@@ -4,15 +4,18 @@
 from __future__ import annotations
 
 import contextlib
+import json
 import math
 from collections.abc import Sequence
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import InputError
 
-__all__ = ["parse_length", "parse_ranges", "read_utterances", "regions", "report"]
+__all__ = ["draw", "parse_length", "parse_ranges", "read_utterances", "regions", "report",
+           "write"]
 
 
 def parse_ranges(text: str | None, n: int, field: str) -> list[int] | None:
@@ -130,8 +133,8 @@ def regions(files: Sequence[str | Path], output: str | Path, *, k: int | None = 
     -------
     facemech.analysis.lucero2008.RegionAnalysis, with its figures
     """
-    from ..analysis.lucero2008 import analyse, draw, write
-    from ..io.atomic import check_output
+    from ..analysis.lucero2008 import analyse
+    from ..atomic import check_output
 
     check_output(output, [*files, None if str(neutral) == "first" else neutral], folder=True,
                  field="-o")
@@ -149,3 +152,67 @@ def report(res, output: str | Path) -> list[str]:
     """What ``facemech regions`` prints."""
     return [f"epsilon {res.eps_mm:.3f} mm, rank {res.rank} of {res.markers}; k = {res.k}",
             "independent markers: " + ", ".join(res.selected), f"summary and figures -> {output}/"]
+
+
+def write(result, path: str | Path) -> Path:
+    """Write a region analysis' (:class:`~facemech.analysis.lucero2008.RegionAnalysis`,
+    :class:`~facemech.analysis.lucero2008.Lucero2008`) ``as_dict()`` as JSON
+    (``summary.json``), atomically."""
+    from ..atomic import atomic_path
+
+    with atomic_path(path, suffix=".json") as tmp:
+        tmp.write_text(json.dumps(result.as_dict(), indent=2))
+    return Path(path)
+
+
+def draw(result, folder: str | Path):
+    """Draw the analysis' PNG figures into ``folder`` (created): R values (Fig. 2), the first
+    eigenregions and orthogonal regions, and with held-out utterances the errors against k and
+    a predicted trajectory (Fig. 9), and the stability of the R values.
+
+    Returns the result with its ``figures`` (name -> file name).
+    """
+    from ..viz import regions as fig
+
+    out = Path(folder)
+    out.mkdir(parents=True, exist_ok=True)
+    model, full, names = result.model, result.full, list(result.names)
+    figures = {"r_values": fig.r_values_figure(out / "r_values.png", result.r_values_mm,
+                                               result.eps_mm, "R values (Fig. 2)").name}
+    xy = result.rest_mm[:, :2]
+    maps, titles, marks = [], [], []
+    for j in range(min(3, result.k)):
+        vals = np.zeros(len(names))
+        vals[model.secondary_] = model.coef_[j]
+        vals[model.selected_[j]] = 1.0
+        maps.append(vals)
+        titles.append(f"eigenregion of {names[model.selected_[j]]}")
+        marks.append(int(model.selected_[j]))
+    if maps:
+        figures["eigenregions"] = fig.region_maps(out / "eigenregions.png", xy, maps, titles,
+                                                  marks).name
+    r = full.R_
+    omaps, otitles, omarks = [], [], []
+    for j in range(min(3, r.shape[0])):
+        vals = np.zeros(len(names))
+        vals[full.order_] = r[j] / r[j, j]
+        omaps.append(vals)
+        otitles.append(f"orthogonal region {j + 1} ({names[full.order_[j]]})")
+        omarks.append(int(full.order_[j]))
+    figures["orthogonal_regions"] = fig.region_maps(out / "orthogonal_regions.png", xy, omaps,
+                                                    otitles, omarks).name
+    if result.held_out_error is not None:
+        rows = result.held_out_error
+        figures["errors"] = fig.error_figure(
+            out / "errors.png", [r_.k for r_ in rows], [r_.mean_abs_error_mm for r_ in rows],
+            [r_.relative_error for r_ in rows], [r_.pca_mean_abs_error_mm for r_ in rows]).name
+    t = result.trajectory
+    if t is not None:
+        figures["trajectory"] = fig.trajectory_figure(
+            out / "trajectory.png", t.time_s, t.recorded_mm, t.predicted_mm,
+            f"{t.marker}, held-out utterance {t.utterance}, k = {result.k} (Fig. 9)").name
+    if result.stability is not None:
+        figures["stability"] = fig.stability_figure(out / "stability.png",
+                                                    list(result.stability.utterances),
+                                                    result.stability.first_r_values_mm).name
+    return replace(result, figures={k: str(v) for k, v in figures.items()})

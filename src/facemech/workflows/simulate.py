@@ -127,9 +127,9 @@ def jaw_from_chin(path: str | Path, marker: str, model, params, times: np.ndarra
                   units: str | None = None) -> np.ndarray:
     """Jaw angles (frames,) rad at ``times`` (s) from the vertical trajectory of a chin marker
     in a marker file (model axes), 33 ms early
-    (:func:`facemech.solvers.jaw.jaw_angles_from_marker`); the marker is the face's node of
+    (:func:`facemech.solvers.jaw_drive.jaw_angles_from_marker`); the marker is the face's node of
     that name, or its chin landmark. The file must cover ``times``."""
-    from ..solvers.jaw import jaw_angles_from_marker
+    from ..solvers.jaw_drive import jaw_angles_from_marker
     from .markers import trajectories
 
     y = trajectories(path, [marker], units=units, times=times,
@@ -273,10 +273,10 @@ def simulate_files(output: str | Path, controls: Controls, jaw: JawSource = JawS
     from ..geometry.builder import load_face
     from ..params import preset as get_preset
 
-    prm = get_preset(preset)
+    params = get_preset(preset)
     if jaw_kinematics is not None:
-        prm = prm.with_(jaw_kinematics=jaw_kinematics)
-    from ..io.atomic import check_output
+        params = params.with_(jaw_kinematics=jaw_kinematics)
+    from ..atomic import check_output
 
     given = [controls.activity, controls.emg, controls.emg_calibration, jaw.angles, jaw.markers,
              face if Path(str(face)).suffix else None]
@@ -285,15 +285,15 @@ def simulate_files(output: str | Path, controls: Controls, jaw: JawSource = JawS
         from .pictures import check_movie
 
         movie = check_movie(movie, [*given, output], field="video")
-    times, act, inputs = read_controls(controls, prm.frame_rate)  # before the slow face
-    model = load_face(face, tissue=prm.tissue)
-    jaw_angles, jaw_inputs = jaw_series(jaw, model, prm, times)
+    times, act, inputs = read_controls(controls, params.frame_rate)  # before the slow face
+    model = load_face(face, tissue=params.tissue)
+    jaw_angles, jaw_inputs = jaw_series(jaw, model, params, times)
     inputs.update(jaw_inputs)
     src = str(controls.activity if controls.activity is not None else controls.emg)
-    run = simulate_to_file(output, model, act, jaw_angles, inputs=inputs, params=prm,
+    run = simulate_to_file(output, model, act, jaw_angles, inputs=inputs, params=params,
                            integrator=integrator, substeps=substeps, dt=dt, jaw_drive=jaw_drive,
-                           source=src, progress=stage(progress,
-                                                      f"simulate ({integrator or prm.integrator})"))
+                           source=src, progress=stage(
+                               progress, f"simulate ({integrator or params.integrator})"))
     written = None
     if movie:  # from the file: the whole run in memory (rendering does not stream)
         from .pictures import render_movie

@@ -12,29 +12,29 @@ __all__ = ["describe_file", "describe_report", "describe_text", "speak",
            "speak_report", "stimuli", "stimuli_report"]
 
 
-def speak(output: str | Path, text: str | None = None, *, video: bool = True,
-          view: str = "frontal+profile", size: str = "1280x720", background: str = "#2a2c33",
-          aa: int = 2, **options):
+def speak(output: str | Path, text: str | None = None, *, video: bool = True, render=None,
+          **options):
     """Make the face say ``text``, or speak in sync with a recorded voice, into the folder
-    ``output``: :func:`facemech.speech.speak.speak` (its keywords: ``audio``, ``textgrid``,
-    ``voice``, ``rate_wpm``, ``word_tier``, ``phone_tier``, ``face``, ``preset``, ``strength``,
-    ``progress``), the MP4 with ``video`` (:func:`.pictures.render_options` of ``view``, ``size``,
-    ``background``, ``aa``). Returns its :class:`~facemech.speech.speak.Spoken`."""
-    from ..io.atomic import check_output
-    from ..speech.speak import speak as run
+    ``output``: :func:`facemech.workflows.speak.speak` (its keywords: ``audio``, ``textgrid``,
+    ``voice``, ``rate_wpm``, ``tiers``, ``face``, ``preset``, ``strength``, ``progress``), the
+    MP4 with ``video``, drawn with ``render`` (a :class:`facemech.viz.video.RenderOptions`,
+    :func:`.pictures.render_options`; None: frontal+profile, 1280x720). Returns its
+    :class:`~facemech.workflows.speak.Spoken`."""
+    from ..atomic import check_output
+    from .speak import speak as run
 
     named = [options.get(k) for k in ("face", "preset")]  # built-in names or files
     check_output(output, [options.get("audio"), options.get("textgrid"),
                           *(n for n in named if n and Path(str(n)).suffix)],
                  folder=True, field="-o")
-    opts = render_options(view, size, background, aa) if video else None
-    return run(output, text, video=video, render_options=opts, **options)
+    look = render or render_options()
+    return run(output, text, video=look if video else False, **options)
 
 
 def speak_report(res, output: str | Path) -> list[str]:
     """What ``facemech speak`` prints: the phones and words, the duration and the files.
 
-    ``res`` is the :class:`~facemech.speech.speak.Spoken` that :func:`speak` returns.
+    ``res`` is the :class:`~facemech.workflows.speak.Spoken` that :func:`speak` returns.
     """
     words = " ".join(w.label for w in res.alignment.words)
     return [f"{len(res.alignment.phones)} phones ({words}), {res.alignment.duration:.2f} s "
@@ -72,9 +72,9 @@ def stimuli(design: str | Path, output: str | Path, *, video: bool = True,
     ``background``
     and ``aa``; ``progress`` is callable(stage, done, total). Returns the
     :class:`~facemech.speech.design.DesignReport`."""
-    from ..io.atomic import check_output
+    from ..atomic import check_output
     from ..speech.design import run_design
-    from ..speech.speak import text_items
+    from .speak import text_items
 
     check_output(output, [design], folder=True, field="-o")
     return run_design(design, output, text_items(Path(output) / "items"),

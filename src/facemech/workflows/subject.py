@@ -24,8 +24,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ..atomic import atomic_path, check_output
+from ..checks import check_value
 from ..errors import InputError
-from ..io.atomic import atomic_path, check_output
 from .outcome import Written
 
 __all__ = ["Subject", "analyse", "make_subject", "read_subject", "usable_head"]
@@ -260,7 +261,7 @@ def make_subject(face: str | Path, markers: str | Path, output: str | Path, *,
                              field="landmarks")
         import tempfile
 
-        from ..io.atomic import pending_folder
+        from ..atomic import pending_folder
         from .faces import build_face_file
 
         with tempfile.TemporaryDirectory() as tmp, pending_folder(tmp):  # gone if interrupted
@@ -418,11 +419,32 @@ def prepare(subj: Subject, ms, *, max_gap: float, rate: float, source: str,
     return ms, notes
 
 
+@dataclass(frozen=True)
+class Preparation:
+    """How :func:`analyse` prepares a recording: the length unit of a recording that carries
+    none, the longest gap filled (s) and the low-pass cut-off (Hz; None: none)."""
+
+    units: str | None = None
+    max_gap: float = 0.1
+    lowpass: float | None = LOWPASS_HZ
+
+    def __post_init__(self):  # the command line's intervals (facemech.checks)
+        check_value("max_gap", self.max_gap)
+        if self.lowpass is not None:
+            check_value("lowpass", self.lowpass)
+
+
+#: the lsq inversion's options in :func:`analyse`: longer and stronger than the method's own
+#: defaults (2, 0.3): a recording is noisy (a twin with 0.1 mm of marker noise recovers every
+#: determined muscle with r >= 0.88 with them, RIS and DAO at 0.73 and 0.75 without;
+#: docs/recordings.md)
+ANALYSE_LSQ = {"window": 3, "smooth": 1.0}
+
+
 def analyse(subject: str | Path, recording: str | Path, output: str | Path, *,
-            units: str | None = None, max_gap: float = 0.1, lowpass: float | None = LOWPASS_HZ,
-            method: str = "lsq", controls: str = "speech", noise: float | None = None,
-            window: int | None = 3, smooth: float | None = 1.0, preset: str = "anatomical",
-            video: bool = False, progress=None) -> Written:
+            preparation: Preparation = Preparation(), method: str = "lsq",
+            options: dict | None = None, controls: str = "speech", noise: float | None = None,
+            preset: str = "anatomical", video: bool = False, progress=None) -> Written:
     """Analyse a recording against a subject folder into the folder ``output``.
 
     Writes ``markers.csv`` (the prepared markers: model frame, mm, the model's rate) and its
@@ -437,15 +459,9 @@ def analyse(subject: str | Path, recording: str | Path, output: str | Path, *,
     subject : a folder made by :func:`make_subject`
     recording : C3D, TRC or CSV of the same markers, in the lab, any rate
     output : the results folder
-    units : length unit of a recording that carries none
-    max_gap : longest gap filled, s
-    lowpass : Hz, the recording's low-pass cut-off (None: none)
+    preparation : the recording's unit, gaps filled and low-pass (:class:`Preparation`)
     method, controls, noise, preset : as :func:`facemech.workflows.invert.invert`
-    window, smooth : the lsq inversion's frames per fit and smoothness weight (mm per unit);
-        the defaults, 3 and 1.0, are longer and stronger than :func:`invert`'s (2, 0.3): a
-        recording is noisy (a twin with 0.1 mm of marker noise recovers every determined
-        muscle with r >= 0.88 with them, RIS and DAO at 0.73 and 0.75 without;
-        docs/recordings.md)
+    options : the method's options (None: :data:`ANALYSE_LSQ` for lsq, the defaults for powell)
     video : render ``movie.mp4``
     progress : staged callback: ``prepare``, ``invert (lsq)``, ``render``
 
@@ -453,7 +469,7 @@ def analyse(subject: str | Path, recording: str | Path, output: str | Path, *,
     -------
     Written : ``data`` a dict of the stages' numbers (as ``summary.json``)
     """
-    from .. import params as P
+    from ..inverse.workflow import JawMarkers
     from ..io.markers import read_markers, write_markers
     from . import compare, invert
 
@@ -462,8 +478,10 @@ def analyse(subject: str | Path, recording: str | Path, output: str | Path, *,
     subj = read_subject(subject)
     say = progress or (lambda *a: None)
     say("prepare", 0, 1)
-    ms, notes = prepare(subj, read_markers(recording, units=units), max_gap=max_gap,
-                        rate=P.preset(preset).frame_rate, source=src, lowpass_hz=lowpass)
+    params = invert.parameters(preset)
+    ms, notes = prepare(subj, read_markers(recording, units=preparation.units),
+                        max_gap=preparation.max_gap, rate=params.frame_rate, source=src,
+                        lowpass_hz=preparation.lowpass)
     invert.check_marker_set(ms, src)  # what would stop the inversion: before anything is written
     write_markers(out / "markers.csv", ms, units="mm")
     with atomic_path(out / "mapping.csv") as tmp:  # the subject's, for the markers recorded
@@ -471,16 +489,18 @@ def analyse(subject: str | Path, recording: str | Path, output: str | Path, *,
     jaw = [n if n in ms.names and np.isfinite(ms.marker(n)).all() else None
            for n in (subj.chin_marker, subj.jaw_second_marker)]
     if subj.chin_marker is not None and None in jaw[: 2 if subj.jaw_second_marker else 1]:
-        notes.append(f"the jaw markers are missing or have gaps longer than {max_gap:g} s in "
+        notes.append(f"the jaw markers are missing or have gaps longer than "
+                     f"{preparation.max_gap:g} s in "
                      "the recording: the jaw is estimated")
         jaw = [None, None]
     say("prepare", 1, 1)
-    res = invert.invert(out / "markers.csv", out / "result.nc", face=subj.face,
-                        map_file=out / "mapping.csv", method=method, controls=controls,
-                        chin_marker=jaw[0], jaw_second_marker=jaw[1],
-                        noise=noise, preset=preset, units="mm", figure=out / "controls.png",
-                        window=window if method == "lsq" else None,
-                        smooth=smooth if method == "lsq" else None, progress=progress)
+    if options is None:
+        options = ANALYSE_LSQ if method == "lsq" else {}
+    res = invert.invert(invert.MarkerFile(out / "markers.csv", "mm", out / "mapping.csv"),
+                        out / "result.nc", face=subj.face, params=params, method=method,
+                        options=options, controls=controls,
+                        jaw=JawMarkers(chin_marker=jaw[0], jaw_second_marker=jaw[1]),
+                        noise=noise, figure=out / "controls.png", progress=progress)
     cmp = compare.compare_files(out / "result.nc", out / "markers.csv")
     with atomic_path(out / "comparison.json") as tmp:
         tmp.write_text("\n".join(compare.report(cmp, as_json=True)))

@@ -19,10 +19,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import generic
-from .appearance import Appearance
-from .mesh import vertex_normals
-from .photo_fit import PhotoFit
+from ..geometry import generic
+from ..geometry.appearance import Appearance
+from ..geometry.mesh import vertex_normals
+from ..geometry.photo_fit import PhotoFit
 
 #: texels of the baked texture, (height, width)
 TEXTURE_SIZE = (1024, 1024)
@@ -161,7 +161,7 @@ def _outline_weight(points: np.ndarray, size: tuple[int, int], px: np.ndarray,
 
 def _grid_shape(uv: np.ndarray) -> tuple[int, int]:
     """(rows, cols) of the generic grid the fitted face keeps (:data:`PHOTO_RESOLUTION`)."""
-    from .photo_fit import PHOTO_RESOLUTION
+    from ..geometry.photo_fit import PHOTO_RESOLUTION
 
     rows, cols = PHOTO_RESOLUTION
     cols += 1 - cols % 2
@@ -193,7 +193,7 @@ def _skin_tone(colour: np.ndarray, weight: np.ndarray, pts: np.ndarray,
 
 def _renderer_light(normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Diffuse light and highlight (n,) of the renderer at unit normals seen from the front."""
-    from ..viz.raster import GROUND, LIGHTS, SKY, WRAP, vertex_light
+    from .raster import GROUND, LIGHTS, SKY, WRAP, vertex_light
 
     lights = np.concatenate([LIGHTS[:, :3] / np.linalg.norm(LIGHTS[:, :3], axis=1,
                                                             keepdims=True), LIGHTS[:, 3:]],

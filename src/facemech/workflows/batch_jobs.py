@@ -1,5 +1,6 @@
 """The job kinds of a batch manifest: their options (names, types, which are input files) and
-the workflow each one calls to fill an item's folder.
+the workflow each one calls to fill an item's folder. The batch's runner (:mod:`facemech.batch`)
+is given this table (:data:`JOBS`); it imports no workflow.
 
 Every option is named as the command's option (``jaw-chin`` or ``jaw_chin``); a job's outputs
 are the files its command writes, under fixed names inside the item's folder:
@@ -20,43 +21,21 @@ regions     ``files``             ``summary.json`` and the figures
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from dataclasses import dataclass
 from pathlib import Path
 
-from ..errors import FacemechError, InputError
+from ..batch.execute import Outcome, run_item
+from ..batch.job import Job
+from ..batch.manifest import Item
+from ..batch.manifest import read_manifest as read_manifest_of
+from ..errors import FacemechError
 
-__all__ = ["JOBS", "Job", "OPTION_KINDS"]
-
-#: value kinds: a file read (hashed), several files, a file or a built-in name (a value with a
-#: suffix is a file), a marker file or "first", text, numbers and yes/no
-OPTION_KINDS = ("path", "paths", "file_or_name", "path_or_first", "str", "int", "float", "bool")
+__all__ = ["JOBS", "Job", "read_manifest", "run_job"]
 
 _RENDER = {"view": "str", "size": "str", "background": "str", "aa": "int"}
 
 
-@dataclass(frozen=True)
-class Job:
-    """One job kind.
-
-    Attributes
-    ----------
-    options : option name -> value kind (:data:`OPTION_KINDS`)
-    required : groups of options; each group needs at least one of its options given
-    run : run(options, folder) -> (numbers, report lines): fills ``folder`` (it exists and is
-        empty) and returns the item's key numbers and the lines its command would print
-    more_inputs : more_inputs(options) -> {name: path}: files the job reads that its options
-        name only indirectly (a design table's sounds and results), hashed with the others
-    """
-
-    options: dict
-    required: tuple
-    run: Callable[[dict, Path], tuple[dict, list[str]]]
-    more_inputs: Callable[[dict], dict] | None = None
-
-
 def _simulate(o: dict, folder: Path):
-    from ..workflows.simulate import Controls, JawSource, simulate_files
+    from .simulate import Controls, JawSource, simulate_files
 
     keys = ("face", "preset", "jaw_kinematics", "integrator", "substeps", "dt", "jaw_drive")
     run = simulate_files(
@@ -72,41 +51,46 @@ def _simulate(o: dict, folder: Path):
             str(run).splitlines())
 
 
-_INVERT_KEYS = ("face", "method", "positive", "controls", "chin_marker", "jaw_second_marker",
-                "jaw_incisor", "jaw_molar", "jaw_fixed", "jaw_lead", "noise", "window", "tol",
-                "bend", "smooth", "effort",
-                "max_evaluations", "scale_pair", "preset", "jaw_kinematics", "dt", "units")
-
-
 def _invert(o: dict, folder: Path):
-    from ..workflows import invert as wf
+    from . import invert
 
     figure = folder / "inversion.png" if o.get("figure") else None
     out = folder / "result.nc"
-    res = wf.invert(o["markers"], out, map_file=o.get("map"), figure=figure,
-                    **{k: o[k] for k in _INVERT_KEYS if k in o})
+    jaw = ("chin_marker", "jaw_second_marker", "jaw_incisor", "jaw_molar", "jaw_fixed",
+           "jaw_lead")
+    fit = ("window", "tol", "bend", "smooth", "effort", "max_evaluations")
+    res = invert.invert(
+        invert.MarkerFile(o["markers"], o.get("units"), o.get("map"), o.get("scale_pair")), out,
+        params=invert.parameters(o.get("preset", "anatomical"), o.get("jaw_kinematics"),
+                                 o.get("dt")),
+        options={k: o.get(k) for k in fit},
+        jaw=invert.JawMarkers(**{k: o[k] for k in jaw if k in o}),
+        figure=figure, **{k: o[k] for k in ("face", "method", "positive", "controls", "noise")
+                          if k in o})
     s = res.error_summary()
     return ({"frames": len(res.time), "median_error_mm": round(float(s["median_mm"]), 4),
              "max_error_mm": round(float(s["max_mm"]), 4), "markers": len(res.marker_names)},
-            wf.report(res, out.name, None if figure is None else figure.name) + wf.notes(res))
+            invert.report(res, out.name, None if figure is None else figure.name)
+            + invert.notes(res))
 
 
 def _speak(o: dict, folder: Path):
-    from ..workflows.speech import speak, speak_report
+    from .pictures import render_options
+    from .speech import speak, speak_report
 
-    keys = ("audio", "textgrid", "voice", "word_tier", "phone_tier", "strength", "face", "preset",
-            "video", *_RENDER)
+    keys = ("audio", "textgrid", "voice", "strength", "face", "preset", "video")
     kw = {k: o[k] for k in keys if k in o}
     if "rate" in o:
         kw["rate_wpm"] = o["rate"]
-    res = speak(folder, o.get("text"), **kw)
+    res = speak(folder, o.get("text"), tiers=(o.get("word_tier"), o.get("phone_tier")),
+                render=render_options(**{k: o[k] for k in _RENDER if k in o}), **kw)
     return ({"frames": len(res.simulation.time), "phones": len(res.alignment.phones),
              "duration_s": round(float(res.alignment.duration), 3)},
             speak_report(res, folder.name))
 
 
 def _stimuli(o: dict, folder: Path):
-    from ..workflows.speech import stimuli, stimuli_report
+    from .speech import stimuli, stimuli_report
 
     rep = stimuli(o["design"], folder, **{k: o[k] for k in ("video", *_RENDER) if k in o})
     made, failed = stimuli_report(rep)
@@ -131,7 +115,7 @@ def _design_files(o: dict) -> dict:
 
 
 def _regions(o: dict, folder: Path):
-    from ..workflows.regions import regions, report
+    from .regions import regions, report
 
     keys = ("k", "eps", "neutral", "train", "test", "method", "units")
     res = regions(o["files"], folder, **{k: o[k] for k in keys if k in o})
@@ -171,9 +155,13 @@ JOBS: dict[str, Job] = {
 }
 
 
-def check_kind(job: str, *, source: str, row: int) -> Job:
-    """The :class:`Job` of kind ``job``; an InputError naming ``source`` and ``row`` if none."""
-    if job not in JOBS:
-        raise InputError(f"row {row}: unknown job kind {job!r} (one of {', '.join(JOBS)})",
-                         source=source, field="job")
-    return JOBS[job]
+def read_manifest(path: str | Path) -> list[Item]:
+    """Read and check a whole manifest of these job kinds
+    (:func:`facemech.batch.manifest.read_manifest` with :data:`JOBS`)."""
+    return read_manifest_of(path, JOBS)
+
+
+def run_job(item: Item, out_dir: str | Path) -> Outcome:
+    """Make ``item`` into ``out_dir/<id>/`` with its job kind of :data:`JOBS` (what a dask worker
+    runs: :func:`facemech.batch.execute.run_item`)."""
+    return run_item(item, out_dir, JOBS)

@@ -11,8 +11,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
-from ..kinematics.resample import savgol_derivative
 from ..params import Parameters
+from .resample import savgol_derivative
 
 __all__ = ["Comparison", "MarkerStatistics", "acceleration", "axis_correlations", "centroid",
            "compare", "corr3d", "cross_correlation", "error_summary", "frame_errors", "json_safe",

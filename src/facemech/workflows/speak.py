@@ -60,13 +60,11 @@ def speak(
     textgrid: str | Path | None = None,
     voice: str = "en-us",
     rate_wpm: int = 160,
-    word_tier: str | None = None,
-    phone_tier: str | None = None,
+    tiers: tuple[str | None, str | None] = (None, None),
     face: str | Path = "default",
     preset: str = "anatomical",
     strength: float = 1.0,
-    video: bool = True,
-    render_options=None,
+    video=True,
     progress: Callable[[str, int, int], None] | None = None,
 ) -> Spoken:
     """Make the face say ``text`` (eSpeak NG), or speak in sync with a recorded ``audio`` whose
@@ -77,28 +75,28 @@ def speak(
     out_dir : the folder (created; files in it are replaced, nothing else is touched)
     text : what to say; or give ``audio`` and ``textgrid`` instead
     voice, rate_wpm : eSpeak NG voice (e.g. ``en-us``, ``en-gb+f3``) and words per minute
-    word_tier, phone_tier : TextGrid tier names (default: found by name, as MFA writes them)
+    tiers : the TextGrid's (word, phone) tier names (None: found by name, as MFA writes them)
     face : a face file or a built-in face name
     preset : the physical preset (default ``anatomical``)
     strength : scale of every viseme's departure from rest (1 = the table's)
-    video : render the MP4 (H.264, the audio muxed in as AAC)
-    render_options : :class:`facemech.viz.video.RenderOptions` (default frontal+profile, 720p)
+    video : render the MP4 (H.264, the audio muxed in as AAC): True (frontal+profile, 720p),
+        a :class:`facemech.viz.video.RenderOptions`, or False
     progress : callable(stage, done, total)
 
     Returns
     -------
     Spoken
     """
-    from .. import params as P
     from ..analysis.describe import describe
     from ..geometry.builder import load_face
     from ..io.activity import write_activity
     from ..io.results import file_hash, to_dataset, write_dataset
     from ..params import MUSCLE_GROUPS
+    from ..params import preset as load_preset
     from ..solvers.forward import simulate
-    from .alignment_io import read_textgrid, write_alignment_csv, write_textgrid
-    from .coarticulation import controls_from_alignment
-    from .wav import read_wav, write_wav
+    from ..speech.alignment_io import read_textgrid, write_alignment_csv, write_textgrid
+    from ..speech.coarticulation import controls_from_alignment
+    from ..speech.wav import read_wav, write_wav
 
     if (text is None) == (audio is None):
         raise InputError("give either text or --audio with --textgrid", field="text")
@@ -117,11 +115,11 @@ def speak(
                 Path(given).name in FILES.values():
             raise InputError("an input would be overwritten by an output of the same name",
                              source=str(given), field="output")
-    prm = P.preset(preset)
+    params = load_preset(preset)
     files = {k: out / v for k, v in FILES.items()}
     inputs: dict = {}
     if text is not None:
-        from .tts import synthesize
+        from ..speech.tts import synthesize
 
         report(progress, "synthesise", 0, 1)
         speech = synthesize(text, voice=voice, rate_wpm=rate_wpm)
@@ -133,7 +131,7 @@ def speak(
             samples, rate = read_wav(audio)
         except InputError as exc:
             raise InputError(exc.message, source=str(audio), field="audio") from None
-        alignment = read_textgrid(textgrid, word_tier=word_tier, phone_tier=phone_tier)
+        alignment = read_textgrid(textgrid, word_tier=tiers[0], phone_tier=tiers[1])
         dur = len(samples) / rate
         if alignment.phones and alignment.phones[-1].end > dur + 0.05:
             raise InputError(f"the alignment runs to {alignment.phones[-1].end:.2f} s, the "
@@ -141,16 +139,16 @@ def speak(
                              source=str(textgrid), field="time")
         inputs["audio"] = file_hash(audio)
         inputs["textgrid"] = file_hash(textgrid)
-    model = load_face(face, tissue=prm.tissue)  # after the inputs are checked: it takes a while
+    model = load_face(face, tissue=params.tissue)  # after the inputs are checked: it takes a while
     out.mkdir(parents=True, exist_ok=True)
     write_wav(files["audio"], samples, rate)
     write_textgrid(files["textgrid"], alignment)
     write_alignment_csv(files["alignment"], alignment)
-    t, act, jaw = controls_from_alignment(alignment, frame_rate=prm.frame_rate,
+    t, act, jaw = controls_from_alignment(alignment, frame_rate=params.frame_rate,
                                           strength=strength)
     write_activity(files["controls"], t, np.column_stack([act, jaw]),
                    (*MUSCLE_GROUPS, "jaw_angle"))
-    sim = simulate(model, act, jaw, params=prm,
+    sim = simulate(model, act, jaw, params=params,
                    progress=None if progress is None else
                    (lambda d, n: progress("simulate", d, n)))
     ds = to_dataset(sim, inputs)
@@ -159,7 +157,8 @@ def speak(
     if video:
         from ..viz.video import render_results
 
-        render_results(ds, files["movie"], options=render_options, audio=files["audio"],
+        options = None if video is True else video
+        render_results(ds, files["movie"], options=options, audio=files["audio"],
                        progress=None if progress is None else
                        (lambda d, n: progress("render", d, n)))
     else:
@@ -169,19 +168,19 @@ def speak(
         "text": text,
         "voice": voice if text is not None else None,
         "rate_wpm": rate_wpm if text is not None else None,
-        "face": str(face), "preset": prm.name, "strength": strength,
+        "face": str(face), "preset": params.name, "strength": strength,
         "inputs": inputs,
         "alignment": {"notation": alignment.notation, "duration_s": alignment.duration,
                       "words": [w.label for w in alignment.words],
                       "phones": len(alignment.phones), "source": alignment.source,
                       **{k: v for k, v in alignment.meta.items()
                          if isinstance(v, (str, int, float))}},
-        "frames": int(len(t)), "frame_rate_hz": float(prm.frame_rate),
+        "frames": int(len(t)), "frame_rate_hz": float(params.frame_rate),
         "audio_sample_rate_hz": int(rate),
         "files": {k: p.name for k, p in files.items()},
         "stimulus": desc,
     }
-    from ..io.atomic import atomic_path
+    from ..atomic import atomic_path
 
     with atomic_path(files["manifest"]) as tmp:
         tmp.write_text(json.dumps(manifest, indent=2, default=_json_default))
@@ -193,7 +192,7 @@ def _padded(samples, rate: int, alignment, before: float, after: float):
     """Audio with ``before`` and ``after`` s of silence, and its alignment shifted to match."""
     from dataclasses import replace
 
-    from .alignment import Segment
+    from ..speech.alignment import Segment
 
     k0, k1 = int(round(before * rate)), int(round(after * rate))
     audio = np.concatenate([np.zeros(k0, np.float32), np.asarray(samples, np.float32),

@@ -14,7 +14,7 @@ import tempfile
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 
-from ..errors import InputError
+from .errors import InputError
 
 __all__ = ["atomic_path", "check_output", "pending_folder", "remove_pending"]
 

@@ -1,0 +1,107 @@
+"""Parameters that check themselves (issue 28): one table of names, kinds and intervals
+(facemech.checks) serves the Python API and the command line."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import fields
+
+import pytest
+
+from facemech import cli_options
+from facemech.checks import CHOICES, KINDS, RANGES
+from facemech.errors import InputError
+from facemech.inverse.methods import LeastSquares, Powell
+from facemech.params import PRESETS, Parameters, preset
+
+
+def test_an_unknown_material_is_an_error_naming_the_field():
+    with pytest.raises(InputError, match="material") as exc:
+        Parameters(material="contnuum")
+    assert exc.value.field == "material"
+
+
+@pytest.mark.parametrize("field, value", [("integrator", "eulr"), ("tissue", "anatomic"),
+                                         ("material", 1), ("fixed_skull_contact", "yes")])
+def test_a_word_not_among_its_choices_is_an_error_naming_the_field(field, value):
+    with pytest.raises(InputError) as exc:
+        Parameters(**{field: value})
+    assert exc.value.field == field
+
+
+def _outside(interval: str) -> list[float]:
+    lo, hi = (float(v) for v in interval[1:-1].split(","))
+    out = [math.nan, math.inf]
+    out.append(lo if interval[0] == "(" else lo - 1.0)
+    if math.isfinite(hi):
+        out.append(hi if interval[-1] == ")" else hi * 2 + 1)
+    return out
+
+
+def _field_rows():
+    names = {f.name for f in fields(Parameters)}
+    return [(n, v) for n, r in RANGES.items() if n in names for v in _outside(r)]
+
+
+@pytest.mark.parametrize("field, value", _field_rows())
+def test_every_field_out_of_its_interval_is_refused_when_made(field, value):
+    if KINDS[field] == "int" and math.isfinite(value):
+        value = int(value)
+    with pytest.raises(InputError) as exc:
+        Parameters(**{field: value})
+    assert exc.value.field == field
+
+
+def test_the_presets_pass_their_own_checks_and_the_table_names_every_choice():
+    for name in PRESETS:
+        preset(name)
+    from facemech.solvers.step import INTEGRATORS
+
+    assert CHOICES["integrator"] == INTEGRATORS
+
+
+def test_the_command_lines_intervals_are_the_tables():
+    assert all(RANGES[name] == interval for name, interval in cli_options.RANGES.items())
+
+
+#: the command line's numbers and the Python objects that take them
+_API = {"window": LeastSquares, "bend": LeastSquares, "smooth": LeastSquares,
+        "effort": LeastSquares, "max_evaluations": LeastSquares, "dt": Parameters,
+        "substeps": Parameters}
+
+
+@pytest.mark.parametrize("name, value", [(n, v) for n in _API for v in
+                                         _outside(cli_options.RANGES[n])])
+def test_what_the_command_line_refuses_the_python_api_refuses(name, value):
+    if KINDS[name] == "int" and math.isfinite(value):
+        value = int(value)
+    with pytest.raises(InputError) as exc:
+        _API[name](**{name: value})
+    assert exc.value.field == name
+    with pytest.raises(InputError):
+        cli_options.check_number("--" + name, value, cli_options.RANGES[name])
+    if name == "max_evaluations":
+        with pytest.raises(InputError):
+            Powell(max_evaluations=value)
+
+
+def test_the_solver_options_of_a_run_are_checked_too():
+    from facemech.solvers.step import solver_from_options
+
+    for option, value in (("dt", 1.0), ("dt", -1e-5), ("substeps", 0)):
+        with pytest.raises(InputError) as exc:
+            solver_from_options("implicit", preset("anatomical"), **{option: value})
+        assert exc.value.field == option
+
+
+def test_the_inversions_and_analyses_objects_refuse_what_the_command_line_refuses():
+    from facemech.inverse.workflow import JawMarkers
+    from facemech.workflows.subject import Preparation
+
+    for make, name, value in ((JawMarkers, "jaw_lead", 601), (JawMarkers, "jaw_lead", -1),
+                              (Preparation, "max_gap", 0.0), (Preparation, "max_gap", 1e4),
+                              (Preparation, "lowpass", -1.0), (Preparation, "lowpass", 2e3)):
+        with pytest.raises(InputError):
+            make(**{name: value})
+        with pytest.raises(InputError):
+            cli_options.check_number("--" + name, value, cli_options.RANGES[name])
