@@ -54,11 +54,11 @@ def test_speak_makes_audio_alignment_results_movie_and_manifest(tmp_path, monkey
     assert "11 phones (Bob bought a puppy)" in stdout
 
 
-#: m, the largest lip gap at a bilabial's middle that counts as closed. The default
-#: environment closes every bilabial of both sentences to 0.33 mm or less; the anatomical
-#: forward model amplifies rounding about threefold per frame, and under other BLAS kernels
-#: (tools/spread.py, speak; docs/reproducibility.md) a /b/ of "bought" stays 0.75 mm open.
-#: That, and a margin of 0.25 mm
+#: m, the largest lip gap at a bilabial's middle that counts as closed. Measured (2026-11-28,
+#: the contacts stepped on their own): every bilabial of both sentences at 0.00 mm (the lips
+#: pressed 1 um into each other) but the /b/ of "balloon" after the /u:/ of "blue", 0.86 mm: the
+#: rounded vowel's dominance pulls against the bilabial's (docs/stimuli.md). The same in every
+#: environment of tools/spread.py (speak; docs/reproducibility.md). That, and a margin
 BILABIAL_GAP_MAX = 1.0e-3
 
 
