@@ -162,3 +162,17 @@ def test_an_in_range_number_passes_its_python_entrys_check(name, tmp_path):
         _entries(tmp_path)[name](_INSIDE[name])
     except Exception as e:  # noqa: BLE001 - anything but the check's refusal
         assert getattr(e, "field", None) != name, e
+
+
+def test_physics_refuses_a_face_of_another_tissue_naming_both(seeds_face):
+    """No silent swap (issue 28): the caller rebuilds the face for the preset, explicitly."""
+    from facemech.geometry.builder import for_tissue
+    from facemech.physics.assembly import Physics
+
+    anatomical = preset("anatomical")
+    assert seeds_face.tissue == "uniform" != anatomical.tissue
+    with pytest.raises(InputError, match="uniform.*anatomical") as exc:
+        Physics.build(seeds_face, anatomical)
+    assert exc.value.field == "face"
+    rebuilt = for_tissue(seeds_face, anatomical.tissue)
+    assert Physics.build(rebuilt, anatomical).model is rebuilt
