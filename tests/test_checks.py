@@ -105,3 +105,74 @@ def test_the_inversions_and_analyses_objects_refuse_what_the_command_line_refuse
             make(**{name: value})
         with pytest.raises(InputError):
             cli_options.check_number("--" + name, value, cli_options.RANGES[name])
+
+
+def _entries(tmp):
+    """The command line's numbers and the Python functions that take them, each called so that
+    an in-range value fails later (a missing or unwritable file) and never runs the work."""
+    from facemech.speech.tts import synthesize
+    from facemech.viz.render import RenderOptions
+    from facemech.viz.video import still
+    from facemech.workflows import batch, experiments, markers, photo, regions, speak
+
+    taken = tmp / "taken"
+    taken.write_text("a file where a folder is wanted")
+    missing = tmp / "missing"
+    return {
+        "rate_wpm": lambda v: synthesize("hello", voice="", rate_wpm=v),
+        "strength": lambda v: speak.speak(taken, "hello", strength=v),
+        "aa": lambda v: RenderOptions(supersample=v),
+        "time": lambda v: still(missing.with_suffix(".nc"), tmp / "x.png", time=v),
+        "frames": lambda v: experiments.crosstalker(tmp / "x.json", frames=v,
+                                                    preset=str(missing.with_suffix(".json"))),
+        "utterances": lambda v: experiments.lucero2008(taken, utterances=v),
+        "k": lambda v: regions.regions([], taken, k=v),
+        "workers": lambda v: batch.run_batch(missing.with_suffix(".csv"), tmp / "b", workers=v),
+        "ipd": lambda v: photo.face_from_photo_file(missing.with_suffix(".jpg"),
+                                                    tmp / "t.npz", ipd=v),
+        "distance": lambda v: photo.face_from_photo_file(missing.with_suffix(".jpg"),
+                                                         tmp / "t.npz", distance=v),
+        "reference": lambda v: markers.frame_file(missing.with_suffix(".csv"), tmp / "o.csv",
+                                                  right="a", left="b", front="c", reference=v),
+    }
+
+
+_INSIDE = {"rate_wpm": 160, "strength": 1.0, "aa": 2, "time": 0.5, "frames": 60,
+           "utterances": 40, "k": 10, "workers": 2, "ipd": 63.4, "distance": 1.0,
+           "reference": 0}
+
+
+@pytest.mark.parametrize("name, value", [(n, v) for n in _INSIDE for v in
+                                         _outside(cli_options.RANGES[n])])
+def test_every_number_the_command_line_refuses_raises_through_its_python_entry(
+        name, value, tmp_path):
+    if KINDS[name] == "int" and math.isfinite(value):
+        value = int(value)
+    with pytest.raises(InputError) as exc:
+        _entries(tmp_path)[name](value)
+    assert exc.value.field == name
+    with pytest.raises(InputError):
+        cli_options.check_number("--" + name, value, cli_options.RANGES[name])
+
+
+@pytest.mark.parametrize("name", sorted(_INSIDE))
+def test_an_in_range_number_passes_its_python_entrys_check(name, tmp_path):
+    """The entry goes past the check (and then fails on the missing or unwritable file)."""
+    try:
+        _entries(tmp_path)[name](_INSIDE[name])
+    except Exception as e:  # noqa: BLE001 - anything but the check's refusal
+        assert getattr(e, "field", None) != name, e
+
+
+def test_physics_refuses_a_face_of_another_tissue_naming_both(seeds_face):
+    """No silent swap (issue 28): the caller rebuilds the face for the preset, explicitly."""
+    from facemech.geometry.builder import for_tissue
+    from facemech.physics.assembly import Physics
+
+    anatomical = preset("anatomical")
+    assert seeds_face.tissue == "uniform" != anatomical.tissue
+    with pytest.raises(InputError, match="uniform.*anatomical") as exc:
+        Physics.build(seeds_face, anatomical)
+    assert exc.value.field == "face"
+    rebuilt = for_tissue(seeds_face, anatomical.tissue)
+    assert Physics.build(rebuilt, anatomical).model is rebuilt

@@ -142,13 +142,14 @@ def step_response_matrix(face, params, nodes, gmat, *, estimate_jaw: bool,
     (groups, controls) and, with ``estimate_jaw``, the jaw angle in units of
     :data:`~facemech.inverse.frame.JAW_UNIT` rad; a jaw that is not estimated is held at
     ``jaw_start`` (angle rad, shift_y m, shift_z m)."""
+    from ..geometry.builder import for_tissue
     from ..physics.assembly import Physics
     from ..solvers.forward import single_threaded_blas
     from ..solvers.state import State
     from ..solvers.step import Stepper
     from .frame import JAW_UNIT
 
-    physics = Physics.build(face, params)
+    physics = Physics.build(for_tissue(face, params.tissue), params)  # the preset's tissue
     stepper = Stepper(physics, dt=params.fast_dt if dt is None else dt)
     nm = gmat.shape[1]
     start = np.asarray(jaw_start, float)

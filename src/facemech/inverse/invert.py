@@ -28,6 +28,7 @@ import numpy as np
 
 from ..checks import check_value
 from ..errors import InputError
+from ..geometry.builder import for_tissue
 from ..markerset import MarkerSet
 from ..params import EMG_CHANNELS, MUSCLE_GROUPS, Parameters, default_parameters
 from ..physics.assembly import Physics
@@ -118,7 +119,8 @@ def invert(
 
     Parameters
     ----------
-    face : FaceModel
+    face : FaceModel; one built for another tissue geometry than the preset's is rebuilt for
+        it here, explicitly (:func:`facemech.geometry.builder.for_tissue`)
     markers : MarkerSet in the model's frame (metres) at the model's frame rate (60 Hz); the
         first frame is taken as the face at rest
     mapping : marker name -> epidermal node (see :func:`facemech.closest_nodes`)
@@ -178,8 +180,8 @@ def invert(
     if prior is not None and np.shape(prior) != (frames, len(cnames)):
         raise InputError(f"prior must be (frames, {len(cnames)})", field="prior")
     nodes = np.array([mapping[n] for n in names])
+    face = for_tissue(face, params.tissue)  # explicit: the preset's tissue (same skin nodes)
     physics = Physics.build(face, params)
-    face = physics.model  # with the preset's tissue geometry (same epidermal nodes)
     stepper = Stepper(physics, dt=dt)
     lo = np.full(nc, 0.0 if positive else -1.0)
     hi = np.ones(nc)

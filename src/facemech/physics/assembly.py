@@ -16,7 +16,7 @@ import numba as nb
 import numpy as np
 
 from ..errors import InputError
-from ..geometry.builder import FaceModel, for_tissue
+from ..geometry.builder import FaceModel
 from ..params import MUSCLE_GROUPS, Parameters
 from .bundles import (
     Anchors,
@@ -54,8 +54,10 @@ class Physics:
 
     ``Physics.build`` reads the constants as the preset says (:attr:`Parameters.material`): the
     seeds' per-spring values, or tissue moduli turned into per-element constants by
-    :mod:`materials`. It also gives the face the preset's tissue geometry
-    (:func:`~facemech.geometry.builder.for_tissue`): ``physics.model`` is the face simulated.
+    :mod:`materials`. The face must have the preset's tissue geometry
+    (:attr:`Parameters.tissue`): another is an :class:`~facemech.errors.InputError` naming
+    both, never swapped silently; :func:`~facemech.geometry.builder.for_tissue` rebuilds a face
+    for a preset explicitly. ``physics.model`` is the face simulated.
     """
 
     model: FaceModel
@@ -100,7 +102,11 @@ class Physics:
 
     @classmethod
     def build(cls, model: FaceModel, params: Parameters) -> Physics:
-        model = for_tissue(model, params.tissue)
+        if model.tissue != params.tissue:
+            raise InputError(
+                f"face {model.name!r} has the {model.tissue} tissue, the preset "
+                f"{params.name!r} the {params.tissue} tissue: rebuild the face for the preset "
+                f"(facemech.geometry.builder.for_tissue)", field="face")
         rest = model.rest_positions
         kind = model.spring_kind
         l0 = np.linalg.norm(rest[model.spring_j] - rest[model.spring_i], axis=1)

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import InputError, SimulationBlowUp
-from ..geometry.builder import FaceModel
+from ..geometry.builder import FaceModel, for_tissue
 from ..params import MUSCLE_GROUPS, Parameters, default_parameters
 from ..physics.assembly import Physics
 from ..physics.muscle_outputs import MuscleRecorder, MuscleSeries
@@ -139,7 +139,10 @@ def simulate(
 
     Parameters
     ----------
-    model : FaceModel
+    model : FaceModel; one built for another tissue geometry than the preset's
+        (:attr:`Parameters.tissue`) is rebuilt for it here, explicitly
+        (:func:`facemech.geometry.builder.for_tissue`); ``Simulation.model`` is the face
+        simulated
     activity : (frames, groups) array in [0, 1], columns :data:`~facemech.params.MUSCLE_GROUPS`
     jaw_angle : (frames,) rad or (frames, 3) poses, optional (default: jaw closed)
         The jaw's angle per frame, its condyles' shift then following the preset's
@@ -319,8 +322,8 @@ def _setup(model, activity, jaw_angle, *, params, integrator, substeps, dt, jaw_
     from .jaw import jaw_poses
 
     poses = jaw_poses(jaw_angle, params) if jaw_angle.ndim == 1 else jaw_angle.copy()
+    model = for_tissue(model, params.tissue)  # explicit: the preset's tissue geometry
     physics = Physics.build(model, params)
-    model = physics.model  # with the preset's tissue geometry
     stepper = Stepper(physics, integrator=integrator, substeps=substeps, dt=dt,
                       jaw_drive=jaw_drive)
     names, nodes = marker_nodes(model)

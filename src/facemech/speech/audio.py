@@ -1,55 +1,24 @@
 """Audio for stimuli: WAV in and out, shifting by whole samples, time stretching, onsets.
 
+WAV in and out are :mod:`facemech.speech.wav`'s, the one reader and writer of WAV files:
+:func:`read_wav` and :func:`write_wav` here are its :func:`~facemech.speech.wav.read_audio` and
+:func:`~facemech.speech.wav.write_audio` (samples as stored), and :class:`Audio` is its class.
+
 :class:`Audio` holds samples (n, channels) in the file's own sample type, so a shift or a trim
 writes back exactly the samples it read. Times are in seconds, offsets in ms at the edges.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from pathlib import Path
-
 import numpy as np
 
 from ..errors import InputError
-from .wav import read_samples, write_samples
+from .wav import Audio
+from .wav import read_audio as read_wav
+from .wav import write_audio as write_wav
 
-
-@dataclass(frozen=True)
-class Audio:
-    """Sampled sound: ``samples`` (n, channels) in the file's dtype, ``rate`` (Hz)."""
-
-    samples: np.ndarray
-    rate: int
-    source: str | None = None
-
-    @property
-    def duration(self) -> float:
-        """Length, s."""
-        return len(self.samples) / self.rate
-
-    def mono(self) -> np.ndarray:
-        """The channels' mean as float64 (n,), full scale 1 for integer samples."""
-        x = self.samples.astype(float)
-        if np.issubdtype(self.samples.dtype, np.integer):
-            x /= float(np.iinfo(self.samples.dtype).max)
-        return x.mean(axis=1)
-
-    def with_samples(self, samples: np.ndarray) -> Audio:
-        return Audio(np.asarray(samples).astype(self.samples.dtype, copy=False), self.rate,
-                     self.source)
-
-
-def read_wav(path: str | Path) -> Audio:
-    """Read a WAV file (PCM 8/16/24/32-bit or float), keeping its samples as stored."""
-    data, rate = read_samples(path)
-    return Audio(data, rate, str(path))
-
-
-def write_wav(path: str | Path, audio: Audio) -> Path:
-    """Write ``audio`` as WAV atomically, in its own sample type."""
-    data = audio.samples[:, 0] if audio.samples.shape[1] == 1 else audio.samples
-    return write_samples(path, data, audio.rate)
+__all__ = ["Audio", "fit_length", "onset", "peak", "read_wav", "shift", "time_stretch",
+           "write_wav"]
 
 
 def shift(audio: Audio, seconds: float, *, length: int | None = None) -> tuple[Audio, int]:

@@ -42,7 +42,9 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import FacemechError, InputError, missing_input
-from .audio import Audio, read_wav, write_wav
+from .wav import Audio
+from .wav import read_audio as read_wav
+from .wav import write_audio as write_wav
 
 SOURCE_COLUMNS = ("results", "audio", "text", "face")
 MANIPULATION_COLUMNS = (

@@ -1,16 +1,56 @@
-"""WAV files: the samples as stored (:func:`read_samples`, :func:`write_samples`), and mono
-audio as float samples in [-1, 1], written as 16-bit PCM (:func:`read_wav`, :func:`write_wav`)."""
+"""WAV files, the one reader and writer of them: the samples as stored (:func:`read_samples`,
+:func:`write_samples`), as an :class:`Audio` (:func:`read_audio`, :func:`write_audio`, which
+:mod:`facemech.speech.audio` gives as its ``read_wav`` and ``write_wav``), and mono audio as float
+samples in [-1, 1], written as 16-bit PCM (:func:`read_wav`, :func:`write_wav`)."""
 
 from __future__ import annotations
 
 import os
 import warnings
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from ..atomic import atomic_path
 from ..errors import InputError, missing_input
+
+
+@dataclass(frozen=True)
+class Audio:
+    """Sampled sound: ``samples`` (n, channels) in the file's dtype, ``rate`` (Hz)."""
+
+    samples: np.ndarray
+    rate: int
+    source: str | None = None
+
+    @property
+    def duration(self) -> float:
+        """Length, s."""
+        return len(self.samples) / self.rate
+
+    def mono(self) -> np.ndarray:
+        """The channels' mean as float64 (n,), full scale 1 for integer samples."""
+        x = self.samples.astype(float)
+        if np.issubdtype(self.samples.dtype, np.integer):
+            x /= float(np.iinfo(self.samples.dtype).max)
+        return x.mean(axis=1)
+
+    def with_samples(self, samples: np.ndarray) -> Audio:
+        return Audio(np.asarray(samples).astype(self.samples.dtype, copy=False), self.rate,
+                     self.source)
+
+
+def read_audio(path: str | os.PathLike) -> Audio:
+    """Read a WAV file (PCM 8/16/24/32-bit or float), keeping its samples as stored."""
+    data, rate = read_samples(path)
+    return Audio(data, rate, str(path))
+
+
+def write_audio(path: str | os.PathLike, audio: Audio) -> Path:
+    """Write ``audio`` as WAV atomically, in its own sample type."""
+    data = audio.samples[:, 0] if audio.samples.shape[1] == 1 else audio.samples
+    return write_samples(path, data, audio.rate)
 
 
 def write_wav(path: str | os.PathLike, audio: np.ndarray, rate: int) -> Path:

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..checks import check_value
 from ..errors import InputError
 from .camera import MAX_SIZE, Camera, panels, view_camera
 from .raster import (
@@ -156,8 +157,7 @@ class RenderOptions:
             raise InputError(f"size {w}x{h} is outside 16x16 .. {MAX_SIZE[1]}x{MAX_SIZE[0]}",
                              field="size")
         parse_background(self.background)
-        if not 1 <= self.supersample <= 4:
-            raise InputError("anti-aliasing must be 1 to 4 samples per axis", field="aa")
+        check_value("aa", self.supersample)  # 1 to 4 samples per axis (facemech.checks)
         if self.distance is not None and not 0.2 <= self.distance <= 20.0:
             raise InputError("camera distance must be 0.2 to 20 m", field="distance")
 

@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from ..atomic import atomic_path
+from ..checks import check_value
 from ..errors import InputError
 from ..params import FRAME_RATE_HZ
 from .render import Renderer, RenderOptions
@@ -135,6 +136,8 @@ def still(ds, output: str | Path, *, time: float | None = None, peak: str | None
     import matplotlib.figure as mfig
 
     source = source or (str(ds) if isinstance(ds, (str, Path)) else None)
+    if time is not None:
+        check_value("time", time, source=source)  # the command line's interval
     ds = _dataset(ds)
     output = Path(output)
     if output.suffix.lower() not in (".png", ".pdf"):

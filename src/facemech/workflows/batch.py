@@ -18,6 +18,7 @@ from pathlib import Path
 from ..batch.execute import Outcome, skipped
 from ..batch.manifest import Item
 from ..batch.records import remove_partial, up_to_date, write_summary
+from ..checks import check_value
 from ..errors import InputError
 from .batch_jobs import read_manifest, run_job
 
@@ -203,6 +204,8 @@ def run_batch(manifest: str | Path, output: str | Path, *, workers: int | None =
     """
     from ..atomic import check_output
 
+    if workers is not None:
+        check_value("workers", workers)  # the command line's interval (facemech.checks)
     if workers is not None and (scheduler is not None or client is not None):
         raise InputError("give the number of local workers or a scheduler, not both",
                          field="workers")

@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..checks import check_value
 from ..errors import InputError
 
 __all__ = ["crosstalker", "crosstalker_report", "dense_animation", "draw_lucero2008",
@@ -129,6 +130,7 @@ def crosstalker(output: str | Path | None = None, *, frames: int = 120,
     """
     from ..inverse.experiments import run_crosstalker
 
+    check_value("frames", frames)  # the command line's interval (facemech.checks)
     if frames < 8:
         raise InputError("needs at least 8 frames", field="frames")
     _check(output, preset, folder=False)
@@ -175,6 +177,8 @@ def lucero2008(output: str | Path, *, utterances: int = 40, frames: int = 60, k:
     from ..analysis.lucero2008 import run_lucero2008
     from .regions import write
 
+    for name, value in (("utterances", utterances), ("frames", frames), ("k", k)):
+        check_value(name, value)  # the command line's intervals (facemech.checks)
     _check(output, None, folder=True)
     res = run_lucero2008(n_utterances=utterances, frames=frames, k=k, progress=progress)
     res = draw_lucero2008(res, output, video=video, progress=progress)

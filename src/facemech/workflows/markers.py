@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from ..atomic import check_output
+from ..checks import check_value
 from ..errors import InputError
 from .outcome import Written
 
@@ -132,6 +133,8 @@ def head_correct_file(source: str | Path, output: str | Path, head: str | Sequen
     from ..io.markers import read_markers, write_markers
     from ..kinematics.rigid import head_correct
 
+    if reference is not None:
+        check_value("reference", reference)  # the command line's interval (facemech.checks)
     check_output(output, [source], field="-o")
     ms = read_markers(source, units=units)
     res = head_correct(ms, names_of(head), reference=reference)
@@ -176,6 +179,7 @@ def frame_file(source: str | Path, output: str | Path, *, right: str, left: str,
     from ..io.markers import read_markers, write_markers
     from ..kinematics.frames import to_anatomical_frame
 
+    check_value("reference", reference)  # the command line's interval (facemech.checks)
     check_output(output, [source], field="-o")
     ms = read_markers(source, units=units)
     res = to_anatomical_frame(ms, right=right, left=left, front=front, origin=origin,

@@ -117,6 +117,7 @@ def face_from_photo_file(front: str | Path, output: str | Path, *,
         from, the share of the skin painted from the photo, and the model's counts
     """
     from ..atomic import check_output
+    from ..checks import check_value
     from ..errors import InputError
     from ..io.photo import DlibDetector, check_profile, frontal_landmarks, read_photo
 
@@ -124,9 +125,9 @@ def face_from_photo_file(front: str | Path, output: str | Path, *,
     if not str(output).lower().endswith(".npz"):
         raise InputError("the talker is a .npz face file", source=str(output), field="-o")
     check_output(output, [front, profile], field="-o")
-    if ipd is not None and not 50.0 <= ipd <= 80.0:
-        raise InputError(f"interpupillary distance {ipd:g} mm is outside 50-80 mm",
-                         field="--ipd")
+    if ipd is not None:
+        check_value("ipd", ipd)  # mm, the command line's interval (facemech.checks)
+    check_value("distance", distance)  # m
 
     def say(stage, done):
         if progress is not None:

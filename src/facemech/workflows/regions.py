@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..checks import check_value
 from ..errors import InputError
 
 __all__ = ["draw", "parse_length", "parse_ranges", "read_utterances", "regions", "report",
@@ -136,6 +137,8 @@ def regions(files: Sequence[str | Path], output: str | Path, *, k: int | None = 
     from ..analysis.lucero2008 import analyse
     from ..atomic import check_output
 
+    if k is not None:
+        check_value("k", k)  # the command line's interval (facemech.checks)
     check_output(output, [*files, None if str(neutral) == "first" else neutral], folder=True,
                  field="-o")
     utts, names, base, rate = read_utterances(files, neutral=neutral, units=units)

@@ -22,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..checks import check_value
 from ..errors import InputError
 
 __all__ = ["FILES", "LEAD_IN_S", "TAIL_S", "Spoken", "speak", "text_items"]
@@ -105,8 +106,7 @@ def speak(
                          field="textgrid")
     if text is not None and not text.strip():
         raise InputError("nothing to say: the text is empty", field="text")
-    if not (np.isfinite(strength) and 0.0 <= strength <= 2.0):
-        raise InputError(f"strength must be within [0, 2] (got {strength})", field="strength")
+    check_value("strength", strength)  # the command line's interval (facemech.checks)
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
         raise InputError("output must be a folder", source=str(out), field="output")
