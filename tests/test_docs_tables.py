@@ -175,3 +175,23 @@ def test_docs_table_matches_its_command(table, request):
                             table.tolerance)
     assert not differ, (f"{table.doc}: table {table.name} differs from its command's output; "
                         "run `make docs`:\n" + "\n".join(differ))
+
+
+def test_a_block_names_its_numerical_environment_and_the_check_ignores_it(monkeypatch):
+    """Issue 32: the docs' tables name the library versions and the CPU target they were made
+    with; another machine's line is provenance, not a difference."""
+    monkeypatch.setitem(dt._ENVIRONMENT, "line", dt.ENV_PREFIX + "numpy 9.9 on X.</sub>")
+    monkeypatch.setattr(dt, "RUNS", {"r": dt.Run(("facemech", "x"))})
+    t = dt.Table("alpha", "doc.md", ("r",), lambda out: "| a |\n|---|\n| 1 |")
+    body = dt.block(t, {"r": {}})
+    assert body.splitlines()[-1] == dt.ENV_PREFIX + "numpy 9.9 on X.</sub>"
+    other = body.replace("numpy 9.9 on X", "numpy 2.4.6, OpenBLAS kernels Katmai")
+    assert dt.differences(body, other, ()) == []
+    assert dt.differences(body, other.replace("| 1 |", "| 2 |"), ()) != []
+    # the real line reads the versions from the commands' environment
+    monkeypatch.delitem(dt._ENVIRONMENT, "line")
+    import numpy
+
+    line = dt.environment_line()
+    assert line.startswith(dt.ENV_PREFIX) and f"numpy {numpy.__version__}" in line
+    assert "OpenBLAS kernels" in line and "compiled for" in line
