@@ -6,17 +6,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..geometry.teeth import LOWER_ARCH_SETBACK, LOWER_EDGE_ABOVE_STOMION
 from . import dentition
 from . import textures as T
 from .head import HAIR, hair_on_skin
 from .lids import lid_mesh, lid_of, lower_lid_of
 from .look import FaceLook
-from .mesh import Part, fit_inside, grid_faces, skin_depth, sphere
+from .mesh import Part, fit_inside, skin_depth, sphere
 
 CAVITY = np.array([0.20, 0.07, 0.07])
 SOCKET = np.array([0.55, 0.30, 0.28])
-TONGUE = np.array([0.74, 0.40, 0.40])
 EYE_RADIUS = 0.012  #: m
 
 
@@ -168,60 +166,6 @@ def eye_parts(look: FaceLook) -> list[Part]:
         parts.append(Part(name + "_socket", lining, faces[:, ::-1],
                           np.tile(SOCKET, (len(v), 1)), (0.1, 20.0), "skull", inward=True))
     return parts
-
-
-def _arch(look: FaceLook, upper: bool):
-    """A dental arch (incisal edge, crowns, gum) as a textured ribbon with a lingual side."""
-    lm = look.landmarks
-    st = lm.get("stomion", 0.5 * (lm["upper_lip_center"] + lm["lower_lip_center"]))
-    ul = lm["upper_lip_center"]
-    front_z = ul[2] - look.teeth_depth
-    widths = T.UPPER_TEETH_MM if upper else T.LOWER_TEETH_MM
-    crown, gum = (0.0105, 0.006) if upper else (0.009, 0.006)
-    tex, half = T.arch_texture(widths, crown, gum)
-    a_x, a_z = 0.0235, 0.030  # half-width and depth of the arch ellipse (m)
-    if not upper:
-        # the lower incisors' edge as geometry.teeth.lower_incisor_point places it
-        a_x, a_z, front_z = 0.021, 0.027, front_z - LOWER_ARCH_SETBACK
-    edge_y = st[1] - 0.0015 if upper else st[1] + LOWER_EDGE_ABOVE_STOMION
-    sign = 1.0 if upper else -1.0
-    # arc-length parametrisation of the ellipse x = a sin p, z = -a_z (1 - cos p)
-    p = np.linspace(-1.45, 1.45, 400)
-    xs, zs = a_x * np.sin(p), -a_z * (1 - np.cos(p))
-    arc = np.concatenate([[0], np.cumsum(np.hypot(np.diff(xs), np.diff(zs)))])
-    arc -= np.interp(0.0, p, arc)
-    s = np.linspace(-min(half, arc[-1]), min(half, arc[-1]), 41)
-    pp = np.interp(s, arc, p)
-    x, z = a_x * np.sin(pp), front_z - a_z * (1 - np.cos(pp))
-    nx, nz = np.sin(pp) / a_x, np.cos(pp) / a_z  # outward normal direction in xz
-    nn = np.hypot(nx, nz)
-    nx, nz = nx / nn, nz / nn
-    heights = np.array([0.0, 0.0015, crown, crown + gum])
-    rows = []
-    for hgt in heights:  # labial face
-        bulge = 0.0008 * np.sin(np.pi * min(hgt / crown, 1.0))
-        rows.append(np.stack([x + nx * bulge, np.full_like(x, edge_y + sign * hgt),
-                              z + nz * bulge], -1))
-    thick = 0.006
-    for hgt in (0.0, crown + gum):  # lingual face, from the edge back up
-        rows.append(np.stack([x - nx * thick, np.full_like(x, edge_y + sign * hgt),
-                              z - nz * thick], -1))
-    order = [3, 2, 1, 0, 4, 5] if upper else [0, 1, 2, 3, 5, 4]
-    grid = np.stack([rows[k] for k in order])  # rows stacked so that faces point outward
-    nr, nc = grid.shape[:2]
-    verts = grid.reshape(-1, 3)
-    faces = grid_faces(nr, nc)
-    faces = faces if upper else faces[:, ::-1]
-    hrow = np.array([heights[k] if k < 4 else 0.0 for k in order])
-    u = (np.tile(s, nr) + half) / (2 * half) * tex.shape[1]
-    v = (1.0 - np.repeat(hrow, nc) / (crown + gum)) * tex.shape[0]
-    uv = np.stack([u, v], -1)[faces]
-    labial = np.repeat(np.arange(nr - 1) < 3, 2 * (nc - 1))
-    if upper:
-        labial = np.repeat(np.arange(nr - 1) < 3, 2 * (nc - 1))
-    albedo = np.tile(T.TOOTH * 0.9, (len(verts), 1))
-    return Part("upper_teeth" if upper else "lower_teeth", verts, faces, albedo, (0.35, 40.0),
-                "skull" if upper else "jaw", uv, tex, tex_mask=labial)
 
 
 def mouth_parts(look: FaceLook) -> list[Part]:

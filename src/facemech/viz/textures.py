@@ -26,13 +26,9 @@ LASH = np.array([0.12, 0.08, 0.07])
 LID_CREASE = np.array([0.70, 0.52, 0.45])
 SCLERA = np.array([0.93, 0.91, 0.87])
 IRIS = np.array([0.36, 0.25, 0.16])
-TOOTH = np.array([0.92, 0.89, 0.80])
-GUM = np.array([0.80, 0.45, 0.45])
 
 SKIN_TEXEL = 2.5e-4  #: m per texel of the skin texture
 FISSURE_HALF_LENGTH = 0.014  #: m
-UPPER_TEETH_MM = (8.5, 6.5, 7.5, 7.0, 6.5, 10.0, 10.0)
-LOWER_TEETH_MM = (5.0, 5.5, 7.0, 7.0, 7.0, 11.0, 11.0)
 
 
 def _smooth(d: np.ndarray, width: float) -> np.ndarray:
@@ -193,33 +189,3 @@ def iris_texture(n: int = 192) -> np.ndarray:
     rgb = rgb * (1 - p) + p * np.array([0.02, 0.02, 0.02])
     return np.concatenate([np.clip(rgb, 0, 1), np.ones((n, n, 1))], axis=-1)
 
-
-def arch_texture(widths_mm: tuple[float, ...], crown: float, gum: float,
-                 texel: float = 2.5e-4) -> tuple[np.ndarray, float]:
-    """RGBA front of a dental arch: u along the arch from the right end, v from the gum.
-
-    Row 0 is the gum's far edge, the last row the incisal edges. Returns the image and the
-    arch half-length (m).
-    """
-    half = 1e-3 * float(sum(widths_mm))
-    w = int(np.ceil(2 * half / texel))
-    h = int(np.ceil((crown + gum) / texel))
-    s = (np.arange(w) + 0.5) * texel - half  # arc length from the midline
-    v = (crown + gum) - (np.arange(h) + 0.5) * texel  # height above the incisal edge
-    S, V = np.meshgrid(s, v)
-    edges = np.concatenate([[0.0], np.cumsum(widths_mm)]) * 1e-3
-    a = np.abs(S)
-    k = np.clip(np.searchsorted(edges, a) - 1, 0, len(widths_mm) - 1)
-    lo, hi = edges[k], edges[k + 1]
-    pos = (a - lo) / (hi - lo)  # 0..1 across the tooth
-    # scalloped gum line: highest between the teeth, lowest mid-crown
-    gum_line = crown - 0.0012 * np.sin(np.pi * pos) + 0.0006
-    rgb = np.broadcast_to(TOOTH, (h, w, 3)).copy()
-    rgb *= (0.93 + 0.07 * np.sin(np.pi * pos) ** 0.5)[..., None]
-    gap = np.minimum(a - lo, hi - a)
-    rgb *= (1.0 - 0.45 * np.exp(-0.5 * (gap / 2.5e-4) ** 2))[..., None]
-    edge = np.clip(1.0 - V / 0.0012, 0, 1)[..., None]  # translucent incisal edge
-    rgb = rgb * (1 - 0.25 * edge) + 0.25 * edge * np.array([0.70, 0.72, 0.76])
-    g = _smooth(V - gum_line, 3e-4)[..., None]
-    rgb = rgb * (1 - g) + g * GUM
-    return np.concatenate([np.clip(rgb, 0, 1), np.ones((h, w, 1))], axis=-1), half
