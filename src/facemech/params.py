@@ -147,8 +147,8 @@ class Parameters:
     k_bone_contact: float = 0.0  # N/m^3, one-sided contact of the sliding surface with the bone
     #: the implicit methods step the bone and lip contacts on their own, after the global solve
     #: (solvers/contacts.py); False keeps them in the force as penalties (they chatter at 4 steps
-    #: per frame: docs/model.md). Not the default yet: the anatomical preset's lips were tuned
-    #: with the penalties (issues 27, 32).
+    #: per frame, and the chatter made results hang on the last bit: docs/reproducibility.md).
+    #: On in the anatomical preset (issue 32); the seeds' presets do not use it (explicit Euler).
     implicit_contacts: bool = False
     # how a jaw angle alone moves the mandible (JAW_KINEMATICS): the seeds' hinge, or the hinge
     # with the condyle's coupled glide of glide_rate (m/rad) along glide_slope (rad below the
@@ -328,7 +328,8 @@ def anatomical(scales: dict | None = None) -> Parameters:
     - viscosity: a viscous time (viscosity / modulus) of 3 ms (no published facial-tissue
       viscosity serves): small enough not to slow gestures, large enough for the step's stability
       (docs/model.md);
-    - integration: linearly implicit Euler, 4 steps per 60-Hz frame.
+    - integration: linearly implicit Euler, 4 steps per 60-Hz frame, with the bone and lip
+      contacts stepped on their own after each solve (``implicit_contacts``, issue 32).
     """
     s = {**ANATOMICAL_SCALES, **(scales or {})}
     unknown = set(s) - set(ANATOMICAL_SCALES)
