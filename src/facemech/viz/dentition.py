@@ -150,10 +150,10 @@ def _slots(teeth: tuple[Tooth, ...]) -> list[tuple[Tooth, float]]:
     return out
 
 
-def crowns(look: FaceLook, upper: bool) -> list[tuple[Tooth, np.ndarray, np.ndarray,
-                                                        np.ndarray]]:
-    """Each crown of one arch as (tooth, vertices (m, 3) m, faces (k, 3), albedo (m, 3) sRGB),
-    the central incisors first, then outwards, the subject's left and right in turn."""
+def _placement(look: FaceLook, upper: bool):
+    """Where one arch stands: its frame (:func:`_arch_frame`, the incisors' labial face
+    ``teeth_depth`` behind the upper lip, the lower arch set back by LOWER_ARCH_SETBACK) and the
+    incisal edges' height (m) relative to the stomion."""
     lm = look.landmarks
     st = lm.get("stomion", 0.5 * (lm["upper_lip_center"] + lm["lower_lip_center"]))
     front_z = lm["upper_lip_center"][2] - look.teeth_depth
@@ -161,7 +161,14 @@ def crowns(look: FaceLook, upper: bool) -> list[tuple[Tooth, np.ndarray, np.ndar
     if not upper:
         front_z -= LOWER_ARCH_SETBACK
     edge_y = st[1] - UPPER_EDGE_BELOW_STOMION if upper else st[1] + LOWER_EDGE_ABOVE_STOMION
-    frame = _arch_frame(half_width, depth, front_z)
+    return _arch_frame(half_width, depth, front_z), edge_y
+
+
+def crowns(look: FaceLook, upper: bool) -> list[tuple[Tooth, np.ndarray, np.ndarray,
+                                                        np.ndarray]]:
+    """Each crown of one arch as (tooth, vertices (m, 3) m, faces (k, 3), albedo (m, 3) sRGB),
+    the central incisors first, then outwards, the subject's left and right in turn."""
+    frame, edge_y = _placement(look, upper)
     out = []
     sign = 1.0 if upper else -1.0
     for tooth, centre_s in _slots(UPPER if upper else LOWER):
@@ -175,13 +182,7 @@ def crowns(look: FaceLook, upper: bool) -> list[tuple[Tooth, np.ndarray, np.ndar
 
 def arch(look: FaceLook, upper: bool) -> tuple[Part, Part]:
     """The crowns (one part, :func:`crowns`) and the gingiva of one dental arch."""
-    lm = look.landmarks
-    st = lm.get("stomion", 0.5 * (lm["upper_lip_center"] + lm["lower_lip_center"]))
-    front_z = lm["upper_lip_center"][2] - look.teeth_depth
-    half_width, depth = UPPER_ARCH if upper else LOWER_ARCH
-    if not upper:
-        front_z -= LOWER_ARCH_SETBACK
-    edge_y = st[1] - UPPER_EDGE_BELOW_STOMION if upper else st[1] + LOWER_EDGE_ABOVE_STOMION
+    frame, edge_y = _placement(look, upper)
     each = crowns(look, upper)
     base = np.cumsum([0] + [len(v) for _, v, _, _ in each])
     teeth = Part("upper_teeth" if upper else "lower_teeth",
@@ -189,8 +190,8 @@ def arch(look: FaceLook, upper: bool) -> tuple[Part, Part]:
                  np.concatenate([c[2] + b for c, b in zip(each, base[:-1], strict=True)]),
                  np.concatenate([a for _, _, _, a in each]), (0.45, 45.0),
                  "skull" if upper else "jaw")
-    gum = _gingiva(_slots(UPPER if upper else LOWER), _arch_frame(half_width, depth, front_z),
-                   edge_y, 1.0 if upper else -1.0, upper)
+    gum = _gingiva(_slots(UPPER if upper else LOWER), frame, edge_y, 1.0 if upper else -1.0,
+                   upper)
     return teeth, gum
 
 
