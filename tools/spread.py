@@ -6,8 +6,9 @@ as docs/inversion.md and the tests run it), the default inversion of benchmarks/
 (``inversion-default``: 3 s of the demo utterance, the jaw estimated), the demo twin through the
 command line (``demo-twin``: ``facemech invert`` on the demo's markers, the jaw estimated, as
 tests/test_inversion_trust.py) and the subject twin (``subject-twin``: ``facemech subject`` and
-``facemech analyse`` on a lab recording of the demo, as tests/test_subject.py). Each runs in a
-child process once per *environment*:
+``facemech analyse`` on a lab recording of the demo, as tests/test_subject.py), the visemes
+(``visemes``), ``facemech speak`` (``speak``) and docs/model.md's gesture table (``gestures``).
+Each runs in a child process once per *environment*:
 
 ==================  =========================================================================
 ``default``         one thread everywhere (numba, OpenBLAS), the machine's own OpenBLAS kernels
@@ -71,7 +72,7 @@ DEFAULT_ENVS = ("default", "prescott", "nehalem", "blas-2", "generic", "perturbe
 BASE_ENV = {"FACEMECH_THREADS": "1", "NUMBA_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1",
             "MPLBACKEND": "Agg"}
 JOBS = ("e1-lucero1999", "e1-anatomical", "inversion-default", "demo-twin", "subject-twin",
-        "visemes", "speak")
+        "visemes", "speak", "gestures")
 #: the sentences of tests/test_speak.py's viseme targets
 SENTENCES = ("Bob bought a puppy", "Pop, a blue balloon, and a large car.")
 
@@ -231,6 +232,18 @@ def job_speak(folder: Path) -> dict:
     return out
 
 
+def job_gestures() -> dict:
+    """docs/model.md's gesture table under the default preset: each group named by a minimum of
+    :data:`facemech.analysis.gestures.TARGETS` at full activity (forward simulations), every
+    measure in mm."""
+    from facemech import default_face
+    from facemech.analysis.gestures import TARGETS, gesture_table
+
+    groups = sorted({"+".join(t[0]) for t in TARGETS})
+    table = gesture_table(default_face(), groups=groups)
+    return {f"{g}: {k} mm": float(v) for g, row in table.items() for k, v in row.items()}
+
+
 def _flatten(tree, prefix: str = "") -> dict:
     """Numeric leaves of a JSON tree, keyed ``a: b: c``; timings (``wall``, ``_s`` keys) left
     out."""
@@ -276,6 +289,8 @@ def child(job: str) -> dict:
             numbers = job_speak(Path(tmp))
         elif job == "visemes":
             numbers = job_script("visemes.py")
+        elif job == "gestures":
+            numbers = job_gestures()
         else:
             raise SystemExit(f"unknown job {job!r} (expected one of {', '.join(JOBS)})")
     from facemech.io.results import numerics_attrs
@@ -435,7 +450,7 @@ def main(argv: list[str] | None = None) -> int:
     if "default" not in envs:
         envs.insert(0, "default")
     pairs = [(j, e) for e in envs for j in jobs  # every job's default first
-             if not (j in ("visemes", "speak") and e == "perturbed")]
+             if not (j in ("visemes", "speak", "gestures") and e == "perturbed")]
     if args.cached:
         pairs = [p for p in pairs if (args.cache / f"{p[0]}@{p[1]}.json").exists()]
     with ThreadPoolExecutor(max(1, args.parallel)) as pool:
