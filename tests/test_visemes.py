@@ -21,6 +21,7 @@ from facemech.speech.visemes import VISEMES, viseme
 
 # ---- phone classes --------------------------------------------------------------------------
 
+MID_ROUNDED = "mid_rounded"
 BILABIAL, ROUNDED, SPREAD, OPEN = ("bilabial", "close_back_rounded", "close_front_spread",
                                    "open")
 
@@ -50,6 +51,23 @@ BILABIAL, ROUNDED, SPREAD, OPEN = ("bilabial", "close_back_rounded", "close_fron
 ])  # fmt: skip
 def test_phone_classes_in_three_notations(label, notation, expected):
     assert phone_classes(label, notation) == expected
+
+
+@pytest.mark.parametrize("voice, expected", [
+    ("en-us", (OPEN,)), ("en-us+f3", (OPEN,)), ("en-gb", (MID_ROUNDED,)), (None, (MID_ROUNDED,)),
+])  # fmt: skip
+def test_espeaks_0_is_unrounded_in_american_english(voice, expected):
+    """eSpeak NG writes the vowel of "Bob" as ``0``: [ɑ] in en-us (open, unrounded), [ɒ] in
+    en-gb (rounded)."""
+    assert phone_classes("0", "espeak", voice=voice) == expected
+    assert phone_classes("'0", "espeak", voice=voice) == expected
+
+
+def test_an_american_alignment_opens_bob_without_rounding():
+    al = Alignment(words=(), phones=(Segment("b", 0.0, 0.1), Segment("'0", 0.1, 0.3),
+                                     Segment("b", 0.3, 0.4)),
+                   notation="espeak", duration=0.4, meta={"voice": "en-us"})
+    assert [g.cls for g in gestures(al)] == [BILABIAL, OPEN, BILABIAL]
 
 
 @pytest.mark.parametrize("label, notation", [("Q9", "espeak"), ("XX1", "arpabet"),

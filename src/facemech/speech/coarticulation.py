@@ -65,7 +65,8 @@ def gestures(alignment: Alignment) -> list[Gesture]:
     sharing its interval equally. Raises InputError for an unknown label."""
     out = []
     for seg in alignment.phones:
-        parts = phone_classes(seg.label, alignment.notation, source=alignment.source)
+        parts = phone_classes(seg.label, alignment.notation, source=alignment.source,
+                              voice=alignment.meta.get("voice"))
         if not parts:
             continue
         step = (seg.end - seg.start) / len(parts)

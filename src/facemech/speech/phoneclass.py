@@ -135,7 +135,14 @@ _IPA_STRIP = frozenset("ˈˌ.ːˑ‿͜͡ʰʲʷˠˤ˞'ˀ")
 _IPA_LONGEST = max(len(k) for k in _IPA)
 
 
-def phone_classes(label: str, notation: str, *, source: str | None = None) -> tuple[str, ...]:
+#: eSpeak NG mnemonics whose vowel depends on the English voice: in en-us eSpeak writes ``0``
+#: (the vowel of "Bob", "mom", "pot") as unrounded [ɑ] (its IPA output, phsource/ph_english_us),
+#: an open vowel; in en-gb as rounded [ɒ], kept with the rounded vowels
+_ESPEAK_UNROUNDED_IN = {"0": ("en-us",), "0#": ("en-us",)}
+
+
+def phone_classes(label: str, notation: str, *, source: str | None = None,
+                  voice: str | None = None) -> tuple[str, ...]:
     """The articulatory classes of one phone label, in order.
 
     Parameters
@@ -146,6 +153,9 @@ def phone_classes(label: str, notation: str, *, source: str | None = None) -> tu
     notation : {"espeak", "ipa", "arpabet"}
     source : str, optional
         Where the label came from, for the error message.
+    voice : str, optional
+        The eSpeak NG voice that wrote an ``espeak`` label (e.g. ``"en-us+f3"``): eSpeak's
+        ``0`` is the open unrounded [ɑ] in en-us and the rounded [ɒ] elsewhere.
 
     Returns
     -------
@@ -163,7 +173,7 @@ def phone_classes(label: str, notation: str, *, source: str | None = None) -> tu
     if text.lower() in PAUSE_LABELS:
         return (PAUSE,)
     if notation == "espeak":
-        found = _espeak(text)
+        found = _espeak(text, voice)
     elif notation == "arpabet":
         found = _arpabet(text)
     elif notation == "ipa":
@@ -177,7 +187,7 @@ def phone_classes(label: str, notation: str, *, source: str | None = None) -> tu
     return found
 
 
-def _espeak(text: str) -> tuple[str, ...] | None:
+def _espeak(text: str, voice: str | None = None) -> tuple[str, ...] | None:
     t = text.lstrip("',%=")
     if t.lower() in PAUSE_LABELS:
         return (PAUSE,)
@@ -186,6 +196,9 @@ def _espeak(text: str) -> tuple[str, ...] | None:
     if not t.strip(";"):
         return ()  # eSpeak's palatalisation mark on its own: no gesture of its own
     t = t.rstrip(";")
+    language = (voice or "").split("+", 1)[0].strip().lower()
+    if any(language.startswith(v) for v in _ESPEAK_UNROUNDED_IN.get(t, ())):
+        return (_O,)
     return _ESPEAK.get(t)
 
 
