@@ -89,6 +89,8 @@ tether: float [0, inf)
 incisive_area_cm2: float [0, inf)
 k_bone_contact: float [0, inf)
 implicit_contacts: bool
+volume_floor: float [0, 1)
+volume_floor_modulus: float [0, inf)
 """
 
 

@@ -150,6 +150,11 @@ class Parameters:
     #: per frame, and the chatter made results hang on the last bit: docs/reproducibility.md).
     #: On in the anatomical preset (issue 32); the seeds' presets do not use it (explicit Euler).
     implicit_contacts: bool = False
+    #: the implicit methods' floor under each prism's volume (solvers/volume_floor.py): a
+    #: prism below ``volume_floor`` x its rest volume is pushed back by a one-sided penalty of
+    #: modulus ``volume_floor_modulus`` (Pa), stepped on its own after the solve; 0: none
+    volume_floor: float = 0.0
+    volume_floor_modulus: float = 0.0
     # how a jaw angle alone moves the mandible (JAW_KINEMATICS): the seeds' hinge, or the hinge
     # with the condyle's coupled glide of glide_rate (m/rad) along glide_slope (rad below the
     # horizontal)

@@ -39,6 +39,7 @@ from ..errors import InputError
 from ..geometry.prism import volume_gradients
 from ..physics.assembly import Physics, accumulate_forces, rest_anchors
 from .contacts import resolve_contacts
+from .volume_floor import resolve_volume_floor
 from .muscle_implicit import MuscleJacobian
 from .solver_state import (
     SolverState,
@@ -309,11 +310,16 @@ class Rosenbrock2:
 
 
 def _contacts(ss: SolverState, pos: np.ndarray, vel: np.ndarray, anchors) -> None:
-    """The stiff contacts' own implicit step after a step's solve (:mod:`.contacts`)."""
+    """The stiff contacts' own implicit step after a step's solve (:mod:`.contacts`), then
+    the prisms' volume floor's (:mod:`.volume_floor`)."""
     c = ss.contacts
     if len(c.bone_k) or len(c.lip_k):
         resolve_contacts(pos, vel, ss.inv_mass, c.tied, c.bone_k, anchors.rest, anchors.normal,
                          c.pairs, c.normals, c.lip_k, ss.step)
+    floor = ss.volume_floor
+    if len(floor.floor):
+        resolve_volume_floor(pos, vel, ss.inv_mass, floor.nodes, floor.floor, floor.kappa,
+                             ss.step)
 
 
 def _ros2_stage(ss: SolverState, r_x, r_v, jac):

@@ -22,6 +22,7 @@ from ..physics.assembly import Physics, force_bundles
 from ..physics.bundles import Anchors, ForceBundles
 from ..physics.muscle import activation_exact_damped, max_force
 from .contacts import ImplicitContacts, split_contacts
+from .volume_floor import VolumeFloor
 from .mandible import JawBundle, jaw_bundle, place_jaw, set_jaw_nodes
 from .state import Controls, State
 
@@ -51,6 +52,8 @@ class SolverState:
     zeta : float -- the damping ratio of the activation filter (eq. 4; 1 in the seeds)
     contacts : ImplicitContacts -- the stiff contacts the implicit methods step apart
         (:mod:`facemech.solvers.contacts`); left out of ``forces``; empty otherwise
+    volume_floor : VolumeFloor -- the prisms' volume floor the implicit methods step apart
+        (:mod:`facemech.solvers.volume_floor`); empty unless the preset sets one
     """
 
     forces: ForceBundles
@@ -66,6 +69,7 @@ class SolverState:
     system: ImplicitSystem | None = None
     zeta: float = 1.0
     contacts: ImplicitContacts = ImplicitContacts.empty()
+    volume_floor: VolumeFloor = VolumeFloor.empty()
 
     def steady_force(self, activity: np.ndarray) -> np.ndarray:
         """M_bar (muscles,) N of each instance from group activity (groups,) in [0, 1] (eq. 3)."""
@@ -85,8 +89,12 @@ def solver_state(physics: Physics, n_steps: int,
     contacts = ImplicitContacts.empty()
     if system is not None and p.is_continuum and p.implicit_contacts:
         forces, contacts = split_contacts(forces)
+    floor = VolumeFloor.empty()
+    if system is not None and p.is_continuum and p.volume_floor > 0.0:
+        floor = VolumeFloor.of(physics.prism_nodes, physics.prism_rest_volume, p.volume_floor,
+                               p.volume_floor_modulus)
     return SolverState(
-        forces=forces, contacts=contacts, jaw=jaw_bundle(physics), dynamic=physics.dynamic,
+        forces=forces, contacts=contacts, volume_floor=floor, jaw=jaw_bundle(physics), dynamic=physics.dynamic,
         inv_mass=physics.inv_mass, muscle_group=physics.muscle_group,
         max_force=max_force(p.k_force, physics.muscle_area), tau=p.tau_activation,
         frame_duration=frame, n_steps=int(n_steps), step=frame / n_steps, system=system,
