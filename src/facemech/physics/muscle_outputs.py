@@ -21,7 +21,7 @@ import numba as nb
 import numpy as np
 
 from ..params import MUSCLE_GROUPS
-from .assembly import Physics, muscle_bundle, muscle_f4, muscle_lengths
+from .assembly import Physics, muscle_lengths
 from .muscle import hill_force
 
 #: the quantities of :class:`MuscleSeries` as (attribute, results variable, units, long name)
@@ -78,11 +78,11 @@ def muscle_outputs(physics: Physics, positions: np.ndarray, velocities: np.ndarr
     pos = np.ascontiguousarray(positions, float)
     vel = np.ascontiguousarray(velocities, float)
     act = np.ascontiguousarray(activation, float)
-    length, rate = muscle_lengths(muscle_bundle(ph), pos, vel)
+    muscles = ph.forces.muscles
+    length, rate = muscle_lengths(muscles, pos, vel)
     force = np.empty(ph.n_muscles)
-    _tensions(act, length, rate, ph.muscle_rest, ph.muscle_k_passive, p.f1, p.f2, p.f3,
-              muscle_f4(p, ph.muscle_rest),
-              force)
+    _tensions(act, length, rate, muscles.rest_length, muscles.k_passive, p.f1, p.f2, p.f3,
+              muscles.f4, force)
     return MuscleOutputs(force, length, rate, act.copy())
 
 

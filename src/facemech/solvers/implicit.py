@@ -113,11 +113,12 @@ def implicit_system(physics: Physics, h: float) -> ImplicitSystem:
     muscles join the solve through their beads.
     """
     ph, p = physics, physics.params
+    springs, prisms, restoration = ph.forces.springs, ph.forces.prisms, ph.forces.restoration
     nd = ph.n_dynamic
     row = np.full(ph.model.n_nodes, -1, np.int64)
     row[ph.dynamic] = np.arange(nd)
-    si, sj = row[ph.spring_i], row[ph.spring_j]
-    pn = row[ph.prism_nodes]
+    si, sj = row[springs.i], row[springs.j]
+    pn = row[prisms.nodes]
     a_idx = np.repeat(np.arange(6), 6)
     b_idx = np.tile(np.arange(6), 6)
     ra, rb = pn[:, a_idx].reshape(-1), pn[:, b_idx].reshape(-1)
@@ -127,26 +128,26 @@ def implicit_system(physics: Physics, h: float) -> ImplicitSystem:
         # over-damps acts as inertia and makes the step ring; stiffness: a share of each
         # spring's stiff branch, the volume term's Gram matrices (within a factor 3 of its
         # rank-one Hessian) and the tethers
-        damp = _graph_matrix(si, sj, ph.spring_damping, nd)
-        k_springs = _graph_matrix(si, sj, IMPLICIT_STIFFNESS_SHARE * ph.spring_k_high, nd)
-        grads = volume_gradients(ph.model.rest_positions[ph.prism_nodes])  # (p, 6, 3)
-        gram = np.einsum("pac,pbc->pab", grads, grads) * ph.prism_bulk[:, None, None]
+        damp = _graph_matrix(si, sj, springs.damping, nd)
+        k_springs = _graph_matrix(si, sj, IMPLICIT_STIFFNESS_SHARE * springs.k_high, nd)
+        grads = volume_gradients(ph.model.rest_positions[prisms.nodes])  # (p, 6, 3)
+        gram = np.einsum("pac,pbc->pab", grads, grads) * prisms.bulk[:, None, None]
         tether = np.zeros(nd)
-        np.add.at(tether, row[ph.tied], ph.restore_k)
+        np.add.at(tether, row[restoration.nodes], restoration.k_restore)
         stiff = (k_springs + sp.csc_matrix((gram.reshape(-1)[ok], (ra[ok], rb[ok])),
                                            shape=(nd, nd)) + sp.diags(tether)).tocsc()
         mass = 1.0 / ph.inv_mass[ph.dynamic]
     else:
-        k_tan = ph.spring_k_low * 0.5 * (1.0 + 0.5 * np.pi * p.sigma)
+        k_tan = springs.k_low * 0.5 * (1.0 + 0.5 * np.pi * p.sigma)
         stiff = _graph_matrix(si, sj, k_tan, nd)
         # shape term of eq. (9): d(-k_e2 (x_a - centroid))/dx_b = -k_e2 (delta_ab - 1/6)
         coef = p.k_shape * ((a_idx == b_idx).astype(float) - 1.0 / 6.0)
         cv = np.broadcast_to(coef, (len(pn), 36)).reshape(-1)
         stiff = stiff + sp.csc_matrix((cv[ok], (ra[ok], rb[ok])), shape=(nd, nd))
         restore = np.zeros(nd)
-        restore[row[ph.tied]] = ph.restore_k
+        restore[row[restoration.nodes]] = restoration.k_restore
         stiff = stiff + sp.diags(restore)
-        damp = _graph_matrix(si, sj, ph.spring_damping, nd)
+        damp = _graph_matrix(si, sj, springs.damping, nd)
         mass = np.full(nd, p.node_mass)
     stiff = stiff.tocsc()
     a_mat = (sp.diags(mass) + h * damp + h * h * stiff).tocsc()

@@ -4,7 +4,7 @@ end of a frame that all of them share.
 A solver (:class:`~facemech.solvers.explicit.ExplicitEuler`,
 :class:`~facemech.solvers.implicit.LinearImplicitEuler`,
 :class:`~facemech.solvers.implicit.Rosenbrock2`) is a small frozen description of the method;
-``solver.init(physics)`` returns a :class:`SolverState` (the kernels' bundles, the step, and
+``solver.init(physics)`` returns a :class:`SolverState` (the model's kernel bundles, the step, and
 for the implicit methods the factorised matrix) and ``solver.step(solver_state, state,
 controls)`` returns the next :class:`~facemech.solvers.state.State`, one frame later. Nothing
 is mutated between calls: each step works on its own copies of the state's arrays.
@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING
 import numba as nb
 import numpy as np
 
-from ..physics.assembly import Physics, force_bundles
+from ..physics.assembly import Physics
 from ..physics.bundles import Anchors, ForceBundles
 from ..physics.muscle import activation_exact_damped, max_force
 from .contacts import ImplicitContacts, split_contacts
@@ -35,8 +35,9 @@ class SolverState:
 
     Attributes
     ----------
-    forces : ForceBundles -- the force kernel's constant arguments
-        (:func:`~facemech.physics.assembly.force_bundles`)
+    forces : ForceBundles -- the force kernel's constant arguments: the model's own
+        (:attr:`~facemech.physics.assembly.Physics.forces`), less the contacts an implicit
+        method steps apart
     jaw : JawBundle -- what the mandible carries (:func:`~facemech.solvers.mandible.jaw_bundle`)
     dynamic : (d,) int64 -- the nodes that move under forces, ascending
     inv_mass : (nodes,) 1/kg -- 0 for kinematic nodes
@@ -81,7 +82,7 @@ def solver_state(physics: Physics, n_steps: int,
     (:mod:`.contacts`)."""
     p = physics.params
     frame = 1.0 / p.frame_rate
-    forces = force_bundles(physics)
+    forces = physics.forces
     contacts = ImplicitContacts.empty()
     if system is not None and p.is_continuum and p.implicit_contacts:
         forces, contacts = split_contacts(forces)
