@@ -73,14 +73,13 @@ def muscle_outputs(physics: Physics, positions: np.ndarray, velocities: np.ndarr
     -------
     MuscleOutputs
     """
-    ph = physics
-    p = ph.params
+    p = physics.params
     pos = np.ascontiguousarray(positions, float)
     vel = np.ascontiguousarray(velocities, float)
     act = np.ascontiguousarray(activation, float)
-    muscles = ph.forces.muscles
+    muscles = physics.forces.muscles
     length, rate = muscle_lengths(muscles, pos, vel)
-    force = np.empty(ph.n_muscles)
+    force = np.empty(physics.n_muscles)
     _tensions(act, length, rate, muscles.rest_length, muscles.k_passive, p.f1, p.f2, p.f3,
               muscles.f4, force)
     return MuscleOutputs(force, length, rate, act.copy())
@@ -143,11 +142,11 @@ class MuscleRecorder:
             arr[frame] = getattr(out, name)
 
     def series(self) -> MuscleSeries:
-        ph = self.physics
+        physics = self.physics
         return MuscleSeries(
-            names=tuple(ph.model.muscles.names),
-            groups=tuple(MUSCLE_GROUPS[g] for g in ph.muscle_group),
-            max_force=ph.params.k_force * ph.muscle_area,
+            names=tuple(physics.model.muscles.names),
+            groups=tuple(MUSCLE_GROUPS[g] for g in physics.muscle_group),
+            max_force=physics.params.k_force * physics.muscle_area,
             **self._arrays)
 
 

@@ -175,18 +175,17 @@ class MuscleJacobian:
     THRESHOLD = 1e-6  # N: a muscle with less filtered and steady force takes no part
 
     def __init__(self, physics, lu):
-        ph = physics
-        self.physics = ph
-        self.muscles = ph.forces.muscles
+        self.physics = physics
+        self.muscles = physics.forces.muscles
         self.lu = lu
-        row = np.full(ph.model.n_nodes, -1, np.int64)
-        row[ph.dynamic] = np.arange(ph.n_dynamic)
+        row = np.full(physics.model.n_nodes, -1, np.int64)
+        row[physics.dynamic] = np.arange(physics.n_dynamic)
         r = row[self.muscles.nodes]
         ok = r >= 0
         self.n_beads = int(self.muscles.bead_start[-1])
         self.W = sp.csr_matrix((self.muscles.weights[ok], (r[ok], self.muscles.bead[ok])),
-                               shape=(ph.n_dynamic, self.n_beads))
-        self.Y = lu.solve(self.W.toarray()) if self.n_beads else np.zeros((ph.n_dynamic, 0))
+                               shape=(physics.n_dynamic, self.n_beads))
+        self.Y = lu.solve(self.W.toarray()) if self.n_beads else np.zeros((physics.n_dynamic, 0))
         self.G = np.asarray(self.W.T @ self.Y)
         # a cache of what depends on the set of active muscles only (no state: the results of
         # every call are those of a fresh object)

@@ -118,15 +118,15 @@ class FrameStart:
     anchors: Anchors
 
 
-def start_frame(ss: SolverState, state: State, controls: Controls) -> FrameStart:
+def start_frame(solver_state: SolverState, state: State, controls: Controls) -> FrameStart:
     """Copies of ``state``'s arrays with the jaw placed in the frame's start pose."""
     pos = np.array(state.positions)
     vel = np.array(state.velocities)
     start = np.array(controls.jaw_start)
-    rate = (np.asarray(controls.jaw_end) - start) / ss.frame_duration
-    anchors = place_jaw_into(ss.jaw, start + rate * 0.0, rate, pos, vel)
+    rate = (np.asarray(controls.jaw_end) - start) / solver_state.frame_duration
+    anchors = place_jaw_into(solver_state.jaw, start + rate * 0.0, rate, pos, vel)
     return FrameStart(pos, vel, np.array(state.muscle_force), np.array(state.muscle_force_rate),
-                      ss.steady_force(controls.activity), start, rate, anchors)
+                      solver_state.steady_force(controls.activity), start, rate, anchors)
 
 
 def place_jaw_into(jaw: JawBundle, pose: np.ndarray, rate: np.ndarray, pos: np.ndarray,
@@ -138,15 +138,15 @@ def place_jaw_into(jaw: JawBundle, pose: np.ndarray, rate: np.ndarray, pos: np.n
     return anchors
 
 
-def finish_frame(ss: SolverState, state: State, controls: Controls, pos: np.ndarray,
+def finish_frame(solver_state: SolverState, state: State, controls: Controls, pos: np.ndarray,
                  vel: np.ndarray, m_force: np.ndarray, m_rate: np.ndarray,
                  jaw_rate: np.ndarray) -> State:
     """The state at the frame's end: the jaw nodes set in the end pose (moving at
     ``jaw_rate``), time one frame on."""
     target = np.asarray(controls.jaw_end)
-    place_jaw_into(ss.jaw, target + jaw_rate * 0.0, jaw_rate, pos, vel)
-    return State(pos, vel, m_force, m_rate, float(target[0]), state.time + ss.frame_duration,
-                 target[1:])
+    place_jaw_into(solver_state.jaw, target + jaw_rate * 0.0, jaw_rate, pos, vel)
+    return State(pos, vel, m_force, m_rate, float(target[0]),
+                 state.time + solver_state.frame_duration, target[1:])
 
 
 @nb.njit(cache=True)
