@@ -289,8 +289,8 @@ def test_a_one_frame_trc_is_refused_and_never_written(monkeypatch, capsys, tmp_p
 
 # ---- sizes as typed ----------------------------------------------------------------------------
 def test_the_design_manifest_writes_the_size_as_typed():
-    from facemech.speech.design import _render_settings
     from facemech.workflows.pictures import render_options
+    from facemech.workflows.stimuli import _render_settings
 
     assert _render_settings(render_options(size="640x480"), True)["size"] == "640x480"
     assert _render_settings(render_options(size="640x480"), False) == {"video": False}

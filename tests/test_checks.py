@@ -65,7 +65,7 @@ def test_the_command_lines_intervals_are_the_tables():
 
 
 #: the command line's numbers and the Python objects that take them
-_API = {"window": LeastSquares, "bend": LeastSquares, "smooth": LeastSquares,
+_API = {"window": LeastSquares, "tol": LeastSquares, "bend": LeastSquares, "smooth": LeastSquares,
         "effort": LeastSquares, "max_evaluations": LeastSquares, "dt": Parameters,
         "substeps": Parameters}
 
@@ -83,6 +83,20 @@ def test_what_the_command_line_refuses_the_python_api_refuses(name, value):
     if name == "max_evaluations":
         with pytest.raises(InputError):
             Powell(max_evaluations=value)
+
+
+def test_tol_0_is_one_rule_for_the_command_line_and_python():
+    """``tol`` 0 (iterate until no step gains) is taken by both, and a negative tol or one
+    past 100 mm refused by both: the table's one interval [0, 100]."""
+    assert cli_options.RANGES["tol"] == RANGES["tol"] == "[0, 100]"
+    cli_options.check_number("--tol", 0.0, cli_options.RANGES["tol"])
+    assert LeastSquares(tol=0.0).tol == 0.0
+    for value in (-1e-9, 100.5):
+        with pytest.raises(InputError):
+            cli_options.check_number("--tol", value, cli_options.RANGES["tol"])
+        with pytest.raises(InputError) as exc:
+            LeastSquares(tol=value)
+        assert exc.value.field == "tol"
 
 
 def test_the_solver_options_of_a_run_are_checked_too():

@@ -42,7 +42,7 @@ def _refused(monkeypatch, capsys, tmp_path, *args) -> str:
     (("regions", "{t}/m.csv", "-o", "{t}/rg", "-k", "0"), "-k"),
     (("invert", "--markers", "{t}/m.csv", "-o", "{t}/i.nc", "--window", "0"), "--window"),
     (("invert", "--markers", "{t}/m.csv", "-o", "{t}/i.nc", "--noise", "-1"), "--noise"),
-    (("invert", "--markers", "{t}/m.csv", "-o", "{t}/i.nc", "--tol", "0"), "--tol"),
+    (("invert", "--markers", "{t}/m.csv", "-o", "{t}/i.nc", "--tol", "-1"), "--tol"),
     (("experiment", "pitermann2001-synthetic", "--noise", "nan"), "--noise"),
     (("experiment", "lucero2008", "-o", "{t}/l", "--frames", "1"), "--frames"),
 ])

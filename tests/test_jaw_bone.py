@@ -11,7 +11,7 @@ from facemech.errors import InputError
 from facemech.geometry.teeth import lower_incisor_point
 from facemech.inverse.control_pick import MIN_NEW_MOTION_MM, pick_controls
 from facemech.inverse.invert import SPEECH_CONTROLS
-from facemech.inverse.workflow import _at_frame_rate, _bone_gaps_filled, invert_markers
+from facemech.inverse.workflow import _at_frame_rate, _bone_gaps_filled
 from facemech.io.markers import write_markers
 from facemech.io.results import read_results
 from facemech.kinematics.roles import bone_points, marker_roles, on_sites
@@ -28,6 +28,7 @@ from facemech.solvers.jaw_bone import (
     protrusion_of,
 )
 from facemech.workflows import simulate as wsim
+from facemech.workflows.invert import invert_markers
 
 DEG = np.pi / 180
 MOLAR_FROM_INCISOR = np.array([0.0, 0.008, -0.035])  # m: a molar pellet behind the incisors

@@ -137,10 +137,10 @@ def test_eq9_prism_forces():
 
 def _assembled(face, params):
     """The bundles of a face through the public assembly (what every solver uses)."""
-    from facemech.physics.assembly import Physics, force_bundles, rest_anchors
+    from facemech.physics.assembly import Physics, rest_anchors
 
     ph = Physics.build(face, params)
-    return ph, force_bundles(ph), rest_anchors(ph)
+    return ph, ph.forces, rest_anchors(ph)
 
 
 def test_springs_bundle_gives_eqs_1_2_on_a_perturbed_face(seeds_face):

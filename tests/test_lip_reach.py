@@ -30,7 +30,7 @@ from facemech import read_results
 from facemech.geometry.anatomy import MARGINAL
 from facemech.io.activity import write_activity
 from facemech.params import MARGINAL_GROUPS, MUSCLE_GROUPS, preset
-from facemech.physics.assembly import Physics, force_bundles
+from facemech.physics.assembly import Physics
 
 FRAMES = 40
 JAW_DEG = 10.0
@@ -111,7 +111,7 @@ def test_the_lips_close_and_press_with_the_jaw_open_10_degrees(face, runs):
     """The midline pair of the lip line: open by about 12 mm with the jaw alone; closed and
     pressed (gap < 0, so the lip contact pushes back) under OOSM + OOIM + OOS + OOI + MEN."""
     ph = Physics.build(face, preset("anatomical"))
-    contact = force_bundles(ph).contact
+    contact = ph.forces.contact
     rest = face.rest_positions
     mid = int(np.argmin(np.abs(rest[contact.pairs[:, 0], 0])))
     u, w = contact.pairs[mid]

@@ -12,7 +12,7 @@ from facemech.errors import InputError
 from facemech.io.activity import write_activity
 from facemech.params import MUSCLE_GROUPS, Parameters, preset, read_preset
 from facemech.physics import muscle
-from facemech.physics.assembly import Physics, muscle_bundle
+from facemech.physics.assembly import Physics
 
 #: the lips' force response to a stimulus pulse: 6.1 Hz, damping ratio 0.7 (orbicularis oris
 #: superior and inferior, eight subjects; Ito, Murano & Gomi 2004, J Appl Physiol 96:2318)
@@ -91,17 +91,18 @@ def test_each_muscle_gets_its_own_f4_and_the_seeds_keep_theirs(face, seeds_face)
     """Under an intrinsic speed, each instance's f4 is (f3 - x_half) / (v_half l0) with its own
     rest length (the short mentalis slower in m/s than the long zygomaticus); the seeds' presets
     give every muscle f4 = 20 s/m."""
-    seeds = muscle_bundle(Physics.build(seeds_face, preset("lucero1999")))
+    seeds = Physics.build(seeds_face, preset("lucero1999")).forces.muscles
     assert np.all(seeds.f4 == 20.0)
     ph = Physics.build(face, preset("anatomical").with_(fv_vmax=20.0))
-    f4 = muscle_bundle(ph).f4
+    f4 = ph.forces.muscles.f4
     names = ph.model.muscles.names
     p = ph.params
     x = muscle.half_force_argument(p.f1, p.f2, p.f3)
-    np.testing.assert_allclose(f4, (p.f3 - x) / (20.0 / 6.0 * ph.muscle_rest), rtol=1e-12)
+    np.testing.assert_allclose(f4, (p.f3 - x) / (20.0 / 6.0 * ph.forces.muscles.rest_length),
+                               rtol=1e-12)
     assert f4[names.index("MEN_R")] > f4[names.index("ZYG_R")]
     # the default anatomical preset keeps the seeds' f4 and filter until its default changes
-    assert np.all(muscle_bundle(Physics.build(face, preset("anatomical"))).f4 == 20.0)
+    assert np.all(Physics.build(face, preset("anatomical")).forces.muscles.f4 == 20.0)
 
 
 @pytest.mark.parametrize("field,value", [("activation_damping", 1.5),

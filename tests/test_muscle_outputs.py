@@ -30,7 +30,7 @@ def hand_kinematics(physics, pos, vel):
     for m in range(ph.n_muscles):
         a, b = mus.ptr[m], mus.ptr[m + 1]
         nodes, w, bead = mus.nodes[a:b], mus.weights[a:b], beads[a:b]
-        if ph.muscle_pull == 1:  # beads: weighted means of their nodes
+        if ph.forces.muscles.pull == 1:  # beads: weighted means of their nodes
             pts = np.array([w[bead == k] @ pos[nodes[bead == k]] for k in range(bead.max() + 1)])
             vts = np.array([w[bead == k] @ vel[nodes[bead == k]] for k in range(bead.max() + 1)])
             offset = mus.offsets()[m]

@@ -11,7 +11,7 @@ from facemech.geometry.builder import build_face, default_surface, tissue_option
 from facemech.geometry.scan import load_scan
 from facemech.geometry.scan_order import top_down
 from facemech.params import preset
-from facemech.physics.assembly import Physics, force_bundles
+from facemech.physics.assembly import Physics
 from facemech.physics.slabs import interleaving
 from scans import write_landmark_csv, write_obj
 
@@ -63,7 +63,7 @@ def test_a_shuffled_scan_is_read_top_down_and_its_threads_bands_stay_apart(tmp_p
 
     def changes(vertices, faces):
         ph = Physics.build(build_face(vertices, faces, scan.landmarks, options=opt), prm)
-        b = force_bundles(ph)
+        b = ph.forces
         return interleaving(b.springs, b.prisms, ph.model.rest_positions, "y")
 
     built_in = changes(*default_surface()[:2])

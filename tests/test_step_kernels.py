@@ -154,12 +154,12 @@ def test_spring_law_with_its_knee_as_a_length(sigma):
 def test_two_threads_give_one_threads_forces_and_frame(face):
     """The default face's forces, and one explicit frame of it, on two threads equal one
     thread's within 1e-12 relative (only the order of the additions differs)."""
-    from facemech.physics.assembly import Physics, accumulate_forces, force_bundles, rest_anchors
+    from facemech.physics.assembly import Physics, accumulate_forces, rest_anchors
     from facemech.solvers.explicit import EulerSteps, euler_frame
     from facemech.solvers.solver_state import solver_state
 
     ph = Physics.build(face, preset("anatomical"))
-    b = force_bundles(ph)
+    b = ph.forces
     anchors = rest_anchors(ph)
     rng = np.random.default_rng(18)
     pos = ph.model.rest_positions + rng.normal(0, 2e-4, ph.model.rest_positions.shape)
@@ -201,10 +201,10 @@ def test_set_threads_takes_whole_counts_within_the_pool():
 def test_a_collapsed_spring_raises_on_any_thread_count(face, threads):
     """Two nodes of a spring at one point: one thread raises ZeroDivisionError, and so does the
     parallel path (``prange`` cannot raise: its forces are checked after the reduction)."""
-    from facemech.physics.assembly import Physics, accumulate_forces, force_bundles, rest_anchors
+    from facemech.physics.assembly import Physics, accumulate_forces, rest_anchors
 
     ph = Physics.build(face, preset("anatomical"))
-    b = force_bundles(ph)
+    b = ph.forces
     pos = ph.model.rest_positions.copy()
     i, j = b.springs.i[0], b.springs.j[0]
     pos[j] = pos[i]
@@ -221,11 +221,11 @@ def test_slabs_of_one_parity_share_no_node_and_hold_every_element_once(face):
     """The default face in 2 x threads slabs across the face: every spring and prism once,
     slabs of one parity without a common node, the work about even, in order along the axis
     (top to bottom, the built-in face's node order, by default; left to right across x)."""
-    from facemech.physics.assembly import Physics, force_bundles
+    from facemech.physics.assembly import Physics
     from facemech.physics.slabs import slab_bundles
 
     ph = Physics.build(face, preset("anatomical"))
-    b = force_bundles(ph)
+    b = ph.forces
     rest = ph.model.rest_positions
     for threads, axis in ((2, None), (3, None), (4, None), (2, "x"), (3, "x")):
         sl = slab_bundles(b.springs, b.prisms, rest, threads, axis=axis)
@@ -260,11 +260,11 @@ def test_slabs_are_cut_across_the_axis_the_nodes_are_numbered_along(face):
     across y, where the two threads' slabs share almost no 128-byte block of the forces (and
     across x, where every row is cut, many). The same mesh numbered column by column, left to
     right, is cut across x."""
-    from facemech.physics.assembly import Physics, force_bundles
+    from facemech.physics.assembly import Physics
     from facemech.physics.slabs import slab_axis
 
     ph = Physics.build(face, preset("anatomical"))
-    b = force_bundles(ph)
+    b = ph.forces
     rest = ph.model.rest_positions
     assert slab_axis(b.springs, b.prisms, rest) == "y"
     n = ph.model.n_surface
@@ -283,12 +283,11 @@ def test_slab_forces_do_not_depend_on_the_thread_count(face):
     from facemech.physics.assembly import (
         Physics,
         element_forces_one_thread,
-        force_bundles,
         slab_forces,
     )
 
     ph = Physics.build(face, preset("anatomical"))
-    b = force_bundles(ph)
+    b = ph.forces
     sl = b.slabs
     assert len(sl.spring_ptr) > 2
     rng = np.random.default_rng(21)

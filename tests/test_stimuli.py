@@ -13,7 +13,7 @@ from facemech.analysis.describe import describe, marker_nodes
 from facemech.io.results import read_results, to_dataset, write_dataset
 from facemech.speech import stimuli as st
 from facemech.speech.audio import Audio, onset, read_wav, shift, write_wav
-from facemech.speech.design import run_design
+from facemech.workflows.stimuli import run_design
 
 RATE = 16000
 FRAMES = 24

@@ -28,7 +28,7 @@ max_gap: float (0, 3600]
 time: float [0, inf)
 noise: float [0, 100]
 noise_mm: float [0, 100]
-tol: float (0, 100]
+tol: float [0, 100]
 bend: float [0, 1e6]
 smooth: float [0, 1e6]
 effort: float [0, 1e6]

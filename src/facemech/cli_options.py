@@ -94,7 +94,7 @@ textgrid: the recording's Praat TextGrid (MFA)
 time: time of the frame, s
 tissue: anatomical or uniform
 title: page title
-tol: lsq: stop at RMS gains below this, mm
+tol: lsq: stop at RMS gains below this, mm (0: stop when no step gains)
 train: utterances to fit, e.g. 1-30
 units: length unit if the file has none
 utterances: utterances in the corpus

@@ -29,7 +29,10 @@ class LeastSquares:
     ----------
     window : frames fitted per frame (>= 1); only the first frame's controls are kept
     tol : mm; a frame's iterations stop when an accepted step lowers the RMS marker residual by
-        less than this (default 0.01 mm, a tenth of a good motion-capture system's precision)
+        less than this (default 0.01 mm, a tenth of a good motion-capture system's precision);
+        0: they stop only when no step gains (the step is below 1e-6, the linearisation
+        predicts no gain or a step fails with fresh responses), after 12 iterations or at
+        ``max_evaluations`` (tol is only compared with, never divided by)
     bend : mm per unit activity, weight of second differences of activity across the window
         (acts for windows of 3 frames or more)
     smooth : mm per unit, weight of first differences (from the previous frame's controls);
@@ -62,8 +65,8 @@ class LeastSquares:
         if not (isinstance(self.max_evaluations, int) and self.max_evaluations >= 1):
             raise InputError(f"max_evaluations must be >= 1 (got {self.max_evaluations!r})",
                              field="max_evaluations")
-        # the command line's intervals (facemech.checks); tol may be 0 here (no stopping rule)
-        for name in ("window", "bend", "smooth", "effort", "max_evaluations"):
+        # the command line's intervals (facemech.checks)
+        for name in ("window", "tol", "bend", "smooth", "effort", "max_evaluations"):
             check_value(name, getattr(self, name))
 
 

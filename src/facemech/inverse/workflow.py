@@ -1,6 +1,6 @@
-"""Inversion of a marker file, as the ``invert`` command runs it: read, map, adapt, drive the
-jaw, choose the controls, invert. Kept apart from the command line so that scripts run the same
-steps.
+"""Inversion of a marker set on a face, as the ``invert`` command runs it: map, adapt, drive
+the jaw, choose the controls, invert (:func:`invert_marker_set`). Reading the marker file, the
+face and the map file is the command's wiring: :func:`facemech.workflows.invert.invert_markers`.
 
 Markers are skin markers unless they are named (or, from articulography, given the role) of a
 point on the mandible: a lower-incisor sensor and, optionally, a molar pellet. Those drive the
@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, replace
-from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -23,7 +23,10 @@ from ..markerset import MarkerSet
 from ..params import Parameters, default_parameters
 from .result import Inversion
 
-__all__ = ["SKIN_JAW_LEAD", "JawMarkers", "invert_markers"]
+if TYPE_CHECKING:
+    from ..geometry.model import FaceModel
+
+__all__ = ["SKIN_JAW_LEAD", "SIGN_EFFORT", "JawMarkers", "invert_marker_set", "pick_candidates"]
 
 #: frames by which a skin jaw marker's drive is moved earlier by default (33 ms at 60 Hz, the
 #: seeds' lead); a bone point's drive has none
@@ -70,11 +73,11 @@ class JawMarkers:
             check_value("jaw_lead", self.jaw_lead)
 
 
-def invert_markers(
-    markers: str | Path | MarkerSet,
+def invert_marker_set(
+    ms: MarkerSet,
+    model: FaceModel,
     *,
-    face: str | Path = "default",
-    map_file: str | Path | None = None,
+    mapping: dict[str, int] | None = None,
     scale_pair: str | None = None,
     params: Parameters | None = None,
     method: str = "lsq",
@@ -85,17 +88,17 @@ def invert_markers(
     options: dict | None = None,
     progress: Callable[[int, int], None] | None = None,
 ) -> Inversion:
-    """Invert a marker file on a face (see :func:`facemech.inverse.invert.invert`).
+    """Invert a marker set on a face (see :func:`facemech.inverse.invert.invert`).
 
     Parameters
     ----------
-    markers : marker file (read in its own units; or a :class:`~facemech.markerset.MarkerSet`)
-        in the model's frame, at the preset's frame rate; articulography (``meta["roles"]``)
-        in its own frame and at its own rate: its lips are laid on the face's vermilion points,
-        and it is resampled
-    face : face file or built-in face name
-    map_file : marker,node CSV (default: the closest nodes; articulography's lips: their
-        vermilion points)
+    ms : the markers (m) in the model's frame, at the preset's frame rate; articulography
+        (``meta["roles"]``) in its own frame and at its own rate: its lips are laid on the
+        face's vermilion points, and it is resampled
+    model : the face; rebuilt for the preset's tissue here, explicitly
+        (:func:`~facemech.geometry.builder.for_tissue`)
+    mapping : marker name -> node (:func:`facemech.kinematics.mapping.read_mapping`; None: the
+        closest nodes, articulography's lips their vermilion points)
     scale_pair : "A,B": adapt the markers by per-axis scaling from two markers far apart
     params : the parameters (default: the default preset); their ``fast_dt`` is the explicit
         Euler step of every evaluation (s)
@@ -116,8 +119,7 @@ def invert_markers(
     Inversion
         Its notes also say how articulography roles were used and which controls were held.
     """
-    from ..geometry.builder import load_face
-    from ..io.markers import read_markers
+    from ..geometry.builder import for_tissue
     from ..kinematics.mapping import scale_adapt
     from ..kinematics.roles import bone_points, is_midsagittal
     from .invert import JawRecording, invert
@@ -128,8 +130,7 @@ def invert_markers(
     chin_marker, jaw_second_marker = jaw.chin_marker, jaw.jaw_second_marker
     jaw_fixed, jaw_lead = jaw.jaw_fixed, jaw.jaw_lead
     params = params or default_parameters()
-    ms = markers if isinstance(markers, MarkerSet) else read_markers(markers)
-    src = ms.meta.get("source") or str(markers)
+    src = ms.meta.get("source")
     incisor, molar, by_role = bone_points(ms, incisor=jaw.jaw_incisor, molar=jaw.jaw_molar,
                                           skin_jaw=chin_marker)
     molar, dropped = _usable_molar(ms, molar, by_role)
@@ -138,9 +139,9 @@ def invert_markers(
     if jaw_fixed and chin_marker is None and incisor is None:
         raise InputError("--jaw-fixed needs a jaw recording (--chin-marker or --jaw-incisor)",
                          field="jaw-fixed")
-    model = load_face(face, tissue=params.tissue)
+    model = for_tissue(model, params.tissue)
     midsagittal = is_midsagittal(ms)
-    skin, mapping, notes = _skin_markers(ms, model, map_file, (incisor, molar), midsagittal)
+    skin, mapping, notes = _skin_markers(ms, model, mapping, (incisor, molar), midsagittal)
     notes = resampled + dropped + filled + notes
     if scale_pair is not None:
         a, _, b = scale_pair.partition(",")
@@ -212,10 +213,11 @@ def _bone_gaps_filled(ms, bone, by_role):
         f"frames, each at most {MAX_BONE_GAP_S:g} s) by a cubic spline"]
 
 
-def _skin_markers(ms, model, map_file, bone, midsagittal):
-    """(the skin markers in the model's frame, name -> node, notes): bone points left out;
-    articulography's lips on the face's vermilion points, by their displacements."""
-    from ..kinematics.mapping import closest_nodes, read_mapping
+def _skin_markers(ms, model, given, bone, midsagittal):
+    """(the skin markers in the model's frame, name -> node, notes): bone points left out
+    (``given``: the mapping read from a map file, or None); articulography's lips on the face's
+    vermilion points, by their displacements."""
+    from ..kinematics.mapping import closest_nodes
     from ..kinematics.roles import LIP_SITES, lip_markers, marker_roles, on_sites, pinned_x
 
     src = ms.meta.get("source")
@@ -223,8 +225,7 @@ def _skin_markers(ms, model, map_file, bone, midsagittal):
     bone = [n for n in bone if n is not None]
     notes = []
     if roles:
-        mapping = (read_mapping(map_file, ms, model) if map_file is not None
-                   else lip_markers(ms, model))
+        mapping = dict(given) if given is not None else lip_markers(ms, model)
         mapping = {n: v for n, v in mapping.items() if n not in bone}
         if not mapping:
             raise InputError("no sensor has the role upper_lip or lower_lip (nor a node in "
@@ -233,7 +234,7 @@ def _skin_markers(ms, model, map_file, bone, midsagittal):
         skin = on_sites(ms.select(names), model, mapping)
         lips = ", ".join(f"{n} ({roles.get(n, 'mapped')}) -> node {mapping[n]}"
                          + (f" ({LIP_SITES[roles[n]]})" if roles.get(n) in LIP_SITES
-                            and map_file is None else "") for n in names)
+                            and given is None else "") for n in names)
         unused = [f"{n} ({roles.get(n, 'no role')})" for n in ms.names
                   if n not in mapping and n not in bone]
         jaw = f"bone points {', '.join(bone)} drive the jaw" if bone else "no bone point"
@@ -241,8 +242,7 @@ def _skin_markers(ms, model, map_file, bone, midsagittal):
                      f"its first sample; {jaw}; kept but not used: {', '.join(unused) or 'none'}")
     else:
         rest = ms.select([n for n in ms.names if n not in bone])
-        mapping = (read_mapping(map_file, ms, model) if map_file is not None
-                   else closest_nodes(rest, model))
+        mapping = dict(given) if given is not None else closest_nodes(rest, model)
         mapping = {n: v for n, v in mapping.items() if n not in bone}
         skin = rest
     if midsagittal:

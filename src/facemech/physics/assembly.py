@@ -5,7 +5,8 @@
 numba kernel that maps the pure element kernels of :mod:`springs`, :mod:`volume` and
 :mod:`muscle` over springs, prisms and muscles, then applies restoration (eq. 11), lip contact and
 skull non-penetration (eq. 10). The kernels take their constants as the typed bundles of
-:mod:`.bundles`, made from a :class:`Physics` by :func:`force_bundles`.
+:mod:`.bundles`, which :class:`Physics` builds and holds (``physics.forces``): the model's one
+shape for the kernels, no copy made from it.
 """
 
 from __future__ import annotations
@@ -50,8 +51,12 @@ from .volume import (
 
 @dataclass(frozen=True, eq=False)
 class Physics:
-    """Flat arrays of a face model with its material constants (SI). Built once, read-only.
+    """A face model with its material constants (SI) as the force kernels read them. Built
+    once, read-only.
 
+    ``physics.forces`` holds the kernels' typed bundles (:mod:`.bundles`): the springs, prisms,
+    muscles, tied nodes, lip contact and the slabs for numba's threads, built here once and
+    handed as they are to every solver (:class:`~facemech.solvers.solver_state.SolverState`).
     ``Physics.build`` reads the constants as the preset says (:attr:`Parameters.material`): the
     seeds' per-spring values, or tissue moduli turned into per-element constants by
     :mod:`materials`. The face must have the preset's tissue geometry
@@ -64,41 +69,13 @@ class Physics:
     params: Parameters
     dynamic: np.ndarray  # nodes that move under forces, ascending
     inv_mass: np.ndarray  # (nodes,) 1/kg (0 for kinematic nodes)
-    spring_i: np.ndarray
-    spring_j: np.ndarray
-    spring_rest: np.ndarray
-    spring_k_low: np.ndarray
-    spring_k_high: np.ndarray
-    spring_biphasic: np.ndarray
-    spring_damping: np.ndarray  # N s/m per spring
-    prism_nodes: np.ndarray
-    prism_rest_volume: np.ndarray
-    prism_rest_rel: np.ndarray
-    prism_bulk: np.ndarray  # K / V0 of the pressure term (continuum), 0 for the seeds
-    tied: np.ndarray  # nodes held to an anchor on the bone: the seeds' tied fascia (eq. 11),
-    # the continuum's sliding skull nodes (a weak tether standing for the areolar tissue)
-    tied_skull: np.ndarray  # the seeds': their skull nodes (eq. 10)
-    tied_weight: np.ndarray  # share of the jaw's rotation of each anchor
-    tied_height: np.ndarray  # m, rest height of each tied fascia node above its skull node
-    restore_k: np.ndarray  # N/m, stiffness holding each tied node to its anchor
-    bone_k: np.ndarray  # N/m, one-sided contact of each tied node with the bone (continuum)
-    skull_contact: bool  # eq. (10) on the tied nodes
+    forces: ForceBundles  # the force kernel's constants: springs, prisms, muscles, tied nodes
+    # (the seeds' tied fascia, eq. 11; the continuum's sliding skull nodes), lip contact, slabs
+    tied_weight: np.ndarray  # share of the jaw's rotation of each tied node's anchor
     jaw_nodes: np.ndarray
     jaw_weights: np.ndarray  # share of the jaw's rotation of each jaw node
-    contact_k: np.ndarray  # N/m, lip contact stiffness of each pair
-    muscle_group: np.ndarray
-    muscle_kind: np.ndarray
-    muscle_origin: np.ndarray
-    muscle_ptr: np.ndarray
-    muscle_nodes: np.ndarray
-    muscle_weights: np.ndarray
-    muscle_rest: np.ndarray
-    muscle_area: np.ndarray  # m^2
-    muscle_k_passive: np.ndarray  # N/m
-    muscle_pull: int  # MusclePull: towards the origin (seeds) or along the muscle's length
-    muscle_offset: np.ndarray  # (m, 3) m, origin point minus origin node (fixed origins)
-    muscle_bead: np.ndarray  # (entries,) global bead of each muscle entry
-    bead_start: np.ndarray  # (muscles + 1,) first global bead of each muscle
+    muscle_group: np.ndarray  # (muscles,) the group (column of the activity) of each instance
+    muscle_area: np.ndarray  # (muscles,) m^2
 
     @classmethod
     def build(cls, model: FaceModel, params: Parameters) -> Physics:
@@ -166,31 +143,35 @@ class Physics:
         bead_start = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
         owner = np.repeat(np.arange(len(mus)), np.diff(mus.ptr))
         muscle_bead = (bead_start[owner] + local).astype(np.int64)
+        springs = SpringBundle.make(
+            i=model.spring_i.astype(np.int64), j=model.spring_j.astype(np.int64),
+            rest_length=l0, k_low=np.asarray(k_low, float), k_high=np.asarray(k_high, float),
+            biphasic=biphasic, damping=np.asarray(damping, float), knee=params.biphasic_knee,
+            sigma=params.sigma)
+        prisms = PrismBundle(
+            nodes=model.prism_nodes.astype(np.int64), rest_volume=vols, rest_rel=rel,
+            k_volume=params.k_volume, k_shape=params.k_shape, bulk=np.asarray(bulk, float))
+        muscles = MuscleBundle(
+            kind=mus.kind, origin=mus.origin, offset=mus.offsets(), ptr=mus.ptr,
+            nodes=mus.nodes, weights=mus.weights, bead=muscle_bead, bead_start=bead_start,
+            rest_length=mus.rest_length,
+            k_passive=np.array([params.passive_stiffness(g) for g in groups]),
+            pull=PULL_ALONG_LENGTH if params.is_continuum else PULL_TOWARDS_ORIGIN,
+            f1=params.f1, f2=params.f2, f3=params.f3, f4=muscle_f4(params, mus.rest_length))
+        restoration = RestorationBundle(
+            nodes=tied, skull=tied_skull, height=tied_height,
+            k_restore=np.asarray(restore_k, float), bone_k=np.asarray(bone_k, float),
+            skull_contact=bool(params.fixed_skull_contact and not params.is_continuum))
+        contact = ContactBundle(pairs=model.lip_pairs, normals=model.lip_normals,
+                                k=np.asarray(contact, float))
         return cls(
             model=model, params=params, dynamic=dynamic, inv_mass=inv_mass,
-            spring_i=model.spring_i.astype(np.int64), spring_j=model.spring_j.astype(np.int64),
-            spring_rest=l0, spring_k_low=np.asarray(k_low, float),
-            spring_k_high=np.asarray(k_high, float), spring_biphasic=biphasic,
-            spring_damping=np.asarray(damping, float),
-            prism_nodes=model.prism_nodes.astype(np.int64), prism_rest_volume=vols,
-            prism_rest_rel=rel, prism_bulk=np.asarray(bulk, float),
-            tied=tied, tied_skull=tied_skull, tied_weight=jaw[tied_skull],
-            tied_height=tied_height, restore_k=np.asarray(restore_k, float),
-            bone_k=np.asarray(bone_k, float),
-            skull_contact=bool(params.fixed_skull_contact and not params.is_continuum),
-            jaw_nodes=np.asarray(model.jaw_nodes, np.int64),
-            jaw_weights=np.asarray(model.jaw_weight, float),
-            contact_k=np.asarray(contact, float),
-            muscle_group=model.muscles.group, muscle_kind=model.muscles.kind,
-            muscle_origin=model.muscles.origin, muscle_ptr=model.muscles.ptr,
-            muscle_nodes=model.muscles.nodes, muscle_weights=model.muscles.weights,
-            muscle_rest=model.muscles.rest_length,
+            forces=_with_slabs(ForceBundles(springs, prisms, muscles, restoration, contact),
+                               rest, dynamic),
+            tied_weight=jaw[tied_skull], jaw_nodes=np.asarray(model.jaw_nodes, np.int64),
+            jaw_weights=np.asarray(model.jaw_weight, float), muscle_group=mus.group,
             muscle_area=np.array([params.instance_area(nm, g)
-                                  for nm, g in zip(mus.names, groups, strict=True)]),
-            muscle_k_passive=np.array([params.passive_stiffness(g) for g in groups]),
-            muscle_pull=PULL_ALONG_LENGTH if params.is_continuum else PULL_TOWARDS_ORIGIN,
-            muscle_bead=muscle_bead, bead_start=bead_start, muscle_offset=mus.offsets(),
-        )
+                                  for nm, g in zip(mus.names, groups, strict=True)]))
 
     @property
     def n_muscles(self) -> int:
@@ -545,7 +526,7 @@ def accumulate_forces(forces, pos, vel, muscle_force, anchors, out):
     Parameters
     ----------
     forces : ForceBundles -- the springs, prisms, muscles, restoration and lip contact
-        (:func:`force_bundles`)
+        (:attr:`Physics.forces`)
     pos, vel : (nodes, 3) m and m/s
     muscle_force : (muscles,) N -- the filtered force M of eq. (4) of each muscle instance
     anchors : Anchors -- the tied nodes' anchors and the bone's normals there, already moved
@@ -666,39 +647,25 @@ def accumulate_forces(forces, pos, vel, muscle_force, anchors, out):
                 out[i, a] -= fn * tied_normal[k, a]
 
 
-def force_bundles(ph: Physics) -> ForceBundles:
-    """The constant arguments of :func:`accumulate_forces` for a model: every solver's, and
-    the way tests and benchmarks make them.
+def _with_slabs(forces: ForceBundles, rest: np.ndarray, dynamic: np.ndarray) -> ForceBundles:
+    """``forces`` with the springs and prisms also sorted into slabs for numba's threads
+    (:func:`~facemech.physics.slabs.slab_bundles`), where the mesh has
+    :data:`PARALLEL_MIN_ELEMENTS` of them or more.
 
     Parameters
     ----------
-    ph : Physics
+    forces : ForceBundles -- without slabs
+    rest : (nodes, 3) m -- rest positions
+    dynamic : (d,) int64 -- the nodes that move under forces
 
     Returns
     -------
     ForceBundles
     """
-    p = ph.params
-    bundles = ForceBundles(
-        springs=SpringBundle.make(
-            i=ph.spring_i, j=ph.spring_j, rest_length=ph.spring_rest, k_low=ph.spring_k_low,
-            k_high=ph.spring_k_high, biphasic=ph.spring_biphasic, damping=ph.spring_damping,
-            knee=p.biphasic_knee, sigma=p.sigma),
-        prisms=PrismBundle(
-            nodes=ph.prism_nodes, rest_volume=ph.prism_rest_volume, rest_rel=ph.prism_rest_rel,
-            k_volume=p.k_volume, k_shape=p.k_shape, bulk=ph.prism_bulk),
-        muscles=muscle_bundle(ph),
-        restoration=RestorationBundle(
-            nodes=ph.tied, skull=ph.tied_skull, height=ph.tied_height, k_restore=ph.restore_k,
-            bone_k=ph.bone_k, skull_contact=ph.skull_contact),
-        contact=ContactBundle(pairs=ph.model.lip_pairs, normals=ph.model.lip_normals,
-                              k=ph.contact_k),
-    )
-    if len(ph.spring_i) + len(ph.prism_nodes) < PARALLEL_MIN_ELEMENTS:
-        return bundles
-    return bundles._replace(slabs=slab_bundles(bundles.springs, bundles.prisms,
-                                               ph.model.rest_positions,
-                                               nb.config.NUMBA_NUM_THREADS, ph.dynamic))
+    if len(forces.springs.i) + len(forces.prisms.nodes) < PARALLEL_MIN_ELEMENTS:
+        return forces
+    return forces._replace(slabs=slab_bundles(forces.springs, forces.prisms, rest,
+                                              nb.config.NUMBA_NUM_THREADS, dynamic))
 
 
 def muscle_f4(p: Parameters, rest_length: np.ndarray) -> np.ndarray:
@@ -712,23 +679,13 @@ def muscle_f4(p: Parameters, rest_length: np.ndarray) -> np.ndarray:
     return fibre_f4(rest_length, p.fv_vmax, p.fv_curvature, p.f1, p.f2, p.f3)
 
 
-def muscle_bundle(ph: Physics) -> MuscleBundle:
-    """The muscle instances of a model and its preset's Hill constants, as the kernels read
-    them."""
-    p = ph.params
-    return MuscleBundle(
-        kind=ph.muscle_kind, origin=ph.muscle_origin, offset=ph.muscle_offset, ptr=ph.muscle_ptr,
-        nodes=ph.muscle_nodes, weights=ph.muscle_weights, bead=ph.muscle_bead,
-        bead_start=ph.bead_start, rest_length=ph.muscle_rest, k_passive=ph.muscle_k_passive,
-        pull=ph.muscle_pull, f1=p.f1, f2=p.f2, f3=p.f3, f4=muscle_f4(p, ph.muscle_rest))
-
-
-def rest_anchors(ph: Physics) -> Anchors:
+def rest_anchors(physics: Physics) -> Anchors:
     """The tied nodes' anchors with the jaw closed: their rest positions and the bone's
     normals there (new arrays)."""
-    return Anchors(rest=ph.model.rest_positions[ph.tied].copy(),
-                   normal=ph.model.skull_normals[ph.tied_skull].copy())
+    restoration = physics.forces.restoration
+    return Anchors(rest=physics.model.rest_positions[restoration.nodes].copy(),
+                   normal=physics.model.skull_normals[restoration.skull].copy())
 
 
-__all__ = ["Physics", "accumulate_forces", "force_bundles", "muscle_bundle", "muscle_lengths",
-           "rest_anchors", "SPHINCTER"]
+__all__ = ["Physics", "accumulate_forces", "muscle_f4", "muscle_lengths", "rest_anchors",
+           "SPHINCTER"]

@@ -2,8 +2,8 @@
 
 Each bundle is a :class:`typing.NamedTuple` of arrays and numbers, which numba compiles as a
 typed tuple (attribute access by name inside the kernels, no cost per call beyond a tuple's).
-:func:`facemech.physics.assembly.force_bundles` makes them from a
-:class:`~facemech.physics.assembly.Physics`; a test or a small system can make them by name.
+:class:`~facemech.physics.assembly.Physics` builds them from a face model and holds them
+(``physics.forces``, a :class:`ForceBundles`); a test or a small system can make them by name.
 Units are SI; ``s`` springs, ``p`` prisms, ``m`` muscle instances, ``e`` muscle entries (node and
 weight pairs), ``b`` beads, ``t`` tied nodes, ``c`` lip contact pairs.
 
@@ -220,8 +220,8 @@ class SlabBundle(NamedTuple):
 
 
 class ForceBundles(NamedTuple):
-    """Every constant argument of :func:`~facemech.physics.assembly.accumulate_forces`;
-    ``slabs`` (none by default) lets it use several threads."""
+    """Every constant argument of :func:`~facemech.physics.assembly.accumulate_forces`
+    (``Physics.forces``); ``slabs`` (none by default) lets it use several threads."""
 
     springs: SpringBundle
     prisms: PrismBundle

@@ -20,7 +20,7 @@ SEED_SPRING_KINDS = (SpringKind.EPIDERMIS, SpringKind.DERMAL_FATTY, SpringKind.F
 
 
 class MusclePull(IntEnum):
-    """How a muscle's tension reaches the nodes (``Physics.muscle_pull``)."""
+    """How a muscle's tension reaches the nodes (``MuscleBundle.pull``)."""
 
     TOWARDS_ORIGIN = 0  # the seeds': each insertion node pulled towards the origin node
     ALONG_LENGTH = 1  # the continuum's: minus the tension times the gradient of the length,

@@ -21,7 +21,7 @@ import numba as nb
 import numpy as np
 
 from ..params import MUSCLE_GROUPS
-from .assembly import Physics, muscle_bundle, muscle_f4, muscle_lengths
+from .assembly import Physics, muscle_lengths
 from .muscle import hill_force
 
 #: the quantities of :class:`MuscleSeries` as (attribute, results variable, units, long name)
@@ -73,16 +73,15 @@ def muscle_outputs(physics: Physics, positions: np.ndarray, velocities: np.ndarr
     -------
     MuscleOutputs
     """
-    ph = physics
-    p = ph.params
+    p = physics.params
     pos = np.ascontiguousarray(positions, float)
     vel = np.ascontiguousarray(velocities, float)
     act = np.ascontiguousarray(activation, float)
-    length, rate = muscle_lengths(muscle_bundle(ph), pos, vel)
-    force = np.empty(ph.n_muscles)
-    _tensions(act, length, rate, ph.muscle_rest, ph.muscle_k_passive, p.f1, p.f2, p.f3,
-              muscle_f4(p, ph.muscle_rest),
-              force)
+    muscles = physics.forces.muscles
+    length, rate = muscle_lengths(muscles, pos, vel)
+    force = np.empty(physics.n_muscles)
+    _tensions(act, length, rate, muscles.rest_length, muscles.k_passive, p.f1, p.f2, p.f3,
+              muscles.f4, force)
     return MuscleOutputs(force, length, rate, act.copy())
 
 
@@ -143,11 +142,11 @@ class MuscleRecorder:
             arr[frame] = getattr(out, name)
 
     def series(self) -> MuscleSeries:
-        ph = self.physics
+        physics = self.physics
         return MuscleSeries(
-            names=tuple(ph.model.muscles.names),
-            groups=tuple(MUSCLE_GROUPS[g] for g in ph.muscle_group),
-            max_force=ph.params.k_force * ph.muscle_area,
+            names=tuple(physics.model.muscles.names),
+            groups=tuple(MUSCLE_GROUPS[g] for g in physics.muscle_group),
+            max_force=physics.params.k_force * physics.muscle_area,
             **self._arrays)
 
 

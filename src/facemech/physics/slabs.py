@@ -122,7 +122,7 @@ def slab_bundles(springs: SpringBundle, prisms: PrismBundle, rest: np.ndarray,
 
     Parameters
     ----------
-    springs, prisms : the mesh's, as :func:`~facemech.physics.assembly.force_bundles` makes them
+    springs, prisms : the mesh's, as :class:`~facemech.physics.assembly.Physics` builds them
     rest : (nodes, 3) m -- rest positions
     threads : int -- the most threads the slabs are for
     dynamic : (d,) int, optional -- the nodes that move under forces (default: all)

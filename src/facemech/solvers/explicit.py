@@ -150,38 +150,45 @@ class ExplicitEuler:
             raise InputError(f"the {p.name} preset needs an implicit integrator (implicit or "
                              "rosenbrock): its muscle forces and tissue viscosity make explicit "
                              "Euler steps unstable", field="integrator")
-        ss = solver_state(physics, self.steps_per_frame(p.frame_rate))
-        _warm_up(ss, physics)
-        return ss
+        prepared = solver_state(physics, self.steps_per_frame(p.frame_rate))
+        _warm_up(prepared, physics)
+        return prepared
 
     def step(self, solver_state: SolverState, state: State, controls: Controls) -> State:
         """``state`` advanced by one frame under ``controls`` (a new :class:`State`)."""
-        ss = solver_state
-        f = start_frame(ss, state, controls)
-        steps = EulerSteps(ss.n_steps, ss.step, ss.tau, ss.dynamic, ss.inv_mass, ss.zeta)
+        f = start_frame(solver_state, state, controls)
+        steps = _euler_steps(solver_state, solver_state.n_steps)
         try:
             pos, vel, m_force, m_rate = euler_frame(
-                ss.forces, ss.jaw, steps, f.positions, f.velocities, f.muscle_force,
-                f.muscle_force_rate, f.muscle_steady, f.anchors, f.jaw_start, f.jaw_rate)
+                solver_state.forces, solver_state.jaw, steps, f.positions, f.velocities,
+                f.muscle_force, f.muscle_force_rate, f.muscle_steady, f.anchors, f.jaw_start,
+                f.jaw_rate)
         except ZeroDivisionError:  # a spring or prism collapsed: nodes met mid-frame
-            frame = int(round(state.time / ss.frame_duration)) + 1
+            frame = int(round(state.time / solver_state.frame_duration)) + 1
             raise SimulationBlowUp(
                 "nodes collapsed onto each other within the frame; likely cause: the time "
-                f"step ({ss.step * 1e3:.3g} ms) is too large for the stiffness and damping (try "
-                "a smaller --dt)", frame=frame) from None
-        return finish_frame(ss, state, controls, pos, vel, m_force, m_rate, f.jaw_rate)
+                f"step ({solver_state.step * 1e3:.3g} ms) is too large for the stiffness and "
+                "damping (try a smaller --dt)", frame=frame) from None
+        return finish_frame(solver_state, state, controls, pos, vel, m_force, m_rate, f.jaw_rate)
 
 
-def _warm_up(ss: SolverState, physics: Physics) -> None:
+def _warm_up(solver_state: SolverState, physics: Physics) -> None:
     """Compile (or load) the kernels now, so that timings of the first frame are not the
     compiler's: a frame of zero steps touches every kernel and changes nothing."""
     pos = physics.model.rest_positions.copy()
-    m = np.zeros(len(ss.muscle_group))
+    m = np.zeros(len(solver_state.muscle_group))
     anchors = rest_anchors(physics)
-    steps = EulerSteps(0, ss.step, ss.tau, ss.dynamic, ss.inv_mass, ss.zeta)
-    euler_frame(ss.forces, ss.jaw, steps, pos, np.zeros_like(pos), m, m, m, anchors,
-                np.zeros(3), np.zeros(3))
-    accumulate_forces(ss.forces, pos, np.zeros_like(pos), m, anchors, np.zeros_like(pos))
+    steps = _euler_steps(solver_state, 0)
+    euler_frame(solver_state.forces, solver_state.jaw, steps, pos, np.zeros_like(pos), m, m, m,
+                anchors, np.zeros(3), np.zeros(3))
+    accumulate_forces(solver_state.forces, pos, np.zeros_like(pos), m, anchors,
+                      np.zeros_like(pos))
+
+
+def _euler_steps(solver_state: SolverState, n_steps: int) -> EulerSteps:
+    """The :class:`EulerSteps` of ``n_steps`` steps of a solver state."""
+    return EulerSteps(n_steps, solver_state.step, solver_state.tau, solver_state.dynamic,
+                      solver_state.inv_mass, solver_state.zeta)
 
 
 __all__ = ["ExplicitEuler", "EulerSteps", "euler_frame"]

@@ -113,12 +113,14 @@ def implicit_system(physics: Physics, h: float) -> ImplicitSystem:
     stiff branch, the volume term's Gram matrices and the tethers (see the module doc); the
     muscles join the solve through their beads.
     """
-    ph, p = physics, physics.params
-    nd = ph.n_dynamic
-    row = np.full(ph.model.n_nodes, -1, np.int64)
-    row[ph.dynamic] = np.arange(nd)
-    si, sj = row[ph.spring_i], row[ph.spring_j]
-    pn = row[ph.prism_nodes]
+    p = physics.params
+    forces = physics.forces
+    springs, prisms, restoration = forces.springs, forces.prisms, forces.restoration
+    nd = physics.n_dynamic
+    row = np.full(physics.model.n_nodes, -1, np.int64)
+    row[physics.dynamic] = np.arange(nd)
+    si, sj = row[springs.i], row[springs.j]
+    pn = row[prisms.nodes]
     a_idx = np.repeat(np.arange(6), 6)
     b_idx = np.tile(np.arange(6), 6)
     ra, rb = pn[:, a_idx].reshape(-1), pn[:, b_idx].reshape(-1)
@@ -128,26 +130,26 @@ def implicit_system(physics: Physics, h: float) -> ImplicitSystem:
         # over-damps acts as inertia and makes the step ring; stiffness: a share of each
         # spring's stiff branch, the volume term's Gram matrices (within a factor 3 of its
         # rank-one Hessian) and the tethers
-        damp = _graph_matrix(si, sj, ph.spring_damping, nd)
-        k_springs = _graph_matrix(si, sj, IMPLICIT_STIFFNESS_SHARE * ph.spring_k_high, nd)
-        grads = volume_gradients(ph.model.rest_positions[ph.prism_nodes])  # (p, 6, 3)
-        gram = np.einsum("pac,pbc->pab", grads, grads) * ph.prism_bulk[:, None, None]
+        damp = _graph_matrix(si, sj, springs.damping, nd)
+        k_springs = _graph_matrix(si, sj, IMPLICIT_STIFFNESS_SHARE * springs.k_high, nd)
+        grads = volume_gradients(physics.model.rest_positions[prisms.nodes])  # (p, 6, 3)
+        gram = np.einsum("pac,pbc->pab", grads, grads) * prisms.bulk[:, None, None]
         tether = np.zeros(nd)
-        np.add.at(tether, row[ph.tied], ph.restore_k)
+        np.add.at(tether, row[restoration.nodes], restoration.k_restore)
         stiff = (k_springs + sp.csc_matrix((gram.reshape(-1)[ok], (ra[ok], rb[ok])),
                                            shape=(nd, nd)) + sp.diags(tether)).tocsc()
-        mass = 1.0 / ph.inv_mass[ph.dynamic]
+        mass = 1.0 / physics.inv_mass[physics.dynamic]
     else:
-        k_tan = ph.spring_k_low * 0.5 * (1.0 + 0.5 * np.pi * p.sigma)
+        k_tan = springs.k_low * 0.5 * (1.0 + 0.5 * np.pi * p.sigma)
         stiff = _graph_matrix(si, sj, k_tan, nd)
         # shape term of eq. (9): d(-k_e2 (x_a - centroid))/dx_b = -k_e2 (delta_ab - 1/6)
         coef = p.k_shape * ((a_idx == b_idx).astype(float) - 1.0 / 6.0)
         cv = np.broadcast_to(coef, (len(pn), 36)).reshape(-1)
         stiff = stiff + sp.csc_matrix((cv[ok], (ra[ok], rb[ok])), shape=(nd, nd))
         restore = np.zeros(nd)
-        restore[row[ph.tied]] = ph.restore_k
+        restore[row[restoration.nodes]] = restoration.k_restore
         stiff = stiff + sp.diags(restore)
-        damp = _graph_matrix(si, sj, ph.spring_damping, nd)
+        damp = _graph_matrix(si, sj, springs.damping, nd)
         mass = np.full(nd, p.node_mass)
     stiff = stiff.tocsc()
     a_mat = (sp.diags(mass) + h * damp + h * h * stiff).tocsc()
@@ -157,7 +159,7 @@ def implicit_system(physics: Physics, h: float) -> ImplicitSystem:
               options={"SymmetricMode": True})
     return ImplicitSystem(stiffness=stiff.tocsr(), damping=damp.tocsr(), mass=mass, lu=lu,
                           factor_step=h,
-                          muscles=MuscleJacobian(ph, lu) if p.is_continuum else None)
+                          muscles=MuscleJacobian(physics, lu) if p.is_continuum else None)
 
 
 def _graph_matrix(i: np.ndarray, j: np.ndarray, w: np.ndarray, nd: int) -> sp.csc_matrix:
@@ -186,28 +188,29 @@ def _check_substeps(substeps) -> int:
 def _init(physics: Physics, substeps: int, gamma: float) -> SolverState:
     frame = 1.0 / physics.params.frame_rate
     system = implicit_system(physics, gamma * (frame / substeps))
-    ss = solver_state(physics, substeps, system)
-    _warm_up(ss, physics)
-    return ss
+    prepared = solver_state(physics, substeps, system)
+    _warm_up(prepared, physics)
+    return prepared
 
 
-def _warm_up(ss: SolverState, physics: Physics) -> None:
+def _warm_up(solver_state: SolverState, physics: Physics) -> None:
     """Compile (or load) the kernels now, so that timings of the first frame are not the
     compiler's."""
     pos = physics.model.rest_positions.copy()
     vel = np.zeros_like(pos)
-    m = np.zeros(len(ss.muscle_group))
-    place_jaw_into(ss.jaw, np.zeros(3), np.zeros(3), pos, vel)
+    m = np.zeros(len(solver_state.muscle_group))
+    place_jaw_into(solver_state.jaw, np.zeros(3), np.zeros(3), pos, vel)
     anchors = rest_anchors(physics)
-    accumulate_forces(ss.forces, pos, vel, m, anchors, np.zeros_like(pos))
-    _contacts(ss, pos, vel, anchors)
-    filter_exact(m, m, m, ss.tau, ss.step, ss.zeta)
-    ss.system.linearise(pos, vel, m + 1.0, m)
+    accumulate_forces(solver_state.forces, pos, vel, m, anchors, np.zeros_like(pos))
+    _contacts(solver_state, pos, vel, anchors)
+    filter_exact(m, m, m, solver_state.tau, solver_state.step, solver_state.zeta)
+    solver_state.system.linearise(pos, vel, m + 1.0, m)
 
 
-def _frame_force_bound(ss: SolverState, m_force, m_rate, m_steady):
+def _frame_force_bound(solver_state: SolverState, m_force, m_rate, m_steady):
     """The larger of each muscle's filtered force now and at the frame's end (eq. 4)."""
-    end, _ = filter_exact(m_force, m_rate, m_steady, ss.tau, ss.frame_duration, ss.zeta)
+    end, _ = filter_exact(m_force, m_rate, m_steady, solver_state.tau,
+                          solver_state.frame_duration, solver_state.zeta)
     return np.maximum(m_force, end)
 
 
@@ -233,27 +236,28 @@ class LinearImplicitEuler:
 
     def step(self, solver_state: SolverState, state: State, controls: Controls) -> State:
         """``state`` advanced by one frame under ``controls`` (a new :class:`State`)."""
-        ss = solver_state
-        system = ss.system
-        f = start_frame(ss, state, controls)
+        system = solver_state.system
+        f = start_frame(solver_state, state, controls)
         pos, vel = f.positions, f.velocities
         m_force, m_rate, m_steady = f.muscle_force, f.muscle_force_rate, f.muscle_steady
-        dyn = ss.dynamic
-        h = ss.step
+        dyn = solver_state.dynamic
+        h = solver_state.step
         out = np.zeros_like(pos)
-        jac = system.linearise(pos, vel, _frame_force_bound(ss, m_force, m_rate, m_steady),
+        jac = system.linearise(pos, vel,
+                               _frame_force_bound(solver_state, m_force, m_rate, m_steady),
                                m_steady)
-        for step in range(ss.n_steps):
-            anchors = place_jaw_into(ss.jaw, f.jaw_start + f.jaw_rate * (step * h), f.jaw_rate,
-                                     pos, vel)
-            accumulate_forces(ss.forces, pos, vel, m_force, anchors, out)
+        for step in range(solver_state.n_steps):
+            anchors = place_jaw_into(solver_state.jaw, f.jaw_start + f.jaw_rate * (step * h),
+                                     f.jaw_rate, pos, vel)
+            accumulate_forces(solver_state.forces, pos, vel, m_force, anchors, out)
             v0 = vel[dyn]
             rhs = h * (out[dyn] - h * system.apply_stiffness(v0, jac))
             vel[dyn] = v0 + system.solve(rhs, jac, h)
             pos[dyn] += h * vel[dyn]
-            _contacts(ss, pos, vel, anchors)
-            m_force, m_rate = filter_exact(m_force, m_rate, m_steady, ss.tau, h, ss.zeta)
-        return finish_frame(ss, state, controls, pos, vel, m_force, m_rate, f.jaw_rate)
+            _contacts(solver_state, pos, vel, anchors)
+            m_force, m_rate = filter_exact(m_force, m_rate, m_steady, solver_state.tau, h,
+                                           solver_state.zeta)
+        return finish_frame(solver_state, state, controls, pos, vel, m_force, m_rate, f.jaw_rate)
 
 
 @dataclass(frozen=True)
@@ -279,57 +283,59 @@ class Rosenbrock2:
 
     def step(self, solver_state: SolverState, state: State, controls: Controls) -> State:
         """``state`` advanced by one frame under ``controls`` (a new :class:`State`)."""
-        ss = solver_state
-        system = ss.system
-        f = start_frame(ss, state, controls)
+        system = solver_state.system
+        f = start_frame(solver_state, state, controls)
         pos, vel = f.positions, f.velocities
         m_force, m_rate, m_steady = f.muscle_force, f.muscle_force_rate, f.muscle_steady
-        dyn = ss.dynamic
-        h = ss.step
-        inv_m = ss.inv_mass[dyn][:, None]
+        dyn = solver_state.dynamic
+        h = solver_state.step
+        inv_m = solver_state.inv_mass[dyn][:, None]
         out = np.zeros_like(pos)
-        jac = system.linearise(pos, vel, _frame_force_bound(ss, m_force, m_rate, m_steady),
+        jac = system.linearise(pos, vel,
+                               _frame_force_bound(solver_state, m_force, m_rate, m_steady),
                                m_steady)
-        for step in range(ss.n_steps):
+        for step in range(solver_state.n_steps):
             x0, v0 = pos[dyn].copy(), vel[dyn].copy()
-            anchors = place_jaw_into(ss.jaw, f.jaw_start + f.jaw_rate * (step * h), f.jaw_rate,
-                                     pos, vel)
-            accumulate_forces(ss.forces, pos, vel, m_force, anchors, out)
-            k1x, k1v = _ros2_stage(ss, v0, out[dyn] * inv_m, jac)
+            anchors = place_jaw_into(solver_state.jaw, f.jaw_start + f.jaw_rate * (step * h),
+                                     f.jaw_rate, pos, vel)
+            accumulate_forces(solver_state.forces, pos, vel, m_force, anchors, out)
+            k1x, k1v = _ros2_stage(solver_state, v0, out[dyn] * inv_m, jac)
             pos[dyn] = x0 + h * k1x
             vel[dyn] = v0 + h * k1v
-            m_force, m_rate = filter_exact(m_force, m_rate, m_steady, ss.tau, h, ss.zeta)
-            anchors = place_jaw_into(ss.jaw, f.jaw_start + f.jaw_rate * ((step + 1) * h),
+            m_force, m_rate = filter_exact(m_force, m_rate, m_steady, solver_state.tau, h,
+                                           solver_state.zeta)
+            anchors = place_jaw_into(solver_state.jaw, f.jaw_start + f.jaw_rate * ((step + 1) * h),
                                      f.jaw_rate, pos, vel)
-            accumulate_forces(ss.forces, pos, vel, m_force, anchors, out)
-            k2x, k2v = _ros2_stage(ss, vel[dyn] - 2.0 * k1x, out[dyn] * inv_m - 2.0 * k1v, jac)
+            accumulate_forces(solver_state.forces, pos, vel, m_force, anchors, out)
+            k2x, k2v = _ros2_stage(solver_state, vel[dyn] - 2.0 * k1x,
+                                   out[dyn] * inv_m - 2.0 * k1v, jac)
             pos[dyn] = x0 + h * (1.5 * k1x + 0.5 * k2x)
             vel[dyn] = v0 + h * (1.5 * k1v + 0.5 * k2v)
-            _contacts(ss, pos, vel, anchors)
-        return finish_frame(ss, state, controls, pos, vel, m_force, m_rate, f.jaw_rate)
+            _contacts(solver_state, pos, vel, anchors)
+        return finish_frame(solver_state, state, controls, pos, vel, m_force, m_rate, f.jaw_rate)
 
 
-def _contacts(ss: SolverState, pos: np.ndarray, vel: np.ndarray, anchors) -> None:
+def _contacts(solver_state: SolverState, pos: np.ndarray, vel: np.ndarray, anchors) -> None:
     """The stiff contacts' own implicit step after a step's solve (:mod:`.contacts`), then
     the prisms' volume floor's (:mod:`.volume_floor`)."""
-    c = ss.contacts
+    c = solver_state.contacts
     if len(c.bone_k) or len(c.lip_k):
-        resolve_contacts(pos, vel, ss.inv_mass, c.tied, c.bone_k, anchors.rest, anchors.normal,
-                         c.pairs, c.normals, c.lip_k, ss.step)
-    floor = ss.volume_floor
+        resolve_contacts(pos, vel, solver_state.inv_mass, c.tied, c.bone_k, anchors.rest,
+                         anchors.normal, c.pairs, c.normals, c.lip_k, solver_state.step)
+    floor = solver_state.volume_floor
     if len(floor.floor):
-        resolve_volume_floor(pos, vel, ss.inv_mass, floor.nodes, floor.floor, floor.kappa,
-                             ss.step)
+        resolve_volume_floor(pos, vel, solver_state.inv_mass, floor.nodes, floor.floor,
+                             floor.kappa, solver_state.step)
 
 
-def _ros2_stage(ss: SolverState, r_x, r_v, jac):
+def _ros2_stage(solver_state: SolverState, r_x, r_v, jac):
     """Solve (I - gamma h J) k = r for the state (x, v) with the constant matrices.
 
     With J = [[0, I], [-K/m, -C/m]]: (m + g C + g^2 K) k_v = m r_v - g K r_x and
     k_x = r_x + g k_v, g = gamma h (the factorised matrix).
     """
-    system = ss.system
-    g = ROS2_GAMMA * ss.step
+    system = solver_state.system
+    g = ROS2_GAMMA * solver_state.step
     m = system.mass[:, None]
     k_v = system.solve(m * r_v - g * system.apply_stiffness(r_x, jac), jac, g)
     return r_x + g * k_v, k_v

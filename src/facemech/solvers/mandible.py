@@ -169,5 +169,6 @@ def jaw_bundle(physics) -> JawBundle:
         hinge_point=hinge, hinge_axis=np.asarray(model.hinge_axis, float),
         nodes=physics.jaw_nodes, weights=physics.jaw_weights,
         rest_from_hinge=rest[physics.jaw_nodes] - model.hinge_point,
-        anchor_weights=physics.tied_weight, anchor_rest=rest[physics.tied].copy(),
-        anchor_normal=model.skull_normals[physics.tied_skull].copy())
+        anchor_weights=physics.tied_weight,
+        anchor_rest=rest[physics.forces.restoration.nodes].copy(),
+        anchor_normal=model.skull_normals[physics.forces.restoration.skull].copy())

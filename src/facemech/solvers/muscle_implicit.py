@@ -27,7 +27,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.linalg import lu_factor, lu_solve
 
-from ..physics.assembly import bead_positions, muscle_bundle
+from ..physics.assembly import bead_positions
 from ..physics.kinds import SPHINCTER
 from ..physics.muscle import force_length
 
@@ -175,18 +175,17 @@ class MuscleJacobian:
     THRESHOLD = 1e-6  # N: a muscle with less filtered and steady force takes no part
 
     def __init__(self, physics, lu):
-        ph = physics
-        self.physics = ph
-        self.muscles = muscle_bundle(ph)
+        self.physics = physics
+        self.muscles = physics.forces.muscles
         self.lu = lu
-        row = np.full(ph.model.n_nodes, -1, np.int64)
-        row[ph.dynamic] = np.arange(ph.n_dynamic)
-        r = row[ph.muscle_nodes]
+        row = np.full(physics.model.n_nodes, -1, np.int64)
+        row[physics.dynamic] = np.arange(physics.n_dynamic)
+        r = row[self.muscles.nodes]
         ok = r >= 0
-        self.n_beads = int(ph.bead_start[-1])
-        self.W = sp.csr_matrix((ph.muscle_weights[ok], (r[ok], ph.muscle_bead[ok])),
-                               shape=(ph.n_dynamic, self.n_beads))
-        self.Y = lu.solve(self.W.toarray()) if self.n_beads else np.zeros((ph.n_dynamic, 0))
+        self.n_beads = int(self.muscles.bead_start[-1])
+        self.W = sp.csr_matrix((self.muscles.weights[ok], (r[ok], self.muscles.bead[ok])),
+                               shape=(physics.n_dynamic, self.n_beads))
+        self.Y = lu.solve(self.W.toarray()) if self.n_beads else np.zeros((physics.n_dynamic, 0))
         self.G = np.asarray(self.W.T @ self.Y)
         # a cache of what depends on the set of active muscles only (no state: the results of
         # every call are those of a fresh object)
@@ -198,8 +197,8 @@ class MuscleJacobian:
         key = active.tobytes()
         hit = self._subspaces.get(key)
         if hit is None:
-            ph = self.physics
-            beads = np.concatenate([np.arange(ph.bead_start[m], ph.bead_start[m + 1])
+            bead_start = self.muscles.bead_start
+            beads = np.concatenate([np.arange(bead_start[m], bead_start[m + 1])
                                     for m in active])
             wa = self.W[:, beads].tocsr()
             hit = (beads, (3 * beads[:, None] + np.arange(3)).reshape(-1), wa, wa.T.tocsr(),

@@ -4,7 +4,7 @@ end of a frame that all of them share.
 A solver (:class:`~facemech.solvers.explicit.ExplicitEuler`,
 :class:`~facemech.solvers.implicit.LinearImplicitEuler`,
 :class:`~facemech.solvers.implicit.Rosenbrock2`) is a small frozen description of the method;
-``solver.init(physics)`` returns a :class:`SolverState` (the kernels' bundles, the step, and
+``solver.init(physics)`` returns a :class:`SolverState` (the model's kernel bundles, the step, and
 for the implicit methods the factorised matrix) and ``solver.step(solver_state, state,
 controls)`` returns the next :class:`~facemech.solvers.state.State`, one frame later. Nothing
 is mutated between calls: each step works on its own copies of the state's arrays.
@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING
 import numba as nb
 import numpy as np
 
-from ..physics.assembly import Physics, force_bundles
+from ..physics.assembly import Physics
 from ..physics.bundles import Anchors, ForceBundles
 from ..physics.muscle import activation_exact_damped, max_force
 from .contacts import ImplicitContacts, split_contacts
@@ -36,8 +36,9 @@ class SolverState:
 
     Attributes
     ----------
-    forces : ForceBundles -- the force kernel's constant arguments
-        (:func:`~facemech.physics.assembly.force_bundles`)
+    forces : ForceBundles -- the force kernel's constant arguments: the model's own
+        (:attr:`~facemech.physics.assembly.Physics.forces`), less the contacts an implicit
+        method steps apart
     jaw : JawBundle -- what the mandible carries (:func:`~facemech.solvers.mandible.jaw_bundle`)
     dynamic : (d,) int64 -- the nodes that move under forces, ascending
     inv_mass : (nodes,) 1/kg -- 0 for kinematic nodes
@@ -85,16 +86,18 @@ def solver_state(physics: Physics, n_steps: int,
     (:mod:`.contacts`)."""
     p = physics.params
     frame = 1.0 / p.frame_rate
-    forces = force_bundles(physics)
+    forces = physics.forces
     contacts = ImplicitContacts.empty()
     if system is not None and p.is_continuum and p.implicit_contacts:
         forces, contacts = split_contacts(forces)
     floor = VolumeFloor.empty()
     if system is not None and p.is_continuum and p.volume_floor > 0.0:
-        floor = VolumeFloor.of(physics.prism_nodes, physics.prism_rest_volume, p.volume_floor,
+        prisms = physics.forces.prisms
+        floor = VolumeFloor.of(prisms.nodes, prisms.rest_volume, p.volume_floor,
                                p.volume_floor_modulus)
     return SolverState(
-        forces=forces, contacts=contacts, volume_floor=floor, jaw=jaw_bundle(physics), dynamic=physics.dynamic,
+        forces=forces, contacts=contacts, volume_floor=floor, jaw=jaw_bundle(physics),
+        dynamic=physics.dynamic,
         inv_mass=physics.inv_mass, muscle_group=physics.muscle_group,
         max_force=max_force(p.k_force, physics.muscle_area), tau=p.tau_activation,
         frame_duration=frame, n_steps=int(n_steps), step=frame / n_steps, system=system,
@@ -125,15 +128,15 @@ class FrameStart:
     anchors: Anchors
 
 
-def start_frame(ss: SolverState, state: State, controls: Controls) -> FrameStart:
+def start_frame(solver_state: SolverState, state: State, controls: Controls) -> FrameStart:
     """Copies of ``state``'s arrays with the jaw placed in the frame's start pose."""
     pos = np.array(state.positions)
     vel = np.array(state.velocities)
     start = np.array(controls.jaw_start)
-    rate = (np.asarray(controls.jaw_end) - start) / ss.frame_duration
-    anchors = place_jaw_into(ss.jaw, start + rate * 0.0, rate, pos, vel)
+    rate = (np.asarray(controls.jaw_end) - start) / solver_state.frame_duration
+    anchors = place_jaw_into(solver_state.jaw, start + rate * 0.0, rate, pos, vel)
     return FrameStart(pos, vel, np.array(state.muscle_force), np.array(state.muscle_force_rate),
-                      ss.steady_force(controls.activity), start, rate, anchors)
+                      solver_state.steady_force(controls.activity), start, rate, anchors)
 
 
 def place_jaw_into(jaw: JawBundle, pose: np.ndarray, rate: np.ndarray, pos: np.ndarray,
@@ -145,15 +148,15 @@ def place_jaw_into(jaw: JawBundle, pose: np.ndarray, rate: np.ndarray, pos: np.n
     return anchors
 
 
-def finish_frame(ss: SolverState, state: State, controls: Controls, pos: np.ndarray,
+def finish_frame(solver_state: SolverState, state: State, controls: Controls, pos: np.ndarray,
                  vel: np.ndarray, m_force: np.ndarray, m_rate: np.ndarray,
                  jaw_rate: np.ndarray) -> State:
     """The state at the frame's end: the jaw nodes set in the end pose (moving at
     ``jaw_rate``), time one frame on."""
     target = np.asarray(controls.jaw_end)
-    place_jaw_into(ss.jaw, target + jaw_rate * 0.0, jaw_rate, pos, vel)
-    return State(pos, vel, m_force, m_rate, float(target[0]), state.time + ss.frame_duration,
-                 target[1:])
+    place_jaw_into(solver_state.jaw, target + jaw_rate * 0.0, jaw_rate, pos, vel)
+    return State(pos, vel, m_force, m_rate, float(target[0]),
+                 state.time + solver_state.frame_duration, target[1:])
 
 
 @nb.njit(cache=True)

@@ -1,4 +1,6 @@
-"""Design tables: one row per stimulus, made into results, WAV and MP4 plus a manifest.
+"""Design tables: one row per stimulus, read and checked, and a row's manipulations applied to
+a face and its sound (:func:`make_stimulus`). Making the files (results, WAV and MP4) and the
+manifest: :func:`facemech.workflows.stimuli.run_design`.
 
 A table is CSV (a header row, then one row per stimulus) or TOML (``[[stimulus]]`` tables, and
 an optional ``[defaults]`` table whose keys every stimulus starts from). Columns:
@@ -32,19 +34,15 @@ The manipulations are applied in this order: dub, time scale, amplitude, freeze,
 from __future__ import annotations
 
 import csv
-import hashlib
-import json
 import re
 from collections.abc import Callable
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import FacemechError, InputError, missing_input
 from .wav import Audio
-from .wav import read_audio as read_wav
-from .wav import write_audio as write_wav
 
 SOURCE_COLUMNS = ("results", "audio", "text", "face")
 MANIPULATION_COLUMNS = (
@@ -246,59 +244,6 @@ def _freeze_at(row) -> str | int | float:
                        row=row["_row"], column="freeze_at") from None
 
 
-# ---- making -----------------------------------------------------------------------------------
-@dataclass
-class DesignReport:
-    """What :func:`run_design` did: ids made and skipped, the rows that failed (RowError), and
-    the manifest's paths."""
-
-    made: list[str] = field(default_factory=list)
-    skipped: list[str] = field(default_factory=list)
-    failed: list[RowError] = field(default_factory=list)
-    manifest_json: Path | None = None
-    manifest_csv: Path | None = None
-
-    def summary(self) -> str:
-        return (f"{len(self.made)} made, {len(self.skipped)} unchanged, {len(self.failed)} "
-                f"failed; manifest -> {self.manifest_json}")
-
-
-def _hash_json(obj) -> str:
-    return hashlib.sha256(json.dumps(obj, sort_keys=True, default=str).encode()).hexdigest()[:16]
-
-
-def _source_hash(source: dict, make_item) -> dict:
-    from ..io.results import file_hash
-
-    if "results" in source:
-        return {"results": file_hash(source["results"]), "audio": file_hash(source["audio"])}
-    return {"item": _hash_json({**source, "hook": getattr(make_item, "version", "")})}
-
-
-def _load_source(source: dict, make_item, row: int):
-    from ..io.results import read_results
-
-    if "results" in source:
-        try:
-            ds = read_results(source["results"])
-        except InputError as exc:
-            raise RowError(exc.message, row=row, column="results") from None
-        face = source.get("face")
-        if face is not None and str(ds.attrs.get("face", "")) != face:
-            raise RowError(f"the results were made with the face {ds.attrs.get('face')!r}, "
-                           f"not {face!r}", row=row, column="face")
-        try:
-            audio = read_wav(source["audio"])
-        except InputError as exc:
-            raise RowError(exc.message, row=row, column="audio") from None
-        return ds, audio
-    try:
-        ds, wav = make_item(dict(source))
-    except FacemechError as exc:
-        raise RowError(exc.one_line(), row=row, column="text") from None
-    return ds, (wav if isinstance(wav, Audio) else read_wav(wav))
-
-
 def make_stimulus(ds, audio: Audio, settings: dict, *, dub_audio: Audio | None = None):
     """Apply a row's manipulations (in the order dub, time scale, amplitude, freeze, AV offset)
     to a face and its sound; returns (dataset, Audio)."""
@@ -320,119 +265,6 @@ def make_stimulus(ds, audio: Audio, settings: dict, *, dub_audio: Audio | None =
     if settings.get("av_offset_ms", 0.0) != 0.0:
         ds, audio = st.offset_audio(ds, audio, settings["av_offset_ms"])
     return ds, audio
-
-
-def run_design(table_path: str | Path, out_dir: str | Path, make_item: MakeItem | None = None,
-               *, options=None, video: bool = True,
-               progress: Callable[[str, int, int], None] | None = None) -> DesignReport:
-    """Make every stimulus of a design table in ``out_dir``, with a manifest.
-
-    Each stimulus writes ``ID.nc`` (results), ``ID.wav`` and, with ``video``, ``ID.mp4``
-    (:func:`facemech.viz.video.render_results`, the sound muxed in), each atomically; then the
-    manifest (``manifest.json`` and ``manifest.csv``) is rewritten, so an interrupted run keeps
-    what it made. A row that cannot be made is reported (a :class:`RowError` in the report and
-    the manifest) and the others are still made. A stimulus whose key (a hash of its settings,
-    its inputs' hashes, the render settings and facemech's version) matches the manifest's, and
-    whose files are all there, is skipped.
-
-    Parameters
-    ----------
-    table_path : CSV or TOML design (see the module)
-    out_dir : folder for the stimuli and the manifest
-    make_item : hook for rows without ``results``: ``make_item(row) -> (dataset, WAV path or
-        Audio)``; may carry a ``version`` attribute that enters the key
-    options : :class:`facemech.viz.render.RenderOptions` of the movies
-    video : render the movies
-    progress : callable(stage, done, total)
-
-    Returns
-    -------
-    DesignReport
-    """
-    from .._version import __version__
-    from ..analysis.describe import describe
-    from ..io.results import file_hash, write_dataset
-
-    table_path, out_dir = Path(table_path), Path(out_dir)
-    parsed = check_design(table_path, make_item)  # the whole table, before anything is written
-    specs = {spec.id: spec for spec in parsed}  # every row parsed: a RowError refused it
-    render = _render_settings(options, video)
-    old = _old_entries(out_dir / "manifest.json")
-    report = DesignReport()
-    entries: list[dict] = []
-    cache: dict[str, tuple] = {}
-    total = len(parsed)
-    for done, spec in enumerate(parsed):
-        if progress is not None:
-            progress("stimuli", done, total)
-        try:
-            inputs = {"source": _source_hash(spec.source, make_item)}
-            if "dub_audio" in spec.settings:
-                inputs["dub_audio"] = file_hash(spec.settings["dub_audio"])
-            if "dub_from" in spec.settings:
-                ref = specs.get(spec.settings["dub_from"])
-                if ref is None:
-                    raise RowError(f"row {spec.settings['dub_from']!r} could not be read",
-                                   row=spec.row, column="dub_from")
-                inputs["dub_from"] = _source_hash(ref.source, make_item)
-            key = _hash_json({"settings": spec.settings, "inputs": inputs, "render": render,
-                              "extra": spec.extra, "version": __version__})
-            outputs = {"results": f"{spec.id}.nc", "audio": f"{spec.id}.wav"}
-            if video:
-                outputs["movie"] = f"{spec.id}.mp4"
-            prev = old.get(spec.id)
-            if (prev is not None and prev.get("key") == key and prev.get("status") in (
-                    "made", "unchanged")
-                    and all((out_dir / f).is_file() for f in outputs.values())):
-                entries.append({**prev, "row": spec.row, "status": "unchanged"})
-                report.skipped.append(spec.id)
-                _write_manifest(out_dir, table_path, render, entries, report)
-                continue
-            ds, audio = _item(spec.id, spec.source, make_item, spec.row, cache)
-            dub_audio = None
-            if "dub_audio" in spec.settings:
-                try:
-                    dub_audio = read_wav(spec.settings["dub_audio"])
-                except InputError as exc:
-                    raise RowError(exc.message, row=spec.row, column="dub_audio") from None
-            elif "dub_from" in spec.settings:
-                ref = specs[spec.settings["dub_from"]]
-                dub_audio = _item(ref.id, ref.source, make_item, spec.row, cache)[1]
-            try:
-                ds, audio = make_stimulus(ds, audio, spec.settings, dub_audio=dub_audio)
-            except InputError as exc:
-                raise RowError(exc.message, row=spec.row, column=exc.field) from None
-            ds.attrs["stimulus_id"] = spec.id
-            ds.attrs["stimulus_key"] = key
-            out_dir.mkdir(parents=True, exist_ok=True)
-            write_dataset(out_dir / outputs["results"], ds)
-            write_wav(out_dir / outputs["audio"], audio)
-            if video:
-                from ..viz.video import render_results
-
-                render_results(ds, out_dir / outputs["movie"], options=options,
-                               audio=out_dir / outputs["audio"], source=spec.id,
-                               progress=None if progress is None else (
-                                   lambda d, n, s=spec.id: progress(f"render {s}", d, n)))
-            desc = describe(ds, source=spec.id)
-            entries.append({"id": spec.id, "row": spec.row, "status": "made", "key": key,
-                            "settings": spec.settings, "source": spec.source,
-                            "inputs": inputs, "extra": spec.extra, "notes": spec.notes,
-                            "outputs": outputs, "description": desc.to_dict(),
-                            "flat": desc.flat()})
-            report.made.append(spec.id)
-        except RowError as exc:
-            report.failed.append(_with_source(exc, table_path))
-            entries.append(_failed_entry(exc, spec))
-        except FacemechError as exc:
-            err = _with_source(RowError(exc.one_line(), row=spec.row), table_path)
-            report.failed.append(err)
-            entries.append(_failed_entry(err, spec))
-        _write_manifest(out_dir, table_path, render, entries, report)
-    if progress is not None:
-        progress("stimuli", total, total)
-    _write_manifest(out_dir, table_path, render, entries, report)
-    return report
 
 
 def check_design(table_path: str | Path, make_item: MakeItem | None = None) -> list[Stimulus]:
@@ -480,7 +312,7 @@ def refuse_table(parsed: list, table: Path, make_item: MakeItem | None = None) -
     from .wav import check_audio
 
     def refuse(exc: RowError):
-        err = _with_source(exc, table)
+        err = with_source(exc, table)
         raise InputError(err.message, source=err.source) from None
 
     for spec in parsed:
@@ -511,83 +343,13 @@ def refuse_table(parsed: list, table: Path, make_item: MakeItem | None = None) -
                                 row=spec.row, column="av_offset_ms"))
 
 
-def _item(sid, source, make_item, row, cache):
-    if sid not in cache:
-        cache[sid] = _load_source(source, make_item, row)
-    return cache[sid]
-
-
-def _with_source(exc: RowError, table: Path) -> RowError:
+def with_source(exc: RowError, table: Path) -> RowError:
+    """``exc`` naming the design ``table`` as its source where it names none."""
     if exc.source is None:
         return RowError(exc.detail, row=exc.row, column=exc.column, source=str(table))
     return exc
 
 
-def _failed_entry(exc: RowError, spec: Stimulus) -> dict:
-    return {"id": spec.id, "row": exc.row, "status": "failed",
-            "error": {"column": exc.column, "message": exc.one_line()}}
-
-
-def _render_settings(options, video: bool) -> dict:
-    if not video:
-        return {"video": False}
-    if options is None:
-        from ..viz.render import RenderOptions
-
-        options = RenderOptions()
-    d = dict(asdict(options) if hasattr(options, "__dataclass_fields__") else vars(options))
-    if "size" in d:  # as typed: WIDTHxHEIGHT (RenderOptions keeps (height, width))
-        h, w = d["size"]
-        d["size"] = f"{w}x{h}"
-    return {"video": True, **{k: (list(v) if isinstance(v, tuple) else v)
-                              for k, v in d.items()}}
-
-
-def _old_entries(path: Path) -> dict[str, dict]:
-    if not path.is_file():
-        return {}
-    try:
-        doc = json.loads(path.read_text())
-        return {e["id"]: e for e in doc.get("stimuli", []) if "id" in e}
-    except (ValueError, KeyError, TypeError, AttributeError):
-        return {}  # an unreadable manifest: everything is made again
-
-
-def _write_manifest(out_dir: Path, table: Path, render: dict, entries: list[dict],
-                    report: DesignReport) -> None:
-    from .._version import __version__
-    from ..atomic import atomic_path
-    from ..io.results import file_hash
-
-    out_dir.mkdir(parents=True, exist_ok=True)
-    doc = {"facemech_version": __version__, "table": str(table),
-           "table_hash": file_hash(table), "render": render,
-           "order": ["dub", "time_scale", "amplitude", "freeze", "av_offset"],
-           "stimuli": entries}
-    report.manifest_json = out_dir / "manifest.json"
-    report.manifest_csv = out_dir / "manifest.csv"
-    with atomic_path(report.manifest_json) as tmp:
-        tmp.write_text(json.dumps(doc, indent=1, default=str))
-    cols = ["id", "row", "status", "key", *MANIPULATION_COLUMNS, "source_results",
-            "source_audio", "input_hashes"]
-    flat_cols: list[str] = []
-    for e in entries:
-        for c in e.get("flat", {}):
-            if c not in flat_cols:
-                flat_cols.append(c)
-    cols += [*flat_cols, "notes", "error"]
-    with atomic_path(report.manifest_csv) as tmp, open(tmp, "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=cols, extrasaction="ignore")
-        w.writeheader()
-        for e in entries:
-            rec = {"id": e["id"], "row": e["row"], "status": e["status"],
-                   "key": e.get("key", ""), "notes": e.get("notes", ""),
-                   "error": e.get("error", {}).get("message", "")}
-            rec.update({k: v for k, v in e.get("settings", {}).items()})
-            src = e.get("source", {})
-            rec["source_results"] = src.get("results", src.get("text", ""))
-            rec["source_audio"] = src.get("audio", "")
-            if "inputs" in e:
-                rec["input_hashes"] = json.dumps(e["inputs"], sort_keys=True)
-            rec.update({k: ("" if v is None else v) for k, v in e.get("flat", {}).items()})
-            w.writerow(rec)
+__all__ = ["COLUMNS", "MANIPULATION_COLUMNS", "SOURCE_COLUMNS", "MakeItem", "RowError",
+           "Stimulus", "check_design", "make_stimulus", "parse_row", "read_design",
+           "refuse_table", "with_source"]

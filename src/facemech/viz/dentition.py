@@ -116,13 +116,13 @@ def _crown(tooth: Tooth, centre_s: float, frame, edge_y: float, sign: float, sla
     b = (unit[:, 1] + 1) / 2 if sign > 0 else (1 - unit[:, 1]) / 2
     # boxy ends: the rings keep their size near the poles (an incisor's edge is straight)
     ring = np.abs(np.cos(lat)) ** (0.12 if tooth.kind == "incisor" else 0.35)
-    wf, tf = _profile(tooth.kind, b)
+    width_frac, thick_frac = _profile(tooth.kind, b)
     e = 0.6  # a superellipse: flatter labial and lingual faces than an ellipse
     lon = np.arctan2(unit[:, 0], unit[:, 2])
     sl, cl = np.sin(lon), np.cos(lon)
-    along = np.sign(sl) * np.abs(sl) ** e * wf * ring * (0.5 * tooth.width - 0.5 * GAP)
+    along = np.sign(sl) * np.abs(sl) ** e * width_frac * ring * (0.5 * tooth.width - 0.5 * GAP)
     along *= 1.0 - 0.3 * np.clip(-cl, 0.0, 1.0)  # narrower lingually: the arch converges there
-    out = np.sign(cl) * np.abs(cl) ** e * tf * ring * 0.5 * tooth.thickness
+    out = np.sign(cl) * np.abs(cl) ** e * thick_frac * ring * 0.5 * tooth.thickness
     # the crown bent along the arch: each vertex on the normal through its own place on the
     # arch, so that neighbours' lingual sides, where the arch converges, never meet
     where = centre_s + along
@@ -130,7 +130,7 @@ def _crown(tooth: Tooth, centre_s: float, frame, edge_y: float, sign: float, sla
     n = _at(where, s, nrm)
     n /= np.linalg.norm(n, axis=1, keepdims=True)
     # the labial face on the arch at the edge; the crown leans lingually towards its neck
-    depth = out - 0.5 * tf * tooth.thickness - slant * b * tooth.height
+    depth = out - 0.5 * thick_frac * tooth.thickness - slant * b * tooth.height
     verts = np.stack([c[:, 0] + n[:, 0] * depth, edge_y + sign * b * tooth.height,
                       c[:, 1] + n[:, 1] * depth], -1)
     shade = np.clip(b / 0.5, 0.0, 1.0)[:, None]

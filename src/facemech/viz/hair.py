@@ -124,8 +124,8 @@ def _wander(lon: np.ndarray) -> np.ndarray:
     rng = np.random.default_rng(5)
     k = np.arange(3, 9)
     amp = rng.normal(0, 1, len(k)) / k
-    ph = rng.uniform(0, 2 * np.pi, len(k))
-    w = (amp[:, None] * np.sin(k[:, None] * np.radians(lon)[None, :] + ph[:, None])).sum(0)
+    phase = rng.uniform(0, 2 * np.pi, len(k))
+    w = (amp[:, None] * np.sin(k[:, None] * np.radians(lon)[None, :] + phase[:, None])).sum(0)
     return WANDER * w / np.abs(w).max()
 
 

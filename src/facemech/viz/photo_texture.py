@@ -103,9 +103,9 @@ def bake_photo_texture(fit: PhotoFit, photo: np.ndarray, *, delight: bool = True
     nrm /= np.maximum(np.linalg.norm(nrm, axis=1, keepdims=True), 1e-12)
     cosine = np.einsum("ij,ij->i", nrm, fit.camera.view_direction(pts))
     px = fit.camera.project(pts)
-    ph, pw = photo.shape[:2]
-    inside = ((px[:, 0] >= 0.5) & (px[:, 0] <= pw - 0.5) & (px[:, 1] >= 0.5)
-              & (px[:, 1] <= ph - 0.5))
+    photo_h, photo_w = photo.shape[:2]
+    inside = ((px[:, 0] >= 0.5) & (px[:, 0] <= photo_w - 0.5) & (px[:, 1] >= 0.5)
+              & (px[:, 1] <= photo_h - 0.5))
     lin = _srgb_to_linear(np.asarray(photo[..., :3], float) / 255.0)
     colour = np.stack([map_coordinates(lin[..., c], [px[:, 1] - 0.5, px[:, 0] - 0.5], order=1,
                                        mode="nearest") for c in range(3)], axis=1)
@@ -116,7 +116,8 @@ def bake_photo_texture(fit: PhotoFit, photo: np.ndarray, *, delight: bool = True
     lo, hi = GRAZING
     t = np.clip((cosine - lo) / (hi - lo), 0.0, 1.0)
     top = float(fit.camera.project(fit.vertices)[:, 1].min())
-    weight = t * t * (3 - 2 * t) * inside * _outline_weight(fit.image_points, (ph, pw), px, top)
+    weight = (t * t * (3 - 2 * t) * inside
+              * _outline_weight(fit.image_points, (photo_h, photo_w), px, top))
     skin = _skin_tone(colour, weight, pts, fit)
     out = weight[:, None] * colour + (1 - weight[:, None]) * skin
     image = np.round(_linear_to_srgb(out) * 255).astype(np.uint8).reshape(th, tw, 3)

@@ -36,12 +36,13 @@ if TYPE_CHECKING:
         simulate,
         speak,
         speech,
+        stimuli,
         subject,
     )
 
 __all__ = ["batch", "batch_jobs", "calibrate", "compare", "demo", "emg", "experiments", "faces",
            "invert", "landmarks", "markers", "outcome", "photo", "pictures", "regions",
-           "simulate", "speak", "speech", "subject"]
+           "simulate", "speak", "speech", "stimuli", "subject"]
 
 
 def __getattr__(name: str):

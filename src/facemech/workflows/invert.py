@@ -1,4 +1,8 @@
-"""``facemech invert``: a marker file inverted, the results written, the figure drawn."""
+"""``facemech invert``: a marker file inverted, the results written, the figure drawn.
+
+The files are read here (the markers, the face, the map file); the inversion of the marker
+set on the face is :func:`facemech.inverse.workflow.invert_marker_set`.
+"""
 
 from __future__ import annotations
 
@@ -10,8 +14,10 @@ import numpy as np
 
 from ..errors import InputError
 from ..inverse.workflow import JawMarkers
+from ..markerset import MarkerSet
 
-__all__ = ["JawMarkers", "MarkerFile", "draw", "invert", "notes", "parameters", "report"]
+__all__ = ["JawMarkers", "MarkerFile", "draw", "invert", "invert_markers", "notes",
+           "parameters", "report"]
 
 
 @dataclass(frozen=True)
@@ -43,6 +49,54 @@ def parameters(preset: str | Path = "anatomical", jaw_kinematics: str | None = N
     if jaw_kinematics is not None:
         params = params.with_(jaw_kinematics=jaw_kinematics)
     return params if dt is None else params.with_(fast_dt=dt)
+
+
+def invert_markers(
+    markers: str | Path | MarkerSet,
+    *,
+    face: str | Path = "default",
+    map_file: str | Path | None = None,
+    scale_pair: str | None = None,
+    params=None,
+    method: str = "lsq",
+    positive: bool = True,
+    controls: str | None = None,
+    jaw: JawMarkers | None = None,
+    noise: float | None = None,
+    options: dict | None = None,
+    progress: Callable[[int, int], None] | None = None,
+):
+    """Invert a marker file on a face: the files read, then
+    :func:`facemech.inverse.workflow.invert_marker_set` (its parameters, but these three).
+
+    Parameters
+    ----------
+    markers : marker file (read in its own units; or a :class:`~facemech.markerset.MarkerSet`)
+    face : face file or built-in face name, loaded with the preset's tissue
+    map_file : marker,node CSV (default: the closest nodes; articulography's lips: their
+        vermilion points)
+    scale_pair, params, method, positive, controls, jaw, noise, options, progress : as
+        :func:`~facemech.inverse.workflow.invert_marker_set`
+
+    Returns
+    -------
+    facemech.inverse.result.Inversion
+    """
+    from ..geometry.builder import load_face
+    from ..inverse.methods import method_from_options
+    from ..inverse.workflow import invert_marker_set
+    from ..io.markers import read_markers
+    from ..kinematics.mapping import read_mapping
+    from ..params import default_parameters
+
+    method_from_options(method, **(options or {}))  # a bad option before any file is read
+    params = params or default_parameters()
+    ms = markers if isinstance(markers, MarkerSet) else read_markers(markers)
+    model = load_face(face, tissue=params.tissue)
+    mapping = None if map_file is None else read_mapping(map_file, ms, model)
+    return invert_marker_set(ms, model, mapping=mapping, scale_pair=scale_pair, params=params,
+                             method=method, positive=positive, controls=controls, jaw=jaw,
+                             noise=noise, options=options, progress=progress)
 
 
 def invert(markers: MarkerFile | str | Path, output: str | Path, *,
@@ -77,7 +131,6 @@ def invert(markers: MarkerFile | str | Path, output: str | Path, *,
     facemech.inverse.result.Inversion
     """
     from ..atomic import check_output
-    from ..inverse.workflow import invert_markers
     from ..io.results import file_hash
 
     src = markers if isinstance(markers, MarkerFile) else MarkerFile(Path(markers))

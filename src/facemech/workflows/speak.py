@@ -225,7 +225,7 @@ TEXT_ROW_COLUMNS = ("text", "face", "voice", "rate_wpm", "strength", "preset")
 
 
 def text_items(work_dir: str | Path, *, preset: str = "anatomical"):
-    """The ``make_item`` hook of :func:`facemech.speech.design.run_design` for text rows: each
+    """The ``make_item`` hook of :func:`facemech.workflows.stimuli.run_design` for text rows: each
     row's text spoken by :func:`speak` (no movie) into ``work_dir/<key>/``.
 
     A row may set ``text``, ``face``, ``voice``, ``rate_wpm``, ``strength`` and ``preset``.

@@ -67,14 +67,14 @@ def stimuli(design: str | Path, output: str | Path, *, video: bool = True,
             view: str = "frontal", size: str = "1280x720", background: str = "#2a2c33",
             aa: int = 2, progress=None):
     """Make the stimuli of a design table in the folder ``output``
-    (:func:`facemech.speech.design.run_design`); text rows are spoken by :func:`speak` into
+    (:func:`facemech.workflows.stimuli.run_design`); text rows are spoken by :func:`speak` into
     ``output/items``; the movies' :func:`.pictures.render_options` are ``view``, ``size``,
     ``background``
     and ``aa``; ``progress`` is callable(stage, done, total). Returns the
-    :class:`~facemech.speech.design.DesignReport`."""
+    :class:`~facemech.workflows.stimuli.DesignReport`."""
     from ..atomic import check_output
-    from ..speech.design import run_design
     from .speak import text_items
+    from .stimuli import run_design
 
     check_output(output, [design], folder=True, field="-o")
     return run_design(design, output, text_items(Path(output) / "items"),
