@@ -19,7 +19,7 @@ import numpy as np
 from ..atomic import atomic_path, pending_folder
 from ..errors import InputError
 from ..params import FRAME_RATE_HZ
-from .render import RenderOptions
+from .render import FrameMotion, RenderOptions
 from .scene import Scene
 
 
@@ -54,6 +54,17 @@ def _check(positions: np.ndarray, jaw: np.ndarray | None, scene: Scene,
     return jaw
 
 
+def _poses(motion: FrameMotion | None, frames: int, source: str | None):
+    """Per frame, the keywords the renderer takes besides skin and jaw."""
+    if motion is None:
+        return [{}] * frames
+    if len(motion) != frames:
+        raise InputError(f"the blink, gaze and head series have {len(motion)} frames, the "
+                         f"positions {frames}", source=source, field="motion")
+    return [dict(zip(("blink", "gaze", "head"), motion.at(k), strict=True))
+            for k in range(frames)]
+
+
 def write_movie(
     path: str | Path,
     scene: Scene,
@@ -65,6 +76,7 @@ def write_movie(
     options: RenderOptions | None = None,
     progress: Callable[[int, int], None] | None = None,
     source: str | None = None,
+    motion: FrameMotion | None = None,
 ) -> Path:
     """Render skin trajectories to an H.264 MP4.
 
@@ -79,6 +91,8 @@ def write_movie(
     audio : optional WAV muxed in (AAC); the movie is cut to the shorter of the two
     options : view, size, background and anti-aliasing (default: frontal+profile, 1280x720)
     source : name of the input, for error messages
+    motion : blinks, gaze and head pose per frame (:class:`.render.FrameMotion`; None: still
+        eyes, open lids, the head at rest)
     """
     import imageio_ffmpeg
 
@@ -90,6 +104,7 @@ def write_movie(
     if audio is not None and not Path(audio).is_file():
         raise InputError("audio file not found", source=str(audio))
     jaw = _check(positions, jaw_angle, scene, source)
+    poses = _poses(motion, len(positions), source)
     render = opt.renderer(scene)
     h, w = opt.size
     path = Path(path)
@@ -101,7 +116,7 @@ def write_movie(
         writer.send(None)
         try:
             for k in range(len(positions)):
-                img = render(positions[k], jaw[k])
+                img = render(positions[k], jaw[k], **poses[k])
                 writer.send(np.ascontiguousarray(img[..., :3]))
                 if progress is not None:
                     progress(k + 1, len(positions))
@@ -142,10 +157,12 @@ def write_frames(
     options: RenderOptions | None = None,
     progress: Callable[[int, int], None] | None = None,
     source: str | None = None,
+    motion: FrameMotion | None = None,
 ) -> Path:
     """Render every frame to ``folder/frame_00000.png`` ... (RGBA PNG).
 
-    The folder must not exist or be empty; it appears complete or not at all.
+    The folder must not exist or be empty; it appears complete or not at all. ``motion``:
+    blinks, gaze and head pose per frame, as :func:`write_movie`.
     """
     import matplotlib.image as mpimg
 
@@ -154,13 +171,14 @@ def write_frames(
         raise InputError("the frame folder exists and is not empty", source=str(folder),
                          field="frames")
     jaw = _check(positions, jaw_angle, scene, source)
+    poses = _poses(motion, len(positions), source)
     render = (options or RenderOptions()).renderer(scene)
     folder.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", dir=folder.parent))
     try:
         with pending_folder(tmp):  # removed whole if the command is interrupted
             for k in range(len(positions)):
-                mpimg.imsave(tmp / f"frame_{k:05d}.png", render(positions[k], jaw[k]))
+                mpimg.imsave(tmp / f"frame_{k:05d}.png", render(positions[k], jaw[k], **poses[k]))
                 if progress is not None:
                     progress(k + 1, len(positions))
             if folder.exists():
