@@ -15,8 +15,8 @@ Blinks (:func:`blink_schedule`, :func:`blink_closure`)
     mean interval is 60 / rate. Shape of one blink: the lid closes in :data:`BLINK_CLOSE_S`,
     stays shut :data:`BLINK_HOLD_S` and opens in :data:`BLINK_OPEN_S`, each phase a raised
     cosine: the down phase is faster than the up phase (VanderWerf et al. 2003, J Neurophysiol
-    89:2784; the durations are our choice inside the 100-400 ms of spontaneous blinks that
-    Caffier et al. 2003, Eur J Appl Physiol 89:319, report).
+    89:2784; the durations are our choice, within the few hundred ms of spontaneous
+    blinks).
 Gaze (:func:`gaze_schedule`, :func:`gaze_series`)
     While speaking, the eyes fixate and shift by small saccades: fixations of
     :data:`GAZE_MIN_INTERVAL_S` plus a gamma variate, mean :data:`GAZE_MEAN_INTERVAL_S`; each new
