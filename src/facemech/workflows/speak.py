@@ -287,11 +287,16 @@ def text_items(work_dir: str | Path, *, preset: str = "anatomical"):
         return values[0], values[1]
 
     def make_item(row: dict):
+        from ..speech.alive import Liveliness
+
         rate, strength = check(row)
         key = _row_key(row, preset)
+        # the design's movies are drawn from the results alone: the item's manifest says that
+        # they neither blink nor move the head (a design's columns for them: not yet)
         spoken = speak(work / key, str(row["text"]), voice=str(row.get("voice", "en-us")),
                        rate_wpm=rate, face=row.get("face", "default"),
-                       preset=str(row.get("preset", preset)), strength=strength, video=False)
+                       preset=str(row.get("preset", preset)), strength=strength, video=False,
+                       alive=Liveliness.off())
         return spoken.dataset, spoken.files["audio"]
 
     make_item.version = f"speak {__version__}"
