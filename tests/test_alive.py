@@ -214,3 +214,18 @@ def test_speak_records_them_and_describe_stays_relative_to_the_head(tmp_path, mo
     assert still["stimulus"] == written["stimulus"]
     a, b = (read_results(tmp_path / k / "result.nc") for k in ("on", "off"))
     np.testing.assert_array_equal(a["positions"].values, b["positions"].values)
+
+
+def test_the_head_pose_turns_as_its_docstring_says():
+    """Pitch > 0 raises the face (its forward axis tilts up), yaw > 0 turns it to the subject's
+    left (+x), roll > 0 tilts its top to the left; a rotation, applied about the pivot."""
+    from facemech.viz.scene import head_rotation
+
+    ahead, up = np.array([0.0, 0.0, 1.0]), np.array([0.0, 1.0, 0.0])
+    a = np.radians(5.0)
+    assert (head_rotation((a, 0, 0)) @ ahead)[1] == pytest.approx(np.sin(a))
+    assert (head_rotation((0, a, 0)) @ ahead)[0] == pytest.approx(np.sin(a))
+    assert (head_rotation((0, 0, a)) @ up)[0] == pytest.approx(np.sin(a))
+    r = head_rotation((0.1, -0.2, 0.05))
+    np.testing.assert_allclose(r @ r.T, np.eye(3), atol=1e-12)
+    assert np.linalg.det(r) == pytest.approx(1.0)
