@@ -36,10 +36,10 @@ Head (:func:`head_motion`)
     roll wander slowly (smoothed seeded noise, SD :data:`HEAD_WANDER_SD_S` in time), their
     amplitude scaled by the voice's intensity: SD :data:`HEAD_YAW_RAD` and
     :data:`HEAD_ROLL_RAD` while speaking at full level, less as the voice falls, none in
-    silence. The gain, the lead, the smoothing and the yaw and roll amplitudes are our choices
-    (head rotations of a few degrees, as Hadar et al. 1983, Lang Speech 26:117, measured
-    during speech; nods that anticipate the pitch accent, as co-speech gestures' apexes do,
-    e.g. Esteve-Gibert et al. 2017, J Acoust Soc Am 141:4727).
+    silence. The gain and its sign (up with a higher F0), the lead, the smoothing and the yaw
+    and roll amplitudes are our choices: rotations of a few degrees (head movements accompany
+    speech, Hadar et al. 1983, Lang Speech 26:117), nods that anticipate the pitch accent, as
+    co-speech gestures' apexes do (e.g. Esteve-Gibert et al. 2017, J Acoust Soc Am 141:4727).
 
 :class:`Liveliness` holds the switches, the seed and the blink rate; :func:`laws` lists the
 constants, as the manifest records them.
