@@ -124,6 +124,7 @@ def test_the_inversions_and_analyses_objects_refuse_what_the_command_line_refuse
 def _entries(tmp):
     """The command line's numbers and the Python functions that take them, each called so that
     an in-range value fails later (a missing or unwritable file) and never runs the work."""
+    from facemech.speech.alive import Liveliness
     from facemech.speech.tts import synthesize
     from facemech.viz.render import RenderOptions
     from facemech.viz.video import still
@@ -135,6 +136,7 @@ def _entries(tmp):
     return {
         "rate_wpm": lambda v: synthesize("hello", voice="", rate_wpm=v),
         "strength": lambda v: speak.speak(taken, "hello", strength=v),
+        "seed": lambda v: speak.speak(taken, "hello", alive=Liveliness(seed=v)),
         "aa": lambda v: RenderOptions(supersample=v),
         "time": lambda v: still(missing.with_suffix(".nc"), tmp / "x.png", time=v),
         "frames": lambda v: experiments.crosstalker(tmp / "x.json", frames=v,
@@ -151,7 +153,7 @@ def _entries(tmp):
     }
 
 
-_INSIDE = {"rate_wpm": 160, "strength": 1.0, "aa": 2, "time": 0.5, "frames": 60,
+_INSIDE = {"rate_wpm": 160, "strength": 1.0, "seed": 0, "aa": 2, "time": 0.5, "frames": 60,
            "utterances": 40, "k": 10, "workers": 2, "ipd": 63.4, "distance": 1.0,
            "reference": 0}
 

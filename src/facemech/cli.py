@@ -223,14 +223,14 @@ def view(result: Path, output: Path = ..., units: str | None = None,
     """Write an interactive viewer: one self-contained HTML page (WebGL, works offline)."""
     return workflows.pictures.view_file(result, output, markers=markers, units=units, title=title)
 
-@command(args=("text",), look=("frontal+profile", "1280x720", "#2a2c33", 2), groups=("tiers",))
-def speak(text: str | None = None, output: Path = Path("speak-output"),
-          audio: Path | None = None, textgrid: Path | None = None, voice: str = "en-us",
-          rate_wpm: int = 160, strength: float = 1.0, face: str = "default",
-          preset: str = "anatomical", video: bool = True, render=None, tiers=None):
-    """Make the face say TEXT (eSpeak NG), or speak in sync with a recorded voice (--audio)."""
-    kw = {**locals(), "tiers": (tiers["word_tier"], tiers["phone_tier"])}
-    _say(workflows.speech.speak_report(_staged(workflows.speech.speak, **kw), output))
+@command(args=("text",), look=("frontal+profile", "1280x720", "#2a2c33", 2),
+         groups=("recording", "alive"))
+def speak(text: str | None = None, output: Path = Path("speak-output"), voice: str = "en-us",
+          rate_wpm: int = 160, strength: float = 1.0, face: str = "default", preset: str =
+          "anatomical", video: bool = True, render=None, recording=None, alive=None):
+    """Make the face say TEXT (eSpeak NG), or speak in sync with a recorded voice (--audio);
+    it blinks, shifts its gaze and moves its head with the voice (docs/stimuli.md)."""
+    _say(workflows.speech.speak_report(_staged(workflows.speech.speak, **locals()), output))
 
 @command()
 def describe(result: Path, as_json: bool = False, series: bool = False):

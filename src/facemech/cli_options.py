@@ -20,6 +20,7 @@ as_json: print JSON
 audio: WAV to mux in
 background: '#rrggbb', 'r,g,b' or 'transparent' (PNG)
 baseline: rest interval START,STOP (s)
+blinks: blinks at the rate of conversation (26/min)
 bend: lsq weight, mm/unit: --bend, --smooth (0.3), --effort
 bite_block: hold the jaw at its initial pose
 builtin: refit the built-in targets
@@ -42,8 +43,10 @@ fit: scales: force, lips, stiffness, sphincter
 fmt: obj or ply: one mesh per frame in the folder -o
 frames: frames of the gesture sequence
 front: marker in front, on the same plane
+gaze: small gaze shifts, about one a second
 gestures: maximal gestures, each FILE:GROUPS, e.g. smile.c3d:ZYG,LAO,RIS
 head: comma-separated head markers (at least 3)
+head_motion: head motion driven by the voice's F0 and level
 integrator: euler, implicit or rosenbrock
 jaw_angle: CSV: time, jaw_angle (rad) or jaw_angle_deg
 jaw_chin: marker file with the jaw's markers (chin, or incisor and molar)
@@ -83,6 +86,7 @@ result: results file (.nc)
 right: marker on the right
 scale_pair: A,B: scale the markers per axis
 series: with --json: the per-frame mouth measures
+seed: seed of the blinks, gaze shifts and head motion
 size: frame size WIDTHxHEIGHT, pixels
 smooth: see --bend
 source: input marker file
@@ -218,8 +222,11 @@ GROUPS: dict[str, dict[str, tuple]] = {
     "preparation": {"units": (str | None, None), "max_gap": (float, 0.1),
                     "lowpass": (float | None, 12.0)},
     "lsq": {"window": (int | None, 3), "smooth": (float | None, 1.0)},
-    # facemech.workflows.speak's TextGrid tiers
-    "tiers": {"word_tier": (str | None, None), "phone_tier": (str | None, None)},
+    # facemech.workflows.speak's Recording, and facemech.speech.alive.Liveliness
+    "recording": {"audio": (Path | None, None), "textgrid": (Path | None, None),
+                  "word_tier": (str | None, None), "phone_tier": (str | None, None)},
+    "alive": {"blinks": (bool, True), "gaze": (bool, True), "head_motion": (bool, True),
+              "seed": (int, 0)},
 }
 
 #: parameter -> the interval its value must lie in, for the numbers that are options of a

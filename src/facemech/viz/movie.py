@@ -19,7 +19,7 @@ import numpy as np
 from ..atomic import atomic_path, pending_folder
 from ..errors import InputError
 from ..params import FRAME_RATE_HZ
-from .render import RenderOptions
+from .render import FrameMotion, RenderOptions
 from .scene import Scene
 
 
@@ -54,6 +54,17 @@ def _check(positions: np.ndarray, jaw: np.ndarray | None, scene: Scene,
     return jaw
 
 
+def _poses(motion: FrameMotion | None, frames: int, source: str | None):
+    """Per frame, the keywords the renderer takes besides skin and jaw."""
+    if motion is None:
+        return [{}] * frames
+    if len(motion) != frames:
+        raise InputError(f"the blink, gaze and head series have {len(motion)} frames, the "
+                         f"positions {frames}", source=source, field="motion")
+    return [dict(zip(("blink", "gaze", "head"), motion.at(k), strict=True))
+            for k in range(frames)]
+
+
 def write_movie(
     path: str | Path,
     scene: Scene,
@@ -65,6 +76,7 @@ def write_movie(
     options: RenderOptions | None = None,
     progress: Callable[[int, int], None] | None = None,
     source: str | None = None,
+    motion: FrameMotion | None = None,
 ) -> Path:
     """Render skin trajectories to an H.264 MP4.
 
@@ -76,9 +88,12 @@ def write_movie(
     jaw_angle : (frames,) rad or (frames, 3) poses (angle rad, shift_y m, shift_z m): moves the
         lower teeth and tongue (None: closed)
     fps : frame rate of the movie (the simulation's)
-    audio : optional WAV muxed in (AAC); the movie is cut to the shorter of the two
+    audio : optional WAV muxed in (AAC); the movie is cut to the shorter of the two (the frames
+        that the audio covers, the last one ending at or after it)
     options : view, size, background and anti-aliasing (default: frontal+profile, 1280x720)
     source : name of the input, for error messages
+    motion : blinks, gaze and head pose per frame (:class:`.render.FrameMotion`; None: still
+        eyes, open lids, the head at rest)
     """
     import imageio_ffmpeg
 
@@ -90,6 +105,11 @@ def write_movie(
     if audio is not None and not Path(audio).is_file():
         raise InputError("audio file not found", source=str(audio))
     jaw = _check(positions, jaw_angle, scene, source)
+    poses = _poses(motion, len(positions), source)
+    frames = len(positions)
+    seconds = None if audio is None else _wav_seconds(audio)
+    if seconds is not None:  # the frames the audio covers: the last one ends at or after it
+        frames = max(1, min(frames, int(np.ceil(seconds * fps - 1e-6))))
     render = opt.renderer(scene)
     h, w = opt.size
     path = Path(path)
@@ -100,30 +120,49 @@ def write_movie(
         )
         writer.send(None)
         try:
-            for k in range(len(positions)):
-                img = render(positions[k], jaw[k])
+            for k in range(frames):
+                img = render(positions[k], jaw[k], **poses[k])
                 writer.send(np.ascontiguousarray(img[..., :3]))
                 if progress is not None:
-                    progress(k + 1, len(positions))
+                    progress(k + 1, frames)
         finally:
             writer.close()
         if audio is not None:
-            _mux(exe, video, audio)
+            _mux(exe, video, audio, None if seconds is None else frames / fps)
     return path
 
 
-def _mux(exe: str, video: Path, audio) -> None:
+def _wav_seconds(audio) -> float | None:
+    """s, the length of a WAV file (None: not a WAV that scipy reads; ffmpeg may)."""
+    import warnings
+
+    from scipy.io import wavfile
+
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", wavfile.WavFileWarning)
+            rate, data = wavfile.read(audio, mmap=True)
+        return len(data) / float(rate)
+    except Exception:  # noqa: BLE001 - any parser error: leave it to ffmpeg
+        return None
+
+
+def _mux(exe: str, video: Path, audio, seconds: float | None = None) -> None:
     muxed = video.with_name(video.stem + ".mux.mp4")
     with pending_folder(muxed):  # removed if the command is interrupted
-        _mux_into(exe, video, audio, muxed)
+        _mux_into(exe, video, audio, muxed, seconds)
 
 
-def _mux_into(exe: str, video: Path, audio, muxed: Path) -> None:
+def _mux_into(exe: str, video: Path, audio, muxed: Path, seconds: float | None = None) -> None:
+    """Mux ``audio`` into ``video`` (copied): cut to ``seconds`` (the video's length, the
+    audio's re-encoded exactly), or None: to the shorter stream (ffmpeg's ``-shortest``, which
+    cuts a copied video where its packets happen to interleave: a frame or two early)."""
+    cut = ["-shortest"] if seconds is None else ["-t", f"{seconds:.6f}"]
     try:
         # -nostdin and no standard input: ffmpeg would otherwise read (and swallow) the
         # caller's input, e.g. the next line of a `while read` loop in a shell script
         cmd = [exe, "-nostdin", "-y", "-loglevel", "error", "-i", str(video), "-i", str(audio),
-               "-c:v", "copy", "-c:a", "aac", "-shortest", str(muxed)]
+               "-c:v", "copy", "-c:a", "aac", *cut, str(muxed)]
         run = subprocess.run(cmd, capture_output=True, text=True, stdin=subprocess.DEVNULL)
         if run.returncode != 0:
             last = (run.stderr.strip().splitlines() or ["unknown error"])[-1]
@@ -142,10 +181,12 @@ def write_frames(
     options: RenderOptions | None = None,
     progress: Callable[[int, int], None] | None = None,
     source: str | None = None,
+    motion: FrameMotion | None = None,
 ) -> Path:
     """Render every frame to ``folder/frame_00000.png`` ... (RGBA PNG).
 
-    The folder must not exist or be empty; it appears complete or not at all.
+    The folder must not exist or be empty; it appears complete or not at all. ``motion``:
+    blinks, gaze and head pose per frame, as :func:`write_movie`.
     """
     import matplotlib.image as mpimg
 
@@ -154,13 +195,14 @@ def write_frames(
         raise InputError("the frame folder exists and is not empty", source=str(folder),
                          field="frames")
     jaw = _check(positions, jaw_angle, scene, source)
+    poses = _poses(motion, len(positions), source)
     render = (options or RenderOptions()).renderer(scene)
     folder.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", dir=folder.parent))
     try:
         with pending_folder(tmp):  # removed whole if the command is interrupted
             for k in range(len(positions)):
-                mpimg.imsave(tmp / f"frame_{k:05d}.png", render(positions[k], jaw[k]))
+                mpimg.imsave(tmp / f"frame_{k:05d}.png", render(positions[k], jaw[k], **poses[k]))
                 if progress is not None:
                     progress(k + 1, len(positions))
             if folder.exists():

@@ -120,15 +120,54 @@ class Renderer:
         self.supersample = supersample
 
     def __call__(self, skin: np.ndarray, jaw_angle=0.0, blink: float = 0.0,
-                 gaze=(0.0, 0.0)) -> np.ndarray:
+                 gaze=(0.0, 0.0), head=None) -> np.ndarray:
         """(h, w, 4) uint8 frame of skin node positions (n, 3) m and a jaw angle (rad) or pose
         (3,) (angle rad, shift_y m, shift_z m); ``blink`` 0 (open) .. 1 (closed) and ``gaze``
-        (yaw, pitch) rad move the eyes and lids (:meth:`.scene.Scene.frame`)."""
-        verts, norms = self.scene.frame(skin, jaw_angle, blink, gaze)
+        (yaw, pitch) rad move the eyes and lids; ``head`` (pitch, yaw, roll) rad turns the
+        whole head (:meth:`.scene.Scene.frame`)."""
+        verts, norms = self.scene.frame(skin, jaw_angle, blink, gaze, head)
         return np.concatenate([render_panel(self.scene, verts, norms, cam,
                                             background=self.background,
                                             supersample=self.supersample)
                                for cam in self.cameras], axis=1)
+
+
+@dataclass(frozen=True)
+class FrameMotion:
+    """What moves the face besides its skin and jaw, per frame (e.g. from
+    :func:`facemech.speech.alive.liveliness`).
+
+    Attributes
+    ----------
+    blink : (T,) lid closure, 0 open .. 1 closed
+    gaze : (T, 2) rad, (yaw, pitch) of both eyes
+    head : (T, 3) rad, the head's (pitch, yaw, roll) (:func:`.scene.head_rotation`)
+    """
+
+    blink: np.ndarray
+    gaze: np.ndarray
+    head: np.ndarray
+
+    def __post_init__(self):
+        shapes = {"blink": (None,), "gaze": (None, 2), "head": (None, 3)}
+        frames = len(np.asarray(self.blink))
+        for name, shape in shapes.items():
+            a = np.asarray(getattr(self, name), float)
+            if a.ndim != len(shape) or a.shape[1:] != shape[1:] or len(a) != frames:
+                raise InputError(f"{name} series of shape {a.shape} does not fit {frames} "
+                                 f"frames", field=name)
+            if not np.all(np.isfinite(a)):
+                raise InputError(f"{name} series is not finite", field=name)
+            object.__setattr__(self, name, a)
+        if np.any((self.blink < 0) | (self.blink > 1)):
+            raise InputError("blink closure must lie in 0..1", field="blink")
+
+    def __len__(self) -> int:
+        return len(self.blink)
+
+    def at(self, k: int) -> tuple[float, np.ndarray, np.ndarray]:
+        """(blink, gaze (2,), head (3,)) of frame ``k``."""
+        return float(self.blink[k]), self.gaze[k], self.head[k]
 
 
 @dataclass(frozen=True)

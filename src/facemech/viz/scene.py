@@ -12,6 +12,9 @@
   gums and the tongue moving with the mandible (the results' jaw angle about the model's
   hinge, plus the hinge's shift) (:mod:`.dentition`), and a dark seal across the slit between
   the lips' edges, facing into the mouth (it moves with the skin) (:mod:`.face_parts`);
+* **head motion**: the whole head (every part above) turns rigidly about :func:`head_pivot`
+  (the top of the neck) by a pose (pitch, yaw, roll) rad (:func:`head_rotation`); the skin's
+  positions, from the simulation, stay in the head's frame;
 * **head**: for a face without its own texture, the closure that makes skin and head one
   surface from the crown to the neck, its edge ring the skin's edge nodes (:mod:`.closure`,
   :mod:`.cranium`), hair with volume and a strand fringe (:mod:`.hair`) and ears with relief
@@ -38,7 +41,7 @@ from .mesh import Part, VertexNormals
 from .raster import srgb_to_linear
 
 __all__ = ["FaceLook", "MAX_TEXTURE", "Part", "SKIRT_DEPTH", "Scene", "build_scene",
-           "look_from_dataset", "look_from_model"]
+           "head_pivot", "head_rotation", "look_from_dataset", "look_from_model"]
 
 
 @dataclass(frozen=True)
@@ -63,13 +66,15 @@ class Scene:
     framing: dict = field(default_factory=dict)
 
     def frame(self, skin: np.ndarray, jaw_angle=0.0, blink: float = 0.0,
-              gaze=(0.0, 0.0)) -> tuple[np.ndarray, np.ndarray]:
+              gaze=(0.0, 0.0), head=None) -> tuple[np.ndarray, np.ndarray]:
         """Vertices (N, 3) and unit normals (N, 3) of every part for one frame (model axes).
 
         ``jaw_angle``: the jaw's angle (rad), or its pose (3,) (angle rad, shift_y m, shift_z
         m): the mandible's parts turn about the hinge and move with its shift. ``blink``: the
         lids' closure, 0 open .. 1 closed; ``gaze``: (yaw, pitch) rad of both eyes,
-        yaw > 0 towards the subject's left, pitch > 0 up (:mod:`.lids`).
+        yaw > 0 towards the subject's left, pitch > 0 up (:mod:`.lids`); ``head``: None, or the
+        head's pose (3,) rad (pitch up, yaw to the subject's left, roll to the left): every
+        part turns about :func:`head_pivot` (:func:`head_rotation`).
         """
         look = self.look
         yaw, pitch = (float(g) for g in gaze)
@@ -125,7 +130,35 @@ class Scene:
                     n = n @ rot.T
             verts.append(v)
             norms.append(-n if p.inward else n)
-        return np.concatenate(verts), np.concatenate(norms)
+        verts, norms = np.concatenate(verts), np.concatenate(norms)
+        if head is not None and np.any(np.asarray(head, float) != 0.0):
+            r = head_rotation(head)
+            pivot = head_pivot(self)
+            verts = (verts - pivot) @ r.T + pivot
+            norms = norms @ r.T
+        return verts, norms
+
+
+#: m, the head's pivot (the top of the neck, about the occipital condyles) below the centre of
+#: the head's sphere (:func:`.head.head_centre`), our estimate
+PIVOT_BELOW_CENTRE = 0.085
+
+
+def head_pivot(scene: Scene) -> np.ndarray:
+    """(3,) m, the point the head turns about: on the midline, at the depth of the head's
+    centre, :data:`PIVOT_BELOW_CENTRE` below it (model axes)."""
+    c = np.asarray(scene.centre, float)
+    return np.array([0.0, c[1] - PIVOT_BELOW_CENTRE, c[2]])
+
+
+def head_rotation(pose) -> np.ndarray:
+    """(3, 3) rotation of a head pose (pitch, yaw, roll) rad: pitch > 0 raises the face,
+    yaw > 0 turns it to the subject's left (+x), roll > 0 tilts the top to the left;
+    ``R = R_yaw @ R_pitch @ R_roll``."""
+    pitch, yaw, roll = (float(v) for v in np.asarray(pose, float).reshape(3))
+    cr, sr = np.cos(roll), np.sin(roll)
+    rz = np.array([[cr, sr, 0.0], [-sr, cr, 0.0], [0.0, 0.0, 1.0]])
+    return gaze_rotation(yaw, pitch) @ rz
 
 
 def jaw_pose_of(jaw) -> tuple[float, np.ndarray]:

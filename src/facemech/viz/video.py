@@ -17,10 +17,10 @@ from ..atomic import atomic_path
 from ..checks import check_value
 from ..errors import InputError
 from ..params import FRAME_RATE_HZ
-from .render import Renderer, RenderOptions
+from .render import FrameMotion, Renderer, RenderOptions
 from .scene import Scene, build_scene, look_from_dataset, look_from_model
 
-__all__ = ["RenderOptions", "peak_frame", "render_results", "scene_of", "still"]
+__all__ = ["FrameMotion", "RenderOptions", "peak_frame", "render_results", "scene_of", "still"]
 
 
 
@@ -35,7 +35,7 @@ def scene_of(source) -> Scene:
 def render_results(ds, output: str | Path, *, options: RenderOptions | None = None,
                    audio: str | Path | None = None, fps: float | None = None,
                    progress: Callable[[int, int], None] | None = None,
-                   source: str | None = None) -> Path:
+                   source: str | None = None, motion: FrameMotion | None = None) -> Path:
     """Render a results dataset to ``output``: an ``.mp4`` movie, or a folder of PNG frames.
 
     Parameters
@@ -46,6 +46,7 @@ def render_results(ds, output: str | Path, *, options: RenderOptions | None = No
     audio : WAV muxed into a movie
     fps : frame rate (default: the results')
     source : name of the results, for error messages (default: the path, when given one)
+    motion : blinks, gaze and head pose per frame (:class:`FrameMotion`; None: at rest)
     """
     from .movie import write_frames, write_movie
 
@@ -59,14 +60,14 @@ def render_results(ds, output: str | Path, *, options: RenderOptions | None = No
     output = Path(output)
     if output.suffix.lower() == ".mp4":
         return write_movie(output, scene, pos, jaw, fps=fps, audio=audio, options=opt,
-                           progress=progress, source=source)
+                           progress=progress, source=source, motion=motion)
     if output.suffix:
         raise InputError(f"output {output.name!r}: give a .mp4 file or a folder for PNG frames",
                          field="output")
     if audio is not None:
         raise InputError("audio goes into a movie, not into PNG frames", field="audio")
     return write_frames(output, scene, pos, jaw, options=opt, progress=progress,
-                        source=source)
+                        source=source, motion=motion)
 
 
 def jaw_poses_of(ds) -> np.ndarray | None:
@@ -116,7 +117,8 @@ def peak_frame(ds, peak: str, source: str | None = None) -> int:
 
 def still(ds, output: str | Path, *, time: float | None = None, peak: str | None = None,
           options: RenderOptions | None = None, markers: bool = False,
-          labels: bool = False, title: str | None = None, source: str | None = None) -> dict:
+          labels: bool = False, title: str | None = None, source: str | None = None,
+          motion: FrameMotion | None = None) -> dict:
     """A still figure of one frame as PNG or PDF, optionally with marker dots and names.
 
     Parameters
@@ -128,6 +130,8 @@ def still(ds, output: str | Path, *, time: float | None = None, peak: str | None
     options : :class:`RenderOptions` (default here: frontal, 1280x1280)
     markers, labels : draw the model's markers as dots, and their names beside them
     source : name of the results, for error messages (default: the path, when given one)
+    motion : blinks, gaze and head pose per frame of the results (:class:`FrameMotion`; None:
+        at rest); the markers turn with the head
 
     Returns
     -------
@@ -163,14 +167,18 @@ def still(ds, output: str | Path, *, time: float | None = None, peak: str | None
     if not np.all(np.isfinite(skin)) or not np.all(np.isfinite(jaw)):
         raise InputError(f"frame {k} holds non-finite positions or jaw angle", source=source,
                          field="positions")
-    img = rend(skin, jaw)
+    if motion is not None and len(motion) != len(t):
+        raise InputError(f"the blink, gaze and head series have {len(motion)} frames, the "
+                         f"results {len(t)}", source=source, field="motion")
+    blink, gaze, head = motion.at(k) if motion is not None else (0.0, (0.0, 0.0), None)
+    img = rend(skin, jaw, blink, gaze, head)
     h, w = opt.size
     fig = mfig.Figure(figsize=(w / 200, h / 200), dpi=200)
     ax = fig.add_axes((0, 0, 1, 1))
     ax.imshow(img, interpolation="lanczos")
     ax.set_axis_off()
     if markers or labels:
-        _draw_markers(ax, ds, k, rend, labels)
+        _draw_markers(ax, ds, k, rend, labels, head)
     if title:
         ax.text(0.02, 0.98, title, transform=ax.transAxes, va="top", color="white",
                 fontsize=9)
@@ -180,9 +188,11 @@ def still(ds, output: str | Path, *, time: float | None = None, peak: str | None
     return {"frame": k, "time": float(t[k]), "output": str(output)}
 
 
-def _draw_markers(ax, ds, k: int, rend: Renderer, labels: bool) -> None:
-    """Marker dots (and names) on the panels where they face the camera."""
+def _draw_markers(ax, ds, k: int, rend: Renderer, labels: bool, head=None) -> None:
+    """Marker dots (and names) on the panels where they face the camera; ``head``: the head's
+    pose (3,) rad, which turns them with the face."""
     from ..geometry.builder import vertex_normals
+    from .scene import head_pivot, head_rotation
 
     pos = ds["positions"].values[k]
     names = [str(n) for n in ds["marker"].values]
@@ -191,6 +201,10 @@ def _draw_markers(ax, ds, k: int, rend: Renderer, labels: bool) -> None:
 
     nodes = json.loads(ds.attrs.get("marker_nodes", "{}"))
     normals = vertex_normals(pos, ds["triangles"].values)
+    if head is not None:
+        r, pivot = head_rotation(head), head_pivot(rend.scene)
+        mk = (mk - pivot) @ r.T + pivot
+        normals = normals @ r.T
     x_off = 0
     for cam in rend.cameras:
         p = cam.project(mk)

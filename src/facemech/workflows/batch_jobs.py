@@ -82,8 +82,10 @@ def _speak(o: dict, folder: Path):
     kw = {k: o[k] for k in keys if k in o}
     if "rate" in o:
         kw["rate_wpm"] = o["rate"]
+    alive = {k: o[k] for k in ("blinks", "gaze", "head_motion", "seed") if k in o}
     res = speak(folder, o.get("text"), tiers=(o.get("word_tier"), o.get("phone_tier")),
-                render=render_options(**{k: o[k] for k in _RENDER if k in o}), **kw)
+                render=render_options(**{k: o[k] for k in _RENDER if k in o}), alive=alive,
+                **kw)
     return ({"frames": len(res.simulation.time), "phones": len(res.alignment.phones),
              "duration_s": round(float(res.alignment.duration), 3)},
             speak_report(res, folder.name))
@@ -144,7 +146,8 @@ JOBS: dict[str, Job] = {
     "speak": Job(
         {"text": "str", "audio": "path", "textgrid": "path", "voice": "str", "rate": "int",
          "word_tier": "str", "phone_tier": "str", "strength": "float", "face": "file_or_name",
-         "preset": "file_or_name", "video": "bool", **_RENDER},
+         "preset": "file_or_name", "video": "bool", "blinks": "bool", "gaze": "bool",
+         "head_motion": "bool", "seed": "int", **_RENDER},
         (("text", "audio"),), _speak),
     "stimuli": Job({"design": "path", "video": "bool", **_RENDER}, (("design",),), _stimuli,
                    _design_files),

@@ -7,8 +7,12 @@
 2. The muscle activity and jaw angle per 60-Hz frame: visemes blended by dominance functions
    (:func:`facemech.speech.coarticulation.controls_from_alignment`), leading the acoustics.
 3. The forward simulation on the chosen face (:func:`facemech.simulate`).
-4. The movie with the audio muxed in, and a manifest with the settings, the input hashes and the
-   stimulus parameters (:func:`facemech.analysis.describe.describe`).
+4. Blinks, gaze shifts and head motion driven by the voice (:mod:`facemech.speech.alive`; on by
+   default, each off with :class:`~facemech.speech.alive.Liveliness`): the renderer turns the
+   whole head, the simulation stays in the head's frame.
+5. The movie with the audio muxed in, and a manifest with the settings, the input hashes, the
+   stimulus parameters (:func:`facemech.analysis.describe.describe`, relative to the head) and
+   the blinks', gaze shifts' and head motion's times and laws.
 
 Every file is written atomically; the folder's manifest names them all.
 """
@@ -25,7 +29,7 @@ import numpy as np
 from ..checks import check_value
 from ..errors import InputError
 
-__all__ = ["FILES", "LEAD_IN_S", "TAIL_S", "Spoken", "speak", "text_items"]
+__all__ = ["FILES", "LEAD_IN_S", "TAIL_S", "Recording", "Spoken", "speak", "text_items"]
 
 #: s of silence put before and after synthesised speech, so that the face starts at rest and
 #: has the time to anticipate the first phone (muscle activity leads the sound by 100 ms and
@@ -40,6 +44,23 @@ FILES = {"audio": "speech.wav", "textgrid": "alignment.TextGrid", "alignment": "
 
 
 @dataclass(frozen=True)
+class Recording:
+    """A recorded voice and its alignment.
+
+    Attributes
+    ----------
+    audio : the WAV
+    textgrid : its Praat TextGrid (e.g. from the Montreal Forced Aligner)
+    word_tier, phone_tier : the TextGrid's tier names (None: found by name, as MFA writes them)
+    """
+
+    audio: str | Path
+    textgrid: str | Path | None = None
+    word_tier: str | None = None
+    phone_tier: str | None = None
+
+
+@dataclass(frozen=True)
 class Spoken:
     """What :func:`speak` made: the folder's files (name -> path), the alignment, the
     simulation, the stimulus parameters, the manifest (a dict, as written) and the results
@@ -51,37 +72,40 @@ class Spoken:
     description: dict
     manifest: dict = field(default_factory=dict)
     dataset: object = None  # the results as an xarray.Dataset (what result.nc holds)
+    alive: object = None  # the blinks, gaze and head series (facemech.speech.alive.Alive)
 
 
 def speak(
     out_dir: str | Path,
     text: str | None = None,
     *,
-    audio: str | Path | None = None,
-    textgrid: str | Path | None = None,
+    recording: Recording | None = None,
     voice: str = "en-us",
     rate_wpm: int = 160,
-    tiers: tuple[str | None, str | None] = (None, None),
     face: str | Path = "default",
     preset: str = "anatomical",
     strength: float = 1.0,
     video=True,
+    alive=None,
     progress: Callable[[str, int, int], None] | None = None,
 ) -> Spoken:
-    """Make the face say ``text`` (eSpeak NG), or speak in sync with a recorded ``audio`` whose
-    ``textgrid`` aligns its phones; write everything into ``out_dir``.
+    """Make the face say ``text`` (eSpeak NG), or speak in sync with a ``recording`` (a WAV
+    and the TextGrid that aligns its phones); write everything into ``out_dir``.
 
     Parameters
     ----------
     out_dir : the folder (created; files in it are replaced, nothing else is touched)
-    text : what to say; or give ``audio`` and ``textgrid`` instead
+    text : what to say; or give a ``recording`` instead
+    recording : :class:`Recording` (audio, textgrid, tier names)
     voice, rate_wpm : eSpeak NG voice (e.g. ``en-us``, ``en-gb+f3``) and words per minute
-    tiers : the TextGrid's (word, phone) tier names (None: found by name, as MFA writes them)
     face : a face file or a built-in face name
     preset : the physical preset (default ``anatomical``)
     strength : scale of every viseme's departure from rest (1 = the table's)
     video : render the MP4 (H.264, the audio muxed in as AAC): True (frontal+profile, 720p),
         a :class:`facemech.viz.video.RenderOptions`, or False
+    alive : :class:`facemech.speech.alive.Liveliness` (None: blinks, gaze and head motion on,
+        seed 0): shown in the movie, recorded in the manifest (``alive``); the simulation and
+        the stimulus parameters stay in the head's frame, unchanged by them
     progress : callable(stage, done, total)
 
     Returns
@@ -96,9 +120,16 @@ def speak(
     from ..params import preset as load_preset
     from ..solvers.forward import simulate
     from ..speech.alignment_io import read_textgrid, write_alignment_csv, write_textgrid
+    from ..speech.alive import Liveliness, liveliness
     from ..speech.coarticulation import controls_from_alignment
     from ..speech.wav import read_wav, write_wav
 
+    audio, textgrid = (None, None) if recording is None else \
+        (recording.audio, recording.textgrid)
+    tiers = (None, None) if recording is None else (recording.word_tier, recording.phone_tier)
+    alive = Liveliness() if alive is None else alive
+    if not isinstance(alive, Liveliness):
+        raise InputError("alive must be a facemech.speech.alive.Liveliness", field="alive")
     if (text is None) == (audio is None):
         raise InputError("give either text or --audio with --textgrid", field="text")
     if audio is not None and textgrid is None:
@@ -154,13 +185,15 @@ def speak(
     ds = to_dataset(sim, inputs)
     write_dataset(files["results"], ds)
     desc = describe(ds).to_dict()
+    lively = liveliness(ds["time"].values, samples, rate, alive)
     if video:
-        from ..viz.video import render_results
+        from ..viz.video import FrameMotion, render_results
 
         options = None if video is True else video
         render_results(ds, files["movie"], options=options, audio=files["audio"],
                        progress=None if progress is None else
-                       (lambda d, n: progress("render", d, n)))
+                       (lambda d, n: progress("render", d, n)),
+                       motion=FrameMotion(lively.blink, lively.gaze, lively.head))
     else:
         files.pop("movie")
     manifest = {
@@ -179,13 +212,14 @@ def speak(
         "audio_sample_rate_hz": int(rate),
         "files": {k: p.name for k, p in files.items()},
         "stimulus": desc,
+        "alive": lively.record(),
     }
     from ..atomic import atomic_path
 
     with atomic_path(files["manifest"]) as tmp:
         tmp.write_text(json.dumps(manifest, indent=2, default=_json_default))
     return Spoken(files=files, alignment=alignment, simulation=sim, description=desc,
-                  manifest=manifest, dataset=ds)
+                  manifest=manifest, dataset=ds, alive=lively)
 
 
 def _padded(samples, rate: int, alignment, before: float, after: float):
@@ -253,11 +287,16 @@ def text_items(work_dir: str | Path, *, preset: str = "anatomical"):
         return values[0], values[1]
 
     def make_item(row: dict):
+        from ..speech.alive import Liveliness
+
         rate, strength = check(row)
         key = _row_key(row, preset)
+        # the design's movies are drawn from the results alone: the item's manifest says that
+        # they neither blink nor move the head (a design's columns for them: not yet)
         spoken = speak(work / key, str(row["text"]), voice=str(row.get("voice", "en-us")),
                        rate_wpm=rate, face=row.get("face", "default"),
-                       preset=str(row.get("preset", preset)), strength=strength, video=False)
+                       preset=str(row.get("preset", preset)), strength=strength, video=False,
+                       alive=Liveliness.off())
         return spoken.dataset, spoken.files["audio"]
 
     make_item.version = f"speak {__version__}"

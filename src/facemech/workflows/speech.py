@@ -13,22 +13,38 @@ __all__ = ["describe_file", "describe_report", "describe_text", "speak",
 
 
 def speak(output: str | Path, text: str | None = None, *, video: bool = True, render=None,
-          **options):
+          recording: dict | None = None, alive=None, **options):
     """Make the face say ``text``, or speak in sync with a recorded voice, into the folder
-    ``output``: :func:`facemech.workflows.speak.speak` (its keywords: ``audio``, ``textgrid``,
-    ``voice``, ``rate_wpm``, ``tiers``, ``face``, ``preset``, ``strength``, ``progress``), the
-    MP4 with ``video``, drawn with ``render`` (a :class:`facemech.viz.video.RenderOptions`,
-    :func:`.pictures.render_options`; None: frontal+profile, 1280x720). Returns its
+    ``output``: :func:`facemech.workflows.speak.speak` (its keywords: ``voice``, ``rate_wpm``,
+    ``face``, ``preset``, ``strength``, ``progress``), the MP4 with ``video``, drawn with
+    ``render`` (a :class:`facemech.viz.video.RenderOptions`, :func:`.pictures.render_options`;
+    None: frontal+profile, 1280x720).
+
+    The recorded voice: ``recording`` (a dict of ``audio``, ``textgrid``, ``word_tier``,
+    ``phone_tier``), or the keywords ``audio``, ``textgrid`` and ``tiers`` (word, phone).
+    ``alive``: a :class:`facemech.speech.alive.Liveliness`, or a dict of ``blinks``, ``gaze``,
+    ``head_motion`` and ``seed`` (None: all on, seed 0). Returns its
     :class:`~facemech.workflows.speak.Spoken`."""
     from ..atomic import check_output
+    from ..speech.alive import Liveliness
+    from .speak import Recording
     from .speak import speak as run
 
+    rec = {k: v for k, v in (recording or {}).items() if v is not None}
+    rec.update({k: options.pop(k) for k in ("audio", "textgrid") if options.get(k) is not None})
+    if options.get("tiers") is not None:
+        rec["word_tier"], rec["phone_tier"] = options.pop("tiers")
+    options.pop("tiers", None)
+    if isinstance(alive, dict):
+        alive = Liveliness(blinks=alive.get("blinks", True), gaze=alive.get("gaze", True),
+                           head=alive.get("head_motion", True), seed=alive.get("seed", 0))
     named = [options.get(k) for k in ("face", "preset")]  # built-in names or files
-    check_output(output, [options.get("audio"), options.get("textgrid"),
+    check_output(output, [rec.get("audio"), rec.get("textgrid"),
                           *(n for n in named if n and Path(str(n)).suffix)],
                  folder=True, field="-o")
     look = render or render_options()
-    return run(output, text, video=look if video else False, **options)
+    return run(output, text, recording=Recording(**rec) if "audio" in rec else None,
+               video=look if video else False, alive=alive, **options)
 
 
 def speak_report(res, output: str | Path) -> list[str]:
