@@ -39,7 +39,6 @@ from ..errors import InputError
 from ..geometry.prism import volume_gradients
 from ..physics.assembly import Physics, accumulate_forces, rest_anchors
 from .contacts import resolve_contacts
-from .volume_floor import resolve_volume_floor
 from .muscle_implicit import MuscleJacobian
 from .solver_state import (
     SolverState,
@@ -50,6 +49,7 @@ from .solver_state import (
     start_frame,
 )
 from .state import Controls, State
+from .volume_floor import resolve_volume_floor
 
 ROS2_GAMMA = 1.0 + 1.0 / np.sqrt(2.0)
 #: share of the springs' stiffness (of their stiff branch) that the constant matrix of the

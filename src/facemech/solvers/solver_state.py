@@ -22,9 +22,9 @@ from ..physics.assembly import Physics
 from ..physics.bundles import Anchors, ForceBundles
 from ..physics.muscle import activation_exact_damped, max_force
 from .contacts import ImplicitContacts, split_contacts
-from .volume_floor import VolumeFloor
 from .mandible import JawBundle, jaw_bundle, place_jaw, set_jaw_nodes
 from .state import Controls, State
+from .volume_floor import VolumeFloor
 
 if TYPE_CHECKING:
     from .implicit import ImplicitSystem
