@@ -84,6 +84,7 @@ reference: reference frame (default: first full)
 report: write the per-frame residuals (JSON)
 result: results file (.nc)
 right: marker on the right
+scale: KIND:KEY=FACTOR (repeatable), e.g. word:balloon=1.5, class:open=0.8, phone:u:=1.2
 scale_pair: A,B: scale the markers per axis
 series: with --json: the per-frame mouth measures
 seed: seed of the blinks, gaze shifts and head motion

@@ -34,6 +34,7 @@ import numpy as np
 
 from ..errors import InputError
 from .alignment import Alignment
+from .articulation import Articulation, as_articulation
 from .phoneclass import PAUSE, phone_classes
 from .visemes import VISEMES
 
@@ -54,25 +55,40 @@ class Gesture:
     cls: str
     start: float
     end: float
+    #: the factor on its targets' departure from rest (:mod:`.articulation`; 1: the table's)
+    scale: float = 1.0
 
     @property
     def centre(self) -> float:
         return 0.5 * (self.start + self.end)
 
 
-def gestures(alignment: Alignment) -> list[Gesture]:
+def gestures(alignment: Alignment, articulation: Articulation | None = None) -> list[Gesture]:
     """The targets of an alignment in time order: a phone's classes, a diphthong's parts
-    sharing its interval equally. Raises InputError for an unknown label."""
+    sharing its interval equally, each scaled by the rules of ``articulation`` it matches
+    (:mod:`.articulation`; its global strength is not applied here). Raises InputError for an
+    unknown label."""
     out = []
     for seg in alignment.phones:
         parts = phone_classes(seg.label, alignment.notation, source=alignment.source,
                               voice=alignment.meta.get("voice"))
         if not parts:
             continue
+        word = _word_of(alignment, seg.start, seg.end) if articulation else None
         step = (seg.end - seg.start) / len(parts)
         for k, cls in enumerate(parts):
-            out.append(Gesture(cls, seg.start + k * step, seg.start + (k + 1) * step))
+            scale = articulation.factor(cls, seg.label, word) if articulation else 1.0
+            out.append(Gesture(cls, seg.start + k * step, seg.start + (k + 1) * step, scale))
     return out
+
+
+def _word_of(alignment: Alignment, start: float, end: float) -> tuple[int, str] | None:
+    """(index from 1, text) of the word holding the middle of [start, end], or None."""
+    mid = 0.5 * (start + end)
+    for k, w in enumerate(alignment.words, start=1):
+        if w.start <= mid <= w.end:
+            return k, w.label
+    return None
 
 
 def log_dominance(t: np.ndarray, gesture: Gesture, alpha: float, anticipatory_rate: float,
@@ -104,8 +120,9 @@ def blend(t: np.ndarray, items: list[Gesture], *, exponent: float = DOMINANCE_EX
     """
     t = np.asarray(t, float)
     vis = [VISEMES[g.cls] for g in items]
-    act_targets = np.array([v.activity_vector() for v in vis])  # (S, groups)
-    jaw_targets = np.array([v.jaw for v in vis])  # (S,)
+    scale = np.array([g.scale for g in items])
+    act_targets = np.array([v.activity_vector() for v in vis]) * scale[:, None]  # (S, groups)
+    jaw_targets = np.array([v.jaw for v in vis]) * scale  # (S,)
     decay = np.stack([log_dominance(t, g, 1.0, v.anticipatory_rate, v.carryover_rate, exponent)
                       for g, v in zip(items, vis, strict=True)], axis=1)  # (T, S)
 
@@ -122,7 +139,7 @@ def blend(t: np.ndarray, items: list[Gesture], *, exponent: float = DOMINANCE_EX
 
 def controls_from_alignment(alignment: Alignment, *, frame_rate: float = 60.0,
                             lead_s: float = LEAD_S, jaw_lead_s: float = JAW_LEAD_S,
-                            strength: float = 1.0
+                            strength: float | Articulation = 1.0
                             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Muscle activity and jaw angle per frame that make the visible speech of an alignment.
 
@@ -134,7 +151,8 @@ def controls_from_alignment(alignment: Alignment, *, frame_rate: float = 60.0,
     lead_s : s, how far the muscle activity leads the acoustics (:data:`LEAD_S`)
     jaw_lead_s : s, how far the jaw angle leads the acoustics (:data:`JAW_LEAD_S`)
     strength : scale of every target's departure from rest (1: the table's; 0.5 hypo-
-        articulated, the activity clipped to [0, 1])
+        articulated, the activity clipped to [0, 1]), or an :class:`Articulation` that adds
+        rules scaling one phone, word or viseme class (:mod:`.articulation`)
 
     Returns
     -------
@@ -153,6 +171,8 @@ def controls_from_alignment(alignment: Alignment, *, frame_rate: float = 60.0,
         of no duration.
     """
     src = alignment.source
+    articulation = as_articulation(strength)
+    strength = articulation.strength
     if not frame_rate > 0:
         raise InputError(f"frame rate must be positive, got {frame_rate!r}", source=src,
                          field="frame_rate")
@@ -164,7 +184,7 @@ def controls_from_alignment(alignment: Alignment, *, frame_rate: float = 60.0,
                          source=src, field="duration")
     frames = int(np.ceil(alignment.duration * frame_rate - 1e-9)) + 1
     time = np.arange(frames) / frame_rate
-    items = [Gesture(PAUSE, -np.inf, 0.0), *gestures(alignment),
+    items = [Gesture(PAUSE, -np.inf, 0.0), *gestures(alignment, articulation),
              Gesture(PAUSE, alignment.duration, np.inf)]
     activity, _ = blend(time + lead_s, items)
     _, jaw = blend(time + jaw_lead_s, items)

@@ -84,7 +84,7 @@ def speak(
     rate_wpm: int = 160,
     face: str | Path = "default",
     preset: str = "anatomical",
-    strength: float = 1.0,
+    strength=1.0,
     video=True,
     alive=None,
     progress: Callable[[str, int, int], None] | None = None,
@@ -100,7 +100,9 @@ def speak(
     voice, rate_wpm : eSpeak NG voice (e.g. ``en-us``, ``en-gb+f3``) and words per minute
     face : a face file or a built-in face name
     preset : the physical preset (default ``anatomical``)
-    strength : scale of every viseme's departure from rest (1 = the table's)
+    strength : scale of every viseme's departure from rest (1 = the table's), or a
+        :class:`facemech.speech.articulation.Articulation` that adds rules scaling one phone,
+        word or viseme class (e.g. ``Articulation.parse(["word:balloon=1.5"])``)
     video : render the MP4 (H.264, the audio muxed in as AAC): True (frontal+profile, 720p),
         a :class:`facemech.viz.video.RenderOptions`, or False
     alive : :class:`facemech.speech.alive.Liveliness` (None: blinks, gaze and head motion on,
@@ -121,6 +123,7 @@ def speak(
     from ..solvers.forward import simulate
     from ..speech.alignment_io import read_textgrid, write_alignment_csv, write_textgrid
     from ..speech.alive import Liveliness, liveliness
+    from ..speech.articulation import as_articulation
     from ..speech.coarticulation import controls_from_alignment
     from ..speech.wav import read_wav, write_wav
 
@@ -137,7 +140,8 @@ def speak(
                          field="textgrid")
     if text is not None and not text.strip():
         raise InputError("nothing to say: the text is empty", field="text")
-    check_value("strength", strength)  # the command line's interval (facemech.checks)
+    articulation = as_articulation(strength)
+    check_value("strength", articulation.strength)  # the command line's interval (checks.py)
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
         raise InputError("output must be a folder", source=str(out), field="output")
@@ -176,7 +180,7 @@ def speak(
     write_textgrid(files["textgrid"], alignment)
     write_alignment_csv(files["alignment"], alignment)
     t, act, jaw = controls_from_alignment(alignment, frame_rate=params.frame_rate,
-                                          strength=strength)
+                                          strength=articulation)
     write_activity(files["controls"], t, np.column_stack([act, jaw]),
                    (*MUSCLE_GROUPS, "jaw_angle"))
     sim = simulate(model, act, jaw, params=params,
@@ -201,7 +205,8 @@ def speak(
         "text": text,
         "voice": voice if text is not None else None,
         "rate_wpm": rate_wpm if text is not None else None,
-        "face": str(face), "preset": params.name, "strength": strength,
+        "face": str(face), "preset": params.name,
+        "strength": articulation.strength, "scale": [str(r) for r in articulation.rules],
         "inputs": inputs,
         "alignment": {"notation": alignment.notation, "duration_s": alignment.duration,
                       "words": [w.label for w in alignment.words],
@@ -255,21 +260,23 @@ def _json_default(v):
 
 
 #: the columns a design table's text row may carry (besides the manipulations)
-TEXT_ROW_COLUMNS = ("text", "face", "voice", "rate_wpm", "strength", "preset")
+TEXT_ROW_COLUMNS = ("text", "face", "voice", "rate_wpm", "strength", "scale", "preset")
 
 
 def text_items(work_dir: str | Path, *, preset: str = "anatomical"):
     """The ``make_item`` hook of :func:`facemech.workflows.stimuli.run_design` for text rows: each
     row's text spoken by :func:`speak` (no movie) into ``work_dir/<key>/``.
 
-    A row may set ``text``, ``face``, ``voice``, ``rate_wpm``, ``strength`` and ``preset``.
+    A row may set ``text``, ``face``, ``voice``, ``rate_wpm``, ``strength``, ``scale`` (rules
+    ``KIND:KEY=FACTOR`` separated by ``;``, :mod:`facemech.speech.articulation`) and ``preset``.
     """
     from .._version import __version__
 
     work = Path(work_dir)
 
-    def check(row: dict) -> tuple[int, float]:
-        """The row's columns and numbers, checked before any row runs: (rate_wpm, strength)."""
+    def check(row: dict) -> tuple[int, Articulation]:
+        """The row's columns and numbers, checked before any row runs: (rate_wpm, the
+        strength with the row's scale rules)."""
         unknown = [k for k in row if k not in TEXT_ROW_COLUMNS]
         if unknown:
             raise InputError(f"unknown column {unknown[0]!r} (a text row has "
@@ -284,7 +291,9 @@ def text_items(work_dir: str | Path, *, preset: str = "anatomical"):
             if not (np.isfinite(v) and v > 0):
                 raise InputError(f"{text!r} must be a positive number", field=column)
             values.append(kind(v))
-        return values[0], values[1]
+        return values[0], Articulation.parse(row.get("scale") or None, strength=values[1])
+
+    from ..speech.articulation import Articulation
 
     def make_item(row: dict):
         from ..speech.alive import Liveliness

@@ -13,7 +13,7 @@ __all__ = ["describe_file", "describe_report", "describe_text", "speak",
 
 
 def speak(output: str | Path, text: str | None = None, *, video: bool = True, render=None,
-          recording: dict | None = None, alive=None, **options):
+          recording: dict | None = None, alive=None, scale=None, **options):
     """Make the face say ``text``, or speak in sync with a recorded voice, into the folder
     ``output``: :func:`facemech.workflows.speak.speak` (its keywords: ``voice``, ``rate_wpm``,
     ``face``, ``preset``, ``strength``, ``progress``), the MP4 with ``video``, drawn with
@@ -42,6 +42,10 @@ def speak(output: str | Path, text: str | None = None, *, video: bool = True, re
     check_output(output, [rec.get("audio"), rec.get("textgrid"),
                           *(n for n in named if n and Path(str(n)).suffix)],
                  folder=True, field="-o")
+    if scale:
+        from ..speech.articulation import Articulation
+
+        options["strength"] = Articulation.parse(scale, strength=options.get("strength", 1.0))
     look = render or render_options()
     return run(output, text, recording=Recording(**rec) if "audio" in rec else None,
                video=look if video else False, alive=alive, **options)
