@@ -18,9 +18,12 @@ import time
 import numpy as np
 
 #: (groups, landmark, axis) of each gesture, as in benchmarks/realism.py's dynamics table
+#: and the two of issue 27's speed targets: the marginal orbicularis lowering the upper lip,
+#: and its lower part with mentalis raising the lower lip
 GESTURES = ((("ZYG",), "mouth_corner_right", 1), (("LLS",), "upper_lip_center", 1),
             (("DLI",), "lower_lip_center", 1), (("MEN",), "chin", 1),
-            (("OOS", "OOI"), "mouth_corner_right", 0), (("DAO",), "mouth_corner_right", 1))
+            (("OOS", "OOI"), "mouth_corner_right", 0), (("DAO",), "mouth_corner_right", 1),
+            (("OOSM",), "upper_lip_center", 1), (("OOIM", "MEN"), "lower_lip_center", 1))
 
 #: Ito, Murano & Gomi (2004, J Appl Physiol 96:2318): the lips' force response to a stimulus,
 #: 6.1 Hz natural frequency and damping ratio 0.7
@@ -36,6 +39,16 @@ VARIANTS = {
     # under the nose and the chin no longer give way under full LLS and DLI (issue 27's creep)
     "poisson_049": {"poisson": 0.49},
     "poisson_049_fibre_vmax20": {"poisson": 0.49, "fv_vmax": 20.0, **ITO},
+    # a floor under each prism's volume (solvers/volume_floor.py), with and without springs
+    # that stiffen 4 times (not 2) beyond the knee of 15 % strain
+    "fibre_vmax20_floor": {"fv_vmax": 20.0, **ITO, "volume_floor": 0.5,
+                           "volume_floor_modulus": 1e6},
+    "fibre_vmax20_stiffening4": {"fv_vmax": 20.0, **ITO, "stiffening": 4.0},
+    "fibre_vmax20_floor_stiffening4": {"fv_vmax": 20.0, **ITO, "volume_floor": 0.5,
+                                       "volume_floor_modulus": 1e6, "stiffening": 4.0},
+    # no force-velocity term at 4 and at 32 steps per frame: what is left is the step's drag
+    # and the tissue's own slowness
+    "no_force_velocity_32_steps": {"f4": 0.0, "substeps": 32},
 }
 
 
