@@ -1,7 +1,7 @@
 """Draw docs/img/tongue.jpg: the rendered tongue at the middle of a /θ/ ("_ T i: _") and of a
 /t/ ("_ t a _") on the built-in face: the mouth from the front and from three-quarters, and the
-teeth and tongue alone in profile (the skin, cavity and gums left out), the rest tongue dotted
-in grey for comparison (docs/rendering.md, docs/stimuli.md).
+tongue with the far half of the teeth alone in profile (the skin, cavity, gums and the near
+teeth left out), the rest tongue dotted in grey for comparison (docs/rendering.md, docs/stimuli.md).
 
 ``python tools/tongue_figure.py [-o docs/img/tongue.jpg]`` (a minute or two).
 """
@@ -9,6 +9,7 @@ in grey for comparison (docs/rendering.md, docs/stimuli.md).
 from __future__ import annotations
 
 import argparse
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -45,12 +46,17 @@ def _panels(face, labels, edges, when):
     for az, el, half in ((0.0, 0.0, 0.016), (35.0, 4.0, 0.016)):
         cam = Camera(view_rotation(az, el), mouth, half, (SIZE, SIZE), 1.2)
         out.append(render_panel(scene, verts, norms, cam, background=bg)[..., :3])
-    # the teeth and tongue alone, from the subject's left
-    keep = [p for p in scene.parts if p.name in ("upper_teeth", "lower_teeth", "tongue")]
+    # the tongue and the far half of the teeth alone, from the side
+    rot = view_rotation(90.0, 0.0)
+    near = np.sign((rot.T @ np.array([0.0, 0.0, 1.0]))[0])  # the camera's side of the midline
+    keep = [p for p in scene.parts if p.name == "tongue"]
+    for p in scene.parts:
+        if p.name in ("upper_teeth", "lower_teeth"):
+            far = (p.rest[p.faces, 0].mean(axis=1) * near) < 0
+            keep.append(replace(p, faces=p.faces[far]))
     inner = _pack(keep, look)
     v, n = inner.frame(look.rest, sim.jaw_angle[k], tongue=pose)
-    cam = Camera(view_rotation(90.0, 0.0), mouth + np.array([0.0, -0.004, -0.022]), 0.026,
-                 (SIZE, SIZE), 1.2)
+    cam = Camera(rot, mouth + np.array([0.0, -0.004, -0.022]), 0.026, (SIZE, SIZE), 1.2)
     img = render_panel(inner, v, n, cam, background=bg)[..., :3].copy()
     rest, _ = inner.frame(look.rest, sim.jaw_angle[k])
     i = [p.name for p in inner.parts].index("tongue")
@@ -73,7 +79,8 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     face = default_face()
     fig = mfig.Figure(figsize=(7.5, 5.3), dpi=120)
-    titles = ("front", "three-quarter", "teeth and tongue, profile\n(grey dots: the rest tongue)")
+    titles = ("front", "three-quarter",
+              "tongue and the far teeth, profile\n(grey dots: the rest tongue)")
     for r, (label, labels, edges, when) in enumerate(CASES):
         panels, pose = _panels(face, labels, edges, when)
         for c, img in enumerate(panels):
