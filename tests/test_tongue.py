@@ -205,3 +205,18 @@ def test_speak_writes_the_series(tmp_path):
     pose = results_tongue(back)
     assert pose is not None and len(pose) == back.sizes["time"]
     assert pose[_frame(0.36), 0] > REST_TIP_BEHIND_INCISORS
+
+
+def test_the_manipulations_carry_the_tongue_with_the_jaw(theta):
+    """Scaled and frozen with the jaw's region, resampled with the motion (speech/stimuli.py)."""
+    from facemech.speech.stimuli import freeze, scale_amplitude, time_scale
+
+    ds, k = theta
+    pose = results_tongue(ds)
+    np.testing.assert_allclose(results_tongue(scale_amplitude(ds, 0.5, "jaw")), 0.5 * pose)
+    np.testing.assert_array_equal(results_tongue(scale_amplitude(ds, 0.5, "lips")), pose)
+    assert not results_tongue(freeze(ds, "jaw", "rest")).any()
+    held = results_tongue(freeze(ds, "jaw", k))
+    np.testing.assert_array_equal(held, np.broadcast_to(pose[k], pose.shape))
+    slow = time_scale(ds, 2.0)
+    np.testing.assert_allclose(results_tongue(slow)[::2][: len(pose)], pose, atol=1e-12)
