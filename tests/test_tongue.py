@@ -120,8 +120,10 @@ def test_the_dental_shows_the_tongue_between_the_lips(theta, scene):
     tongue at rest shows none of it."""
     ds, k = theta
     cam = view_camera("mouth", scene.framing, (160, 160))
+    from facemech.viz.video import jaw_poses_of
+
     skin = ds["positions"].values[k]
-    jaw = float(ds["jaw_angle"].values[k])
+    jaw = jaw_poses_of(ds)[k]
     bent, _ = scene.frame(skin, jaw, tongue=results_tongue(ds)[k])
     rest, _ = scene.frame(skin, jaw)
     assert _tongue_pixels(scene, rest, cam) == 0
@@ -220,3 +222,23 @@ def test_the_manipulations_carry_the_tongue_with_the_jaw(theta):
     np.testing.assert_array_equal(held, np.broadcast_to(pose[k], pose.shape))
     slow = time_scale(ds, 2.0)
     np.testing.assert_allclose(results_tongue(slow)[::2][: len(pose)], pose, atol=1e-12)
+
+
+def test_the_viewer_page_bends_the_tongue_in_headless_chromium(theta, scene, tmp_path):
+    """The page's tongue at the /θ/'s middle: its foremost vertex where the renderer puts it."""
+    from facemech.viz.video import jaw_poses_of
+    from facemech.viz.viewer import write_viewer
+    from test_viewer import _probe
+
+    ds, k = theta
+    page = write_viewer(ds, tmp_path / "theta.html")
+    got = _probe(tmp_path, f"{page.resolve().as_uri()}#frame={k}&probe=1")
+    assert got["frame"] == k
+    jaw = jaw_poses_of(ds)[k]  # the angle and the condyles' shift, as the page moves the jaw
+    verts, _ = scene.frame(ds["positions"].values[k], jaw, tongue=results_tongue(ds)[k])
+    i = [p.name for p in scene.parts].index("tongue")
+    tongue = verts[scene.offsets[i]:scene.offsets[i + 1]]
+    front = tongue[np.argmax(tongue[:, 2])]
+    np.testing.assert_allclose(got["tongue"], front, atol=2e-6)
+    rest, _ = scene.frame(ds["positions"].values[k], jaw)
+    assert front[2] - rest[scene.offsets[i]:scene.offsets[i + 1], 2].max() > 0.008
