@@ -324,6 +324,9 @@ def results_tongue(ds) -> np.ndarray | None:
     if TONGUE_TIP not in ds:
         return None
     var = ds[TONGUE_TIP]
+    if set(var.dims) != {"time", "tongue_axis"}:
+        raise InputError(f"tongue_tip has dimensions {var.dims}, not (time, tongue_axis)",
+                         source=ds.encoding.get("source"), field=TONGUE_TIP)
     a = np.asarray(var.transpose("time", "tongue_axis").values, float)
     if a.shape != (ds.sizes["time"], 2) or not np.all(np.isfinite(a)):
         raise InputError(f"a tongue tip series is a finite (frames, 2) array, not {a.shape}",
