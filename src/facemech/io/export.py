@@ -14,6 +14,11 @@ replaces the input results file.
 - :func:`write_mesh_sequence`: ``frame_00000.obj`` (or ``.ply``) ... and ``index.json`` (frame
   times, units) in a folder.
 - :func:`write_markers`: the model's markers as TRC, C3D or CSV through the marker writers.
+
+The exports carry the skin (and the markers), not the render-only parts (eyes, teeth, tongue).
+A result with a tongue tip series (``tongue_tip``, from ``facemech speak``) carries it as data:
+the glTF's ``asset.extras.tongue_tip`` (m, per frame) and, in a mesh sequence, each frame's
+``tongue_tip`` in ``index.json`` (in the sequence's units) with its description at the top.
 """
 
 from __future__ import annotations
@@ -191,6 +196,22 @@ def _glb(document: dict, binary: bytes) -> bytes:
                      struct.pack("<II", len(binary), CHUNK_BIN), binary])
 
 
+def _tongue_extras(ds, scale: float, units: str) -> dict:
+    """``{"tongue_tip": {...}}``, the results' tongue tip pose per frame (protrusion, elevation
+    from rest, the mandible's frame; :func:`~facemech.io.results.results_tongue`) in ``units``
+    (``scale`` m each), or ``{}`` for results without it. The exports carry the skin only: the
+    tongue travels as this series, for a renderer that draws its own."""
+    from .results import TONGUE_AXES, results_tongue
+
+    tongue = results_tongue(ds)
+    if tongue is None:
+        return {}
+    return {"tongue_tip": {"units": units, "axes": list(TONGUE_AXES),
+                           "frame": "the mandible's, from the resting tip (protrusion +z, "
+                                    "elevation +y); render geometry, not the skin",
+                           "values": (tongue / scale).round(9).tolist()}}
+
+
 def gltf_document(ds, source: Path | None = None) -> tuple[dict, bytes]:
     """The glTF JSON document and binary buffer of a results dataset (see :func:`write_gltf`)."""
     from .._version import __version__
@@ -233,7 +254,8 @@ def gltf_document(ds, source: Path | None = None) -> tuple[dict, bytes]:
                              "frames": n_frames, "face": str(ds.attrs.get("face", "")),
                              "preset": str(ds.attrs.get("preset", "")),
                              "source": "" if source is None else Path(source).name,
-                             "morph_targets": "frame k > 0 is frame 0 plus target k - 1"}},
+                             "morph_targets": "frame k > 0 is frame 0 plus target k - 1",
+                             **_tongue_extras(ds, 1.0, "m")}},
         "scene": 0,
         "scenes": [{"name": "facemech", "nodes": [0, 1]}],
         "nodes": nodes,
@@ -386,11 +408,17 @@ def write_mesh_sequence(results, folder: str | Path, fmt: str = "obj", *,
                 else:
                     (tmp / name).write_bytes(_ply_bytes(pos[k] / scale, tris, note))
                 entries.append({"file": name, "time_s": float(times[k])})
+            tongue = _tongue_extras(ds, scale, units)
+            if tongue:  # the tongue tip's pose per frame, beside its mesh file
+                for entry, pose in zip(entries, tongue["tongue_tip"]["values"], strict=True):
+                    entry["tongue_tip"] = pose
+                tongue["tongue_tip"].pop("values")
             index = {"format": SEQUENCE_FORMAT, "version": 1, "mesh_format": fmt, "units": units,
                      "axes": "+x subject's left, +y up, +z forward",
                      "frame_rate_hz": float(ds.attrs.get("frame_rate_hz", FRAME_RATE_HZ)),
                      "nodes": int(pos.shape[1]), "triangles": int(len(tris)),
-                     "source": "" if source is None else Path(source).name, "frames": entries}
+                     "source": "" if source is None else Path(source).name,
+                     **tongue, "frames": entries}
             (tmp / "index.json").write_text(_index_text(index))
             umask = os.umask(0)
             os.umask(umask)

@@ -8,6 +8,10 @@ corner) so that the file renders on its own. A
 face built from a textured or coloured scan adds its look (``texture_uv`` (triangle, corner,
 uv), ``texture_image`` (texel_y, texel_x, rgb), ``vertex_colour`` (node, rgb); read back with
 :func:`facemech.geometry.appearance.appearance_from_dataset`).
+The tongue tip's pose, ``tongue_tip`` (time, tongue_axis; m: ``protrusion`` forward and
+``elevation`` up from its rest, in the mandible's frame; render geometry, not physics), is written
+by ``facemech speak`` (:mod:`facemech.speech.tongue`); files without it read as the tongue at rest
+(:func:`results_tongue`).
 Muscle outputs, per muscle instance (coordinate ``muscle_instance``: ``"ZYG_R"``, ``"OOS_L"``,
 ...): ``muscle_force`` (time, muscle_instance; N, tension of eqs. 5-7), ``muscle_length`` (m),
 ``muscle_velocity`` (m/s, lengthening positive), ``muscle_activation`` (N, the activation
@@ -225,7 +229,7 @@ def write_dataset(path: str | Path, ds) -> Path:
 
 #: the variables of a results file that must be finite everywhere (checked on reading)
 FINITE_VARIABLES = ("positions", "markers", "rest_positions", "activity", "jaw_angle",
-                    "jaw_shift")
+                    "jaw_shift", "tongue_tip")
 
 
 def read_results(path: str | Path):
@@ -282,6 +286,52 @@ def with_jaw_shift(ds):
     ds["jaw_shift"] = (("time", "shift_axis"), np.zeros((ds.sizes["time"], 2)),
                        {"units": "m", "long_name": "shift of the jaw hinge (condyles)"})
     return ds.assign_coords(shift_axis=["y", "z"])
+
+
+#: the results variable of the tongue tip's pose and its axis' labels
+TONGUE_TIP = "tongue_tip"
+TONGUE_AXES = ("protrusion", "elevation")
+
+
+def tongue_variable(series: np.ndarray) -> dict:
+    """The results variables of a tongue tip series (frames, 2) m (protrusion, elevation),
+    ``{"tongue_tip": (dims, values, attrs)}``, for ``extra`` of :func:`to_dataset` (its
+    coordinate ``tongue_axis`` is added with :func:`with_tongue_axis`)."""
+    a = np.asarray(series, float)
+    if a.ndim != 2 or a.shape[1] != 2 or not np.all(np.isfinite(a)):
+        raise InputError(f"a tongue tip series is a finite (frames, 2) array, not {a.shape}",
+                         field=TONGUE_TIP)
+    return {TONGUE_TIP: (("time", "tongue_axis"), a,
+                         {"units": "m", "long_name": "tongue tip pose from rest (protrusion "
+                          "forward, elevation up; the mandible's frame; render geometry)"})}
+
+
+def with_tongue(ds, series: np.ndarray):
+    """``ds`` with its ``tongue_tip`` set to ``series`` (frames, 2) m (:func:`tongue_variable`)
+    and the coordinate ``tongue_axis``."""
+    if len(series) != ds.sizes["time"]:
+        raise InputError(f"the tongue tip series has {len(series)} frames, the results "
+                         f"{ds.sizes['time']}", field=TONGUE_TIP)
+    ds = ds.assign_coords(tongue_axis=list(TONGUE_AXES))
+    for name, var in tongue_variable(series).items():
+        ds[name] = var
+    return ds
+
+
+def results_tongue(ds) -> np.ndarray | None:
+    """(frames, 2) m, the tongue tip's pose (protrusion, elevation) of a results dataset, or
+    None for a file without it (the tongue at rest)."""
+    if TONGUE_TIP not in ds:
+        return None
+    var = ds[TONGUE_TIP]
+    if set(var.dims) != {"time", "tongue_axis"}:
+        raise InputError(f"tongue_tip has dimensions {var.dims}, not (time, tongue_axis)",
+                         source=ds.encoding.get("source"), field=TONGUE_TIP)
+    a = np.asarray(var.transpose("time", "tongue_axis").values, float)
+    if a.shape != (ds.sizes["time"], 2) or not np.all(np.isfinite(a)):
+        raise InputError(f"a tongue tip series is a finite (frames, 2) array, not {a.shape}",
+                         source=ds.encoding.get("source"), field=TONGUE_TIP)
+    return a
 
 
 def results_muscles(ds):

@@ -188,13 +188,13 @@ def controls_from_alignment(alignment: Alignment, *, frame_rate: float = 60.0,
              Gesture(PAUSE, alignment.duration, np.inf)]
     activity, _ = blend(time + lead_s, items)
     _, jaw = blend(time + jaw_lead_s, items)
-    edge = _taper(time, alignment.duration)
+    edge = taper(time, alignment.duration)
     activity = np.clip(strength * edge[:, None] * activity, 0.0, 1.0)
     jaw = np.maximum(strength * edge * jaw, 0.0)  # the teeth meet: never closed past rest
     return time, activity, jaw
 
 
-def _taper(t: np.ndarray, duration: float) -> np.ndarray:
+def taper(t: np.ndarray, duration: float) -> np.ndarray:
     """1 inside, falling smoothly (smoothstep) to 0 at 0 and at ``duration`` over EDGE_S."""
     x = np.clip(np.minimum(t, duration - t) / EDGE_S, 0.0, 1.0)
     return x * x * (3.0 - 2.0 * x)

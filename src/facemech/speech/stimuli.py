@@ -27,7 +27,8 @@ one region leaves the nodes wholly inside the others untouched:
 
 Several regions may be named together (``"lips,jaw"``); their weights add. The jaw angle and the
 condyles' shift follow the ``jaw`` region (they are scaled or frozen when it is named, or
-``face``); the teeth, which the renderer moves with the jaw, then follow too.
+``face``); the teeth, which the renderer moves with the jaw, then follow too, and so does the
+tongue tip's pose (``tongue_tip``, :mod:`.tongue`) where the results have one.
 
 Every manipulation keeps the skin, the markers and the jaw consistent (markers are re-read from
 the manipulated skin at their nodes), records itself in the ``stimulus`` attribute (a JSON list,
@@ -130,8 +131,9 @@ def _record(ds, step: dict):
 
 
 def _with_skin(ds, pos: np.ndarray, angle: np.ndarray | None = None,
-               shift_yz: np.ndarray | None = None):
-    """``ds`` with new skin positions, the markers re-read at their nodes, and the jaw."""
+               shift_yz: np.ndarray | None = None, tongue: np.ndarray | None = None):
+    """``ds`` with new skin positions, the markers re-read at their nodes, the jaw and the
+    tongue tip's pose."""
     from ..analysis.describe import marker_nodes
 
     out = ds.copy(deep=True)
@@ -150,6 +152,8 @@ def _with_skin(ds, pos: np.ndarray, angle: np.ndarray | None = None,
         out["jaw_angle"] = (("time",), angle, ds["jaw_angle"].attrs)
     if shift_yz is not None and "jaw_shift" in ds:
         out["jaw_shift"] = (("time", "shift_axis"), shift_yz, ds["jaw_shift"].attrs)
+    if tongue is not None and "tongue_tip" in ds:
+        out["tongue_tip"] = (("time", "tongue_axis"), tongue, ds["tongue_tip"].attrs)
     return out
 
 
@@ -163,6 +167,13 @@ def _jaw(ds) -> tuple[np.ndarray | None, np.ndarray | None]:
     sh = (ds["jaw_shift"].transpose("time", "shift_axis").values.astype(float)
           if "jaw_shift" in ds else None)
     return angle, sh
+
+
+def _tongue(ds) -> np.ndarray | None:
+    """(frames, 2) m, the tongue tip's pose of the results, or None."""
+    if "tongue_tip" not in ds:
+        return None
+    return ds["tongue_tip"].transpose("time", "tongue_axis").values.astype(float)
 
 
 # ---- manipulations ------------------------------------------------------------------------------
@@ -190,10 +201,13 @@ def scale_amplitude(ds, factor: float, region: str = "face"):
     pos, rest = _skin(ds)
     new = pos + (w * (factor - 1.0))[None, :, None] * (pos - rest)  # exact where w = 0
     angle, sh = _jaw(ds)
+    tongue = None
     if _moves_jaw(region):
         angle = None if angle is None else angle * factor
         sh = None if sh is None else sh * factor
-    return _record(_with_skin(ds, new, angle, sh),
+        tongue = _tongue(ds)
+        tongue = None if tongue is None else tongue * factor
+    return _record(_with_skin(ds, new, angle, sh, tongue),
                    {"manipulation": "amplitude", "factor": factor, "region": region})
 
 
@@ -225,10 +239,15 @@ def freeze(ds, region: str, at: str | int | float = "rest"):
     if np.ptp(pos, axis=0).max() > still and not np.ptp(new, axis=0).max() > still and (
             angle is None or _moves_jaw(region) or np.ptp(angle) == 0):
         raise InputError(f"freezing {region!r} leaves no motion at all", field="freeze_region")
+    tongue = None
     if _moves_jaw(region):
         angle = None if angle is None else np.full_like(angle, a_ref)
         sh = None if sh is None else np.broadcast_to(s_ref, sh.shape).astype(float)
-    return _record(_with_skin(ds, new, angle, sh),
+        tongue = _tongue(ds)
+        if tongue is not None:
+            tongue = np.broadcast_to(0.0 if where == "rest" else tongue[where],
+                                     tongue.shape).astype(float)
+    return _record(_with_skin(ds, new, angle, sh, tongue),
                    {"manipulation": "freeze", "region": region, "at": where})
 
 
@@ -236,10 +255,10 @@ def time_scale(ds, factor: float, *, rate: float = 60.0):
     """The motion made ``factor`` times as long, resampled at ``rate`` Hz.
 
     Output frame k at time k / rate shows the input at frame ``k / (factor rate / rate_in)``:
-    skin, markers, jaw angle and shift by a cubic spline through the input frames (exact on
-    them: a factor 2 at 60 Hz keeps every input frame, so peaks keep their height), activity
-    linearly. The new length is ``round(frames x factor x rate / rate_in)`` frames. Speeds
-    divide by the factor.
+    skin, markers, jaw angle and shift (and the tongue tip's pose) by a cubic spline through
+    the input frames (exact on them: a factor 2 at 60 Hz keeps every input frame, so peaks keep
+    their height), activity linearly. The new length is
+    ``round(frames x factor x rate / rate_in)`` frames. Speeds divide by the factor.
     """
     from scipy.interpolate import CubicSpline
 
@@ -261,7 +280,7 @@ def time_scale(ds, factor: float, *, rate: float = 60.0):
     keep = [v for v in ds.data_vars if "time" not in ds[v].dims]
     out = ds[keep].drop_dims("time", errors="ignore").assign_coords(
         time=("time", t0 + np.arange(n) / rate, ds["time"].attrs))
-    for name in ("positions", "markers", "jaw_angle", "jaw_shift"):
+    for name in ("positions", "markers", "jaw_angle", "jaw_shift", "tongue_tip"):
         if name in ds:
             var = ds[name]
             out[name] = (var.dims, resampled(var.values), var.attrs)

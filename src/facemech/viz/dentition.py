@@ -32,6 +32,8 @@ GINGIVA = np.array([0.82, 0.47, 0.49])  #: sRGB, the attached gingiva's coral pi
 TONGUE = np.array([0.76, 0.42, 0.43])  #: sRGB
 GAP = 0.00035  #: m of each crown's place on the arch left empty (half on each side)
 UPPER_EDGE_BELOW_STOMION = 0.003  #: m, the upper incisors' edge below the stomion
+TONGUE_TIP_SETBACK = 0.0045  #: m, the resting tongue tip behind the lower incisors' labial face
+TONGUE_TIP_BELOW_STOMION = 0.0085  #: m, the resting tongue tip under the stomion
 #: m, how far each kind's edge or cusp tip stands back from the incisal plane, upper arch (the
 #: lower's 1.6 times as far)
 STEP = {"incisor": 0.0, "canine": 0.0004, "premolar": 0.0008, "molar": 0.0010}
@@ -239,8 +241,8 @@ def tongue(look: FaceLook) -> Part:
     front_z = lm["upper_lip_center"][2] - look.teeth_depth - LOWER_ARCH_SETBACK
     unit, faces = sphere(20, 32)
     half = np.array([0.020, 0.0075, 0.024])  # m: half-width, half-height, half-length
-    tip_z = front_z - 0.0045  # behind the lower incisors' lingual face
-    centre = np.array([st[0], st[1] - 0.0085, tip_z - half[2]])
+    tip_z = front_z - TONGUE_TIP_SETBACK  # behind the lower incisors' lingual face
+    centre = np.array([st[0], st[1] - TONGUE_TIP_BELOW_STOMION, tip_z - half[2]])
     fwd = np.clip(unit[:, 2], 0, 1)
     x = unit[:, 0] * half[0] * (1.0 - 0.45 * fwd ** 2)  # narrowing to the tip
     y = unit[:, 1] * half[1] * np.where(unit[:, 1] > 0, 1.0, 1.3)
@@ -250,3 +252,43 @@ def tongue(look: FaceLook) -> Part:
     verts = centre + np.stack([x, y, z], -1)
     albedo = np.tile(TONGUE, (len(verts), 1)) * (0.92 + 0.08 * np.clip(unit[:, 1], 0, 1))[:, None]
     return Part("tongue", verts, faces, albedo, (0.35, 25.0), "jaw")
+
+
+#: m, the length of the tongue's front, from the tip back, that bends with the tip's pose
+TONGUE_BEND_LENGTH = 0.030
+
+
+def tongue_modes(rest: np.ndarray) -> np.ndarray:
+    """(n, 2, 3) m per m: how each vertex of the resting tongue (:func:`tongue`, ``rest`` (n, 3)
+    m) moves per metre of the tip's protrusion (forward) and elevation (up); a pose (2,) m bends
+    it to ``rest + pose @ modes`` (:func:`bend_tongue`), linear so that the viewer applies it as
+    the renderer does.
+
+    The front :data:`TONGUE_BEND_LENGTH` follows the tip with a smooth fall-off along the length
+    (a smoothstep weight w, 1 at the tip, 0 at the front's back end), the rest of the body stays:
+    elevation lifts each section by w times the tip's, protrusion moves it forward by w times
+    the tip's and narrows and thins it where it stretches (its cross-section scaled by 1 - w',
+    w' the weight's slope per metre times the protrusion: the volume kept to first order).
+    """
+    rest = np.asarray(rest, float)
+    tip_z = rest[:, 2].max()
+    s = np.clip(1.0 - (tip_z - rest[:, 2]) / TONGUE_BEND_LENGTH, 0.0, 1.0)
+    w = s * s * (3.0 - 2.0 * s)
+    slope = 6.0 * s * (1.0 - s) / TONGUE_BEND_LENGTH  # dw/dz, 1/m
+    mid_x = 0.5 * (rest[:, 0].max() + rest[:, 0].min())
+    mid_y = 0.5 * (rest[:, 1].max() + rest[:, 1].min())
+    modes = np.zeros((len(rest), 2, 3))
+    modes[:, 0, 2] = w
+    # thinning: per metre of protrusion, the section shrinks by 0.5 w' about the midline in each
+    # of x and y (area by w', the length grows by w')
+    modes[:, 0, 0] = -0.5 * slope * (rest[:, 0] - mid_x)
+    modes[:, 0, 1] = -0.5 * slope * (rest[:, 1] - mid_y)
+    modes[:, 1, 1] = w
+    return modes
+
+
+def bend_tongue(rest: np.ndarray, modes: np.ndarray, pose) -> np.ndarray:
+    """(n, 3) m, the tongue's vertices bent by a tip pose (2,) m (protrusion, elevation):
+    ``rest + pose @ modes`` (:func:`tongue_modes`)."""
+    p = np.asarray(pose, float).reshape(2)
+    return np.asarray(rest, float) + p[0] * modes[:, 0] + p[1] * modes[:, 1]

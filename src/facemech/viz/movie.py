@@ -61,7 +61,7 @@ def _poses(motion: FrameMotion | None, frames: int, source: str | None):
     if len(motion) != frames:
         raise InputError(f"the blink, gaze and head series have {len(motion)} frames, the "
                          f"positions {frames}", source=source, field="motion")
-    return [dict(zip(("blink", "gaze", "head"), motion.at(k), strict=True))
+    return [dict(zip(("blink", "gaze", "head", "tongue"), motion.at(k), strict=True))
             for k in range(frames)]
 
 
@@ -92,8 +92,8 @@ def write_movie(
         that the audio covers, the last one ending at or after it)
     options : view, size, background and anti-aliasing (default: frontal+profile, 1280x720)
     source : name of the input, for error messages
-    motion : blinks, gaze and head pose per frame (:class:`.render.FrameMotion`; None: still
-        eyes, open lids, the head at rest)
+    motion : blinks, gaze, head pose and the tongue tip's pose per frame
+        (:class:`.render.FrameMotion`; None: still eyes, open lids, the head and tongue at rest)
     """
     import imageio_ffmpeg
 

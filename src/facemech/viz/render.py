@@ -120,12 +120,13 @@ class Renderer:
         self.supersample = supersample
 
     def __call__(self, skin: np.ndarray, jaw_angle=0.0, blink: float = 0.0,
-                 gaze=(0.0, 0.0), head=None) -> np.ndarray:
+                 gaze=(0.0, 0.0), head=None, tongue=None) -> np.ndarray:
         """(h, w, 4) uint8 frame of skin node positions (n, 3) m and a jaw angle (rad) or pose
         (3,) (angle rad, shift_y m, shift_z m); ``blink`` 0 (open) .. 1 (closed) and ``gaze``
         (yaw, pitch) rad move the eyes and lids; ``head`` (pitch, yaw, roll) rad turns the
-        whole head (:meth:`.scene.Scene.frame`)."""
-        verts, norms = self.scene.frame(skin, jaw_angle, blink, gaze, head)
+        whole head; ``tongue`` (protrusion, elevation) m bends the tongue's tip
+        (:meth:`.scene.Scene.frame`)."""
+        verts, norms = self.scene.frame(skin, jaw_angle, blink, gaze, head, tongue)
         return np.concatenate([render_panel(self.scene, verts, norms, cam,
                                             background=self.background,
                                             supersample=self.supersample)
@@ -142,16 +143,33 @@ class FrameMotion:
     blink : (T,) lid closure, 0 open .. 1 closed
     gaze : (T, 2) rad, (yaw, pitch) of both eyes
     head : (T, 3) rad, the head's (pitch, yaw, roll) (:func:`.scene.head_rotation`)
+    tongue : (T, 2) m, the tongue tip's (protrusion, elevation) from rest
+        (:mod:`facemech.speech.tongue`), or None: at rest
     """
 
     blink: np.ndarray
     gaze: np.ndarray
     head: np.ndarray
+    tongue: np.ndarray | None = None
+
+    @classmethod
+    def rest(cls, frames: int, tongue: np.ndarray | None = None) -> FrameMotion:
+        """Open lids, the eyes ahead and the head still for ``frames`` frames, with a tongue
+        series (T, 2) m or None."""
+        return cls(np.zeros(frames), np.zeros((frames, 2)), np.zeros((frames, 3)), tongue)
+
+    def with_tongue(self, tongue: np.ndarray | None) -> FrameMotion:
+        """The same motion with the tongue series ``tongue`` (T, 2) m (None: this one's)."""
+        if tongue is None:
+            return self
+        return FrameMotion(self.blink, self.gaze, self.head, tongue)
 
     def __post_init__(self):
-        shapes = {"blink": (None,), "gaze": (None, 2), "head": (None, 3)}
+        shapes = {"blink": (None,), "gaze": (None, 2), "head": (None, 3), "tongue": (None, 2)}
         frames = len(np.asarray(self.blink))
         for name, shape in shapes.items():
+            if getattr(self, name) is None:
+                continue
             a = np.asarray(getattr(self, name), float)
             if a.ndim != len(shape) or a.shape[1:] != shape[1:] or len(a) != frames:
                 raise InputError(f"{name} series of shape {a.shape} does not fit {frames} "
@@ -165,9 +183,10 @@ class FrameMotion:
     def __len__(self) -> int:
         return len(self.blink)
 
-    def at(self, k: int) -> tuple[float, np.ndarray, np.ndarray]:
-        """(blink, gaze (2,), head (3,)) of frame ``k``."""
-        return float(self.blink[k]), self.gaze[k], self.head[k]
+    def at(self, k: int) -> tuple[float, np.ndarray, np.ndarray, np.ndarray | None]:
+        """(blink, gaze (2,), head (3,), tongue (2,) or None) of frame ``k``."""
+        return (float(self.blink[k]), self.gaze[k], self.head[k],
+                None if self.tongue is None else self.tongue[k])
 
 
 @dataclass(frozen=True)

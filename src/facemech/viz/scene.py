@@ -10,8 +10,10 @@
   (:mod:`.face_parts`, :mod:`.lids`);
 * **mouth**: a dark oral cavity, the upper teeth and gums fixed to the skull, the lower teeth,
   gums and the tongue moving with the mandible (the results' jaw angle about the model's
-  hinge, plus the hinge's shift) (:mod:`.dentition`), and a dark seal across the slit between
-  the lips' edges, facing into the mouth (it moves with the skin) (:mod:`.face_parts`);
+  hinge, plus the hinge's shift), the tongue's tip bent per frame by its pose (protrusion,
+  elevation: :func:`.dentition.bend_tongue`) (:mod:`.dentition`), and a dark seal across the
+  slit between the lips' edges, facing into the mouth (it moves with the skin)
+  (:mod:`.face_parts`);
 * **head motion**: the whole head (every part above) turns rigidly about :func:`head_pivot`
   (the top of the neck) by a pose (pitch, yaw, roll) rad (:func:`head_rotation`); the skin's
   positions, from the simulation, stay in the head's frame;
@@ -33,6 +35,7 @@ import numpy as np
 
 from ..geometry.builder import vertex_normals
 from ..solvers.jaw import rotation_matrix
+from .dentition import bend_tongue, tongue_modes
 from .face_parts import MAX_TEXTURE, eye_parts, mouth_parts, skin_part
 from .head import SKIRT_DEPTH, closed_head, ear_parts, head_centre, head_shell, skirt_part
 from .lids import gaze_rotation
@@ -64,9 +67,10 @@ class Scene:
     joint_faces: np.ndarray | None = None  # skin + closure faces over [skin, closure] vertices
     joint_normals: VertexNormals | None = None  # of the joint mesh
     framing: dict = field(default_factory=dict)
+    tongue_modes: np.ndarray | None = None  # (n, 2, 3) of the 'tongue' part (.dentition)
 
     def frame(self, skin: np.ndarray, jaw_angle=0.0, blink: float = 0.0,
-              gaze=(0.0, 0.0), head=None) -> tuple[np.ndarray, np.ndarray]:
+              gaze=(0.0, 0.0), head=None, tongue=None) -> tuple[np.ndarray, np.ndarray]:
         """Vertices (N, 3) and unit normals (N, 3) of every part for one frame (model axes).
 
         ``jaw_angle``: the jaw's angle (rad), or its pose (3,) (angle rad, shift_y m, shift_z
@@ -74,7 +78,9 @@ class Scene:
         lids' closure, 0 open .. 1 closed; ``gaze``: (yaw, pitch) rad of both eyes,
         yaw > 0 towards the subject's left, pitch > 0 up (:mod:`.lids`); ``head``: None, or the
         head's pose (3,) rad (pitch up, yaw to the subject's left, roll to the left): every
-        part turns about :func:`head_pivot` (:func:`head_rotation`).
+        part turns about :func:`head_pivot` (:func:`head_rotation`); ``tongue``: None, or the
+        tongue tip's pose (2,) m (protrusion, elevation) in the mandible's frame
+        (:func:`.dentition.bend_tongue`; :mod:`facemech.speech.tongue`).
         """
         look = self.look
         yaw, pitch = (float(g) for g in gaze)
@@ -125,6 +131,9 @@ class Scene:
             else:
                 v = p.rest
                 n = n_rest
+                if p.name == "tongue" and tongue is not None and np.any(np.asarray(tongue)):
+                    v = bend_tongue(p.rest, self.tongue_modes, tongue)
+                    n = vertex_normals(v, p.faces)
                 if p.motion == "jaw" and moved:
                     v = (v - look.hinge_point) @ rot.T + look.hinge_point + shift
                     n = n @ rot.T
@@ -241,6 +250,9 @@ def _pack(parts: list[Part], look: FaceLook) -> Scene:
                   tuple(vertex_normals(p.rest, p.faces) for p in parts),
                   head_centre(look)[0])
     object.__setattr__(scene, "framing", _framing(scene))
+    tongue = next((p for p in parts if p.name == "tongue"), None)
+    if tongue is not None:
+        object.__setattr__(scene, "tongue_modes", tongue_modes(tongue.rest))
     closure = next((p.follow for p in parts if p.motion == "follow"), None)
     if closure is not None:
         skin = parts[0]

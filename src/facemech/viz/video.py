@@ -46,7 +46,9 @@ def render_results(ds, output: str | Path, *, options: RenderOptions | None = No
     audio : WAV muxed into a movie
     fps : frame rate (default: the results')
     source : name of the results, for error messages (default: the path, when given one)
-    motion : blinks, gaze and head pose per frame (:class:`FrameMotion`; None: at rest)
+    motion : blinks, gaze and head pose per frame (:class:`FrameMotion`; None: at rest); the
+        tongue tip's pose is the results' ``tongue_tip`` where ``motion`` carries none
+        (:func:`motion_with_tongue`)
     """
     from .movie import write_frames, write_movie
 
@@ -57,6 +59,7 @@ def render_results(ds, output: str | Path, *, options: RenderOptions | None = No
     pos = ds["positions"].values
     jaw = jaw_poses_of(ds)
     fps = float(fps or ds.attrs.get("frame_rate_hz", FRAME_RATE_HZ))
+    motion = motion_with_tongue(motion, ds)
     output = Path(output)
     if output.suffix.lower() == ".mp4":
         return write_movie(output, scene, pos, jaw, fps=fps, audio=audio, options=opt,
@@ -68,6 +71,20 @@ def render_results(ds, output: str | Path, *, options: RenderOptions | None = No
         raise InputError("audio goes into a movie, not into PNG frames", field="audio")
     return write_frames(output, scene, pos, jaw, options=opt, progress=progress,
                         source=source, motion=motion)
+
+
+def motion_with_tongue(motion: FrameMotion | None, ds) -> FrameMotion | None:
+    """``motion`` with the results' tongue tip series (:func:`facemech.io.results.results_tongue`)
+    where it has none of its own: a still face with that tongue when ``motion`` is None; as
+    given when the results have no tongue series (the tongue at rest)."""
+    from ..io.results import results_tongue
+
+    tongue = results_tongue(ds)
+    if tongue is None or (motion is not None and motion.tongue is not None):
+        return motion
+    if motion is None:
+        return FrameMotion.rest(len(tongue), tongue)
+    return motion.with_tongue(tongue) if len(motion) == len(tongue) else motion
 
 
 def jaw_poses_of(ds) -> np.ndarray | None:
@@ -131,7 +148,7 @@ def still(ds, output: str | Path, *, time: float | None = None, peak: str | None
     markers, labels : draw the model's markers as dots, and their names beside them
     source : name of the results, for error messages (default: the path, when given one)
     motion : blinks, gaze and head pose per frame of the results (:class:`FrameMotion`; None:
-        at rest); the markers turn with the head
+        at rest); the markers turn with the head; the tongue as :func:`render_results`
 
     Returns
     -------
@@ -170,8 +187,10 @@ def still(ds, output: str | Path, *, time: float | None = None, peak: str | None
     if motion is not None and len(motion) != len(t):
         raise InputError(f"the blink, gaze and head series have {len(motion)} frames, the "
                          f"results {len(t)}", source=source, field="motion")
-    blink, gaze, head = motion.at(k) if motion is not None else (0.0, (0.0, 0.0), None)
-    img = rend(skin, jaw, blink, gaze, head)
+    motion = motion_with_tongue(motion, ds)
+    blink, gaze, head, tongue = (motion.at(k) if motion is not None
+                                 else (0.0, (0.0, 0.0), None, None))
+    img = rend(skin, jaw, blink, gaze, head, tongue)
     h, w = opt.size
     fig = mfig.Figure(figsize=(w / 200, h / 200), dpi=200)
     ax = fig.add_axes((0, 0, 1, 1))

@@ -21,6 +21,8 @@ measured        null, or the same plus ``source``, ``coverage`` ([t0, t1] s on t
 activity        ``{"names": [...], "data": base64 float32}``, (frames, muscles) in [0, 1]
 jawDeg          base64 float32, (frames,) degrees
 jawShift        base64 float32, (frames, 2) m: the hinge's shift along y and z (zeros for a hinge)
+tongueTip       base64 float32, (frames, 2) m: the tongue tip's pose (protrusion, elevation) from
+                rest, the results' ``tongue_tip`` (zeros for results without it: at rest)
 scene           the whole head the movie renderer draws (:func:`scene_block`)
 ==============  ==========================================================================
 
@@ -46,7 +48,10 @@ parts           ``[{"name", "motion": "skin"|"skull"|"jaw"|"skirt"|"follow", "in
                 ``gloss``; 'eye' and 'lid' parts stay at rest: the viewer shows the eyes
                 open and looking ahead); a 'follow' part (the
                 head closing the skin) also has base64 ``nodes``, ``inner`` (uint32) and
-                ``weights``, ``reach`` (float32) per vertex (:class:`.closure.Closure`)
+                ``weights``, ``reach`` (float32) per vertex (:class:`.closure.Closure`); the
+                'tongue' part has base64 float32 ``modes`` (count, 2, 3): each vertex moves by
+                ``tongueTip[f] @ modes`` before the jaw moves it
+                (:func:`.dentition.tongue_modes`)
 hinge           ``{"point": [x, y, z] m, "axis": [x, y, z]}``: 'jaw' parts turn about it by
                 the frame's jaw angle (positive opens the mouth), then move by its shift
 frameY          [bottom, top] m: the views fit the ``framed`` parts between these heights
@@ -72,6 +77,7 @@ import numpy as np
 
 from ..atomic import atomic_path
 from ..errors import InputError
+from ..io.results import results_tongue
 from ..params import FRAME_RATE_HZ
 
 FORMAT = "facemech-viewer/1"
@@ -218,6 +224,8 @@ def scene_block(scene) -> dict:
             c = p.follow
             part.update(nodes=_b64(c.nodes, "u4"), inner=_b64(c.inner, "u4"),
                         weights=_b64(c.weights, "f4"), reach=_b64(c.reach, "f4"))
+        if p.name == "tongue" and scene.tongue_modes is not None:  # its tip's bending
+            part["modes"] = _b64(scene.tongue_modes, "f4")
         parts.append(part)
         face += len(p.faces)
     rest = np.concatenate([p.rest for p in scene.parts])
@@ -327,6 +335,8 @@ def viewer_data(results, measured=None, title: str | None = None) -> dict:
            else np.zeros(frames))
     jaw_shift = (np.asarray(results["jaw_shift"].transpose("time", "shift_axis").values, float)
                  if "jaw_shift" in results else np.zeros((frames, 2)))
+    tongue = results_tongue(results)
+    tongue = np.zeros((frames, 2)) if tongue is None else tongue
 
     meas_block = None
     if measured is not None:
@@ -373,6 +383,7 @@ def viewer_data(results, measured=None, title: str | None = None) -> dict:
         "activity": {"names": muscles, "data": _b64(act, "f4")},
         "jawDeg": _b64(jaw, "f4"),
         "jawShift": _b64(jaw_shift, "f4"),
+        "tongueTip": _b64(tongue, "f4"),
         "scene": scene_block(scene),
     }
 

@@ -6,7 +6,9 @@
    from the Montreal Forced Aligner or by hand).
 2. The muscle activity and jaw angle per 60-Hz frame: visemes blended by dominance functions
    (:func:`facemech.speech.coarticulation.controls_from_alignment`), leading the acoustics.
-3. The forward simulation on the chosen face (:func:`facemech.simulate`).
+3. The forward simulation on the chosen face (:func:`facemech.simulate`); the tongue tip's pose
+   per frame (:func:`facemech.speech.tongue.tongue_tip`, render geometry) joins the results as
+   ``tongue_tip``.
 4. Blinks, gaze shifts and head motion driven by the voice (:mod:`facemech.speech.alive`; on by
    default, each off with :class:`~facemech.speech.alive.Liveliness`): the renderer turns the
    whole head, the simulation stays in the head's frame.
@@ -117,7 +119,7 @@ def speak(
     from ..analysis.describe import describe
     from ..geometry.builder import load_face
     from ..io.activity import write_activity
-    from ..io.results import file_hash, to_dataset, write_dataset
+    from ..io.results import file_hash, to_dataset, with_tongue, write_dataset
     from ..params import MUSCLE_GROUPS
     from ..params import preset as load_preset
     from ..solvers.forward import simulate
@@ -125,6 +127,7 @@ def speak(
     from ..speech.alive import Liveliness, liveliness
     from ..speech.articulation import as_articulation
     from ..speech.coarticulation import controls_from_alignment
+    from ..speech.tongue import tongue_tip
     from ..speech.wav import read_wav, write_wav
 
     audio, textgrid = (None, None) if recording is None else \
@@ -186,7 +189,8 @@ def speak(
     sim = simulate(model, act, jaw, params=params,
                    progress=None if progress is None else
                    (lambda d, n: progress("simulate", d, n)))
-    ds = to_dataset(sim, inputs)
+    ds = with_tongue(to_dataset(sim, inputs),
+                     tongue_tip(alignment, sim.time, strength=articulation))
     write_dataset(files["results"], ds)
     desc = describe(ds).to_dict()
     lively = liveliness(ds["time"].values, samples, rate, alive)
