@@ -22,6 +22,7 @@ nasion).
 from __future__ import annotations
 
 import numpy as np
+from scipy.ndimage import gaussian_filter1d
 
 from . import textures as T
 from .mesh import Part, grid_faces
@@ -33,6 +34,7 @@ N_S, N_T = 12, 36  #: samples root -> rim and round the rim
 STAND_OFF = 17.0  #: mm, the rim's largest distance from the head (at Y = :data:`WIDEST_Y`)
 WIDEST_Y = 12.0  #: mm above the ear's root's middle: the rim stands off furthest here
 ARC_UP, ARC_DOWN = 21.0, 44.0  #: mm, the semi-axes of the stand-off's arcs above and below
+T_TOP = 0.16  #: the rim's top (psi = 90 degrees in :func:`outline`)
 WIDEST = 0.25  #: rad, the outline's widest (most posterior) point this far above its middle
 
 
@@ -62,6 +64,9 @@ def stand_off(t: np.ndarray) -> np.ndarray:
     (:data:`STAND_OFF`) at :data:`WIDEST_Y`, falling smoothly to the top of the helix and
     to the lobe (a rounded silhouette, not a point)."""
     _, y = outline(t)
+    # in front of the rim's top (towards the helix's root) no more than at the top: the
+    # helix's root grows out of the head (the taper of :func:`relief`), with no dip at the top
+    y = np.where(t < T_TOP, outline(np.array(T_TOP))[1], y)
     dy = (y - WIDEST_Y) / np.where(y > WIDEST_Y, ARC_UP, ARC_DOWN)
     return STAND_OFF * np.sqrt(np.clip(1.0 - dy * dy, 0.0, 1.0))
 
@@ -125,6 +130,8 @@ def ear_parts(rest: np.ndarray, normals: np.ndarray, nasion: np.ndarray) -> list
             ring = (side * rest[:, 0] > 0.03) & (np.hypot(rest[:, 1] - q[1],
                                                           rest[:, 2] - q[2]) < 0.006)
             lateral[j] = (side * rest[ring, 0].max() - side * a[0]) if ring.any() else 0.0
+        # smoothed along the rim: the largest of a few vertices jumps from one line to the next
+        lateral = gaussian_filter1d(lateral, 1.5, mode="nearest")
         shift = lateral[None, :] / max(abs(out[0]), 0.5)
         pts = (a + 1e-3 * (x_mm[..., None] * back + (y_mm - 2.0)[..., None] * up
                            + h[..., None] * out) + shift[..., None] * out)
