@@ -43,6 +43,8 @@ LOWER_BLINK_RISE = 0.0012  #: m, the lower lid's rise in a full blink
 LOWER_CLEARANCE = 0.0005  #: m between the eyeball and the lower lid (outside the upper)
 ROWS, COLS = 7, 25  #: the lid cap's grid
 LID_RIM = 0.0016  #: m, the lids' margin: how far behind the skin the lids close the fissure
+BLEND = 0.0006  #: m, the smooth maximum's width where a lid passes from the globe to its rim
+LOWER_FRONT = 0.0003  #: m, the lower lid's rim in front of the upper's
 
 
 def gaze_rotation(yaw: float, pitch: float) -> np.ndarray:
@@ -112,8 +114,15 @@ class Lid:
         d = np.stack([np.cos(el) * np.sin(az), np.sin(el), np.cos(el) * np.cos(az)], -1)
         v = (self.centre + d * self.radii).reshape(-1, 3)
         if self.front is not None:  # wrap the globe, and cover the fissure where it is deep
-            v[:, 2] = np.maximum(v[:, 2], quadratic(self.front, v[:, 0], v[:, 1]))
+            v[:, 2] = soft_max(v[:, 2], quadratic(self.front, v[:, 0], v[:, 1]), BLEND)
         return v
+
+
+def soft_max(a: np.ndarray, b: np.ndarray, width: float) -> np.ndarray:
+    """A smooth maximum of ``a`` and ``b`` (m): never below either, at most ``width`` x ln 2
+    above, with no kink where they cross (a lid's shading would show one)."""
+    m = np.maximum(a, b)
+    return m + width * np.log(np.exp((a - m) / width) + np.exp((b - m) / width))
 
 
 def quadratic(c: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -170,7 +179,7 @@ def lower_lid_of(upper: Lid) -> Lid:
                              / r[1], -0.99, 0.99))
     bottom = margin - np.radians(2.0)
     front = None if upper.front is None else upper.front + np.array(
-        [LOWER_CLEARANCE - CLEARANCE, 0, 0, 0, 0, 0])  # in front of the closed upper lid
+        [LOWER_FRONT, 0, 0, 0, 0, 0])  # in front of the closed upper lid
     return Lid(upper.centre, r, upper.azimuth, bottom, rise, upper=upper, front=front)
 
 
