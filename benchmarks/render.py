@@ -100,7 +100,7 @@ def main() -> None:
             bufs["t"] = np.full((bh, bw), -1, np.int32)
             bufs["b"] = np.empty((bh, bw, 2), np.float32)
             rasterise(px, py, p[:, 2], scene.tris, scene.uv, scene.tex, scene.alpha_test,
-                      scene.two_sided, scene.atlas, bufs["z"], bufs["t"], bufs["b"])
+                      scene.two_sided, scene.atlas, bufs["z"], bufs["t"], bufs["b"], s)
 
         ras()
         sub = np.empty((y1 - y0, x1 - x0, 4), np.uint8)
