@@ -204,8 +204,8 @@ def lid_mesh(lid: Lid) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return v, f, albedo.reshape(-1, 3)
 
 
-MARGIN_COLS = 41  #: points along each lid margin of the lid-margin wall
-MARGIN_DEPTHS = (0.0, 0.0006, 0.0012, 0.0018, 0.0024, 0.0030, 0.0040)  #: m, first rows
+MARGIN_COLS = 25  #: points along each lid margin of the lid-margin wall
+MARGIN_DEPTHS = (0.0, 0.0008, 0.0016, 0.0024, 0.0032)  #: m, first rows
 MARGIN_OUTSET = 0.0008  #: m, the wall's front rim outside the fissure's cut (under the skin)
 MARGIN_BEHIND = 0.0004  #: m, the wall's front rim behind the skin
 MARGIN_INTO_GLOBE = 0.001  #: m, the wall's back rim inside the eyeball (under the lids)
@@ -269,7 +269,7 @@ def margin_mesh(eye: np.ndarray, centre: np.ndarray, radii: np.ndarray, side: in
     d = [np.zeros(m)]
     for fixed in MARGIN_DEPTHS[1:]:
         d.append(np.maximum(np.minimum(fixed, total), d[-1]))
-    for frac in (0.5, 0.75, 1.0):
+    for frac in (0.5, 1.0):
         d.append(np.maximum(frac * total, d[-1]))
     d = np.stack(d)
     rows = len(d) + 1
@@ -294,9 +294,10 @@ def margin_mesh(eye: np.ndarray, centre: np.ndarray, radii: np.ndarray, side: in
 
 def margin_colour(d: np.ndarray) -> np.ndarray:
     """sRGB (..., 3) of the margin wall at depth ``d`` (..., 1) m behind its front rim: skin
-    over the lid's rim (:data:`LID_RIM` deep), the palpebral conjunctiva's pink over the next
-    0.7 mm, then the white of the bulbar conjunctiva over the sclera (what a line of sight
-    from the side past the lids meets on a real eye)."""
+    over the lid's rim (:data:`LID_RIM` deep), turning over 0.6 mm into the palpebral
+    conjunctiva's pink, which turns from 0.8 to 2 mm past the rim into the white of the bulbar
+    conjunctiva over the sclera (what a line of sight from the side past the lids meets on a
+    real eye)."""
     a = np.clip((d - LID_RIM) / 0.0006, 0.0, 1.0)
     b = np.clip((d - LID_RIM - 0.0008) / 0.0012, 0.0, 1.0)
     return (1 - a) * T.SKIN + a * ((1 - b) * CONJUNCTIVA + b * BULBAR)

@@ -43,12 +43,18 @@ _LUT = np.clip(
 LINEAR_TO_SRGB_LUT = (_LUT + 0.5).astype(np.uint8)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def _atlas_alpha(atlas, u, v):
-    """The atlas's alpha at texel coordinates (u, v), bilinear (as its colour is): a cut-out
-    whose alpha ramps across its edge (the eye fissures) has a smooth outline at its 0.5
-    contour, not the staircase of its texels."""
+    """The atlas's alpha at texel coordinates (u, v): the nearest texel's where it is 0 or 1,
+    else bilinear (as the colour is). A cut-out whose alpha ramps over two texels across its
+    edge (the eye fissures) has a smooth outline at its 0.5 contour, not the staircase of
+    its texels; a texel of alpha 0 or 1 lies a texel or more from that contour, where the
+    bilinear alpha is on the same side of one half, so a binary cut-out (the hairline's
+    strands) and the plain texels cost one lookup."""
     h, w = atlas.shape[0], atlas.shape[1]
+    a = atlas[min(max(int(v), 0), h - 1), min(max(int(u), 0), w - 1), 3]
+    if a == 0.0 or a == 1.0:
+        return a
     u = min(max(u - 0.5, 0.0), w - 1.001)
     v = min(max(v - 0.5, 0.0), h - 1.001)
     iu, iv = int(u), int(v)
@@ -61,8 +67,15 @@ TILE = 8  #: samples per side of the tiles whose nearest depth culls the inner s
 
 
 @nb.njit(cache=True)
-def rasterise(px, py, pz, tris, uv, tex, alpha_test, two_sided, atlas, zbuf, tid, bary,
-              s=1):
+def rasterise(px, py, pz, tris, uv, tex, alpha_test, two_sided, atlas, zbuf, tid, bary):
+    """Scan-convert triangles into a visibility buffer (in place), one sample at the centre of
+    each cell (:func:`rasterise_grid` with s = 1; its parameters)."""
+    rasterise_grid(px, py, pz, tris, uv, tex, alpha_test, two_sided, atlas, (zbuf, tid, bary),
+                   1)
+
+
+@nb.njit(cache=True)
+def rasterise_grid(px, py, pz, tris, uv, tex, alpha_test, two_sided, atlas, buffers, s):
     """Scan-convert triangles into a visibility buffer (in place).
 
     With ``s`` > 1 (the buffer holds s x s samples per pixel) the samples lie on a rotated
@@ -88,11 +101,11 @@ def rasterise(px, py, pz, tris, uv, tex, alpha_test, two_sided, atlas, zbuf, tid
     alpha_test : (f,) bool, texels with alpha < 0.5 discard the sample
     two_sided : (f,) bool, draw the back face too
     atlas : (H, W, 4) float32 linear RGBA
-    zbuf : (h, w) float32, -inf where empty
-    tid : (h, w) int32 triangle index, -1 where empty
-    bary : (h, w, 2) float32 weights of the first two corners
+    buffers : (zbuf, tid, bary): (h, w) float32 depth, -inf where empty; (h, w) int32
+        triangle index, -1 where empty; (h, w, 2) float32 weights of the first two corners
     s : samples per pixel along each axis (the buffer's supersampling)
     """
+    zbuf, tid, bary = buffers
     h, w = zbuf.shape
     nt = tris.shape[0]
     inner = np.zeros(nt, np.bool_)
@@ -173,55 +186,66 @@ def _scan(f, label, points, tris, uv, test, atlas, buffers, rect, s):
         return
     inv = 1.0 / area
     z0, z1, z2 = pz[i0], pz[i1], pz[i2]
-    # barycentric weights are affine in x: on each row, for each class of columns (their
-    # index mod s, which sets their samples' y), solve for the span where all three are >= 0
-    # and step them along it, s columns at a time
+    # barycentric weights are affine in x and y: on each row, solve for the span where all
+    # three are >= 0 at any of the samples' y offsets (a conservative span), and step them
+    # along it, testing each sample at its own y
     a0 = (y1 - y2) * inv
     a1 = (y2 - y0) * inv
     a2 = -a0 - a1
-    step = max(s, 1)
+    b0 = (x2 - x1) * inv  # along y
+    b1 = (x0 - x2) * inv
+    b2 = -b0 - b1
+    reach = 0.5 - 0.5 / s if s > 1 else 0.0  # the largest y offset
     for yy in range(ymin, ymax + 1):
         ox, _ = sample_offsets(yy, s)
-        for c in range(step):
-            xs = xmin + (c - xmin) % step
-            if xs > xmax:
-                continue
-            _, oy = sample_offsets(xs, s)
-            fy = yy + 0.5 + oy
-            fx = xs + 0.5 + ox
-            w0 = ((x1 - fx) * (y2 - fy) - (x2 - fx) * (y1 - fy)) * inv
-            w1 = ((x2 - fx) * (y0 - fy) - (x0 - fx) * (y2 - fy)) * inv
-            lo, hi = 0, (xmax - xs) // step
-            empty = False
-            for wk, ak in ((w0, a0 * step), (w1, a1 * step), (1.0 - w0 - w1, a2 * step)):
-                if ak > 1e-12:
-                    lo = max(lo, int(np.ceil((-EDGE_EPS - wk) / ak - 1e-6)))
-                elif ak < -1e-12:
-                    hi = min(hi, int(np.floor((-EDGE_EPS - wk) / ak + 1e-6)))
-                elif wk < -EDGE_EPS:
-                    empty = True
-            if empty or lo > hi:
-                continue
-            w0 += a0 * step * lo
-            w1 += a1 * step * lo
-            for k in range(lo, hi + 1):
-                xx = xs + step * k
-                w2 = 1.0 - w0 - w1
-                if w0 >= -EDGE_EPS and w1 >= -EDGE_EPS and w2 >= -EDGE_EPS:
-                    z = w0 * z0 + w1 * z1 + w2 * z2
-                    if z > zbuf[yy, xx]:
-                        keep = True
-                        if test:
-                            u = w0 * uv[f, 0, 0] + w1 * uv[f, 1, 0] + w2 * uv[f, 2, 0]
-                            v = w0 * uv[f, 0, 1] + w1 * uv[f, 1, 1] + w2 * uv[f, 2, 1]
-                            keep = _atlas_alpha(atlas, u, v) >= 0.5
-                        if keep:
-                            zbuf[yy, xx] = z
-                            tid[yy, xx] = label
-                            bary[yy, xx, 0] = w0
-                            bary[yy, xx, 1] = w1
-                w0 += a0 * step
-                w1 += a1 * step
+        fy = yy + 0.5
+        fx = xmin + 0.5 + ox
+        w0 = ((x1 - fx) * (y2 - fy) - (x2 - fx) * (y1 - fy)) * inv
+        w1 = ((x2 - fx) * (y0 - fy) - (x0 - fx) * (y2 - fy)) * inv
+        lo, hi = xmin, xmax
+        empty = False
+        for wk, ak, bk in ((w0, a0, b0), (w1, a1, b1), (1.0 - w0 - w1, a2, b2)):
+            wk += abs(bk) * reach
+            if ak > 1e-12:
+                lo = max(lo, xmin + int(np.ceil((-EDGE_EPS - wk) / ak - 1e-6)))
+            elif ak < -1e-12:
+                hi = min(hi, xmin + int(np.floor((-EDGE_EPS - wk) / ak + 1e-6)))
+            elif wk < -EDGE_EPS:
+                empty = True
+        if empty or lo > hi:
+            continue
+        # one pass along the span: the first sample's weights at its own y, then a step of
+        # one column and of 1/s in the y offset (back by (s - 1)/s when the column's class,
+        # its index mod s, wraps to 0)
+        k = lo % s
+        oy = (k + 0.5) / s - 0.5 if s > 1 else 0.0
+        v0 = w0 + a0 * (lo - xmin) + b0 * oy
+        v1 = w1 + a1 * (lo - xmin) + b1 * oy
+        up0, up1 = a0 + b0 / s, a1 + b1 / s
+        wrap0, wrap1 = a0 - b0 * (s - 1) / s, a1 - b1 * (s - 1) / s
+        for xx in range(lo, hi + 1):
+            v2 = 1.0 - v0 - v1
+            if v0 >= -EDGE_EPS and v1 >= -EDGE_EPS and v2 >= -EDGE_EPS:
+                z = v0 * z0 + v1 * z1 + v2 * z2
+                if z > zbuf[yy, xx]:
+                    keep = True
+                    if test:
+                        u = v0 * uv[f, 0, 0] + v1 * uv[f, 1, 0] + v2 * uv[f, 2, 0]
+                        v = v0 * uv[f, 0, 1] + v1 * uv[f, 1, 1] + v2 * uv[f, 2, 1]
+                        keep = _atlas_alpha(atlas, u, v) >= 0.5
+                    if keep:
+                        zbuf[yy, xx] = z
+                        tid[yy, xx] = label
+                        bary[yy, xx, 0] = v0
+                        bary[yy, xx, 1] = v1
+            k += 1
+            if k == s:
+                k = 0
+                v0 += wrap0
+                v1 += wrap1
+            else:
+                v0 += up0
+                v1 += up1
 
 
 def vertex_light(normals: np.ndarray, gloss: np.ndarray, lights: np.ndarray, sky: float,
