@@ -43,7 +43,7 @@ _LUT = np.clip(
 LINEAR_TO_SRGB_LUT = (_LUT + 0.5).astype(np.uint8)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True)
 def _atlas_alpha(atlas, u, v):
     """The atlas's alpha at texel coordinates (u, v): the nearest texel's where it is 0 or 1,
     else bilinear (as the colour is). A cut-out whose alpha ramps over two texels across its
@@ -162,7 +162,7 @@ def sample_offsets(index, s):
     per pixel. s = 1: no offset."""
     if s <= 1:
         return 0.0, 0.0
-    k = index % s
+    k = index & (s - 1) if s & (s - 1) == 0 else index % s  # a mask for s = 2, 4
     return (s - 1 - k + 0.5) / s - 0.5, (k + 0.5) / s - 0.5
 
 
@@ -217,7 +217,7 @@ def _scan(f, label, points, tris, uv, test, atlas, buffers, rect, s):
         # one pass along the span: the first sample's weights at its own y, then a step of
         # one column and of 1/s in the y offset (back by (s - 1)/s when the column's class,
         # its index mod s, wraps to 0)
-        k = lo % s
+        k = lo & (s - 1) if s & (s - 1) == 0 else lo % s
         oy = (k + 0.5) / s - 0.5 if s > 1 else 0.0
         v0 = w0 + a0 * (lo - xmin) + b0 * oy
         v1 = w1 + a1 * (lo - xmin) + b1 * oy
@@ -238,6 +238,10 @@ def _scan(f, label, points, tris, uv, test, atlas, buffers, rect, s):
                         tid[yy, xx] = label
                         bary[yy, xx, 0] = v0
                         bary[yy, xx, 1] = v1
+            if s == 1:  # an ordered grid: a plain step (the hot loop of the label buffers)
+                v0 += a0
+                v1 += a1
+                continue
             k += 1
             if k == s:
                 k = 0
