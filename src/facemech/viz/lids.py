@@ -25,6 +25,13 @@ and never above the open upper lid's margin.
 
 Gaze (yaw, pitch) in radians turns each eyeball about its centre: yaw > 0 towards the
 subject's left (+x), pitch > 0 up.
+
+Where the eyeball lies deeper than :data:`LID_RIM` behind the skin (the skin round the built-in
+face's eye slopes back laterally, so the fissure's medial end is far in front of the globe), a
+lid lies at that depth behind the skin instead (``Lid.front``, joined to the cap by a smooth
+maximum), so that closed it covers the fissure from the side too; and a wall round the fissure
+(:func:`margin_mesh`) runs from the skin's cut straight back onto the eyeball, the lids' rim and
+conjunctiva, where a line of sight from the side would otherwise pass between skin and globe.
 """
 
 from __future__ import annotations
