@@ -57,7 +57,14 @@ def main() -> None:
     from facemech.params import MUSCLE_GROUPS
     from facemech.solvers.forward import simulate
     from facemech.viz import render as R
-    from facemech.viz.raster import GROUND, LINEAR_TO_SRGB_LUT, SKY, WRAP, rasterise, vertex_light
+    from facemech.viz.raster import (
+        GROUND,
+        LINEAR_TO_SRGB_LUT,
+        SKY,
+        WRAP,
+        rasterise_grid,
+        vertex_light,
+    )
     from facemech.viz.raster import shade_resolve as shade
     from facemech.viz.scene import build_scene, look_from_model
 
@@ -99,8 +106,9 @@ def main() -> None:
             bufs["z"] = np.full((bh, bw), -np.inf, np.float32)
             bufs["t"] = np.full((bh, bw), -1, np.int32)
             bufs["b"] = np.empty((bh, bw, 2), np.float32)
-            rasterise(px, py, p[:, 2], scene.tris, scene.uv, scene.tex, scene.alpha_test,
-                      scene.two_sided, scene.atlas, bufs["z"], bufs["t"], bufs["b"])
+            rasterise_grid(px, py, p[:, 2], scene.tris, scene.uv, scene.tex,
+                           scene.alpha_test, scene.two_sided, scene.atlas,
+                           (bufs["z"], bufs["t"], bufs["b"]), s)
 
         ras()
         sub = np.empty((y1 - y0, x1 - x0, 4), np.uint8)

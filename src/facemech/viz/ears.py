@@ -22,6 +22,7 @@ nasion).
 from __future__ import annotations
 
 import numpy as np
+from scipy.ndimage import gaussian_filter1d
 
 from . import textures as T
 from .mesh import Part, grid_faces
@@ -30,6 +31,11 @@ HEIGHT, WIDTH = 0.062, 0.032  #: m
 BEHIND_NASION = 0.095  #: m from the nasion back to the ear's root
 TOP_ABOVE_NASION = 0.008  #: m
 N_S, N_T = 12, 36  #: samples root -> rim and round the rim
+STAND_OFF = 17.0  #: mm, the rim's largest distance from the head (at Y = :data:`WIDEST_Y`)
+WIDEST_Y = 12.0  #: mm above the ear's root's middle: the rim stands off furthest here
+ARC_UP, ARC_DOWN = 21.0, 44.0  #: mm, the semi-axes of the stand-off's arcs above and below
+T_TOP = 0.16  #: the rim's top (psi = 90 degrees in :func:`outline`)
+WIDEST = 0.25  #: rad, the outline's widest (most posterior) point this far above its middle
 
 
 def _bump(x):
@@ -45,11 +51,24 @@ def outline(t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The rim (X back, Y up) mm of the ear from its top front (t=0) round the back to the
     lobe's front (t=1); the ear's root is at X = 0."""
     psi = np.radians(130.0 - 250.0 * t)
-    x = 14.0 + 16.0 * np.cos(psi)
+    x = 14.0 + 16.0 * np.cos(psi - WIDEST)
     y = 2.0 + 29.0 * np.sin(psi)
     lobe = np.clip((-12.0 - y) / 14.0, 0.0, 1.0)  # the lobe: narrower towards its bottom
     x = 14.0 + (x - 14.0) * (1.0 - 0.35 * lobe)
     return x, y
+
+
+def stand_off(t: np.ndarray) -> np.ndarray:
+    """The rim's distance (mm) from the head at ``t`` (before the helix's roll and the
+    root's sinking): seen from the front, an arc of an ellipse over the rim's height, largest
+    (:data:`STAND_OFF`) at :data:`WIDEST_Y`, falling smoothly to the top of the helix and
+    to the lobe (a rounded silhouette, not a point)."""
+    _, y = outline(t)
+    # in front of the rim's top (towards the helix's root) no more than at the top: the
+    # helix's root grows out of the head (the taper of :func:`relief`), with no dip at the top
+    y = np.where(t < T_TOP, outline(np.array(T_TOP))[1], y)
+    dy = (y - WIDEST_Y) / np.where(y > WIDEST_Y, ARC_UP, ARC_DOWN)
+    return STAND_OFF * np.sqrt(np.clip(1.0 - dy * dy, 0.0, 1.0))
 
 
 def relief(s: np.ndarray, t: np.ndarray) -> np.ndarray:
@@ -58,7 +77,7 @@ def relief(s: np.ndarray, t: np.ndarray) -> np.ndarray:
     cart = 1.0 - lobe  # cartilage
     # the helix's root (t = 0) and the lobe's front (t = 1) grow out of the head
     taper = _smoothstep(t / 0.15) * _smoothstep((1.0 - t) / 0.12)
-    flare = -1.5 + 17.5 * s ** 1.2 * (1.0 - 0.4 * lobe) * taper
+    flare = -1.5 + stand_off(t) * s ** 1.2 * (1.0 - 0.4 * lobe) * taper
     upper = np.clip((0.62 - t) / 0.1, 0.0, 1.0)
     helix = 2.5 * _bump((s - 0.93) / 0.05)
     scapha = -1.5 * _bump((s - 0.76) / 0.06) * upper
@@ -111,6 +130,8 @@ def ear_parts(rest: np.ndarray, normals: np.ndarray, nasion: np.ndarray) -> list
             ring = (side * rest[:, 0] > 0.03) & (np.hypot(rest[:, 1] - q[1],
                                                           rest[:, 2] - q[2]) < 0.006)
             lateral[j] = (side * rest[ring, 0].max() - side * a[0]) if ring.any() else 0.0
+        # smoothed along the rim: the largest of a few vertices jumps from one line to the next
+        lateral = gaussian_filter1d(lateral, 1.5, mode="nearest")
         shift = lateral[None, :] / max(abs(out[0]), 0.5)
         pts = (a + 1e-3 * (x_mm[..., None] * back + (y_mm - 2.0)[..., None] * up
                            + h[..., None] * out) + shift[..., None] * out)

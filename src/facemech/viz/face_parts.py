@@ -9,7 +9,7 @@ import numpy as np
 from . import dentition
 from . import textures as T
 from .head import HAIR, hair_on_skin
-from .lids import lid_mesh, lid_of, lower_lid_of
+from .lids import lid_mesh, lid_of, lower_lid_of, margin_mesh
 from .look import FaceLook
 from .mesh import Part, fit_inside, skin_depth, sphere
 
@@ -152,7 +152,7 @@ def eye_parts(look: FaceLook) -> list[Part]:
         albedo = np.tile(T.SCLERA, (len(v), 1))
         parts.append(Part(name, v, faces, albedo, (0.7, 90.0), "eye", uvv, iris,
                           tex_mask=front, pivot=centre))
-        lid = lid_of(e, centre, radii, side)
+        lid = lid_of(e, centre, radii, side, depth)
         lv, lf, lalb = lid_mesh(lid)
         parts.append(Part(name.replace("eye", "lid"), lv, lf, lalb, (0.10, 16.0), "lid",
                           follow=lid, pivot=centre))
@@ -160,6 +160,9 @@ def eye_parts(look: FaceLook) -> list[Part]:
         lv, lf, lalb = lid_mesh(lower)
         parts.append(Part(name.replace("eye", "lower_lid"), lv, lf, lalb, (0.10, 16.0), "lid",
                           follow=lower, pivot=centre))
+        mv, mf, malb = margin_mesh(e, centre, radii, side, depth)
+        parts.append(Part(name.replace("eye", "lid_margin"), mv, mf, malb, (0.12, 24.0),
+                          "skull"))
         # the socket's lining (conjunctiva), seen past the eyeball from the side
         lining = fit_inside(centre + np.array([0, 0, 0.003]), unit,
                              radii * np.array([1.5, 1.35, 1.7]), depth, 0.0005)

@@ -7,8 +7,8 @@ pixel once where all its samples see one triangle (as multisampling does), blend
 background and converts to sRGB. Light is computed per vertex (wrapped diffuse key, fill and
 rim lights under a sky/ground ambient, and a Blinn-Phong highlight of the key light) and
 interpolated (Gouraud); the albedo comes per pixel from the texture or per vertex. Texture
-lookups are bilinear in a single RGBA atlas; a texel with alpha below one half discards the
-sample (the eye fissures are cut this way).
+lookups are bilinear in a single RGBA atlas; where the bilinear alpha is below one half the
+sample is discarded (the eye fissures are cut this way).
 
 The projection (:class:`facemech.viz.camera.Camera`) has already taken the vertices to image
 sample coordinates: ``x`` right, ``y`` down, ``z`` towards the viewer (larger is nearer).
@@ -45,10 +45,22 @@ LINEAR_TO_SRGB_LUT = (_LUT + 0.5).astype(np.uint8)
 
 @nb.njit(cache=True)
 def _atlas_alpha(atlas, u, v):
+    """The atlas's alpha at texel coordinates (u, v): the nearest texel's where it is 0 or 1,
+    else bilinear (as the colour is). A cut-out whose alpha ramps over two texels across its
+    edge (the eye fissures) has a smooth outline at its 0.5 contour, not the staircase of
+    its texels; a texel of alpha 0 or 1 lies a texel or more from that contour, where the
+    bilinear alpha is on the same side of one half, so a binary cut-out (the hairline's
+    strands) and the plain texels cost one lookup."""
     h, w = atlas.shape[0], atlas.shape[1]
-    iu = min(max(int(u), 0), w - 1)
-    iv = min(max(int(v), 0), h - 1)
-    return atlas[iv, iu, 3]
+    a = atlas[min(max(int(v), 0), h - 1), min(max(int(u), 0), w - 1), 3]
+    if a == 0.0 or a == 1.0:
+        return a
+    u = min(max(u - 0.5, 0.0), w - 1.001)
+    v = min(max(v - 0.5, 0.0), h - 1.001)
+    iu, iv = int(u), int(v)
+    fu, fv = u - iu, v - iv
+    return ((1 - fv) * ((1 - fu) * atlas[iv, iu, 3] + fu * atlas[iv, iu + 1, 3])
+            + fv * ((1 - fu) * atlas[iv + 1, iu, 3] + fu * atlas[iv + 1, iu + 1, 3]))
 
 
 TILE = 8  #: samples per side of the tiles whose nearest depth culls the inner sides
@@ -56,7 +68,20 @@ TILE = 8  #: samples per side of the tiles whose nearest depth culls the inner s
 
 @nb.njit(cache=True)
 def rasterise(px, py, pz, tris, uv, tex, alpha_test, two_sided, atlas, zbuf, tid, bary):
+    """Scan-convert triangles into a visibility buffer (in place), one sample at the centre of
+    each cell (:func:`rasterise_grid` with s = 1; its parameters)."""
+    rasterise_grid(px, py, pz, tris, uv, tex, alpha_test, two_sided, atlas, (zbuf, tid, bary),
+                   1)
+
+
+@nb.njit(cache=True)
+def rasterise_grid(px, py, pz, tris, uv, tex, alpha_test, two_sided, atlas, buffers, s):
     """Scan-convert triangles into a visibility buffer (in place).
+
+    With ``s`` > 1 (the buffer holds s x s samples per pixel) the samples lie on a rotated
+    grid (:func:`sample_offsets`): each of a pixel's s^2 samples has an x and a y of its own,
+    so a near-horizontal or near-vertical edge (a lid's margin) passes s^2 + 1 coverage
+    levels, not the s + 1 of an ordered grid.
 
     Back faces are skipped, except those of ``two_sided`` triangles, which are recorded as
     triangle ``f + len(tris)`` (the inside of the skin, seen through the lips or the lids).
@@ -76,10 +101,11 @@ def rasterise(px, py, pz, tris, uv, tex, alpha_test, two_sided, atlas, zbuf, tid
     alpha_test : (f,) bool, texels with alpha < 0.5 discard the sample
     two_sided : (f,) bool, draw the back face too
     atlas : (H, W, 4) float32 linear RGBA
-    zbuf : (h, w) float32, -inf where empty
-    tid : (h, w) int32 triangle index, -1 where empty
-    bary : (h, w, 2) float32 weights of the first two corners
+    buffers : (zbuf, tid, bary): (h, w) float32 depth, -inf where empty; (h, w) int32
+        triangle index, -1 where empty; (h, w, 2) float32 weights of the first two corners
+    s : samples per pixel along each axis (the buffer's supersampling)
     """
+    zbuf, tid, bary = buffers
     h, w = zbuf.shape
     nt = tris.shape[0]
     inner = np.zeros(nt, np.bool_)
@@ -96,7 +122,7 @@ def rasterise(px, py, pz, tris, uv, tex, alpha_test, two_sided, atlas, zbuf, tid
                 n_inner += 1
             continue
         _scan(f, f, (px, py, pz), tris, uv, alpha_test[f], atlas, (zbuf, tid, bary),
-              (0, w - 1, 0, h - 1))
+              (0, w - 1, 0, h - 1), s)
     if n_inner == 0:
         return
     th, tw = (h + TILE - 1) // TILE, (w + TILE - 1) // TILE
@@ -124,14 +150,28 @@ def rasterise(px, py, pz, tris, uv, tex, alpha_test, two_sided, atlas, zbuf, tid
                     continue
                 _scan(f, f + nt, (px, py, pz), tris, uv, False, atlas, (zbuf, tid, bary),
                       (max(xmin, tx * TILE), min(xmax, tx * TILE + TILE - 1),
-                       max(ymin, ty * TILE), min(ymax, ty * TILE + TILE - 1)))
+                       max(ymin, ty * TILE), min(ymax, ty * TILE + TILE - 1)), s)
 
 
 @nb.njit(cache=True, inline="always")
-def _scan(f, label, points, tris, uv, test, atlas, buffers, rect):
+def sample_offsets(index, s):
+    """Offset (in samples) of a sample from its cell's centre, along the other axis: a
+    sample in buffer row r lies at x + (s - 1 - r % s + 0.5) / s - 0.5 and one in column c at
+    y + (c % s + 0.5) / s - 0.5 (``index`` = r or c). For s = 2 this is the rotated grid of
+    4x multisampling hardware (offsets of +-1/8 pixel): four distinct x and four distinct y
+    per pixel. s = 1: no offset."""
+    if s <= 1:
+        return 0.0, 0.0
+    k = index & (s - 1) if s & (s - 1) == 0 else index % s  # a mask for s = 2, 4
+    return (s - 1 - k + 0.5) / s - 0.5, (k + 0.5) / s - 0.5
+
+
+@nb.njit(cache=True, inline="always")
+def _scan(f, label, points, tris, uv, test, atlas, buffers, rect, s):
     """Scan-convert triangle ``f`` inside the sample rectangle ``rect`` = (cx0, cx1, cy0, cy1),
     recording ``label``; ``points`` = (px, py, pz) the projected vertices, ``buffers`` = (zbuf,
-    tid, bary); ``test``: discard samples on texels of alpha < 0.5."""
+    tid, bary); ``test``: discard samples on texels of alpha < 0.5; ``s``: samples per pixel
+    along each axis (their positions: :func:`sample_offsets`)."""
     px, py, pz = points
     zbuf, tid, bary = buffers
     cx0, cx1, cy0, cy1 = rect
@@ -146,19 +186,26 @@ def _scan(f, label, points, tris, uv, test, atlas, buffers, rect):
         return
     inv = 1.0 / area
     z0, z1, z2 = pz[i0], pz[i1], pz[i2]
-    # barycentric weights are affine in x: on each row, solve for the span where all three
-    # are >= 0 and step them along it
+    # barycentric weights are affine in x and y: on each row, solve for the span where all
+    # three are >= 0 at any of the samples' y offsets (a conservative span), and step them
+    # along it, testing each sample at its own y
     a0 = (y1 - y2) * inv
     a1 = (y2 - y0) * inv
     a2 = -a0 - a1
+    b0 = (x2 - x1) * inv  # along y
+    b1 = (x0 - x2) * inv
+    b2 = -b0 - b1
+    reach = 0.5 - 0.5 / s if s > 1 else 0.0  # the largest y offset
     for yy in range(ymin, ymax + 1):
+        ox, _ = sample_offsets(yy, s)
         fy = yy + 0.5
-        fx = xmin + 0.5
+        fx = xmin + 0.5 + ox
         w0 = ((x1 - fx) * (y2 - fy) - (x2 - fx) * (y1 - fy)) * inv
         w1 = ((x2 - fx) * (y0 - fy) - (x0 - fx) * (y2 - fy)) * inv
         lo, hi = xmin, xmax
         empty = False
-        for wk, ak in ((w0, a0), (w1, a1), (1.0 - w0 - w1, a2)):
+        for wk, ak, bk in ((w0, a0, b0), (w1, a1, b1), (1.0 - w0 - w1, a2, b2)):
+            wk += abs(bk) * reach
             if ak > 1e-12:
                 lo = max(lo, xmin + int(np.ceil((-EDGE_EPS - wk) / ak - 1e-6)))
             elif ak < -1e-12:
@@ -167,25 +214,42 @@ def _scan(f, label, points, tris, uv, test, atlas, buffers, rect):
                 empty = True
         if empty or lo > hi:
             continue
-        w0 += a0 * (lo - xmin)
-        w1 += a1 * (lo - xmin)
+        # one pass along the span: the first sample's weights at its own y, then a step of
+        # one column and of 1/s in the y offset (back by (s - 1)/s when the column's class,
+        # its index mod s, wraps to 0)
+        k = lo & (s - 1) if s & (s - 1) == 0 else lo % s
+        oy = (k + 0.5) / s - 0.5 if s > 1 else 0.0
+        v0 = w0 + a0 * (lo - xmin) + b0 * oy
+        v1 = w1 + a1 * (lo - xmin) + b1 * oy
+        up0, up1 = a0 + b0 / s, a1 + b1 / s
+        wrap0, wrap1 = a0 - b0 * (s - 1) / s, a1 - b1 * (s - 1) / s
         for xx in range(lo, hi + 1):
-            w2 = 1.0 - w0 - w1
-            if w0 >= -EDGE_EPS and w1 >= -EDGE_EPS and w2 >= -EDGE_EPS:
-                z = w0 * z0 + w1 * z1 + w2 * z2
+            v2 = 1.0 - v0 - v1
+            if v0 >= -EDGE_EPS and v1 >= -EDGE_EPS and v2 >= -EDGE_EPS:
+                z = v0 * z0 + v1 * z1 + v2 * z2
                 if z > zbuf[yy, xx]:
                     keep = True
                     if test:
-                        u = w0 * uv[f, 0, 0] + w1 * uv[f, 1, 0] + w2 * uv[f, 2, 0]
-                        v = w0 * uv[f, 0, 1] + w1 * uv[f, 1, 1] + w2 * uv[f, 2, 1]
+                        u = v0 * uv[f, 0, 0] + v1 * uv[f, 1, 0] + v2 * uv[f, 2, 0]
+                        v = v0 * uv[f, 0, 1] + v1 * uv[f, 1, 1] + v2 * uv[f, 2, 1]
                         keep = _atlas_alpha(atlas, u, v) >= 0.5
                     if keep:
                         zbuf[yy, xx] = z
                         tid[yy, xx] = label
-                        bary[yy, xx, 0] = w0
-                        bary[yy, xx, 1] = w1
-            w0 += a0
-            w1 += a1
+                        bary[yy, xx, 0] = v0
+                        bary[yy, xx, 1] = v1
+            if s == 1:  # an ordered grid: a plain step (the hot loop of the label buffers)
+                v0 += a0
+                v1 += a1
+                continue
+            k += 1
+            if k == s:
+                k = 0
+                v0 += wrap0
+                v1 += wrap1
+            else:
+                v0 += up0
+                v1 += up1
 
 
 def vertex_light(normals: np.ndarray, gloss: np.ndarray, lights: np.ndarray, sky: float,

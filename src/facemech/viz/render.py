@@ -20,7 +20,7 @@ from .raster import (
     LINEAR_TO_SRGB_LUT,
     SKY,
     WRAP,
-    rasterise,
+    rasterise_grid,
     shade_resolve,
     srgb_to_linear,
     vertex_light,
@@ -72,8 +72,8 @@ def render_panel(scene: Scene, verts: np.ndarray, norms: np.ndarray, camera: Cam
     zbuf = np.full((bh, bw), -np.inf, np.float32)
     tid = np.full((bh, bw), -1, np.int32)
     bary = np.empty((bh, bw, 2), np.float32)
-    rasterise(px, py, p[:, 2], scene.tris, scene.uv, scene.tex, scene.alpha_test,
-              scene.two_sided, scene.atlas, zbuf, tid, bary)
+    rasterise_grid(px, py, p[:, 2], scene.tris, scene.uv, scene.tex, scene.alpha_test,
+                   scene.two_sided, scene.atlas, (zbuf, tid, bary), s)
     light = vertex_light(norms @ camera.rotation.T, scene.gloss, _LIGHTS, SKY, GROUND, WRAP)
     sub = np.empty((y1 - y0, x1 - x0, 4), np.uint8)
     shade_resolve(tid, bary, s, scene.tris, light, scene.albedo, scene.uv, scene.tex,

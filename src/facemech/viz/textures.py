@@ -147,11 +147,17 @@ def skin_texture(landmarks: dict, bounds: tuple[float, float, float, float], hai
             crease = np.exp(-0.5 * ((hh - up - 0.0035) / 0.0009) ** 2) * np.clip(
                 1.0 - s**2, 0, 1)
             rgb += (0.45 * crease)[..., None] * (LID_CREASE - SKIN)
-            lash = inside & (hh >= up - 1e-4) & (hh < up + 0.0007 * (1 - 0.5 * s**2))
-            lower_lash = inside & (hh <= lo + 1e-4) & (hh > lo - 0.00025)
-            rgb[lash] = LASH
-            rgb[lower_lash] = 0.5 * rgb[lower_lash] + 0.5 * LASH
-            alpha[inside & (hh < up) & (hh > lo)] = 0.0
+            # the lash lines ramp over a texel and the cut over two (no staircase of
+            # texels): the cut's alpha crosses one half on the margin, and the bilinear alpha
+            # test (:mod:`.raster`) follows that contour between the texels
+            along = np.clip(1.0 - s**2, 0.0, 1.0) > 0.0
+            lash = along * np.minimum(_smooth(hh - up + 1e-4, SKIN_TEXEL),
+                                      _smooth(up + 0.0007 * (1 - 0.5 * s**2) - hh, SKIN_TEXEL))
+            lower_lash = 0.5 * along * np.minimum(_smooth(lo + 1e-4 - hh, SKIN_TEXEL),
+                                                  _smooth(hh - lo + 0.00025, SKIN_TEXEL))
+            rgb += (lash + lower_lash)[..., None] * (LASH - rgb)
+            cut = np.where(inside, np.minimum(up - hh, hh - lo), -1.0)
+            alpha = np.minimum(alpha, np.clip(0.5 - cut / (2 * SKIN_TEXEL), 0.0, 1.0))
     if hair is not None:
         m = hair(x, y)[..., None]
         rgb = rgb * (1 - m) + m * HAIR * (0.85 + 0.3 * rng.random((h, w, 1)))
