@@ -51,6 +51,9 @@ def test_rules_are_read_from_a_list_or_one_cell():
                                          "phone:u:=1.2"]
     assert a.to_dict() == {"strength": 0.8, "rules": [str(r) for r in a.rules]}
     assert Articulation.parse(None).rules == ()
+    # a list's item may hold several rules too (a CLI value, a design cell)
+    assert [str(r) for r in Articulation.parse(["word:x=1;class:open=2"]).rules] == [
+        "word:x=1", "class:open=2"]
 
 
 def test_a_class_rule_scales_that_class_and_only_it():

@@ -69,8 +69,9 @@ class Articulation:
         if specs is None:
             specs = ()
         if isinstance(specs, str):
-            specs = specs.split(";")
-        rules = tuple(_rule(s.strip(), source) for s in specs if s.strip())
+            specs = [specs]
+        parts = [part for spec in specs for part in str(spec).split(";")]
+        rules = tuple(_rule(p.strip(), source) for p in parts if p.strip())
         return cls(float(strength), rules)
 
     def factor(self, cls_name: str, label: str, word: tuple[int, str] | None) -> float:
