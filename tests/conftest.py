@@ -90,6 +90,21 @@ def without_progress(err: str) -> str:
     return "\n".join(kept) + ("\n" if kept else "")
 
 
+def seen_triangles(scene, verts, cam):
+    """The renderer's depth pass over a scene's frame: per pixel the camera depth (m, -inf where
+    nothing) and the index of the triangle seen (-1: none), for tests that ask what shows."""
+    from facemech.viz.raster import rasterise
+
+    h, w = cam.size
+    p = cam.project(verts, 1)
+    z = np.full((h, w), -np.inf, np.float32)
+    tid = np.full((h, w), -1, np.int32)
+    bary = np.empty((h, w, 2), np.float32)
+    rasterise(p[:, 0], p[:, 1], p[:, 2], scene.tris, scene.uv, scene.tex, scene.alpha_test,
+              scene.two_sided, scene.atlas, z, tid, bary)
+    return z, tid
+
+
 def run_cli(monkeypatch, capsys, *args) -> tuple[int, str, str]:
     """Run ``facemech ARGS`` in this process: (exit status, stdout, stderr less its progress
     lines, :func:`without_progress`)."""

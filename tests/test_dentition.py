@@ -6,13 +6,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from conftest import activity
+from conftest import activity, seen_triangles
 from facemech.geometry.teeth import lower_incisor_point
 from facemech.solvers.forward import simulate
 from facemech.solvers.jaw import rotate_about
 from facemech.viz import dentition as D
 from facemech.viz.camera import Camera, view_camera
-from facemech.viz.raster import rasterise
 from facemech.viz.render import parse_background, render_panel
 from facemech.viz.scene import _pack, build_scene, look_from_model
 
@@ -32,13 +31,7 @@ def mouth(face):
 def _seen(scene, skin, jaw, cam):
     """The frame (h, w, 3) int and, per pixel, the triangle seen (-1: none)."""
     verts, norms = scene.frame(skin, jaw)
-    h, w = cam.size
-    p = cam.project(verts, 1)
-    z = np.full((h, w), -np.inf, np.float32)
-    tid = np.full((h, w), -1, np.int32)
-    bary = np.empty((h, w, 2), np.float32)
-    rasterise(p[:, 0], p[:, 1], p[:, 2], scene.tris, scene.uv, scene.tex, scene.alpha_test,
-              scene.two_sided, scene.atlas, z, tid, bary)
+    z, tid = seen_triangles(scene, verts, cam)
     img = render_panel(scene, verts, norms, cam, background=parse_background("#00ff00"))
     return img[..., :3].astype(int), tid
 

@@ -8,7 +8,7 @@ import pytest
 import trimesh
 from scipy import ndimage
 
-from conftest import activity
+from conftest import activity, seen_triangles
 from facemech.solvers.forward import simulate
 from facemech.viz.camera import view_camera
 from facemech.viz.closure import closed_surface
@@ -31,13 +31,7 @@ def head(face):
 
 def _labels(scene, verts, cam):
     """Per pixel: the part index seen (-1 none; inner sides -2) and the camera depth (m)."""
-    h, w = cam.size
-    p = cam.project(verts, 1)
-    z = np.full((h, w), -np.inf, np.float32)
-    tid = np.full((h, w), -1, np.int32)
-    bary = np.empty((h, w, 2), np.float32)
-    rasterise(p[:, 0], p[:, 1], p[:, 2], scene.tris, scene.uv, scene.tex, scene.alpha_test,
-              scene.two_sided, scene.atlas, z, tid, bary)
+    z, tid = seen_triangles(scene, verts, cam)
     nt = len(scene.tris)
     face_part = np.repeat(np.arange(len(scene.parts)),
                           [len(q.faces) for q in scene.parts])

@@ -10,13 +10,13 @@ import numpy as np
 import pytest
 
 import facemech as fm
+from conftest import seen_triangles
 from facemech.errors import InputError
 from facemech.io.results import read_results, results_tongue, to_dataset, with_tongue, write_dataset
 from facemech.speech.alignment import Alignment, Segment
 from facemech.speech.coarticulation import controls_from_alignment
 from facemech.speech.tongue import FREE, REST_TIP_BEHIND_INCISORS, TARGETS, target_of, tongue_tip
 from facemech.viz.camera import view_camera
-from facemech.viz.raster import rasterise
 from facemech.viz.scene import build_scene, look_from_dataset
 
 RATE = 60.0
@@ -103,13 +103,7 @@ def scene(theta):
 
 def _tongue_pixels(scene, verts, cam) -> int:
     """Pixels where the tongue is the nearest surface."""
-    h, w = cam.size
-    p = cam.project(verts, 1)
-    z = np.full((h, w), -np.inf, np.float32)
-    tid = np.full((h, w), -1, np.int32)
-    bary = np.empty((h, w, 2), np.float32)
-    rasterise(p[:, 0], p[:, 1], p[:, 2], scene.tris, scene.uv, scene.tex, scene.alpha_test,
-              scene.two_sided, scene.atlas, z, tid, bary)
+    z, tid = seen_triangles(scene, verts, cam)
     starts = np.cumsum([0] + [len(q.faces) for q in scene.parts])
     i = [q.name for q in scene.parts].index("tongue")
     return int(((tid >= starts[i]) & (tid < starts[i + 1])).sum())
