@@ -49,6 +49,18 @@ VARIANTS = {
     # no force-velocity term at 4 and at 32 steps per frame: what is left is the step's drag
     # and the tissue's own slowness
     "no_force_velocity_32_steps": {"f4": 0.0, "substeps": 32},
+    # the step about its explicit predictor (the matrix holding 3/4 of each stiffness and 3 x
+    # the volume Gram matrices, as it must), with eq. 8's dashpots, with dashpots on the rate
+    # of stretch only, and with a quarter and a half of them on eq. 8's form (docs/model.md)
+    **{name: {"fv_vmax": 20.0, **ITO, "volume_floor": 0.5, "volume_floor_modulus": 1e6,
+              "stiffening": 4.0, "predictor": True, "implicit_stiffness_share": 0.75,
+              "implicit_volume_scale": 3.0, **extra}
+       for name, extra in (("predictor", {}),
+                           ("predictor_stretch_dashpots", {"dashpot_isotropy": 0.0}),
+                           ("predictor_quarter_isotropic", {"dashpot_isotropy": 0.25,
+                                                            "viscous_time": 4.5e-3}),
+                           ("predictor_half_isotropic", {"dashpot_isotropy": 0.5,
+                                                         "viscous_time": 4e-3}))},
 }
 
 

@@ -84,6 +84,10 @@ lip_stiffness_factor: float [0, inf)
 poisson: float [0, 0.5)
 skin_modulus_thickness: float [0, inf)
 viscous_time: float [0, inf)
+dashpot_isotropy: float [0, 1]
+predictor: bool
+implicit_stiffness_share: float [0, 10]
+implicit_volume_scale: float [0, 10]
 stiffening: float [0, inf)
 fixed_skull_contact: bool
 sphincter_scale: float [0, inf)

@@ -137,6 +137,20 @@ class Parameters:
     # what the springs, whose lattice has 1/4, lack)
     skin_modulus_thickness: float = 0.0  # N/m, Young's modulus x thickness of the dermis
     viscous_time: float = 0.0  # s, tissue viscosity / modulus (stiffness-proportional damping)
+    #: continuum: the share of each spring's dashpot on the whole relative velocity of its ends
+    #: (1: eq. 8's form); the rest damps the rate of stretch only (a Kelvin-Voigt solid's
+    #: viscosity), which does not resist a rigid turn of the tissue (issue 27: the lower lip
+    #: everts as a nearly rigid flap, and eq. 8's dashpots made it slow)
+    dashpot_isotropy: float = 1.0
+    #: the implicit methods evaluate the forces at the explicit predictor x + h v (the
+    #: linearly implicit step linearised about it) instead of at x with the constant matrix's
+    #: correction -h K v, which resists rigid turns as it resists stretch (numerical drag); the
+    #: matrix must then hold most of each stiffness (below)
+    predictor: bool = False
+    #: the share of each spring's stiff branch, and the factor on the prisms' volume Gram
+    #: matrices, that the implicit methods' constant matrix holds (solvers/implicit.py)
+    implicit_stiffness_share: float = 0.3
+    implicit_volume_scale: float = 1.0
     # continuum: strain stiffening, the stiffness of every spring times this beyond
     # ``biphasic_knee`` of stretch (eq. 1's law on all springs; 1: linear)
     stiffening: float = 1.0
@@ -167,6 +181,7 @@ class Parameters:
         check_jaw_kinematics(self.jaw_kinematics, self.glide_rate, self.glide_slope)
         check_muscle_dynamics(self.fv_vmax, self.fv_curvature, self.tau_activation,
                               self.activation_damping)
+        check_predictor(self)
 
     @property
     def is_continuum(self) -> bool:
@@ -236,6 +251,25 @@ MUSCLE_DYNAMICS_KEYS = MappingProxyType({
     "activation_tau_ms": ("tau_activation", 1e-3),
     "activation_damping": ("activation_damping", 1.0),
 })
+
+
+#: the least shares of the stiffness that the implicit matrix must hold for the predictor's
+#: step to be stable at any stiffness: 3/4 of each spring's stiff branch (the scalar step's
+#: spectral radius, docs/model.md), and 3 x each prism's volume Gram matrix (whose largest
+#: eigenvalue is at least a third of the volume term's rank-one Hessian's)
+PREDICTOR_LEAST_SHARES = {"implicit_stiffness_share": 0.75, "implicit_volume_scale": 3.0}
+
+
+def check_predictor(params: Parameters) -> None:
+    """The predictor's step needs most of each stiffness in the matrix: InputError naming the
+    field that holds too little (:data:`PREDICTOR_LEAST_SHARES`)."""
+    if not params.predictor:
+        return
+    for name, least in PREDICTOR_LEAST_SHARES.items():
+        if getattr(params, name) < least:
+            raise InputError(f"{name} must be at least {least} with predictor=True (got "
+                             f"{getattr(params, name)}): with less stiffness in the implicit "
+                             f"matrix the predictor's step blows up", field=name)
 
 
 def check_muscle_dynamics(vmax, curvature, tau, zeta, *, source: str | None = None) -> None:

@@ -147,7 +147,7 @@ class Physics:
             i=model.spring_i.astype(np.int64), j=model.spring_j.astype(np.int64),
             rest_length=l0, k_low=np.asarray(k_low, float), k_high=np.asarray(k_high, float),
             biphasic=biphasic, damping=np.asarray(damping, float), knee=params.biphasic_knee,
-            sigma=params.sigma)
+            sigma=params.sigma, isotropy=params.dashpot_isotropy if params.is_continuum else 1.0)
         prisms = PrismBundle(
             nodes=model.prism_nodes.astype(np.int64), rest_volume=vols, rest_rel=rel,
             k_volume=params.k_volume, k_shape=params.k_shape, bulk=np.asarray(bulk, float))
@@ -405,6 +405,7 @@ def spring_forces(springs, pos, vel, s0, s1, sigma, out):
     knee_length = springs.knee_length
     damping = springs.damping
     knee = springs.knee
+    isotropy = springs.isotropy
     ok = True
     # unsigned indices: numba then reads the arrays without its test for a negative index
     # (wrap-around), 15 % of this loop (measured on the default face)
@@ -419,9 +420,19 @@ def spring_forces(springs, pos, vel, s0, s1, sigma, out):
         t = tension_at(length, spring_rest[s], k_low[s], k_high[s], knee, knee_length[s], sigma)
         t /= length
         r = damping[s]
-        fx = t * dx + r * (vel[j, 0] - vel[i, 0])
-        fy = t * dy + r * (vel[j, 1] - vel[i, 1])
-        fz = t * dz + r * (vel[j, 2] - vel[i, 2])
+        wx = vel[j, 0] - vel[i, 0]
+        wy = vel[j, 1] - vel[i, 1]
+        wz = vel[j, 2] - vel[i, 2]
+        if isotropy != 1.0:  # a share on the rate of stretch only: (w . d) d / |d|^2
+            a = (1.0 - isotropy) * r * (wx * dx + wy * dy + wz * dz) / (length * length)
+            r *= isotropy
+            fx = (t + a) * dx + r * wx
+            fy = (t + a) * dy + r * wy
+            fz = (t + a) * dz + r * wz
+        else:
+            fx = t * dx + r * wx
+            fy = t * dy + r * wy
+            fz = t * dz + r * wz
         out[i, 0] += fx
         out[i, 1] += fy
         out[i, 2] += fz

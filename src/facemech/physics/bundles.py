@@ -36,6 +36,9 @@ class SpringBundle(NamedTuple):
     sigma : float -- the compression law's sigma (eq. 2); <= 0: mirror of eq. (1) (continuum)
     knee_length : (s,) m -- ``knee * rest_length`` of a biphasic spring, ``inf`` of a linear one
         (:meth:`make` fills it)
+    isotropy : float -- the share of each dashpot that acts on the whole relative velocity of
+        its ends (eq. 8's form, 1); the rest acts on the rate of stretch only (the relative
+        velocity along the spring, a Kelvin-Voigt solid's viscosity), which damps no rigid turn
     """
 
     i: np.ndarray
@@ -48,14 +51,16 @@ class SpringBundle(NamedTuple):
     knee: float
     sigma: float
     knee_length: np.ndarray
+    isotropy: float = 1.0
 
     @classmethod
-    def make(cls, i, j, rest_length, k_low, k_high, biphasic, damping, knee, sigma):
+    def make(cls, i, j, rest_length, k_low, k_high, biphasic, damping, knee, sigma,
+             isotropy=1.0):
         """The bundle of these springs, with the knee of each as a length."""
         biphasic = np.asarray(biphasic, bool)
         knee_length = np.where(biphasic, knee * np.asarray(rest_length, float), np.inf)
         return cls(i, j, rest_length, k_low, k_high, biphasic, damping, float(knee),
-                   float(sigma), knee_length)
+                   float(sigma), knee_length, float(isotropy))
 
 
 class PrismBundle(NamedTuple):

@@ -10,6 +10,13 @@
     approximation of the Jacobian, so one constant factorised matrix (gamma h in place of h)
     serves every step: two force evaluations and two solves per step.
 
+With ``Parameters.predictor`` linear implicit Euler instead evaluates the forces at the
+explicit predictor, ``A dv = h f(x + h v, v)`` (the step linearised about the predictor; the
+same as backward Euler when K is the true stiffness): the matrix then acts only on the change of
+velocity, so it resists no steady rigid turn (the corrected form's drag), but its excess over
+the true stiffness becomes added inertia, and the step is stable only when the matrix holds at
+least 3/4 of each stiffness (:data:`facemech.params.PREDICTOR_LEAST_SHARES`; docs/model.md).
+
 Both integrate the muscle filter of eq. (4) exactly. K and C are isotropic (the same for x, y
 and z) so one factorisation of a nodes x nodes matrix serves the three axes.
 
@@ -71,6 +78,8 @@ class ImplicitSystem:
     factor_step : float, s -- g (h for linear implicit Euler, gamma h for ROS2)
     muscles : MuscleJacobian or None -- the muscles' bead-space Jacobian and the Woodbury solve
         (the continuum tissue); None: the muscles stay explicit
+    predictor : bool -- linear implicit Euler evaluates the forces at the explicit predictor
+        ``x + h v`` and solves ``A dv = h f(x + h v, v)`` (``Parameters.predictor``)
     """
 
     stiffness: sp.csr_matrix
@@ -79,6 +88,7 @@ class ImplicitSystem:
     lu: object
     factor_step: float
     muscles: MuscleJacobian | None
+    predictor: bool = False
 
     def linearise(self, pos, vel, m_force, m_steady):
         """The muscles' Jacobian at a state (None: no muscle in the solve)."""
@@ -131,9 +141,10 @@ def implicit_system(physics: Physics, h: float) -> ImplicitSystem:
         # spring's stiff branch, the volume term's Gram matrices (within a factor 3 of its
         # rank-one Hessian) and the tethers
         damp = _graph_matrix(si, sj, springs.damping, nd)
-        k_springs = _graph_matrix(si, sj, IMPLICIT_STIFFNESS_SHARE * springs.k_high, nd)
+        k_springs = _graph_matrix(si, sj, p.implicit_stiffness_share * springs.k_high, nd)
         grads = volume_gradients(physics.model.rest_positions[prisms.nodes])  # (p, 6, 3)
-        gram = np.einsum("pac,pbc->pab", grads, grads) * prisms.bulk[:, None, None]
+        gram = (np.einsum("pac,pbc->pab", grads, grads) * prisms.bulk[:, None, None]
+                * p.implicit_volume_scale)
         tether = np.zeros(nd)
         np.add.at(tether, row[restoration.nodes], restoration.k_restore)
         stiff = (k_springs + sp.csc_matrix((gram.reshape(-1)[ok], (ra[ok], rb[ok])),
@@ -159,7 +170,8 @@ def implicit_system(physics: Physics, h: float) -> ImplicitSystem:
               options={"SymmetricMode": True})
     return ImplicitSystem(stiffness=stiff.tocsr(), damping=damp.tocsr(), mass=mass, lu=lu,
                           factor_step=h,
-                          muscles=MuscleJacobian(physics, lu) if p.is_continuum else None)
+                          muscles=MuscleJacobian(physics, lu) if p.is_continuum else None,
+                          predictor=bool(p.predictor))
 
 
 def _graph_matrix(i: np.ndarray, j: np.ndarray, w: np.ndarray, nd: int) -> sp.csc_matrix:
@@ -249,9 +261,15 @@ class LinearImplicitEuler:
         for step in range(solver_state.n_steps):
             anchors = place_jaw_into(solver_state.jaw, f.jaw_start + f.jaw_rate * (step * h),
                                      f.jaw_rate, pos, vel)
-            accumulate_forces(solver_state.forces, pos, vel, m_force, anchors, out)
             v0 = vel[dyn]
-            rhs = h * (out[dyn] - h * system.apply_stiffness(v0, jac))
+            if system.predictor:
+                # the forces at the explicit predictor x + h v: the matrix then only corrects
+                # the change of velocity, and resists no steady rigid turn
+                accumulate_forces(solver_state.forces, pos + h * vel, vel, m_force, anchors, out)
+                rhs = h * out[dyn]
+            else:
+                accumulate_forces(solver_state.forces, pos, vel, m_force, anchors, out)
+                rhs = h * (out[dyn] - h * system.apply_stiffness(v0, jac))
             vel[dyn] = v0 + system.solve(rhs, jac, h)
             pos[dyn] += h * vel[dyn]
             _contacts(solver_state, pos, vel, anchors)
@@ -279,6 +297,9 @@ class Rosenbrock2:
 
     def init(self, physics: Physics) -> SolverState:
         """The solver state of a model: its matrix factorised for gamma h."""
+        if physics.params.predictor:
+            raise InputError("predictor=True is a form of the linearly implicit Euler step "
+                             "(integrator 'implicit'), not of 'rosenbrock'", field="predictor")
         return _init(physics, self.substeps, ROS2_GAMMA)
 
     def step(self, solver_state: SolverState, state: State, controls: Controls) -> State:
