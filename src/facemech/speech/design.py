@@ -25,10 +25,25 @@ an optional ``[defaults]`` table whose keys every stimulus starts from). Columns
 ``freeze_region``      a region held still (default: none)
 ``freeze_at``          ``rest`` (default), a frame number, or a time ``0.25s``
 ``av_offset_ms``       the audio moved against the video, ms, positive = audio later (default 0)
+``blinks``             blinks: ``yes``/``no`` (also ``true``/``false``, ``1``/``0``, ``on``/``off``;
+                       default ``no``)
+``gaze``               small gaze shifts, the same values (default ``no``)
+``head_motion``        head motion driven by the voice's F0 and level, the same (default ``no``)
+``seed``               the seed of the blinks, gaze shifts and head motion, an integer in
+                       [0, 2**32 - 1] (default 0)
 ``notes``              free text, copied to the manifest
 =====================  ==========================================================================
 
 The manipulations are applied in this order: dub, time scale, amplitude, freeze, AV offset.
+
+Blinks, gaze shifts and head motion (:mod:`facemech.speech.alive`, ``speak``'s
+``--no-blinks``, ``--no-gaze``, ``--no-head-motion`` and ``--seed``) are **off** in a design
+unless a row (or a TOML table's ``[defaults]``) turns them on, unlike ``speak``: a design's
+conditions then differ only in what they manipulate. They are drawn for the finished stimulus's
+frames, the head driven by the face's own voice on the face's time line (time-scaled with the
+face; not the dubbed sound, and not moved by ``av_offset_ms``), so that they belong to the
+video; with the same seed, stimuli of the same length blink and look at the same times
+(:func:`stimulus_liveliness`).
 """
 
 from __future__ import annotations
@@ -49,7 +64,11 @@ MANIPULATION_COLUMNS = (
     "dub_audio", "dub_from", "dub_align", "dub_face_anchor_s", "dub_audio_anchor_s",
     "time_scale", "time_scale_audio", "amplitude", "amplitude_region", "freeze_region",
     "freeze_at", "av_offset_ms")
-COLUMNS = ("id", *SOURCE_COLUMNS, *MANIPULATION_COLUMNS, "notes")
+#: a row's switches of :class:`facemech.speech.alive.Liveliness` (named as ``speak``'s flags)
+ALIVE_COLUMNS = ("blinks", "gaze", "head_motion", "seed")
+COLUMNS = ("id", *SOURCE_COLUMNS, *MANIPULATION_COLUMNS, *ALIVE_COLUMNS, "notes")
+_TRUE, _FALSE = ("yes", "true", "1", "on"), ("no", "false", "0", "off")
+_SEED_MAX = 2 ** 32 - 1
 _ID = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]*$")
 
 #: make_item(row) -> (results dataset, WAV path or Audio): a face that says the row's text
@@ -179,7 +198,7 @@ def parse_row(row: dict, *, base: Path, ids: set[str], has_hook: bool) -> Stimul
             raise RowError("no text-to-speech here: give 'results' and 'audio' files", row=k,
                            column="text")
         source = {c: row[c] for c in row if c not in MANIPULATION_COLUMNS
-                  and c not in ("id", "notes", "_row")}
+                  and c not in ALIVE_COLUMNS and c not in ("id", "notes", "_row")}
     else:
         raise RowError("give the face item: 'results' and 'audio', or 'text'", row=k,
                        column="results")
@@ -220,6 +239,9 @@ def parse_row(row: dict, *, base: Path, ids: set[str], has_hook: bool) -> Stimul
         s["freeze_region"] = _regions(row, "freeze_region", None, parse_regions)
         s["freeze_at"] = _freeze_at(row)
     s["av_offset_ms"] = _number(row, "av_offset_ms", 0.0)
+    for c in ALIVE_COLUMNS[:3]:
+        s[c] = _switch(row, c, False)
+    s["seed"] = _seed(row)
     return Stimulus(sid, k, source, s, str(row.get("notes", "")),
                     {c: row[c] for c in unknown})
 
@@ -244,19 +266,86 @@ def _freeze_at(row) -> str | int | float:
                        row=row["_row"], column="freeze_at") from None
 
 
+def _switch(row, column: str, default: bool) -> bool:
+    """A yes/no cell (TOML: also a boolean, or the integers 0 and 1)."""
+    if column not in row:
+        return default
+    v = row[column]
+    if isinstance(v, bool):
+        return v
+    text = str(v).strip().lower()
+    if text not in _TRUE + _FALSE:
+        raise RowError(f"{v!r}: expected yes or no (true/false, 1/0, on/off)", row=row["_row"],
+                       column=column)
+    return text in _TRUE
+
+
+def _seed(row) -> int:
+    v = row.get("seed", 0)
+    text = str(v).strip()
+    if isinstance(v, (bool, float)) or not re.fullmatch(r"\+?\d+", text) or \
+            int(text) > _SEED_MAX:
+        raise RowError(f"{v!r}: expected an integer from 0 to {_SEED_MAX}", row=row["_row"],
+                       column="seed")
+    return int(text)
+
+
+def liveliness_of(settings: dict):
+    """A row's :class:`facemech.speech.alive.Liveliness` (its ``blinks``, ``gaze``,
+    ``head_motion`` and ``seed``; off where the settings do not say)."""
+    from .alive import Liveliness
+
+    return Liveliness(blinks=bool(settings.get("blinks", False)),
+                      gaze=bool(settings.get("gaze", False)),
+                      head=bool(settings.get("head_motion", False)),
+                      seed=int(settings.get("seed", 0)))
+
+
+def stimulus_liveliness(ds, voice: Audio | None, settings: dict):
+    """The blinks, gaze shifts and head motion of a finished stimulus
+    (:func:`facemech.speech.alive.liveliness` at its frames, seeded by the row): an
+    :class:`facemech.speech.alive.Alive`, all zeros where the row leaves them off.
+
+    ``voice`` drives the head: the face's own sound on the stimulus's time line (the third
+    value of :func:`make_stimulus_and_voice`); None: silence (no head motion).
+    """
+    from .alive import liveliness
+
+    alive = liveliness_of(settings)
+    if voice is None:
+        samples, rate = np.zeros(1), 16000
+    else:
+        samples, rate = voice.mono(), voice.rate
+    return liveliness(np.asarray(ds["time"].values, float), samples, rate, alive)
+
+
 def make_stimulus(ds, audio: Audio, settings: dict, *, dub_audio: Audio | None = None):
     """Apply a row's manipulations (in the order dub, time scale, amplitude, freeze, AV offset)
     to a face and its sound; returns (dataset, Audio)."""
+    return make_stimulus_and_voice(ds, audio, settings, dub_audio=dub_audio)[:2]
+
+
+def make_stimulus_and_voice(ds, audio: Audio, settings: dict, *,
+                            dub_audio: Audio | None = None):
+    """:func:`make_stimulus`, and the face's own voice on the stimulus's time line (what drives
+    the head, :func:`stimulus_liveliness`): ``audio`` time-scaled as the face is (stretched
+    where the row's sound is not), neither dubbed nor offset; None unless the row turns
+    ``head_motion`` on. Returns (dataset, Audio, Audio or None)."""
     from . import stimuli as st
 
+    voice = audio if settings.get("head_motion") else None
     if dub_audio is not None:
         ds, audio = st.dub(ds, audio, dub_audio, align=settings.get("dub_align", "onset"),
                            face_anchor=settings.get("dub_face_anchor_s"),
                            audio_anchor=settings.get("dub_audio_anchor_s"))
     if settings.get("time_scale", 1.0) != 1.0:
+        method = settings.get("time_scale_audio", "stretch")
         ds, audio = st.time_scale_with_audio(ds, audio, settings["time_scale"],
-                                             audio_method=settings.get("time_scale_audio",
-                                                                       "stretch"))
+                                             audio_method=method)
+        if voice is not None:
+            voice = audio if dub_audio is None and method != "none" else \
+                st.time_stretch(voice, settings["time_scale"],
+                                method="stretch" if method == "none" else method)
     if settings.get("amplitude", 1.0) != 1.0:
         ds = st.scale_amplitude(ds, settings["amplitude"], settings.get("amplitude_region",
                                                                         "face"))
@@ -264,7 +353,7 @@ def make_stimulus(ds, audio: Audio, settings: dict, *, dub_audio: Audio | None =
         ds = st.freeze(ds, settings["freeze_region"], settings.get("freeze_at", "rest"))
     if settings.get("av_offset_ms", 0.0) != 0.0:
         ds, audio = st.offset_audio(ds, audio, settings["av_offset_ms"])
-    return ds, audio
+    return ds, audio, voice
 
 
 def check_design(table_path: str | Path, make_item: MakeItem | None = None) -> list[Stimulus]:
@@ -350,6 +439,7 @@ def with_source(exc: RowError, table: Path) -> RowError:
     return exc
 
 
-__all__ = ["COLUMNS", "MANIPULATION_COLUMNS", "SOURCE_COLUMNS", "MakeItem", "RowError",
-           "Stimulus", "check_design", "make_stimulus", "parse_row", "read_design",
-           "refuse_table", "with_source"]
+__all__ = ["ALIVE_COLUMNS", "COLUMNS", "MANIPULATION_COLUMNS", "SOURCE_COLUMNS", "MakeItem",
+           "RowError", "Stimulus", "check_design", "liveliness_of", "make_stimulus",
+           "make_stimulus_and_voice", "parse_row", "read_design", "refuse_table",
+           "stimulus_liveliness", "with_source"]

@@ -304,8 +304,8 @@ def text_items(work_dir: str | Path, *, preset: str = "anatomical"):
 
         rate, strength = check(row)
         key = _row_key(row, preset)
-        # the design's movies are drawn from the results alone: the item's manifest says that
-        # they neither blink nor move the head (a design's columns for them: not yet)
+        # the item without blinks, gaze or head motion: the design draws them (its columns
+        # blinks, gaze, head_motion, seed) on the finished stimulus's frames
         spoken = speak(work / key, str(row["text"]), voice=str(row.get("voice", "en-us")),
                        rate_wpm=rate, face=row.get("face", "default"),
                        preset=str(row.get("preset", preset)), strength=strength, video=False,

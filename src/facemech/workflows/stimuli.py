@@ -3,9 +3,11 @@
 :func:`run_design` reads a design table (checked whole first by
 :func:`facemech.speech.design.check_design`), loads each row's face and sound (a results file
 and a WAV, or the ``make_item`` hook's), applies the row's manipulations
-(:func:`facemech.speech.design.make_stimulus`), writes ``ID.nc``, ``ID.wav`` and ``ID.mp4``
-and rewrites the manifest (``manifest.json`` and ``manifest.csv``) after each row. The table's
-columns are described in :mod:`facemech.speech.design`.
+(:func:`facemech.speech.design.make_stimulus`), draws the blinks, gaze shifts and head motion
+the row turns on (:func:`facemech.speech.design.stimulus_liveliness`; off by default), writes
+``ID.nc``, ``ID.wav`` and ``ID.mp4`` (the movie showing them) and rewrites the manifest
+(``manifest.json`` and ``manifest.csv``, ``alive`` with their times) after each row. The
+table's columns are described in :mod:`facemech.speech.design`.
 """
 
 from __future__ import annotations
@@ -19,12 +21,14 @@ from pathlib import Path
 
 from ..errors import FacemechError, InputError
 from ..speech.design import (
+    ALIVE_COLUMNS,
     MANIPULATION_COLUMNS,
     MakeItem,
     RowError,
     Stimulus,
     check_design,
-    make_stimulus,
+    make_stimulus_and_voice,
+    stimulus_liveliness,
     with_source,
 )
 from ..speech.wav import Audio
@@ -92,7 +96,9 @@ def run_design(table_path: str | Path, out_dir: str | Path, make_item: MakeItem 
     """Make every stimulus of a design table in ``out_dir``, with a manifest.
 
     Each stimulus writes ``ID.nc`` (results), ``ID.wav`` and, with ``video``, ``ID.mp4``
-    (:func:`facemech.viz.video.render_results`, the sound muxed in), each atomically; then the
+    (:func:`facemech.viz.video.render_results`, the sound muxed in, with the blinks, gaze shifts
+    and head motion the row's ``blinks``, ``gaze``, ``head_motion`` and ``seed`` turn on: off by
+    default; the manifest's ``alive`` records them and their times), each atomically; then the
     manifest (``manifest.json`` and ``manifest.csv``) is rewritten, so an interrupted run keeps
     what it made. A row that cannot be made is reported (a :class:`RowError` in the report and
     the manifest) and the others are still made. A stimulus whose key (a hash of its settings,
@@ -163,7 +169,9 @@ def run_design(table_path: str | Path, out_dir: str | Path, make_item: MakeItem 
                 ref = specs[spec.settings["dub_from"]]
                 dub_audio = _item(ref.id, ref.source, make_item, spec.row, cache)[1]
             try:
-                ds, audio = make_stimulus(ds, audio, spec.settings, dub_audio=dub_audio)
+                ds, audio, voice = make_stimulus_and_voice(ds, audio, spec.settings,
+                                                           dub_audio=dub_audio)
+                lively = stimulus_liveliness(ds, voice, spec.settings)
             except InputError as exc:
                 raise RowError(exc.message, row=spec.row, column=exc.field) from None
             ds.attrs["stimulus_id"] = spec.id
@@ -172,18 +180,19 @@ def run_design(table_path: str | Path, out_dir: str | Path, make_item: MakeItem 
             write_dataset(out_dir / outputs["results"], ds)
             write_wav(out_dir / outputs["audio"], audio)
             if video:
-                from ..viz.video import render_results
+                from ..viz.video import FrameMotion, render_results
 
                 render_results(ds, out_dir / outputs["movie"], options=options,
                                audio=out_dir / outputs["audio"], source=spec.id,
                                progress=None if progress is None else (
-                                   lambda d, n, s=spec.id: progress(f"render {s}", d, n)))
+                                   lambda d, n, s=spec.id: progress(f"render {s}", d, n)),
+                               motion=_motion(lively, FrameMotion))
             desc = describe(ds, source=spec.id)
             entries.append({"id": spec.id, "row": spec.row, "status": "made", "key": key,
                             "settings": spec.settings, "source": spec.source,
                             "inputs": inputs, "extra": spec.extra, "notes": spec.notes,
                             "outputs": outputs, "description": desc.to_dict(),
-                            "flat": desc.flat()})
+                            "flat": desc.flat(), "alive": lively.record()})
             report.made.append(spec.id)
         except RowError as exc:
             report.failed.append(with_source(exc, table_path))
@@ -203,6 +212,20 @@ def _item(sid, source, make_item, row, cache):
     if sid not in cache:
         cache[sid] = _load_source(source, make_item, row)
     return cache[sid]
+
+
+def _motion(lively, frame_motion):
+    """The movie's blinks, gaze and head (a ``FrameMotion``), or None where the row turns
+    none of them on (the movie as without them)."""
+    s = lively.settings
+    if not (s.blinks or s.gaze or s.head):
+        return None
+    return frame_motion(lively.blink, lively.gaze, lively.head)
+
+
+def _onsets(entry: dict, part: str) -> str:
+    """The manifest entry's blink or gaze-shift onsets, s, separated by ';'."""
+    return ";".join(f"{e['onset_s']:.4f}" for e in entry.get("alive", {}).get(part, []))
 
 
 def _failed_entry(exc: RowError, spec: Stimulus) -> dict:
@@ -250,8 +273,9 @@ def _write_manifest(out_dir: Path, table: Path, render: dict, entries: list[dict
     report.manifest_csv = out_dir / "manifest.csv"
     with atomic_path(report.manifest_json) as tmp:
         tmp.write_text(json.dumps(doc, indent=1, default=str))
-    cols = ["id", "row", "status", "key", *MANIPULATION_COLUMNS, "source_results",
-            "source_audio", "input_hashes"]
+    cols = ["id", "row", "status", "key", *MANIPULATION_COLUMNS, *ALIVE_COLUMNS,
+            "blink_onsets_s", "gaze_shift_onsets_s", "source_results", "source_audio",
+            "input_hashes"]
     flat_cols: list[str] = []
     for e in entries:
         for c in e.get("flat", {}):
@@ -266,6 +290,9 @@ def _write_manifest(out_dir: Path, table: Path, render: dict, entries: list[dict
                    "key": e.get("key", ""), "notes": e.get("notes", ""),
                    "error": e.get("error", {}).get("message", "")}
             rec.update({k: v for k, v in e.get("settings", {}).items()})
+            if "alive" in e:
+                rec["blink_onsets_s"] = _onsets(e, "blinks")
+                rec["gaze_shift_onsets_s"] = _onsets(e, "gaze_shifts")
             src = e.get("source", {})
             rec["source_results"] = src.get("results", src.get("text", ""))
             rec["source_audio"] = src.get("audio", "")
