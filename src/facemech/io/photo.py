@@ -96,10 +96,14 @@ class DlibDetector:
         self._predictor = dlib.shape_predictor(models.pose_predictor_model_location())
         self._cnn = None
 
-    def faces(self, image: np.ndarray) -> list[Detection]:
-        """Every frontal face in an RGB image, with its landmarks."""
+    def faces(self, image: np.ndarray, *, upsample: int = 1) -> list[Detection]:
+        """Every frontal face in an RGB image, with its landmarks.
+
+        ``upsample``: how many times the detector doubles the image before it looks (1 finds
+        faces from about 40 px across; 0 from about 80 px, about four times faster).
+        """
         small, k = _reduced(image, DETECT_SIDE)
-        rects, scores, _ = self._detector.run(small, 1, MIN_SCORE)
+        rects, scores, _ = self._detector.run(small, int(upsample), MIN_SCORE)
         out = []
         for r, s in zip(rects, scores, strict=True):
             box = self._dlib.rectangle(*(int(round(c * k)) for c in (r.left(), r.top(),

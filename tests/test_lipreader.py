@@ -1,0 +1,138 @@
+"""Issue 29, "a machine lip-reader sees it": dlib's 68-point tracker on the rendered frontal movie.
+
+The sentence is spoken by :func:`facemech.workflows.speak.speak` on the built-in face
+``default`` (blinks, gaze and head motion off) and its frontal frames are rendered at 300x360
+pixels: the frontal camera frames the head by the frame's height, so these are the 640x360
+movie's frames with the background at the sides cropped (the face about 190 px across, found
+by the detector without upsampling). The whole file takes about 40 s on two cores.
+
+The issue's r >= 0.9 is not met on the built-in face (docs/lipreader.md: 0.46-0.91 over six
+Harvard sentences); that test is a strict expected failure, and the tracker is held here to what
+it does measure: the face in every frame, the points on the mouth, a positive r.
+"""
+
+from __future__ import annotations
+
+import sys
+
+import numpy as np
+import pytest
+
+from facemech.analysis.lipreader import (
+    compare,
+    frontal_frames,
+    inner_lip_distance,
+    model_aperture,
+    read_lips,
+)
+from facemech.errors import InputError
+
+#: a Harvard sentence (IEEE 1969, list 1), about 2 s at eSpeak's default rate
+TEXT = "Rice is often served in round bowls."
+#: the issue's least Pearson r between the tracker's inner-lip distance and the model's aperture
+R_ISSUE = 0.9
+#: r measured on this sentence at 300x360 (0.652 at 640x360, benchmarks/lipreader.py)
+R_MEASURED = 0.66
+#: the least r this test holds the tracker to: the measured r less 0.16, about twice the most
+#: a change of frame size moved r on the sentences tried (0.09)
+R_FLOOR = 0.5
+#: the least share of frames in which the face is found (measured: every frame)
+FOUND_MIN = 0.95
+
+
+@pytest.fixture(scope="module")
+def detector():
+    pytest.importorskip("dlib")
+    pytest.importorskip("face_recognition_models")
+    from facemech.io.photo import DlibDetector
+
+    return DlibDetector()
+
+
+@pytest.fixture(scope="module")
+def read(tmp_path_factory, detector):
+    """(the lip reading, the model's aperture m, their agreement) of the sentence."""
+    from facemech.speech.alive import Liveliness
+    from facemech.workflows.speak import speak
+
+    spoken = speak(tmp_path_factory.mktemp("lipreader"), TEXT, face="default", video=False,
+                   alive=Liveliness.off())
+    ds = spoken.dataset
+    reading = read_lips(frontal_frames(ds, size=(360, 300)), detector=detector)
+    aperture = model_aperture(ds)
+    assert len(aperture) == ds.sizes["time"]
+    return reading, aperture, compare(reading.distance, aperture)
+
+
+def test_the_tracker_finds_the_face_and_sees_the_mouth_open(read):
+    reading, aperture, agreement = read
+    assert agreement.frames == len(aperture) == len(reading.distance)
+    assert agreement.found_fraction >= FOUND_MIN, agreement
+    # the mouth opens in the sentence (about a centimetre), and wider open reads wider
+    assert aperture.max() > 5e-3
+    assert agreement.slope > 0
+    assert agreement.r >= R_FLOOR, agreement
+    # the points sit on the mouth: the inner lips' corners (60, 64) within the outer lips'
+    # (48, 54), the inner lips between the nose's base (33) and the chin (8)
+    pts = reading.points[reading.found]
+    assert np.all(pts[:, 60, 0] > pts[:, 48, 0] - 2) and np.all(pts[:, 64, 0] < pts[:, 54, 0] + 2)
+    assert np.all(pts[:, 62, 1] > pts[:, 33, 1]) and np.all(pts[:, 66, 1] < pts[:, 8, 1])
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    f"measured r = {R_MEASURED} on this sentence, 0.46-0.91 over six Harvard sentences at "
+    "640x360 (docs/lipreader.md): dlib's predictor puts the inner-lip points inside the "
+    "vermilion of the rounded, protruded lips (reading their thickness as opening) and on the "
+    "teeth between spread lips (reading them as closed)"))
+def test_inner_lip_distance_correlates_with_the_aperture_as_the_issue_asks(read):
+    assert read[2].r >= R_ISSUE, read[2]
+
+
+def test_compare_gives_pearson_r_over_the_frames_with_a_face():
+    # the frames without a face (2 and 5) hold apertures that would spoil the correlation
+    aperture = np.array([1.0, 2.0, 9.0, 3.0, 4.0, 9.0, 5.0]) * 1e-3
+    distance = np.array([2.0, 1.0, np.nan, 4.0, 3.0, np.nan, 5.0])
+    # over the others: deviations (-2, -1, 0, 1, 2) mm against (-1, -2, 1, 0, 2) px; their
+    # products sum to 8, the squares to 10 and 10: r = 0.8, slope 0.8 px/mm, 3 - 0.8 * 3 px at 0
+    got = compare(distance, aperture)
+    assert got.found == 5 and got.frames == 7
+    assert got.found_fraction == pytest.approx(5 / 7)
+    assert got.r == pytest.approx(0.8, abs=1e-12)
+    assert got.slope == pytest.approx(800.0) and got.intercept == pytest.approx(0.6)
+    # a line: r = 1, its slope (px per m) and intercept (px) recovered
+    line = compare(4.0 + 2500.0 * aperture, aperture)
+    assert line.r == pytest.approx(1.0)
+    assert line.slope == pytest.approx(2500.0) and line.intercept == pytest.approx(4.0)
+    assert line.to_dict()["slope_px_per_mm"] == pytest.approx(2.5)
+    # anticorrelated
+    assert compare(-aperture, aperture).r == pytest.approx(-1.0)
+    with pytest.raises(InputError, match="two"):
+        compare(distance[:-1], aperture)
+
+
+def test_inner_lip_distance_pairs_the_inner_lip_points():
+    pts = np.zeros((2, 68, 2))
+    pts[:, [61, 62, 63], 1] = 100.0
+    pts[0, [67, 66, 65], 1] = [104.0, 106.0, 105.0]  # lower lip below (y down)
+    pts[1, [67, 66, 65], 1] = 100.0
+    pts[1, 0, 1] = 500.0  # a point off the lips changes nothing
+    assert inner_lip_distance(pts) == pytest.approx([5.0, 0.0])
+    with pytest.raises(InputError, match="68, 2"):
+        inner_lip_distance(np.zeros((67, 2)))
+
+
+def test_no_face_gives_nan(detector):
+    frames = [np.full((360, 300, 3), 40, np.uint8), np.zeros((360, 300, 4), np.uint8)]
+    reading = read_lips(frames, detector=detector)
+    assert reading.distance.shape == (2,) and np.all(np.isnan(reading.distance))
+    assert np.all(np.isnan(reading.points)) and not reading.found.any()
+    got = compare(reading.distance, np.array([0.0, 1e-3]))
+    assert got.found == 0 and got.frames == 2 and np.isnan(got.r)
+    with pytest.raises(InputError, match="uint8 RGB"):
+        read_lips([np.zeros((360, 300), np.uint8)], detector=detector)
+
+
+def test_without_dlib_the_error_names_the_extra(monkeypatch):
+    monkeypatch.setitem(sys.modules, "dlib", None)  # import dlib raises ImportError
+    with pytest.raises(InputError, match=r"facemech\[photo\]"):
+        read_lips([np.zeros((64, 64, 3), np.uint8)])
