@@ -289,37 +289,23 @@ def _vertex_light(n, gloss, lights, half, sky, ground, wrap, out):
         out[i, 1] = spec
 
 
-@nb.njit(cache=True, inline="always", fastmath=True)
-def _shade_sample(f, w0, w1, tris, light, albedo, uv, tex, atlas):
-    """Linear (r, g, b) of one sample of triangle ``f`` at barycentric weights (w0, w1): the
-    albedo (bilinear in the atlas, or per vertex) times the diffuse light, plus the highlight.
-    A tuple, not an array: the three stay in registers."""
-    if f >= tris.shape[0]:  # the inside of a two-sided surface: unlit, dark
-        return INSIDE[0], INSIDE[1], INSIDE[2]
-    w2 = 1.0 - w0 - w1
-    i0, i1, i2 = tris[f, 0], tris[f, 1], tris[f, 2]
-    diff = w0 * light[i0, 0] + w1 * light[i1, 0] + w2 * light[i2, 0]
-    spec = w0 * light[i0, 1] + w1 * light[i1, 1] + w2 * light[i2, 1]
-    if tex[f]:
-        h, w = atlas.shape[0], atlas.shape[1]
-        u = w0 * uv[f, 0, 0] + w1 * uv[f, 1, 0] + w2 * uv[f, 2, 0]
-        v = w0 * uv[f, 0, 1] + w1 * uv[f, 1, 1] + w2 * uv[f, 2, 1]
-        u = min(max(u - 0.5, 0.0), w - 1.001)
-        v = min(max(v - 0.5, 0.0), h - 1.001)
-        iu, iv = int(u), int(v)
-        fu, fv = u - iu, v - iv
-        k00, k01 = (1 - fu) * (1 - fv), fu * (1 - fv)
-        k10, k11 = (1 - fu) * fv, fu * fv
-        r = (k00 * atlas[iv, iu, 0] + k01 * atlas[iv, iu + 1, 0] + k10 * atlas[iv + 1, iu, 0]
-             + k11 * atlas[iv + 1, iu + 1, 0])
-        g = (k00 * atlas[iv, iu, 1] + k01 * atlas[iv, iu + 1, 1] + k10 * atlas[iv + 1, iu, 1]
-             + k11 * atlas[iv + 1, iu + 1, 1])
-        b = (k00 * atlas[iv, iu, 2] + k01 * atlas[iv, iu + 1, 2] + k10 * atlas[iv + 1, iu, 2]
-             + k11 * atlas[iv + 1, iu + 1, 2])
-        return r * diff + spec, g * diff + spec, b * diff + spec
-    return ((w0 * albedo[i0, 0] + w1 * albedo[i1, 0] + w2 * albedo[i2, 0]) * diff + spec,
-            (w0 * albedo[i0, 1] + w1 * albedo[i1, 1] + w2 * albedo[i2, 1]) * diff + spec,
-            (w0 * albedo[i0, 2] + w1 * albedo[i1, 2] + w2 * albedo[i2, 2]) * diff + spec)
+@nb.njit(cache=True, fastmath=True)
+def _texel(atlas, u, v):
+    """Bilinear linear (r, g, b) of the atlas at texel coordinates (u, v)."""
+    h, w = atlas.shape[0], atlas.shape[1]
+    u = min(max(u - 0.5, 0.0), w - 1.001)
+    v = min(max(v - 0.5, 0.0), h - 1.001)
+    iu, iv = int(u), int(v)
+    fu, fv = u - iu, v - iv
+    k00, k01 = (1 - fu) * (1 - fv), fu * (1 - fv)
+    k10, k11 = (1 - fu) * fv, fu * fv
+    r = (k00 * atlas[iv, iu, 0] + k01 * atlas[iv, iu + 1, 0] + k10 * atlas[iv + 1, iu, 0]
+         + k11 * atlas[iv + 1, iu + 1, 0])
+    g = (k00 * atlas[iv, iu, 1] + k01 * atlas[iv, iu + 1, 1] + k10 * atlas[iv + 1, iu, 1]
+         + k11 * atlas[iv + 1, iu + 1, 1])
+    b = (k00 * atlas[iv, iu, 2] + k01 * atlas[iv, iu + 1, 2] + k10 * atlas[iv + 1, iu, 2]
+         + k11 * atlas[iv + 1, iu + 1, 2])
+    return r, g, b
 
 
 @nb.njit(cache=True, fastmath=True)
@@ -334,10 +320,11 @@ def shade_resolve(tid, bary, s, tris, light, albedo, uv, tex, atlas, background,
     """
     h, w = rgba.shape[0], rgba.shape[1]
     ns = s * s
-    ids = np.empty(ns, np.int32)  # an edge pixel's triangles, their sample counts and weights
-    cnt = np.empty(ns, np.float32)
-    wa = np.empty(ns, np.float32)
-    wb = np.empty(ns, np.float32)
+    nt = tris.shape[0]
+    ids = np.empty(ns, np.int32)  # the pixel's triangles, their sample counts and weights
+    cnt = np.empty(ns, np.float64)
+    wa = np.empty(ns, np.float64)
+    wb = np.empty(ns, np.float64)
     m = lut.shape[0] - 1
     for yy in range(h):
         for xx in range(w):
@@ -347,21 +334,19 @@ def shade_resolve(tid, bary, s, tris, light, albedo, uv, tex, atlas, background,
                 for i in range(s):
                     if tid[yy * s + j, xx * s + i] != t0:
                         same = False
-            r = g = b = 0.0
-            cov = 0.0
-            if same and t0 >= 0:
-                a0 = a1 = 0.0
-                for j in range(s):
-                    for i in range(s):
-                        a0 += bary[yy * s + j, xx * s + i, 0]
-                        a1 += bary[yy * s + j, xx * s + i, 1]
-                cr, cg, cb = _shade_sample(t0, a0 / ns, a1 / ns, tris, light, albedo, uv, tex,
-                                           atlas)
-                r, g, b, cov = cr * ns, cg * ns, cb * ns, float(ns)
-            elif not same:
+            k = 0
+            if same:
+                if t0 >= 0:
+                    a0 = a1 = 0.0
+                    for j in range(s):
+                        for i in range(s):
+                            a0 += bary[yy * s + j, xx * s + i, 0]
+                            a1 += bary[yy * s + j, xx * s + i, 1]
+                    ids[0], cnt[0], wa[0], wb[0] = t0, ns, a0, a1
+                    k = 1
+            else:
                 # shade each triangle the pixel's samples see once, at the mean of its
                 # samples' weights, weighted by their number (as multisampling does)
-                k = 0
                 for j in range(s):
                     for i in range(s):
                         f = tid[yy * s + j, xx * s + i]
@@ -379,13 +364,35 @@ def shade_resolve(tid, bary, s, tris, light, albedo, uv, tex, atlas, background,
                         cnt[q] += 1.0
                         wa[q] += bary[yy * s + j, xx * s + i, 0]
                         wb[q] += bary[yy * s + j, xx * s + i, 1]
-                for q in range(k):
-                    cr, cg, cb = _shade_sample(ids[q], wa[q] / cnt[q], wb[q] / cnt[q], tris,
-                                               light, albedo, uv, tex, atlas)
-                    r += cr * cnt[q]
-                    g += cg * cnt[q]
-                    b += cb * cnt[q]
-                    cov += cnt[q]
+            r = g = b = 0.0
+            cov = 0.0
+            for q in range(k):
+                # one sample of triangle f at the mean weights (w0, w1): the albedo (bilinear
+                # in the atlas, or per vertex) times the diffuse light, plus the highlight
+                # (written out here: numba's inlining of a helper that returned a tuple from
+                # several places made this resolve two to three times slower)
+                f, c = ids[q], cnt[q]
+                w0, w1 = wa[q] / c, wb[q] / c
+                if f >= nt:  # the inside of a two-sided surface: unlit, dark
+                    cr, cg, cb = INSIDE[0], INSIDE[1], INSIDE[2]
+                else:
+                    w2 = 1.0 - w0 - w1
+                    i0, i1, i2 = tris[f, 0], tris[f, 1], tris[f, 2]
+                    diff = w0 * light[i0, 0] + w1 * light[i1, 0] + w2 * light[i2, 0]
+                    spec = w0 * light[i0, 1] + w1 * light[i1, 1] + w2 * light[i2, 1]
+                    if tex[f]:
+                        cr, cg, cb = _texel(atlas,
+                                            w0 * uv[f, 0, 0] + w1 * uv[f, 1, 0] + w2 * uv[f, 2, 0],
+                                            w0 * uv[f, 0, 1] + w1 * uv[f, 1, 1] + w2 * uv[f, 2, 1])
+                    else:
+                        cr = w0 * albedo[i0, 0] + w1 * albedo[i1, 0] + w2 * albedo[i2, 0]
+                        cg = w0 * albedo[i0, 1] + w1 * albedo[i1, 1] + w2 * albedo[i2, 1]
+                        cb = w0 * albedo[i0, 2] + w1 * albedo[i1, 2] + w2 * albedo[i2, 2]
+                    cr, cg, cb = cr * diff + spec, cg * diff + spec, cb * diff + spec
+                r += cr * c
+                g += cg * c
+                b += cb * c
+                cov += c
             a_bg = background[3]
             if cov > 0:
                 if a_bg > 0:

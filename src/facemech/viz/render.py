@@ -52,12 +52,18 @@ def parse_background(text: str) -> np.ndarray:
 
 
 def render_panel(scene: Scene, verts: np.ndarray, norms: np.ndarray, camera: Camera, *,
-                 background: np.ndarray, supersample: int = 2) -> np.ndarray:
-    """One camera's view of placed scene vertices: (h, w, 4) uint8 sRGB + alpha."""
+                 background: np.ndarray, supersample: int = 2, out: np.ndarray | None = None,
+                 scratch: dict | None = None) -> np.ndarray:
+    """One camera's view of placed scene vertices: (h, w, 4) uint8 sRGB + alpha.
+
+    ``out``: an (h, w, 4) uint8 array (or view) to draw into, returned; ``scratch``: a dict
+    that keeps the visibility buffers from one call to the next (a movie's frames), where
+    fresh ones would cost their pages every frame.
+    """
     h, w = camera.size
     s = int(supersample)
     p = camera.project(verts, s)
-    img = np.empty((h, w, 4), np.uint8)
+    img = np.empty((h, w, 4), np.uint8) if out is None else out
     bg = resolve_background(background)
     img[:] = bg
     x0 = max(int(np.floor(p[:, 0].min() / s)) - 1, 0)
@@ -69,9 +75,7 @@ def render_panel(scene: Scene, verts: np.ndarray, norms: np.ndarray, camera: Cam
     bh, bw = (y1 - y0) * s, (x1 - x0) * s
     px = p[:, 0] - x0 * s
     py = p[:, 1] - y0 * s
-    zbuf = np.full((bh, bw), -np.inf, np.float32)
-    tid = np.full((bh, bw), -1, np.int32)
-    bary = np.empty((bh, bw, 2), np.float32)
+    zbuf, tid, bary = _buffers(scratch, bh, bw)
     rasterise_grid(px, py, p[:, 2], scene.tris, scene.uv, scene.tex, scene.alpha_test,
                    scene.two_sided, scene.atlas, (zbuf, tid, bary), s)
     light = vertex_light(norms @ camera.rotation.T, scene.gloss, _LIGHTS, SKY, GROUND, WRAP)
@@ -80,6 +84,23 @@ def render_panel(scene: Scene, verts: np.ndarray, norms: np.ndarray, camera: Cam
                   scene.atlas, background.astype(np.float32), LINEAR_TO_SRGB_LUT, sub)
     img[y0:y1, x0:x1] = sub
     return img
+
+
+def _buffers(scratch: dict | None, bh: int, bw: int):
+    """Empty visibility buffers (depth -inf, triangle -1, weights unset) of bh x bw samples:
+    new ones, or views of ``scratch``'s, grown when too small."""
+    n = bh * bw
+    if scratch is None or scratch.get("n", 0) < n:
+        flat = (np.empty(n, np.float32), np.empty(n, np.int32), np.empty(2 * n, np.float32))
+        if scratch is not None:
+            scratch["n"], scratch["flat"] = n, flat
+    else:
+        flat = scratch["flat"]
+    zbuf = flat[0][:n].reshape(bh, bw)
+    tid = flat[1][:n].reshape(bh, bw)
+    zbuf.fill(-np.inf)
+    tid.fill(-1)
+    return zbuf, tid, flat[2][:2 * n].reshape(bh, bw, 2)
 
 
 def resolve_background(background: np.ndarray) -> np.ndarray:
@@ -118,6 +139,7 @@ class Renderer:
         if supersample < 1 or supersample > 4:
             raise InputError("supersample must be 1 to 4", field="supersample")
         self.supersample = supersample
+        self._scratch = [{} for _ in self.cameras]  # each panel's visibility buffers
 
     def __call__(self, skin: np.ndarray, jaw_angle=0.0, blink: float = 0.0,
                  gaze=(0.0, 0.0), head=None, tongue=None) -> np.ndarray:
@@ -127,10 +149,14 @@ class Renderer:
         whole head; ``tongue`` (protrusion, elevation) m bends the tongue's tip
         (:meth:`.scene.Scene.frame`)."""
         verts, norms = self.scene.frame(skin, jaw_angle, blink, gaze, head, tongue)
-        return np.concatenate([render_panel(self.scene, verts, norms, cam,
-                                            background=self.background,
-                                            supersample=self.supersample)
-                               for cam in self.cameras], axis=1)
+        img = np.empty((*self.size, 4), np.uint8)
+        x = 0
+        for cam, scratch in zip(self.cameras, self._scratch, strict=True):
+            w = cam.size[1]
+            render_panel(self.scene, verts, norms, cam, background=self.background,
+                         supersample=self.supersample, out=img[:, x:x + w], scratch=scratch)
+            x += w
+        return img
 
 
 @dataclass(frozen=True)

@@ -89,8 +89,9 @@ class Scene:
         angle, shift = jaw_pose_of(jaw_angle)
         moved = angle != 0.0 or shift[1] != 0.0 or shift[2] != 0.0
         rot = rotation_matrix(look.hinge_axis, angle)
-        verts, norms = [], []
         skin = np.asarray(skin, float)
+        rest_v, rest_n, normals = self._rest()
+        verts, norms = rest_v.copy(), rest_n.copy()  # the parts that keep still stay so
         skin_normals = None
         closure = next((p for p in self.parts if p.motion == "follow"), None)
         if closure is not None:
@@ -102,25 +103,24 @@ class Scene:
             skin_normals = joint[:n_skin]
             closure_normals = joint[n_skin:]
             closure_normals[:e] = skin_normals[closure.follow.loop]
-        for p, n_rest in zip(self.parts, self.rest_normals, strict=True):
+        for k, (p, n_rest) in enumerate(zip(self.parts, self.rest_normals, strict=True)):
             if p.motion == "skin":
                 v = skin
                 if skin_normals is None:  # the skin's own (the first part); others share nodes
-                    skin_normals = vertex_normals(v, p.faces)
+                    skin_normals = normals[k](v)
                 n = skin_normals
             elif p.motion == "follow":
                 v, n = cv, closure_normals
             elif p.motion == "eye":
-                v, n = p.rest, n_rest
-                if turned:
-                    v = (p.rest - p.pivot) @ eye_rot.T + p.pivot
-                    n = n_rest @ eye_rot.T
+                if not turned:
+                    continue
+                v = (p.rest - p.pivot) @ eye_rot.T + p.pivot
+                n = n_rest @ eye_rot.T
             elif p.motion == "lid":
                 if p.follow.at_rest(blink, pitch):
-                    v, n = p.rest, n_rest
-                else:
-                    v = p.follow.place(blink, pitch)
-                    n = vertex_normals(v, p.faces)
+                    continue
+                v = p.follow.place(blink, pitch)
+                n = normals[k](v)
             elif p.motion == "skirt":  # from the skin's edge nodes in towards the head's centre
                 nodes = p.skirt_nodes
                 edge = skin[nodes]
@@ -129,17 +129,23 @@ class Scene:
                 v = np.concatenate([edge, edge + SKIRT_DEPTH * inward])
                 n = np.concatenate([skin_normals[nodes]] * 2)
             else:
+                bent = p.name == "tongue" and tongue is not None and np.any(np.asarray(tongue))
+                if not bent and not (p.motion == "jaw" and moved):
+                    continue
                 v = p.rest
                 n = n_rest
-                if p.name == "tongue" and tongue is not None and np.any(np.asarray(tongue)):
+                if bent:
                     v = bend_tongue(p.rest, self.tongue_modes, tongue)
-                    n = vertex_normals(v, p.faces)
+                    n = normals[k](v)
                 if p.motion == "jaw" and moved:
                     v = (v - look.hinge_point) @ rot.T + look.hinge_point + shift
                     n = n @ rot.T
-            verts.append(v)
-            norms.append(-n if p.inward else n)
-        verts, norms = np.concatenate(verts), np.concatenate(norms)
+            a, b = self.offsets[k], self.offsets[k + 1]
+            verts[a:b] = v
+            if p.inward:
+                np.negative(n, out=norms[a:b])
+            else:
+                norms[a:b] = n
         if head is not None and np.any(np.asarray(head, float) != 0.0):
             r = head_rotation(head)
             pivot = head_pivot(self)
@@ -147,6 +153,19 @@ class Scene:
             norms = norms @ r.T
         return verts, norms
 
+
+    def _rest(self) -> tuple[np.ndarray, np.ndarray, list]:
+        """Every part's vertices (N, 3) and unit normals (N, 3, inward parts' turned) at rest,
+        and per part a :class:`.mesh.VertexNormals` of its faces (built once per scene)."""
+        cached = self.__dict__.get("_rest_cache")
+        if cached is None:
+            verts = np.concatenate([np.asarray(p.rest, float) for p in self.parts])
+            norms = np.concatenate([-n if p.inward else n
+                                    for p, n in zip(self.parts, self.rest_normals, strict=True)])
+            normals = [VertexNormals(p.faces, len(p.rest)) for p in self.parts]
+            cached = (verts, norms.astype(float), normals)
+            object.__setattr__(self, "_rest_cache", cached)  # a cache on a frozen scene
+        return cached
 
 #: m, the head's pivot (the top of the neck, about the occipital condyles) below the centre of
 #: the head's sphere (:func:`.head.head_centre`), our estimate
