@@ -16,8 +16,8 @@ epidermis of the face that said it, each phone is measured for what its class as
 - labiodentals (/f v/): the smallest distance within the phone from the upper incisors' edge
   (:func:`upper_incisor_edge`, where the renderer draws it) to the lower lip's top, the cut
   face of the mouth slit under the lower lip (:func:`lower_lip_top`), and contact when it is
-  :data:`CONTACT_MM` or less (at rest, the lips closed, the lip's top lies about 3 mm above
-  the edge, behind the closed upper lip);
+  :data:`CONTACT_MM` or less (on the default face at rest, the lips closed, the lip's top
+  passes 4.1 mm above the edge);
 - the sentence: the peak speed of the landmark ``lower_lip_center`` (:func:`peak_lower_lip_speed`).
 
 Every phone keeps its eSpeak stress (``'`` primary, ``,`` secondary), read off the label.
