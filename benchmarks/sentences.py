@@ -1,0 +1,137 @@
+"""Visible speech of spoken sentences, per phone class, against issue 29's criteria.
+
+Each of the Harvard sentences of lists 1 and 2 (IEEE 1969, public domain; none was tuned for)
+is spoken by :func:`facemech.workflows.speak.speak`, the path of ``facemech speak``: eSpeak NG
+at its default rate (175 words per minute; ``speak``'s own default is 160), the controls of
+:func:`facemech.speech.coarticulation.controls_from_alignment`, the forward simulation on the
+chosen face; no movie, no blinks, gaze or head motion. Each phone is measured by
+:func:`facemech.analysis.visible_speech.measure_phones`.
+
+Prints JSON: the settings; ``criteria`` (the issue's); ``summary``
+(:func:`~facemech.analysis.visible_speech.summarize`: per group the share passing, the median,
+the worst phone, whether the criterion is met; the sentences' peak lower-lip speeds);
+``classes`` (:func:`~facemech.analysis.visible_speech.class_table`: lip gap and protrusion at
+the phones' middles per articulatory class); ``sentences`` (per sentence: the duration, the
+peak lower-lip speed, the wall time); ``between_bilabials``: the stressed open vowels of
+:data:`BETWEEN_BILABIALS` in a carrier phrase (the open vowels' criterion between two bilabials;
+``--no-carrier`` leaves them out). ``--phones`` adds every phone's row. Progress goes to
+stderr (about 20-40 s a sentence on the 2-core machine).
+
+``python benchmarks/sentences.py [--voice en-gb] [--face default] [--rate 175]
+[--sentences N] [--no-carrier] [--phones]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import tempfile
+import time
+
+os.environ.setdefault("NUMBA_NUM_THREADS", "1")
+
+#: Harvard sentences (IEEE 1969), lists 1 and 2
+HARVARD = (
+    # list 1
+    "The birch canoe slid on the smooth planks.",
+    "Glue the sheet to the dark blue background.",
+    "It's easy to tell the depth of a well.",
+    "These days a chicken leg is a rare dish.",
+    "Rice is often served in round bowls.",
+    "The juice of lemons makes fine punch.",
+    "The box was thrown beside the parked truck.",
+    "The hogs were fed chopped corn and garbage.",
+    "Four hours of steady work faced us.",
+    "A large size in stockings is hard to sell.",
+    # list 2
+    "The boy was there when the sun rose.",
+    "A rod is used to catch pink salmon.",
+    "The source of the huge river is the clear spring.",
+    "Kick the ball straight and follow through.",
+    "Help the woman get back to her feet.",
+    "A pot of tea helps to pass the evening.",
+    "Smoky fires lack flame and heat.",
+    "The soft cushion broke the man's fall.",
+    "The salt breeze came across from the sea.",
+    "The girl at the booth sold fifty bonds.",
+)
+#: words with an open vowel between two bilabials, none of which the Harvard lists above has,
+#: each said in the carrier phrase "Say ___ again." (in en-us "o" is [ɑ])
+BETWEEN_BILABIALS = ("bob", "pop", "mom", "bomb", "mop", "palm", "map", "pam")
+CARRIER = "Say {} again."
+#: voices that eSpeak NG's espeak_SetVoiceByName (:func:`facemech.speech.tts.synthesize`) does
+#: not take by language, said with the voice file of that language ("en" is English (Great
+#: Britain)); the phones are still classed for the language asked for
+VOICE_FILE = {"en-gb": "en"}
+#: eSpeak NG's default speaking rate (words per minute)
+ESPEAK_DEFAULT_WPM = 175
+
+
+def spoken_phones(text: str, *, voice: str = "en-us", rate_wpm: int = ESPEAK_DEFAULT_WPM,
+                  face: str = "default"):
+    """Speak ``text`` as ``facemech speak`` does (no movie, no liveliness) and measure it:
+    (phone measures, peak lower-lip speed m/s, the utterance's duration s)."""
+    from facemech.analysis.visible_speech import measure_phones, peak_lower_lip_speed
+    from facemech.speech.alive import Liveliness
+    from facemech.workflows.speak import speak
+
+    with tempfile.TemporaryDirectory() as tmp:
+        sp = speak(tmp, text, voice=VOICE_FILE.get(voice, voice), rate_wpm=rate_wpm, face=face,
+                   video=False, alive=Liveliness.off())
+    sim = sp.simulation
+    phones = measure_phones(sp.alignment, sim.model, sim.time, sim.positions, voice=voice)
+    return phones, peak_lower_lip_speed(sim.time, sim.positions, sim.model), \
+        float(sp.alignment.duration)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--voice", default="en-us")
+    ap.add_argument("--face", default="default")
+    ap.add_argument("--rate", type=int, default=ESPEAK_DEFAULT_WPM, help="words per minute")
+    ap.add_argument("--sentences", type=int, default=len(HARVARD))
+    ap.add_argument("--no-carrier", action="store_true",
+                    help="leave out the words with an open vowel between two bilabials")
+    ap.add_argument("--phones", action="store_true", help="every phone's row")
+    args = ap.parse_args(argv)
+    from facemech.analysis.visible_speech import CRITERIA, class_table, summarize
+
+    rows, phones, speeds = [], [], []
+    texts = HARVARD[: args.sentences]
+    for k, text in enumerate(texts, 1):
+        t0 = time.perf_counter()
+        ph, peak, dur = spoken_phones(text, voice=args.voice, rate_wpm=args.rate,
+                                      face=args.face)
+        wall = time.perf_counter() - t0
+        phones += ph
+        speeds.append(peak)
+        rows.append({"text": text, "duration_s": round(dur, 3), "phones": len(ph),
+                     "peak_lower_lip_speed_mm_s": round(1e3 * peak, 1),
+                     "wall_s": round(wall, 1)})
+        print(f"[{k}/{len(texts)}] {wall:5.1f} s  peak {1e3 * peak:5.1f} mm/s  {text}",
+              file=sys.stderr, flush=True)
+    out = {"voice": args.voice, "rate_wpm": args.rate, "face": args.face,
+           "criteria": CRITERIA, "summary": summarize(phones, speeds),
+           "classes": class_table(phones), "sentences": rows}
+    if not args.no_carrier:
+        between = []
+        for k, word in enumerate(BETWEEN_BILABIALS, 1):
+            ph, _, _ = spoken_phones(CARRIER.format(word), voice=args.voice, rate_wpm=args.rate,
+                                     face=args.face)
+            between += [p for p in ph if p.between_bilabials]
+            print(f"[{k}/{len(BETWEEN_BILABIALS)}] {CARRIER.format(word)}", file=sys.stderr,
+                  flush=True)
+        out["between_bilabials"] = summarize(between)["open"]["between_bilabials"]
+        out["between_bilabials"]["words"] = list(BETWEEN_BILABIALS)
+        if args.phones:
+            out["between_bilabials"]["phones"] = [p.to_dict() for p in between]
+    if args.phones:
+        out["phones"] = [p.to_dict() for p in phones]
+    print(json.dumps(out, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,369 @@
+"""Visible speech per phone: is each phone's lip shape visible when the face says a sentence?
+
+Given a phone alignment (:class:`facemech.speech.alignment.Alignment`) and the simulated
+epidermis of the face that said it, each phone is measured for what its class asks of the lips
+(issue 29):
+
+- bilabials (/p b m/): the lip gap at the phone's middle
+  (:func:`facemech.speech.mouth.mouth_measures`, the lips' midline contact twins; 0 with the
+  lips together);
+- open vowels (/ɑ æ a ɔ aɪ aʊ/: eSpeak labels whose first class is ``open``, and ``O:``,
+  ``O``, ``O2``): the largest lip gap within the phone's interval (the lip aperture), and
+  whether the phone stands between two bilabials;
+- rounded phones (/u ʊ w oʊ/: :data:`ROUNDED_LABELS`): the largest forward (+z) displacement
+  from rest within the phone reached by both lip centres at once (``lips_forward``, the smaller
+  of ``upper_lip_center``'s and ``lower_lip_center``'s);
+- labiodentals (/f v/): the smallest distance within the phone from the upper incisors' edge
+  (:func:`upper_incisor_edge`, where the renderer draws it) to the lower lip's top, the cut
+  face of the mouth slit under the lower lip (:func:`lower_lip_top`), and contact when it is
+  :data:`CONTACT_MM` or less (on the default face at rest, the lips closed, the lip's top
+  passes 4.1 mm above the edge);
+- the sentence: the peak speed of the landmark ``lower_lip_center`` (:func:`peak_lower_lip_speed`).
+
+Every phone keeps its eSpeak stress (``'`` primary, ``,`` secondary), read off the label.
+:func:`summarize` tabulates the phones against the issue's criteria (:data:`CRITERIA`).
+
+Pure: numbers in, numbers out (m, s inside; the summary in mm and mm/s).
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from ..geometry.teeth import teeth_depth
+from ..speech.mouth import midline_lip_pair, mouth_measures
+from ..speech.phoneclass import phone_classes
+
+__all__ = ["CONTACT_MM", "CRITERIA", "OPEN_EXTRA_LABELS", "ROUNDED_LABELS", "PhoneMeasure",
+           "class_table", "incisor_distance", "lower_lip_speed", "lower_lip_top",
+           "measure_phones", "peak_lower_lip_speed", "summarize", "upper_incisor_edge"]
+
+#: mm: the lower lip touches the upper incisors when it comes this close to their edge
+CONTACT_MM = 1.0
+#: eSpeak labels of /ɔ/ (phoneclass calls them mid rounded; the issue counts them open)
+OPEN_EXTRA_LABELS = frozenset({"O:", "O", "O2"})
+#: eSpeak labels of /u ʊ w oʊ/
+ROUNDED_LABELS = frozenset({"u:", "u", "U", "w", "w#", "W", "oU"})
+#: the issue's criteria (lengths mm, speeds mm/s, shares of the phones)
+CRITERIA = {
+    "bilabial": {"gap_max_mm": 0.5, "share": 0.95, "none_above_mm": 1.0},
+    "open": {"aperture_min_mm": 8.0, "share": 0.90, "median_min_mm": 10.0},
+    "rounded": {"forward_min_mm": 2.0, "share": 0.90},
+    "labiodental": {"contact_mm": CONTACT_MM, "share": 0.90},
+    "speed": {"peak_min_mm_s": 100.0, "peak_max_mm_s": 250.0},
+}
+
+
+@dataclass(frozen=True)
+class PhoneMeasure:
+    """One phone's measures (m); a measure the phone's group does not use is None.
+
+    Attributes
+    ----------
+    label, start, end : the eSpeak label (with its stress mark) and interval (s)
+    classes : articulatory classes (:func:`facemech.speech.phoneclass.phone_classes`)
+    stress : ``"primary"``, ``"secondary"`` or None (unstressed or not marked)
+    group : the issue's group: ``"bilabial"``, ``"open"``, ``"rounded"``, ``"labiodental"``
+        or None
+    between_bilabials : the phones on both sides are bilabials
+    lip_gap_mid : m, the lip gap at the middle of the phone (every phone)
+    lips_forward_mid : m, the forward displacement of both lip centres (the smaller) at the
+        middle of the phone (every phone)
+    aperture_max : m, the largest lip gap within the phone (open vowels)
+    forward_max : m, the largest forward displacement of both lip centres within the phone
+        (rounded phones); ``upper_forward`` and ``lower_forward`` at that frame
+    incisor_distance : m, the smallest distance within the phone from the upper incisors'
+        edge to the lower lip (labiodentals)
+    """
+
+    label: str
+    start: float
+    end: float
+    classes: tuple[str, ...]
+    stress: str | None
+    group: str | None
+    between_bilabials: bool
+    lip_gap_mid: float
+    lips_forward_mid: float
+    aperture_max: float | None = None
+    forward_max: float | None = None
+    upper_forward: float | None = None
+    lower_forward: float | None = None
+    incisor_distance: float | None = None
+
+    def to_dict(self) -> dict:
+        """The row in mm (lengths rounded to 0.01 mm), times in s."""
+        out = asdict(self)
+        for k in ("lip_gap_mid", "lips_forward_mid", "aperture_max", "forward_max", "upper_forward",
+                  "lower_forward", "incisor_distance"):
+            v = out.pop(k)
+            out[f"{k}_mm"] = None if v is None else round(1e3 * v, 2)
+        out["classes"] = list(self.classes)
+        return out
+
+
+def _base(label: str) -> str:
+    return label.strip().lstrip("',%=")
+
+
+def _stress(label: str) -> str | None:
+    t = label.strip()
+    return "primary" if t.startswith("'") else "secondary" if t.startswith(",") else None
+
+
+def _group(label: str, classes: tuple[str, ...]) -> str | None:
+    base = _base(label)
+    if classes[:1] == ("bilabial",):
+        return "bilabial"
+    if classes[:1] == ("labiodental",):
+        return "labiodental"
+    if base in ROUNDED_LABELS:
+        return "rounded"
+    if classes[:1] == ("open",) or base in OPEN_EXTRA_LABELS:
+        return "open"
+    return None
+
+
+def upper_incisor_edge(model) -> np.ndarray:
+    """Position (3,) m of the upper central incisors' edge at the midline, as the renderer
+    draws it (:mod:`facemech.viz.dentition`): ``UPPER_EDGE_BELOW_STOMION`` (3 mm) below the
+    stomion, its labial face :func:`facemech.geometry.teeth.teeth_depth` behind the upper
+    lip's centre. Fixed to the skull."""
+    from ..viz.dentition import UPPER_EDGE_BELOW_STOMION
+
+    rest = model.rest_positions
+    lm = model.landmarks
+    ul = rest[lm["upper_lip_center"]]
+    st = rest[lm["stomion"]] if "stomion" in lm else 0.5 * (ul + rest[lm["lower_lip_center"]])
+    return np.array([st[0], st[1] - UPPER_EDGE_BELOW_STOMION, ul[2] - teeth_depth(model)])
+
+
+def lower_lip_top(model, positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The lower lip's top at the midline: the cut face of the mouth slit under the lower lip.
+
+    The slit is a cut through the lip (:mod:`facemech.speech.mouth`): at the midline it runs
+    from the lower lip's epidermal contact twin (the visible edge of the vermilion) back
+    through the tissue to its twin in the deep layer, which rests on the teeth. The results
+    hold the epidermis only, so the back end is taken at the rest offset of the deep twin from
+    the epidermal one, carried along with the epidermal twin (the lip's top translates; its
+    compression is not seen).
+
+    Parameters
+    ----------
+    model : FaceModel
+    positions : (frames, nodes, 3) or (nodes, 3) m, at least the epidermis
+
+    Returns
+    -------
+    front, back : (frames, 3) or (3,) m, the ends of the lip's top
+    """
+    p = np.asarray(positions, float)
+    _, lo, _ = midline_lip_pair(model)
+    rest = model.rest_positions
+    front = p[..., lo, :]
+    return front, front + (rest[lo + 2 * model.n_surface] - rest[lo])
+
+
+def incisor_distance(model, positions: np.ndarray) -> np.ndarray:
+    """Distance (m) from the upper incisors' edge (:func:`upper_incisor_edge`) to the lower
+    lip's top (:func:`lower_lip_top`, a segment) per frame; 0 where the edge lies on it.
+
+    ``positions`` : (frames, nodes, 3) or (nodes, 3) m; returns (frames,) or a float.
+    """
+    edge = upper_incisor_edge(model)
+    a, b = lower_lip_top(model, positions)
+    ab = b - a
+    s = np.clip(np.sum((edge - a) * ab, axis=-1) / np.sum(ab * ab, axis=-1), 0.0, 1.0)
+    d = np.linalg.norm(a + s[..., None] * ab - edge, axis=-1)
+    return float(d) if np.ndim(d) == 0 else d
+
+
+def lower_lip_speed(time: np.ndarray, positions: np.ndarray, model) -> np.ndarray:
+    """Speed (m/s) of the landmark ``lower_lip_center`` per frame: the norm of its velocity
+    by central differences (:func:`numpy.gradient`) over ``time`` (s)."""
+    k = model.landmarks["lower_lip_center"]
+    p = np.asarray(positions, float)[:, k]
+    v = np.gradient(p, np.asarray(time, float), axis=0)
+    return np.linalg.norm(v, axis=1)
+
+
+def peak_lower_lip_speed(time: np.ndarray, positions: np.ndarray, model) -> float:
+    """The largest speed (m/s) of ``lower_lip_center`` over the whole utterance."""
+    return float(lower_lip_speed(time, positions, model).max())
+
+
+def _window(time: np.ndarray, start: float, end: float) -> np.ndarray:
+    """Frames within [start, end]; the nearest frame to the middle when none is."""
+    idx = np.nonzero((time >= start) & (time <= end))[0]
+    if idx.size == 0:
+        idx = np.array([int(np.argmin(np.abs(time - 0.5 * (start + end))))])
+    return idx
+
+
+def measure_phones(alignment, model, time: np.ndarray, positions: np.ndarray, *,
+                   voice: str | None = None) -> list[PhoneMeasure]:
+    """Measure every phone of an alignment on a simulated face.
+
+    Parameters
+    ----------
+    alignment : Alignment
+        Phones with times (s) in eSpeak mnemonics (the stress marks kept), or IPA or ARPABET
+        (then the groups that name eSpeak labels, :data:`ROUNDED_LABELS` and
+        :data:`OPEN_EXTRA_LABELS`, are found by class only and no stress is read).
+    model : FaceModel
+        The face that said it (``sim.model``).
+    time : (frames,) s
+        The frames' times, on the alignment's clock (``sim.time``).
+    positions : (frames, nodes, 3) m
+        Positions of at least the epidermis (``sim.positions``).
+    voice : str, optional
+        The eSpeak voice (default: ``alignment.meta["voice"]``): eSpeak's ``0`` is open in
+        en-us only.
+
+    Returns
+    -------
+    list of PhoneMeasure
+        One per phone with classes (eSpeak's bare ``;`` and pauses are left out).
+    """
+    time = np.asarray(time, float)
+    p = np.asarray(positions, float)[:, : model.n_surface]
+    voice = alignment.meta.get("voice") if voice is None else voice
+    m = mouth_measures(model, p)
+    gap = m["lip_gap"]
+    incisor_dist = incisor_distance(model, p)
+    phones = [(s, phone_classes(s.label, alignment.notation, source=alignment.source,
+                                voice=voice)) for s in alignment.phones]
+    phones = [(s, c) for s, c in phones if c and c != ("pause",)]
+    groups = [_group(s.label, c) for s, c in phones]
+    out = []
+    for k, ((seg, classes), group) in enumerate(zip(phones, groups, strict=True)):
+        idx = _window(time, seg.start, seg.end)
+        extra: dict = {}
+        if group == "open":
+            extra["aperture_max"] = float(gap[idx].max())
+        elif group == "rounded":
+            j = idx[int(np.argmax(m["lips_forward"][idx]))]
+            extra.update(forward_max=float(m["lips_forward"][j]),
+                         upper_forward=float(m["upper_forward"][j]),
+                         lower_forward=float(m["lower_forward"][j]))
+        elif group == "labiodental":
+            extra["incisor_distance"] = float(incisor_dist[idx].min())
+        between = (0 < k < len(phones) - 1 and groups[k - 1] == "bilabial"
+                   and groups[k + 1] == "bilabial"
+                   and phones[k - 1][0].end >= seg.start - 1e-9
+                   and phones[k + 1][0].start <= seg.end + 1e-9)
+        out.append(PhoneMeasure(
+            label=seg.label, start=float(seg.start), end=float(seg.end), classes=classes,
+            stress=_stress(seg.label) if alignment.notation == "espeak" else None,
+            group=group, between_bilabials=bool(between),
+            lip_gap_mid=float(np.interp(seg.mid, time, gap)),
+            lips_forward_mid=float(np.interp(seg.mid, time, m["lips_forward"])), **extra))
+    return out
+
+
+def _stats(values_mm: list[float], passed: list[bool]) -> dict:
+    v = np.asarray(values_mm, float)
+    return {"n": int(v.size),
+            "share_passing": round(float(np.mean(passed)), 3) if v.size else None,
+            "median_mm": round(float(np.median(v)), 2) if v.size else None,
+            "min_mm": round(float(v.min()), 2) if v.size else None,
+            "max_mm": round(float(v.max()), 2) if v.size else None}
+
+
+def summarize(phones: list[PhoneMeasure], peak_speeds: list[float] | None = None) -> dict:
+    """The phones (and sentences) against the issue's criteria (:data:`CRITERIA`).
+
+    Parameters
+    ----------
+    phones : measures of any number of sentences (:func:`measure_phones`)
+    peak_speeds : m/s, each sentence's peak lower-lip speed (:func:`peak_lower_lip_speed`)
+
+    Returns
+    -------
+    dict
+        Per group: ``n``, ``share_passing`` (of the phones meeting the group's per-phone
+        threshold), ``median_mm``, ``min_mm``, ``max_mm``, ``worst`` (the worst phone's label
+        and value, mm) and ``met`` (the issue's criterion as a whole). ``open`` counts stressed
+        phones only (primary or secondary) and adds ``between_bilabials`` (the same for those
+        of them between two bilabials); ``rounded`` adds the medians of each lip. ``speed``:
+        ``n``, ``min``, ``median``, ``max`` (mm/s), ``share_passing`` and ``met``.
+    """
+    c = CRITERIA
+    out: dict = {}
+
+    bil = [p for p in phones if p.group == "bilabial"]
+    v = [1e3 * p.lip_gap_mid for p in bil]
+    ok = [x <= c["bilabial"]["gap_max_mm"] for x in v]
+    row = _stats(v, ok)
+    row["worst"] = _worst(bil, v, max)
+    row["met"] = bool(bil) and row["share_passing"] >= c["bilabial"]["share"] and \
+        max(v) <= c["bilabial"]["none_above_mm"]
+    out["bilabial"] = row
+
+    def open_row(sel):
+        v = [1e3 * p.aperture_max for p in sel]
+        ok = [x >= c["open"]["aperture_min_mm"] for x in v]
+        row = _stats(v, ok)
+        row["worst"] = _worst(sel, v, min)
+        row["met"] = bool(sel) and row["share_passing"] >= c["open"]["share"] and \
+            row["median_mm"] >= c["open"]["median_min_mm"]
+        return row
+
+    opn = [p for p in phones if p.group == "open" and p.stress is not None]
+    out["open"] = open_row(opn)
+    out["open"]["between_bilabials"] = open_row([p for p in opn if p.between_bilabials])
+
+    rnd = [p for p in phones if p.group == "rounded"]
+    v = [1e3 * p.forward_max for p in rnd]
+    row = _stats(v, [x >= c["rounded"]["forward_min_mm"] for x in v])
+    row["worst"] = _worst(rnd, v, min)
+    if rnd:
+        row["median_upper_mm"] = round(float(np.median([1e3 * p.upper_forward for p in rnd])), 2)
+        row["median_lower_mm"] = round(float(np.median([1e3 * p.lower_forward for p in rnd])), 2)
+    row["met"] = bool(rnd) and row["share_passing"] >= c["rounded"]["share"]
+    out["rounded"] = row
+
+    lab = [p for p in phones if p.group == "labiodental"]
+    v = [1e3 * p.incisor_distance for p in lab]
+    row = _stats(v, [x <= c["labiodental"]["contact_mm"] for x in v])
+    row["worst"] = _worst(lab, v, max)
+    row["met"] = bool(lab) and row["share_passing"] >= c["labiodental"]["share"]
+    out["labiodental"] = row
+
+    if peak_speeds is not None:
+        s = np.asarray(peak_speeds, float) * 1e3
+        lo, hi = c["speed"]["peak_min_mm_s"], c["speed"]["peak_max_mm_s"]
+        ok = (s >= lo) & (s <= hi)
+        out["speed"] = {"n": int(s.size),
+                        "min_mm_s": round(float(s.min()), 1) if s.size else None,
+                        "median_mm_s": round(float(np.median(s)), 1) if s.size else None,
+                        "max_mm_s": round(float(s.max()), 1) if s.size else None,
+                        "share_passing": round(float(ok.mean()), 3) if s.size else None,
+                        "met": bool(s.size) and bool(ok.all())}
+    return out
+
+
+def class_table(phones: list[PhoneMeasure]) -> dict:
+    """Per articulatory class (a phone's first class): ``n``, and the median, smallest and
+    largest lip gap and forward displacement of both lips at the phones' middles (mm)."""
+    out: dict = {}
+    for cls in dict.fromkeys(p.classes[0] for p in phones):
+        sel = [p for p in phones if p.classes[0] == cls]
+        row: dict = {"n": len(sel)}
+        for name, key in (("gap", "lip_gap_mid"), ("forward", "lips_forward_mid")):
+            v = 1e3 * np.array([getattr(p, key) for p in sel])
+            row.update({f"{name}_median_mm": round(float(np.median(v)), 2),
+                        f"{name}_min_mm": round(float(v.min()), 2),
+                        f"{name}_max_mm": round(float(v.max()), 2)})
+        out[cls] = row
+    return out
+
+
+def _worst(sel: list[PhoneMeasure], values: list[float], pick) -> dict | None:
+    if not sel:
+        return None
+    k = int(np.argmax(values) if pick is max else np.argmin(values))
+    return {"label": sel[k].label, "start_s": round(sel[k].start, 3),
+            "value_mm": round(values[k], 2)}

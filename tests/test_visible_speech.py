@@ -1,0 +1,200 @@
+"""Visible speech per phone (issue 29): the measures on hand-made motion whose answers are known,
+and spoken Harvard sentences held to the issue's criteria."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from facemech.analysis.visible_speech import (
+    CONTACT_MM,
+    PhoneMeasure,
+    lower_lip_top,
+    measure_phones,
+    peak_lower_lip_speed,
+    summarize,
+    upper_incisor_edge,
+)
+from facemech.speech.alignment import Alignment, Segment
+from facemech.speech.mouth import midline_lip_pair
+
+RATE = 100.0  # Hz of the hand-made frames
+
+
+def alignment(labels, durations, voice="en-us"):
+    edges = np.concatenate([[0.1], 0.1 + np.cumsum(durations)])
+    phones = tuple(Segment(lab, float(a), float(b))
+                   for lab, a, b in zip(labels, edges[:-1], edges[1:], strict=True))
+    return Alignment(words=(), phones=phones, notation="espeak", duration=float(edges[-1]) + 0.1,
+                     meta={"voice": voice})
+
+
+def frames(face, al):
+    """Time (s) and the epidermis at rest in every frame (frames, n_surface, 3)."""
+    t = np.arange(int(round(al.duration * RATE)) + 1) / RATE
+    rest = face.rest_positions[: face.n_surface]
+    return t, np.repeat(rest[None], len(t), axis=0)
+
+
+def bump(t, a, b):
+    """0 outside [a, b], rising to 1 at its middle (a sine arch)."""
+    return np.where((t >= a) & (t <= b), np.sin(np.pi * np.clip((t - a) / (b - a), 0, 1)), 0.0)
+
+
+def test_lip_gap_aperture_stress_and_bilabial_context(face):
+    al = alignment(["m", "'A:", "b", "@", "t"], [0.1, 0.2, 0.1, 0.1, 0.1])
+    t, p = frames(face, al)
+    _, lo, normal = midline_lip_pair(face)
+    gap = 0.2e-3 + 9e-3 * bump(t, 0.2, 0.4)  # 0.2 mm at the bilabials, 9.2 mm in the vowel
+    p[:, lo] -= gap[:, None] * normal
+    m, a, b, schwa, t_ = measure_phones(al, face, t, p)
+    assert [x.group for x in (m, a, b, schwa, t_)] == ["bilabial", "open", "bilabial", None,
+                                                     None]
+    assert m.lip_gap_mid == pytest.approx(0.2e-3, abs=1e-9)
+    assert a.aperture_max == pytest.approx(9.2e-3, abs=1e-6)
+    assert a.stress == "primary" and m.stress is None
+    assert a.between_bilabials and not schwa.between_bilabials  # "@" lies between b and t
+    assert schwa.aperture_max is None and a.forward_max is None
+    # the en-gb "0" is rounded, not open; en-us's is open
+    assert measure_phones(alignment(["'0"], [0.1], "en-gb"), face, *frames(
+        face, alignment(["'0"], [0.1])))[0].group is None
+    assert measure_phones(alignment(["'0"], [0.1]), face, *frames(
+        face, alignment(["'0"], [0.1])))[0].group == "open"
+
+
+def test_rounding_takes_the_lip_that_moves_less(face):
+    al = alignment(["w", "'u:", "t"], [0.1, 0.2, 0.1])
+    t, p = frames(face, al)
+    lm = face.landmarks
+    p[:, lm["upper_lip_center"], 2] += 3e-3 * bump(t, 0.2, 0.4)
+    p[:, lm["lower_lip_center"], 2] += 2.5e-3 * bump(t, 0.2, 0.4)
+    w, u, t_ = measure_phones(al, face, t, p)
+    assert (w.group, u.group, t_.group) == ("rounded", "rounded", None)
+    assert u.forward_max == pytest.approx(2.5e-3, abs=1e-9)
+    assert u.upper_forward == pytest.approx(3e-3, abs=1e-9)
+    assert u.lower_forward == pytest.approx(2.5e-3, abs=1e-9)
+    assert w.forward_max < 2.5e-3  # w ends where the bump starts: less forward
+
+
+def test_labiodental_contact_is_the_lower_lips_top_at_the_upper_incisors(face):
+    edge = upper_incisor_edge(face)
+    rest = face.rest_positions
+    st = rest[face.landmarks["stomion"]]
+    assert edge[1] < st[1] and edge[2] < st[2]  # below the lip line, behind the lips
+    _, lo, _ = midline_lip_pair(face)
+    front, back = lower_lip_top(face, rest[: face.n_surface])
+    np.testing.assert_allclose(front, rest[lo])
+    np.testing.assert_allclose(back, rest[lo + 2 * face.n_surface])  # the deep twin
+    al = alignment(["f", "'i:", "v"], [0.1, 0.1, 0.1])
+    t, p = frames(face, al)
+    # during /v/ only: the lip's edge 2 mm in front of and 0.3 mm above the incisors' edge
+    inside = (t >= 0.3) & (t <= 0.4)
+    p[inside, lo] = edge + np.array([0.0, 0.3e-3, 2e-3])
+    f, i, v = measure_phones(al, face, t, p)
+
+    def brute(a):  # the nearest of many points along the lip's top
+        s = np.linspace(0.0, 1.0, 200001)[:, None]
+        top = a + s * (rest[lo + 2 * face.n_surface] - rest[lo])
+        return np.linalg.norm(top - edge, axis=1).min()
+
+    assert v.incisor_distance == pytest.approx(brute(edge + [0.0, 0.3e-3, 2e-3]), abs=1e-8)
+    assert v.incisor_distance < 1e-3 * CONTACT_MM
+    assert f.incisor_distance == pytest.approx(brute(rest[lo]), abs=1e-8)
+    assert f.incisor_distance > 2e-3  # at rest the lip's top lies well above the edge
+    assert i.incisor_distance is None
+
+
+def test_peak_lower_lip_speed(face):
+    t = np.arange(61) / 60.0
+    p = np.repeat(face.rest_positions[None, : face.n_surface], len(t), axis=0)
+    k = face.landmarks["lower_lip_center"]
+    # down 0.12 m/s for 10 frames, then back up at 0.06 m/s
+    y = np.interp(t, [0.0, 0.2, 0.35, 0.55, 1.0], [0.0, 0.0, -0.018, -0.006, -0.006])
+    p[:, k, 1] += y
+    assert peak_lower_lip_speed(t, p, face) == pytest.approx(0.12, rel=1e-9)
+
+
+def row(group, stress="primary", **values):
+    base = dict(label="x", start=0.0, end=0.1, classes=("open",), stress=stress, group=group,
+                between_bilabials=False, lip_gap_mid=0.0, lips_forward_mid=0.0)
+    return PhoneMeasure(**{**base, **values})
+
+
+def test_summary_applies_the_issues_criteria():
+    bil = [row("bilabial", lip_gap_mid=0.1e-3)] * 19 + [row("bilabial", lip_gap_mid=0.8e-3)]
+    s = summarize(bil)["bilabial"]
+    assert (s["n"], s["share_passing"], s["met"], s["worst"]["value_mm"]) == (20, 0.95, True, 0.8)
+    s = summarize(bil[1:] + [row("bilabial", lip_gap_mid=1.2e-3)])["bilabial"]
+    assert not s["met"]  # 95 % pass, but one is above 1 mm
+    opn = [row("open", aperture_max=v * 1e-3) for v in (12, 11, 10.5, 9, 7)]
+    s = summarize(opn + [row("open", stress=None, aperture_max=1e-3)])["open"]
+    assert (s["n"], s["share_passing"], s["median_mm"], s["met"]) == (5, 0.8, 10.5, False)
+    s = summarize([row("rounded", forward_max=2.1e-3, upper_forward=3e-3,
+                       lower_forward=2.1e-3)] * 9 +
+                  [row("rounded", forward_max=1e-3, upper_forward=1e-3, lower_forward=2e-3)])
+    assert s["rounded"]["met"] and s["rounded"]["share_passing"] == 0.9
+    s = summarize([row("labiodental", incisor_distance=0.5e-3)], [0.09, 0.2])
+    assert s["labiodental"]["met"] and not s["speed"]["met"]
+    assert s["speed"]["min_mm_s"] == 90.0 and s["speed"]["share_passing"] == 0.5
+
+
+# ---- spoken sentences ---------------------------------------------------------------------
+
+#: three Harvard sentences (IEEE 1969, list 1) with every group of the issue
+SENTENCES = ("The juice of lemons makes fine punch.",
+             "Glue the sheet to the dark blue background.",
+             "Four hours of steady work faced us.")
+#: two words with an open vowel between bilabials, in benchmarks/sentences.py's carrier phrase
+BETWEEN = ("Say pop again.", "Say map again.")
+#: the coarse face: its shares are within a few points of the default face's on the 20
+#: sentences of benchmarks/sentences.py except the labiodentals' (docs/visible-speech.md)
+SENTENCE_FACE = "default-coarse"
+
+
+@pytest.fixture(scope="module")
+def spoken_summary(tmp_path_factory):
+    """The sentences said as ``facemech speak`` says them (eSpeak en-us at its default 175
+    words per minute, no movie, no liveliness), as benchmarks/sentences.py does."""
+    from facemech.speech.alive import Liveliness
+    from facemech.workflows.speak import speak
+
+    phones, speeds, between = [], [], []
+    for k, text in enumerate(SENTENCES + BETWEEN):
+        sp = speak(tmp_path_factory.mktemp(f"s{k}"), text, rate_wpm=175, face=SENTENCE_FACE,
+                   video=False, alive=Liveliness.off())
+        sim = sp.simulation
+        ph = measure_phones(sp.alignment, sim.model, sim.time, sim.positions)
+        if text in BETWEEN:
+            between += ph
+            continue
+        phones += ph
+        speeds.append(peak_lower_lip_speed(sim.time, sim.positions, sim.model))
+    out = summarize(phones, speeds)
+    out["between_bilabials"] = summarize(between)["open"]["between_bilabials"]
+    return out
+
+
+def test_sentences_cover_every_group(spoken_summary):
+    for group in ("bilabial", "open", "rounded", "labiodental", "speed", "between_bilabials"):
+        assert spoken_summary[group]["n"] >= 2, group
+
+
+def not_met(group: str, measured: str):
+    return pytest.param(group, marks=pytest.mark.xfail(
+        strict=True, raises=AssertionError, reason=f"issue 29, not met: {measured}"))
+
+
+@pytest.mark.parametrize("group", [
+    not_met("bilabial", "2 of 5 /p b m/ (40 %) have a lip gap <= 0.5 mm at their middle, "
+            "median 0.97 mm, the widest 1.65 mm"),
+    "open",
+    not_met("between_bilabials", "the open vowels of 'pop' and 'map' open the lips 1.1 and "
+            "0.0 mm"),
+    "rounded",
+    not_met("labiodental", "4 of 5 /f v/ (80 %) bring the lower lip within 1 mm of the upper "
+            "incisors, the farthest 1.5 mm"),
+    not_met("speed", "peak lower-lip speed 89 mm/s in 'Four hours of steady work faced us.' "
+            "(128 and 179 mm/s in the others)"),
+])
+def test_sentences_meet_the_issues_criteria(spoken_summary, group):
+    assert spoken_summary[group]["met"], spoken_summary[group]
