@@ -61,10 +61,6 @@ HARVARD = (
 #: each said in the carrier phrase "Say ___ again." (in en-us "o" is [ɑ])
 BETWEEN_BILABIALS = ("bob", "pop", "mom", "bomb", "mop", "palm", "map", "pam")
 CARRIER = "Say {} again."
-#: voices that eSpeak NG's espeak_SetVoiceByName (:func:`facemech.speech.tts.synthesize`) does
-#: not take by language, said with the voice file of that language ("en" is English (Great
-#: Britain)); the phones are still classed for the language asked for
-VOICE_FILE = {"en-gb": "en"}
 #: eSpeak NG's default speaking rate (words per minute)
 ESPEAK_DEFAULT_WPM = 175
 
@@ -78,7 +74,7 @@ def spoken_phones(text: str, *, voice: str = "en-us", rate_wpm: int = ESPEAK_DEF
     from facemech.workflows.speak import speak
 
     with tempfile.TemporaryDirectory() as tmp:
-        sp = speak(tmp, text, voice=VOICE_FILE.get(voice, voice), rate_wpm=rate_wpm, face=face,
+        sp = speak(tmp, text, voice=voice, rate_wpm=rate_wpm, face=face,
                    video=False, alive=Liveliness.off())
     sim = sp.simulation
     phones = measure_phones(sp.alignment, sim.model, sim.time, sim.positions, voice=voice)

@@ -91,6 +91,18 @@ def test_bad_synthesis_arguments(kwargs, field):
         assert "en-us" in str(err.value) and "en-gb" in str(err.value)
 
 
+@pytest.mark.parametrize("voice", ["en-gb", "en-gb+f3", "fr-fr"])
+def test_the_language_names_the_voice_list_gives_are_voices(voice):
+    """eSpeak NG finds voices by file name ("gmw/en"); the language codes that voices() lists,
+    and the error message suggests, are taken too: en-gb speaks with its own flap-less /t/ in
+    "water" (en-us: the flap "t#"), fr-fr switches to French for "car"."""
+    labels = [p.label for p in synthesize("water car", voice=voice).alignment.phones]
+    assert "t#" not in labels and "t" in labels
+    if voice == "fr-fr":
+        assert "(fr)" in labels
+    assert [p.label for p in synthesize("water car").alignment.phones][2] == "t#"
+
+
 def test_wav_round_trip_and_errors(tmp_path):
     rate = 22050
     t = np.arange(rate // 10) / rate

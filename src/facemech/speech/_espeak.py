@@ -132,11 +132,28 @@ class Engine:
             i += 1
         return out
 
+    def _voice_file(self, voice: str) -> str:
+        """The voice file eSpeak NG's ``SetVoiceByName`` finds for a language or voice name
+        (``"en-gb"`` -> ``"gmw/en"``, keeping a ``+variant``): it looks voices up by file name,
+        and the language codes that :meth:`voices` lists (en-gb, fr-fr) are not all file names.
+        An unknown name is returned as given."""
+        base, plus, variant = voice.partition("+")
+        table = self.lib.espeak_ListVoices(None)
+        i = 0
+        while table[i]:
+            v = table[i].contents
+            lang = (v.languages or b"")[1:].decode("utf-8", "replace")
+            name = (v.name or b"").decode("utf-8", "replace")
+            if base in (lang, name) and v.identifier:
+                return v.identifier.decode("utf-8", "replace") + plus + variant
+            i += 1
+        return voice
+
     def run(self, text: str, voice: str, rate_wpm: int, pitch: int | None
             ) -> tuple[bytes, list[list]]:
         """Speak ``text``: (native-endian int16 samples, [type, text_pos, length, ms, sample,
         phoneme] for each word and phoneme event)."""
-        if self.lib.espeak_SetVoiceByName(voice.encode()) != EE_OK:
+        if self.lib.espeak_SetVoiceByName(self._voice_file(voice).encode()) != EE_OK:
             raise EngineError(f"unknown voice {voice!r}", kind="voice")
         self.lib.espeak_SetParameter(PARAM_RATE, int(rate_wpm), 0)
         self.lib.espeak_SetParameter(PARAM_PITCH,
