@@ -4,12 +4,16 @@ predictor (``Parameters.predictor``)."""
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
+from conftest import run_cli
 from facemech import default_face
 from facemech.errors import InputError
-from facemech.params import MUSCLE_GROUPS, preset
+from facemech.io.activity import write_activity
+from facemech.params import MUSCLE_GROUPS, preset, read_preset
 from facemech.physics.assembly import element_forces
 from facemech.physics.bundles import PrismBundle, SpringBundle
 from facemech.solvers.forward import simulate
@@ -97,3 +101,36 @@ def test_a_predictor_with_too_little_stiffness_in_the_matrix_is_refused():
         preset("anatomical").with_(predictor=True, implicit_stiffness_share=0.75)
     preset("anatomical").with_(predictor=True, implicit_stiffness_share=0.75,
                                implicit_volume_scale=3.0)
+
+
+def test_a_preset_files_step_block_sets_the_options(tmp_path, monkeypatch, capsys):
+    """A preset file's ``step`` block sets the step and the dashpots in the file's units (ms
+    for the viscous time), and ``facemech simulate --preset`` runs with them; a bad entry is
+    one line naming the file and ``step.KEY``, exit 2, nothing written."""
+    step = {"predictor": True, "implicit_stiffness_share": 0.75, "implicit_volume_scale": 3,
+            "dashpot_isotropy": 0.25, "viscous_time_ms": 4.5, "substeps": 8}
+    good = {"format": "facemech-preset", "version": 1, "name": "fast", "base": "anatomical",
+            "scales": {}, "step": step}
+    path = tmp_path / "fast.json"
+    path.write_text(json.dumps(good))
+    p = read_preset(path)
+    assert (p.predictor, p.implicit_stiffness_share, p.implicit_volume_scale,
+            p.dashpot_isotropy, p.substeps) == (True, 0.75, 3.0, 0.25, 8)
+    assert p.viscous_time == pytest.approx(4.5e-3, rel=1e-12)
+    act = tmp_path / "act.csv"
+    level = np.zeros((7, len(MUSCLE_GROUPS)))
+    level[:, MUSCLE_GROUPS.index("DLI")] = 1.0
+    write_activity(act, np.arange(7) / 60.0, level)
+    out = tmp_path / "r.nc"
+    code, _, err = run_cli(monkeypatch, capsys, "simulate", "--face", "default-coarse",
+                           "--activity", act, "--preset", path, "-o", out)
+    assert code == 0, err
+    for entry, value in [("predictor", "yes"), ("implicit_stiffness_share", 0.3),
+                         ("substeps", 2.5), ("dashpot_isotropy", 1.5), ("warp", 1)]:
+        path.write_text(json.dumps({**good, "step": {**step, entry: value}}))
+        out2 = tmp_path / "r2.nc"
+        code, _, err = run_cli(monkeypatch, capsys, "simulate", "--face", "default-coarse",
+                               "--activity", act, "--preset", path, "-o", out2)
+        lines = [ln for ln in err.strip().splitlines() if "still working" not in ln]
+        assert code == 2 and len(lines) == 1 and "step." + entry in lines[0], err
+        assert path.name in lines[0] and not out2.exists()

@@ -424,7 +424,54 @@ def read_preset(path) -> Parameters:
         raise InputError(msg, source=str(path), field=getattr(exc, "field", "scales")) from None
     return p.with_(name=str(data.get("name", path.stem)),
                    **_read_jaw(data.get("jaw"), p, str(path)),
-                   **_read_muscle(data.get("muscle"), p, str(path)))
+                   **_read_muscle(data.get("muscle"), p, str(path)),
+                   **_read_step(data.get("step"), p, str(path)))
+
+
+#: a preset file's ``step`` block: the file's key -> (the Parameters field, its kind and the
+#: factor to SI): issue 27's options of the step and the tissue's viscosity and volume
+STEP_KEYS = MappingProxyType({
+    "substeps": ("substeps", int, 1),
+    "predictor": ("predictor", bool, 1),
+    "implicit_stiffness_share": ("implicit_stiffness_share", float, 1.0),
+    "implicit_volume_scale": ("implicit_volume_scale", float, 1.0),
+    "dashpot_isotropy": ("dashpot_isotropy", float, 1.0),
+    "viscous_time_ms": ("viscous_time", float, 1e-3),
+    "stiffening": ("stiffening", float, 1.0),
+    "volume_floor": ("volume_floor", float, 1.0),
+    "volume_floor_modulus_pa": ("volume_floor_modulus", float, 1.0),
+})
+
+
+def _read_step(block, base: Parameters, source: str) -> dict:
+    """The step and tissue options of a preset file's ``step`` block (absent: the base
+    preset's; :data:`STEP_KEYS`), checked as a whole: a bad entry is an InputError naming the
+    file and ``step.KEY``."""
+    if block is None:
+        return {}
+    if not isinstance(block, dict):
+        raise InputError("step must be an object", source=source, field="step")
+    unknown = sorted(set(block) - set(STEP_KEYS))
+    if unknown:
+        raise InputError(f"unknown step entry {unknown[0]!r} (expected "
+                         f"{', '.join(STEP_KEYS)})", source=source, field="step." + unknown[0])
+    out = {}
+    for key, v in block.items():
+        name, kind, scale = STEP_KEYS[key]
+        number = isinstance(v, (int, float)) and not isinstance(v, bool)
+        if (kind is bool and not isinstance(v, bool)) or (kind is not bool and not number) or (
+                kind is int and v != int(v)):
+            raise InputError(f"{key} must be {'true or false' if kind is bool else 'a number'}"
+                             f"{' of steps' if kind is int else ''} (got {v!r})", source=source,
+                             field="step." + key)
+        out[name] = v if kind is bool else kind(v) * scale
+    try:
+        base.with_(**out)
+    except InputError as exc:
+        key = next((k for k, (f, _, _) in STEP_KEYS.items() if f == exc.field), None)
+        raise InputError(exc.message, source=source,
+                         field="step." + key if key else "step") from None
+    return out
 
 
 def _read_muscle(block, base: Parameters, source: str) -> dict:

@@ -44,6 +44,7 @@ from scipy.sparse.linalg import splu
 
 from ..errors import InputError
 from ..geometry.prism import volume_gradients
+from ..params import Parameters
 from ..physics.assembly import Physics, accumulate_forces, rest_anchors
 from .contacts import resolve_contacts
 from .muscle_implicit import MuscleJacobian
@@ -60,9 +61,10 @@ from .volume_floor import resolve_volume_floor
 
 ROS2_GAMMA = 1.0 + 1.0 / np.sqrt(2.0)
 #: share of the springs' stiffness (of their stiff branch) that the constant matrix of the
-#: continuum carries: with the exact damping in the matrix, the rest left explicit is stable at
-#: 4 steps per frame and the lips do not ring (docs/model.md, Integration)
-IMPLICIT_STIFFNESS_SHARE = 0.3
+#: continuum carries by default (``Parameters.implicit_stiffness_share``): with the exact
+#: damping in the matrix, the rest left explicit is stable at 4 steps per frame and the lips do
+#: not ring (docs/model.md, Integration)
+IMPLICIT_STIFFNESS_SHARE = Parameters.implicit_stiffness_share
 
 
 @dataclass(frozen=True, eq=False)
