@@ -32,15 +32,10 @@ import numpy as np
 
 os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 
-#: Harvard sentences (IEEE 1969), list 1
-HARVARD = (
-    "The birch canoe slid on the smooth planks.",
-    "Glue the sheet to the dark blue background.",
-    "It's easy to tell the depth of a well.",
-    "These days a chicken leg is a rare dish.",
-    "Rice is often served in round bowls.",
-    "The juice of lemons makes fine punch.",
-)
+from sentences import HARVARD  # noqa: E402  (benchmarks/sentences.py: lists 1 and 2)
+
+#: the sentences measured by default: the first six of list 1
+DEFAULT_SENTENCES = 6
 
 
 def measure(text: str, *, face: str, size: tuple[int, int], aa: int, upsample: int,
@@ -115,7 +110,7 @@ def main(argv=None) -> int:
     ap.add_argument("--size", default="640x360", help="WIDTHxHEIGHT pixels")
     ap.add_argument("--aa", type=int, default=2, help="anti-aliasing samples per axis")
     ap.add_argument("--upsample", type=int, default=0, help="detector upsampling (0 or 1)")
-    ap.add_argument("--sentences", type=int, default=len(HARVARD))
+    ap.add_argument("--sentences", type=int, default=DEFAULT_SENTENCES)
     ap.add_argument("--picture", help="JPEG of three frames with their points (module doc)")
     args = ap.parse_args(argv)
     from facemech.io.photo import DlibDetector
