@@ -50,6 +50,7 @@ class Subject:
         self.front = np.ascontiguousarray(front(look.rest)[..., :3])
         self.profile = np.ascontiguousarray(side(look.rest)[..., :3])
         cam = front.cameras[0]
+        self.camera = cam
         self.points = cam.project(ibug)[:, :2].astype(float)  # pixel edges at integers
         er, el = ibug[36:42].mean(axis=0), ibug[42:48].mean(axis=0)
         self.ipd = float(np.linalg.norm(el - er))
@@ -225,6 +226,44 @@ def test_a_profile_corrects_the_depth_the_front_cannot_see(variant):
     assert max(np.linalg.norm(e) for e in both.values()) < 2.0, both
 
 
+def test_a_jaw_line_off_on_one_side_is_taken_loosely(built_in):
+    """The built-in face's exact points with the jaw line on its right (iBUG 0-7) 4 mm further
+    out, as a detector puts it on a face lit from one side: interpolated, the jaw angle on that
+    side moves by 4.9 mm; made symmetric and followed loosely (a detector's jaw line), every
+    landmark stays within 0.4 mm, as without the shift."""
+    mm_per_px = 2e3 * built_in.camera.half_height / SIZE[0]
+    shifted = built_in.points.copy()
+    shifted[0:8, 0] -= 4.0 / mm_per_px  # the subject's right is the image's left
+    from facemech.geometry.photo_fit import fit_frontal
+
+    strict, loose = (fit_frontal(shifted, SIZE, ipd=built_in.ipd, distance=built_in.distance,
+                                 offsets=None, loose_jaw=lj) for lj in (False, True))
+    err = {n: np.linalg.norm(e) for n, e in built_in.errors(strict.landmarks).items()}
+    assert err["jaw_angle_right"] > 4.0
+    err = {n: np.linalg.norm(e) for n, e in built_in.errors(loose.landmarks).items()}
+    assert max(err.values()) < 0.6, err
+
+
+def test_the_jaw_line_is_made_mirror_symmetric_about_the_nose_and_mouth():
+    from facemech.geometry.photo_fit import MIRROR, symmetric_jaw
+
+    g = generic_ibug68()
+    moved = g + [0.003, 0.001, 0.0]  # the face 3 mm to its left, 1 mm up
+    np.testing.assert_allclose(symmetric_jaw(moved), moved, atol=1e-9)  # symmetric: kept
+    lop = moved.copy()
+    lop[0:8, 0] -= 0.004  # the jaw line 4 mm out on the right
+    lop[12, 1] += 0.002
+    out = symmetric_jaw(lop)
+    np.testing.assert_array_equal(out[17:], lop[17:])
+    np.testing.assert_array_equal(out[:, 2], lop[:, 2])
+    jaw = np.arange(17)
+    np.testing.assert_allclose(out[jaw, 0] - 0.003, -(out[MIRROR[jaw], 0] - 0.003), atol=1e-12)
+    np.testing.assert_allclose(out[jaw, 1], out[MIRROR[jaw], 1], atol=1e-12)
+    # each side takes half the one-sided shift
+    np.testing.assert_allclose(out[0:8, 0] - moved[0:8, 0], -0.002, atol=1e-12)
+    np.testing.assert_allclose(out[9:17, 0] - moved[9:17, 0], 0.002, atol=1e-12)
+
+
 def test_the_profile_nasion_is_the_notch_under_the_outline_hull():
     """An outline (front, px, by row) that recedes into hair above a sloping forehead and into
     the neck below the chin: the nasion is the notch between brow and nose, not the
@@ -253,10 +292,12 @@ def test_a_profile_facing_either_way_reads_the_same(variant):
 
 
 # ---- the whole route: dlib's landmarks -------------------------------------------------------
-#: mm: the built-in face's landmarks from dlib's points, the jaw angles apart, come within
-#: 2.0 mm (the menton; the others 0.3-1.6 mm); the jaw angles, which the spline carries from the
-#: jaw line where the predictor's points scatter by 1.3 mm between renders, within 3.6 mm
-DLIB_MM, DLIB_JAW_MM = 2.5, 5.0
+#: mm, the issue's criterion: the fitted face's landmarks from dlib's points within 2 mm of the
+#: truth. Measured (2026-11-28): the built-in face 1.81 mm at most (the right cheek; median
+#: 0.86), the variant 1.76 without the profile (the nose's depth apart) and 1.71 with it (median
+#: 1.1-1.2). The jaw line taken strictly gave 3.70 and 4.3 mm (the jaw angles): dlib puts the
+#: jaw line of these renders 3-5 mm further out on the lit side than on the other
+DLIB_MM = 2.0
 #: the re-rendered face against the photo, inside the iBUG outline: measured 0.90
 MIN_SSIM = 0.85
 
@@ -272,10 +313,32 @@ def from_dlib(built_in, detector):
 def test_dlib_finds_the_landmarks_and_the_fit_places_them(built_in, from_dlib):
     found, made = from_dlib
     err = {n: float(np.linalg.norm(e)) for n, e in built_in.errors(made.fit.landmarks).items()}
-    jaw = {n: err.pop(n) for n in ("jaw_angle_left", "jaw_angle_right")}
     assert max(err.values()) < DLIB_MM, err
-    assert max(jaw.values()) < DLIB_JAW_MM, jaw
-    assert np.median(list(err.values())) < 1.5
+    assert np.median(list(err.values())) < 1.2
+
+
+@pytest.fixture(scope="module")
+def variant_from_dlib(variant, detector):
+    from facemech.geometry.photo_fit import fit_frontal, profile_silhouette
+    from facemech.io.photo import frontal_landmarks
+
+    found = frontal_landmarks(variant.front, source="variant.png", detector=detector)
+    return [fit_frontal(found.points, SIZE, ipd=variant.ipd, distance=variant.distance,
+                        profile=p) for p in (None, profile_silhouette(variant.profile))]
+
+
+def test_the_variant_through_dlib_is_within_2_mm(variant, variant_from_dlib):
+    """The variant (a wider mouth, a longer lower face, a longer nose) from dlib's points: every
+    landmark within 2 mm with the profile; without it too, but for the depth of the nose tip and
+    the subnasale, which a frontal photo cannot see (the generic face's: 5.4 mm short)."""
+    front_only, both = (variant.errors(f.landmarks) for f in variant_from_dlib)
+    assert front_only["nose_tip"][2] < -4.0
+    for n in ("nose_tip", "subnasale"):
+        front_only[n] = front_only[n][:2]
+    for err in (front_only, both):
+        norms = {n: float(np.linalg.norm(e)) for n, e in err.items()}
+        assert max(norms.values()) < DLIB_MM, norms
+        assert np.median(list(norms.values())) < 1.5
 
 
 def test_the_rerendered_talker_matches_the_photo(built_in, from_dlib):

@@ -14,6 +14,12 @@ A frontal photo gives the face's outline in the image plane; its size and depth 
 4. optionally corrects the depth along the midline from a profile photo's silhouette
    (:func:`profile_depth`), carried sideways by the same spline's smooth falloff.
 
+A detector's jaw line (iBUG 0-16) is its least certain part: it lies on the face's visible
+outline, which light, ears and hair move by several millimetres and more on one side than on
+the other. Such points are made mirror-symmetric about the face's midline and fitted loosely
+(a smoothing spline, :data:`JAW_SMOOTHING`), so that the inner points (brows, eyes, nose, lips)
+shape the face and the jaw line refines it.
+
 The result is "a scan": vertices, triangles and 3-D iBUG points, metres, in facemech's axes
 (+x the subject's left, +y up, +z forward; the generic face's nasion near the origin), with the
 camera that sees it as the photo did (:class:`PhotoCamera`), to paint the photo on it
@@ -68,6 +74,14 @@ DLIB_OFFSETS_MM = np.array([
     (0.3, -2.5), (1.8, -3.0), (0.0, -3.3), (-1.8, -3.0), (-0.3, -2.5), (1.3, -0.7), (0.9, 2.6),
     (0.0, 2.3), (-0.9, 2.6), (-1.3, -0.7), (-0.8, -0.8), (0.0, -1.5), (0.8, -0.8),
 ])  # fmt: skip
+#: the jaw line's iBUG points (0 on the subject's right, 8 the menton, 16 on the left)
+JAW = np.arange(17)
+#: how loosely the spline follows a detector's jaw-line points: scipy's thin-plate smoothing
+#: (:class:`scipy.interpolate.RBFInterpolator`, the spline in metres; the inner points get 0,
+#: interpolated). 0 would interpolate the jaw line; a large value leaves it out, the inner
+#: points alone shaping the lower face. On facemech's renders through dlib the landmarks' worst
+#: error changes by under 0.15 mm from 0.07 to 0.2 (``tests/test_photo.py``; docs/photo.md)
+JAW_SMOOTHING = 0.1
 #: the generic mesh the photo face is made from: (rows, columns) of :func:`generic.make_surface`,
 #: the built-in face's (about 2 mm between nodes at the lips)
 PHOTO_RESOLUTION = (48, 41)
@@ -179,7 +193,7 @@ def _generic_grid() -> tuple[np.ndarray, np.ndarray]:
 def fit_frontal(points: np.ndarray, size: tuple[int, int], *, ipd: float | None = None,
                 distance: float = 1.0, profile: ProfileSilhouette | None = None,
                 offsets: np.ndarray | None = DLIB_OFFSETS_MM,
-                source: str | None = None) -> PhotoFit:
+                loose_jaw: bool | None = None, source: str | None = None) -> PhotoFit:
     """Fit the generic face to the 68 iBUG points of a frontal photo.
 
     Parameters
@@ -194,6 +208,10 @@ def fit_frontal(points: np.ndarray, size: tuple[int, int], *, ipd: float | None 
     offsets : (68, 2) mm, where the points' detector puts the iBUG points on the generic face
         from facemech's own placement (default: dlib's, :data:`DLIB_OFFSETS_MM`); None for
         points in facemech's placement (e.g. projected from a known face)
+    loose_jaw : treat the jaw line (iBUG 0-16) as a detector's: made mirror-symmetric about
+        the face's midline (:func:`symmetric_jaw`) and followed loosely by the spline
+        (:data:`JAW_SMOOTHING`); None: when ``offsets`` are given (a detector's points), not
+        for points in facemech's placement
     source : the photo's name, for errors
 
     Returns
@@ -241,8 +259,12 @@ def fit_frontal(points: np.ndarray, size: tuple[int, int], *, ipd: float | None 
     cam = _with_pixel(cam, eyes_m, er, el, z[RIGHT_EYE].mean(), z[LEFT_EYE].mean())
     fitted = cam.back_project(pts, z)
     _check_order(fitted, source)
+    smoothing = np.zeros(len(SPLINE_POINTS))
+    if offsets is not None if loose_jaw is None else loose_jaw:
+        fitted = symmetric_jaw(fitted)
+        smoothing[np.isin(SPLINE_POINTS, JAW)] = JAW_SMOOTHING
     warp = RBFInterpolator(gen[SPLINE_POINTS, :2], fitted[SPLINE_POINTS, :2] - gen[
-        SPLINE_POINTS, :2], kernel="thin_plate_spline", degree=1)
+        SPLINE_POINTS, :2], kernel="thin_plate_spline", degree=1, smoothing=smoothing)
 
     def warped(p: np.ndarray) -> np.ndarray:
         out = np.empty_like(p)
@@ -261,6 +283,31 @@ def fit_frontal(points: np.ndarray, size: tuple[int, int], *, ipd: float | None 
     return PhotoFit(verts, faces, v_gen, ibug, lm, cam, pts.copy(), ipd_m,
                     "given" if ipd is not None else "adult norm, Dodgson 2004",
                     float(size_factor), None if correction is None else correction.values)
+
+
+def symmetric_jaw(points: np.ndarray) -> np.ndarray:
+    """The points with their jaw line (iBUG 0-16) made mirror-symmetric about the face's midline.
+
+    The midline is the mean x of the nose and the mouth (iBUG 27-35 and 48-59: points on the
+    midline and mirror pairs about it, the nearest such to the jaw); each jaw point and its
+    mirror partner take the mean of their distances from it (x) and of their heights (y); the
+    menton (8) goes onto it.
+
+    Parameters
+    ----------
+    points : (68, 2) or (68, 3) points, m, in a levelled frame (x to the subject's left, y up)
+
+    Returns
+    -------
+    (68, 2) or (68, 3) m: the same points, the jaw line's x and y replaced (any z kept)
+    """
+    p = np.array(points, float)
+    mid = float(p[np.r_[27:36, 48:60], 0].mean())
+    partner = MIRROR[JAW]
+    out = p.copy()
+    out[JAW, 0] = mid + 0.5 * ((p[JAW, 0] - mid) - (p[partner, 0] - mid))
+    out[JAW, 1] = 0.5 * (p[JAW, 1] + p[partner, 1])
+    return out
 
 
 def _detector_points(offsets_mm: np.ndarray) -> np.ndarray:
