@@ -7,7 +7,10 @@ corners where the rendered fissure ends. This script renders the built-in face f
 at four image sizes and camera distances, finds its landmarks with dlib, and prints the mean
 offset of each point from the generic one (mm on the face, x to the subject's left, y up),
 made mirror-symmetric, and the largest standard deviation over the renders: the table
-:data:`facemech.geometry.photo_fit.DLIB_OFFSETS_MM`.
+:data:`facemech.geometry.photo_fit.DLIB_OFFSETS_MM`. It also prints how far the jaw line's mean
+offsets depart from mirror symmetry (half the difference between a point's offset and its
+mirror partner's, mirrored), the one-sided error that
+:func:`facemech.geometry.photo_fit.symmetric_jaw` takes out of a detector's jaw line.
 
 Usage::
 
@@ -30,7 +33,9 @@ from facemech.viz.scene import build_scene
 RENDERS = (((720, 540), 1.2), ((1080, 810), 0.7), ((560, 420), 2.5), ((900, 900), 1.0))
 
 
-def measure() -> tuple[np.ndarray, float]:
+def measure() -> tuple[np.ndarray, float, np.ndarray]:
+    """The symmetric table (68, 2) mm, the largest standard deviation over the renders (mm),
+    and the jaw line's departure from symmetry (17, 2) mm."""
     look = look_from_model(default_face())
     scene = build_scene(look)
     g = generic_ibug68()
@@ -49,11 +54,14 @@ def measure() -> tuple[np.ndarray, float]:
     offsets = np.array(offsets)
     mean = offsets.mean(axis=0)
     sym = 0.5 * (mean + mean[MIRROR] * [-1.0, 1.0])
-    return sym, float(offsets.std(axis=0).max())
+    return sym, float(offsets.std(axis=0).max()), (mean - sym)[:17]
 
 
 if __name__ == "__main__":
-    table, spread = measure()
+    table, spread, lopsided = measure()
     print(f"# largest standard deviation over the renders: {spread:.2f} mm")
+    worst = int(np.argmax(np.linalg.norm(lopsided, axis=1)))
+    print(f"# the jaw line's largest departure from symmetry: {np.linalg.norm(lopsided[worst]):.2f}"
+          f" mm (iBUG {worst}: x {lopsided[worst, 0]:+.1f}, y {lopsided[worst, 1]:+.1f})")
     rows = ", ".join(f"({x:.1f}, {y:.1f})" for x, y in table)
     print(f"DLIB_OFFSETS_MM = np.array([{rows}])")

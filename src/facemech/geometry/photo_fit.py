@@ -80,7 +80,7 @@ JAW = np.arange(17)
 #: (:class:`scipy.interpolate.RBFInterpolator`, the spline in metres; the inner points get 0,
 #: interpolated). 0 would interpolate the jaw line; a large value leaves it out, the inner
 #: points alone shaping the lower face. On facemech's renders through dlib the landmarks' worst
-#: error changes by under 0.15 mm from 0.07 to 0.2 (``tests/test_photo.py``; docs/photo.md)
+#: error changes by under 0.1 mm from 0.07 to 0.2 (``tests/test_photo.py``; docs/photo.md)
 JAW_SMOOTHING = 0.1
 #: the generic mesh the photo face is made from: (rows, columns) of :func:`generic.make_surface`,
 #: the built-in face's (about 2 mm between nodes at the lips)
