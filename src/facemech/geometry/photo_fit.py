@@ -16,9 +16,10 @@ A frontal photo gives the face's outline in the image plane; its size and depth 
 
 A detector's jaw line (iBUG 0-16) is its least certain part: it lies on the face's visible
 outline, which light, ears and hair move by several millimetres and more on one side than on
-the other. Such points are made mirror-symmetric about the face's midline and fitted loosely
-(a smoothing spline, :data:`JAW_SMOOTHING`), so that the inner points (brows, eyes, nose, lips)
-shape the face and the jaw line refines it.
+the other, and its points slide along that outline. Such points are made mirror-symmetric
+about its own middle and fitted loosely (a smoothing spline, :data:`JAW_SMOOTHING`), but
+for the chin's heights (:func:`chin_points`), which are interpolated: the inner points (brows,
+eyes, nose, lips) shape the face, the chin sets the lower face's length.
 
 The result is "a scan": vertices, triangles and 3-D iBUG points, metres, in facemech's axes
 (+x the subject's left, +y up, +z forward; the generic face's nasion near the origin), with the
@@ -76,12 +77,13 @@ DLIB_OFFSETS_MM = np.array([
 ])  # fmt: skip
 #: the jaw line's iBUG points (0 on the subject's right, 8 the menton, 16 on the left)
 JAW = np.arange(17)
-#: how loosely the spline follows a detector's jaw-line points: scipy's thin-plate smoothing
-#: (:class:`scipy.interpolate.RBFInterpolator`, the spline in metres; the inner points get 0,
-#: interpolated). 0 would interpolate the jaw line; a large value leaves it out, the inner
-#: points alone shaping the lower face. On facemech's renders through dlib the landmarks' worst
-#: error changes by under 0.1 mm from 0.07 to 0.2 (``tests/test_photo.py``; docs/photo.md)
-JAW_SMOOTHING = 0.1
+#: how loosely the spline follows a detector's jaw-line points (their x, and their y but at the
+#: chin): scipy's thin-plate smoothing (:class:`scipy.interpolate.RBFInterpolator`, the spline
+#: in metres; the inner points get 0, interpolated). 0 would interpolate the jaw line; a large
+#: value leaves it out, the inner points alone shaping the face's width there. On facemech's
+#: renders through dlib the landmarks' worst error is 1.67-1.82 mm from 0.15 to 1, 2.0 mm at 0.1
+#: (``tests/test_photo.py``; docs/photo.md)
+JAW_SMOOTHING = 0.2
 #: the generic mesh the photo face is made from: (rows, columns) of :func:`generic.make_surface`,
 #: the built-in face's (about 2 mm between nodes at the lips)
 PHOTO_RESOLUTION = (48, 41)
@@ -209,9 +211,9 @@ def fit_frontal(points: np.ndarray, size: tuple[int, int], *, ipd: float | None 
         from facemech's own placement (default: dlib's, :data:`DLIB_OFFSETS_MM`); None for
         points in facemech's placement (e.g. projected from a known face)
     loose_jaw : treat the jaw line (iBUG 0-16) as a detector's: made mirror-symmetric about
-        the face's midline (:func:`symmetric_jaw`) and followed loosely by the spline
-        (:data:`JAW_SMOOTHING`); None: when ``offsets`` are given (a detector's points), not
-        for points in facemech's placement
+        its middle (:func:`symmetric_jaw`) and followed loosely by the spline
+        (:data:`JAW_SMOOTHING`), the chin's heights apart (:func:`chin_points`); None: when
+        ``offsets`` are given (a detector's points), not for points in facemech's placement
     source : the photo's name, for errors
 
     Returns
@@ -259,12 +261,14 @@ def fit_frontal(points: np.ndarray, size: tuple[int, int], *, ipd: float | None 
     cam = _with_pixel(cam, eyes_m, er, el, z[RIGHT_EYE].mean(), z[LEFT_EYE].mean())
     fitted = cam.back_project(pts, z)
     _check_order(fitted, source)
-    smoothing = np.zeros(len(SPLINE_POINTS))
+    smooth_x, smooth_y = np.zeros(len(SPLINE_POINTS)), np.zeros(len(SPLINE_POINTS))
     if offsets is not None if loose_jaw is None else loose_jaw:
         fitted = symmetric_jaw(fitted)
-        smoothing[np.isin(SPLINE_POINTS, JAW)] = JAW_SMOOTHING
-    warp = RBFInterpolator(gen[SPLINE_POINTS, :2], fitted[SPLINE_POINTS, :2] - gen[
-        SPLINE_POINTS, :2], kernel="thin_plate_spline", degree=1, smoothing=smoothing)
+        jaw = np.isin(SPLINE_POINTS, JAW)
+        smooth_x[jaw] = JAW_SMOOTHING
+        smooth_y[jaw & ~np.isin(SPLINE_POINTS, chin_points(gen[JAW, :2]))] = JAW_SMOOTHING
+    warp = _spline(gen[SPLINE_POINTS, :2], fitted[SPLINE_POINTS, :2] - gen[SPLINE_POINTS, :2],
+                   smooth_x, smooth_y)
 
     def warped(p: np.ndarray) -> np.ndarray:
         out = np.empty_like(p)
@@ -285,13 +289,30 @@ def fit_frontal(points: np.ndarray, size: tuple[int, int], *, ipd: float | None 
                     float(size_factor), None if correction is None else correction.values)
 
 
-def symmetric_jaw(points: np.ndarray) -> np.ndarray:
-    """The points with their jaw line (iBUG 0-16) made mirror-symmetric about the face's midline.
+def _spline(src: np.ndarray, disp: np.ndarray, smooth_x: np.ndarray, smooth_y: np.ndarray):
+    """The thin-plate spline (degree 1) of 2-D displacements ``disp`` (n, 2) m at ``src`` (n, 2)
+    m, its x and y each with its own smoothing per point (n,) (0: interpolated). Returns a
+    function of points (k, 2) m giving their displacements (k, 2) m."""
+    fx, fy = (RBFInterpolator(src, disp[:, i], kernel="thin_plate_spline", degree=1,
+                              smoothing=sm) for i, sm in enumerate((smooth_x, smooth_y)))
+    return lambda p: np.column_stack([fx(p), fy(p)])
 
-    The midline is the mean x of the nose and the mouth (iBUG 27-35 and 48-59: points on the
-    midline and mirror pairs about it, the nearest such to the jaw); each jaw point and its
-    mirror partner take the mean of their distances from it (x) and of their heights (y); the
-    menton (8) goes onto it.
+
+def chin_points(jaw: np.ndarray) -> np.ndarray:
+    """Indices of the jaw line's points (17, 2) (x, y) where it runs more across than down: the
+    chin's, whose height is the jaw line's normal (iBUG 6-10 on the generic face, in facemech's
+    placement and dlib's)."""
+    tangent = np.gradient(np.asarray(jaw, float), axis=0)
+    return np.flatnonzero(np.abs(tangent[:, 0]) > np.abs(tangent[:, 1]))
+
+
+def symmetric_jaw(points: np.ndarray) -> np.ndarray:
+    """The points with their jaw line (iBUG 0-16) made mirror-symmetric about its own middle.
+
+    The middle is the jaw line's mean x: where the jaw line lies stays (a face turned a little
+    from the camera shows its jaw off the nose's line), its shape becomes symmetric. Each jaw
+    point and its mirror partner take the mean of their distances from the middle (x) and of
+    their heights (y); the menton (8) goes onto the middle.
 
     Parameters
     ----------
@@ -302,7 +323,7 @@ def symmetric_jaw(points: np.ndarray) -> np.ndarray:
     (68, 2) or (68, 3) m: the same points, the jaw line's x and y replaced (any z kept)
     """
     p = np.array(points, float)
-    mid = float(p[np.r_[27:36, 48:60], 0].mean())
+    mid = float(p[JAW, 0].mean())
     partner = MIRROR[JAW]
     out = p.copy()
     out[JAW, 0] = mid + 0.5 * ((p[JAW, 0] - mid) - (p[partner, 0] - mid))
