@@ -16,10 +16,11 @@ A frontal photo gives the face's outline in the image plane; its size and depth 
 
 A detector's jaw line (iBUG 0-16) is its least certain part: it lies on the face's visible
 outline, which light, ears and hair move by several millimetres and more on one side than on
-the other, and its points slide along that outline. Such points are made mirror-symmetric
-about its own middle and fitted loosely (a smoothing spline, :data:`JAW_SMOOTHING`), but
-for the chin's heights (:func:`chin_points`), which are interpolated: the inner points (brows,
-eyes, nose, lips) shape the face, the chin sets the lower face's length.
+the other, and its points slide along that outline. Such a jaw line is made mirror-symmetric
+about its own middle (:func:`symmetric_jaw`) and fitted loosely (a smoothing spline,
+:data:`JAW_SMOOTHING`), but for the chin's heights (:func:`chin_points`), which are
+interpolated: the inner points (brows, eyes, nose, lips) shape the face, the chin sets the
+lower face's length.
 
 The result is "a scan": vertices, triangles and 3-D iBUG points, metres, in facemech's axes
 (+x the subject's left, +y up, +z forward; the generic face's nasion near the origin), with the
