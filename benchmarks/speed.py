@@ -2,7 +2,8 @@
 speed laws of issue 27 (an intrinsic-speed force-velocity law, the lips' measured activation
 dynamics, more implicit steps): 10-90 % rise time, peak speed and creep after 300 ms.
 
-Prints JSON. ``python benchmarks/speed.py [--face default] [--seconds 1.5]``. Each variant runs
+Prints JSON. ``python benchmarks/speed.py [--face default] [--seconds 1.5] [--variants a,b]
+[--overshoot]``. Each variant runs
 the six perioral gestures of docs/model.md's dynamics table; the creep is how far the landmark
 still moves between 300 ms after the step's 90 % point and the end, as a share of the amplitude
 (the issue's limit: 5 %).
@@ -60,7 +61,17 @@ VARIANTS = {
                            ("predictor_quarter_isotropic", {"dashpot_isotropy": 0.25,
                                                             "viscous_time": 4.5e-3}),
                            ("predictor_half_isotropic", {"dashpot_isotropy": 0.5,
-                                                         "viscous_time": 4e-3}))},
+                                                         "viscous_time": 4e-3}),
+                           # the same step converging: what the Kelvin-Voigt tissue does with
+                           # the matrix's added inertia 16 and 256 times smaller (docs/model.md,
+                           # The step's limit)
+                           ("predictor_stretch_dashpots_16_steps", {"dashpot_isotropy": 0.0,
+                                                                    "substeps": 16}),
+                           ("predictor_stretch_dashpots_64_steps", {"dashpot_isotropy": 0.0,
+                                                                    "substeps": 64}),
+                           ("predictor_stretch_dashpots_5ms_64_steps", {
+                               "dashpot_isotropy": 0.0, "viscous_time": 5e-3,
+                               "substeps": 64}))},
 }
 
 
@@ -88,11 +99,29 @@ def measure(face, params, groups, landmark, axis, seconds):
             "creep_after_300ms": round(float((y[-1] - settled) / y[-1]), 3)}
 
 
+def overshoot(face, params, groups, landmark, axis, seconds):
+    """How far the landmark passes its rest after a 100-ms full pulse, as a share of its peak
+    (tests/test_realism.py's ringing measure; its limit is 0.1)."""
+    from facemech.params import MUSCLE_GROUPS
+    from facemech.solvers.forward import simulate
+
+    act = np.zeros((int(round(seconds * params.frame_rate)), len(MUSCLE_GROUPS)))
+    for g in groups:
+        act[:int(round(0.1 * params.frame_rate)), MUSCLE_GROUPS.index(g)] = 1.0
+    x = simulate(face, act, params=params).positions[:, face.landmarks[landmark], axis]
+    x = x - x[0]
+    x = x * np.sign(x[np.argmax(np.abs(x))])
+    k = int(np.argmax(x))
+    return round(float(max(0.0, -x[k:].min()) / x[k]), 3)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--face", default="default")
     ap.add_argument("--seconds", type=float, default=1.5)
     ap.add_argument("--variants", default=",".join(VARIANTS))
+    ap.add_argument("--overshoot", action="store_true",
+                    help="also the overshoot past rest after a 100-ms full pulse (twice the time)")
     args = ap.parse_args(argv)
     from threadpoolctl import threadpool_limits
 
@@ -108,6 +137,9 @@ def main(argv=None) -> int:
             t0 = time.perf_counter()
             for groups, landmark, axis in GESTURES:
                 rows["+".join(groups)] = measure(face, p, groups, landmark, axis, args.seconds)
+                if args.overshoot:
+                    rows["+".join(groups)]["overshoot_after_pulse"] = overshoot(
+                        face, p, groups, landmark, axis, args.seconds)
                 print(f"{name} {'+'.join(groups)} {rows['+'.join(groups)]}", file=sys.stderr,
                       flush=True)
             out["variants"][name] = {"changes": {k: float(v) for k, v in VARIANTS[name].items()},
