@@ -163,3 +163,11 @@ def test_the_open_rounded_vowel():
     v, o = VISEMES["open_rounded"], VISEMES["open"]
     assert np.degrees(v.jaw) >= 10.0 and v.jaw_dominance == o.jaw_dominance
     assert v.activity["OOS"] > 0 and v.activity["OOI"] > 0
+
+
+def test_the_command_lines_default_is_the_planners():
+    from facemech.cli_options import GROUPS
+    from facemech.speech.planning import PLAN_ITERATIONS
+
+    assert GROUPS["articulation"]["plan_iterations"] == (int, PLAN_ITERATIONS)
+    assert GROUPS["articulation"]["plan"] == (bool, True)

@@ -18,14 +18,22 @@ The targets (:data:`TARGETS`; measured as :mod:`facemech.analysis.visible_speech
 
 What is adjusted, per phone instance (its gestures: :class:`~.coarticulation.Gesture`): the
 factor on its targets' departure from rest (the per-phone ``scale`` of :mod:`.articulation`,
-multiplying what the rules gave), an offset added to its jaw target, and factors on its
-dominance magnitudes (lips and jaw), so that a phone can win the blend over its neighbours.
-Each update is proportional to the phone's miss (mm) with a fixed gain, and bounded
-(:data:`BOUNDS`); the blended activity stays clipped to [0, 1] and the jaw within
-[0, :data:`JAW_MAX_DEG`]. Only the model is used: the simulation of the utterance itself.
+multiplying what the rules gave), an offset added to its jaw target, factors on its
+dominance magnitudes (lips and jaw), so that a phone can win the blend over its neighbours,
+and a factor on its neighbours' dominance rates (a missed open vowel, or bilabial, narrows the
+dominance of the gestures beside it, so that a short vowel between two bilabials gets its own
+interval). Each update is proportional to the phone's miss (mm) with a fixed gain
+(:data:`GAIN`), and bounded (:data:`BOUNDS`); the blended activity stays clipped to [0, 1]
+and the jaw target within [0, :data:`JAW_MAX_DEG`]. A labiodental's jaw offset moves the way
+its error's sign says (the lip's top above the incisors' edge: open) and turns back at half
+the step when the distance grows. An iteration whose total miss is larger than the best so
+far is undone: the next update starts again from the best gestures with half the step. Only
+the model is used: the simulation of the utterance itself, so nothing is tuned to a text.
 
-Cost: one forward simulation per iteration (``iterations + 1`` in all); the controls returned
-are those of the iteration with the smallest total miss, with their simulation.
+Cost: one forward simulation per iteration (``iterations + 1`` in all; fewer when every phone
+is within its tolerance); the controls returned are those of the iteration with the smallest
+total miss (the sum over the phones of their misses beyond the tolerances, mm), with their
+simulation.
 """
 
 from __future__ import annotations
@@ -41,7 +49,8 @@ from .articulation import Articulation, as_articulation
 from .coarticulation import Gesture, controls_from_gestures, gestures
 from .phoneclass import PAUSE, phone_classes
 
-__all__ = ["BOUNDS", "JAW_MAX_DEG", "PLAN_ITERATIONS", "TARGETS", "Plan", "plan_controls"]
+__all__ = ["BOUNDS", "GAIN", "JAW_MAX_DEG", "MAX_ITERATIONS", "PLAN_ITERATIONS", "TARGETS",
+           "Plan", "check_iterations", "plan_controls"]
 
 #: iterations of the planner by default (each one forward simulation after the first)
 PLAN_ITERATIONS = 4
@@ -54,7 +63,8 @@ TARGETS = {
     "rounded": {"forward": 3e-3, "tolerance": 0.5e-3},
     "labiodental": {"distance": 0.0, "tolerance": 0.5e-3},
 }
-#: bounds of the per-instance adjustments: scale factor, dominance factor, jaw offset (deg)
+#: bounds of the per-instance adjustments: scale factor, dominance factor, jaw offset (deg),
+#: factor on the dominance's rates
 BOUNDS = {"scale": (0.5, 1.6), "dominance": (1.0, 30.0), "jaw_deg": (-4.0, 14.0),
           "rate": (1.0, 3.0)}
 #: deg, the largest jaw target a plan may ask for (the jaw's range is -5 to 35 deg)
