@@ -87,7 +87,7 @@ class Plan:
     simulation : the forward simulation of these controls (:func:`facemech.simulate`)
     gestures : the adjusted gestures (:class:`~.coarticulation.Gesture`)
     record : for manifests: the iterations run, the one kept, the per-group misses of each
-        (mm), the wall time (s)
+        (mm) and its peak lower-lip speed (mm/s, recorded only), the wall time (s)
     """
 
     time: np.ndarray
@@ -139,6 +139,7 @@ def plan_controls(alignment: Alignment, model, *, params=None,
     """
     import time as _time
 
+    from ..analysis.visible_speech import peak_lower_lip_speed
     from ..params import preset as load_preset
     from ..solvers.forward import simulate
     from .coarticulation import controls_from_alignment
@@ -159,6 +160,8 @@ def plan_controls(alignment: Alignment, model, *, params=None,
         sim = simulate(model, act, jaw, params=params)
         misses = _measure(alignment, sim, phones)
         summary = _summary(misses)
+        summary["peak_lower_lip_speed_mm_s"] = round(1e3 * peak_lower_lip_speed(
+            sim.time, sim.positions, sim.model), 1)  # recorded, not planned for
         history.append(summary)
         better = best is None or summary["cost_mm"] < best[0]["cost_mm"] - 1e-9
         if better:
