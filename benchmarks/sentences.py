@@ -4,7 +4,9 @@ Each of the Harvard sentences of lists 1 and 2 (IEEE 1969, public domain; none w
 is spoken by :func:`facemech.workflows.speak.speak`, the path of ``facemech speak``: eSpeak NG
 at its default rate (175 words per minute; ``speak``'s own default is 160), the controls of
 :func:`facemech.speech.coarticulation.controls_from_alignment`, the forward simulation on the
-chosen face; no movie, no blinks, gaze or head motion. Each phone is measured by
+chosen face, planned for the face's dynamics as ``speak`` plans them by default
+(:func:`facemech.speech.planning.plan_controls`; ``--no-plan``: the blend as it is,
+``--plan-iterations N``); no movie, no blinks, gaze or head motion. Each phone is measured by
 :func:`facemech.analysis.visible_speech.measure_phones`.
 
 Prints JSON: the settings; ``criteria`` (the issue's); ``summary``
@@ -12,13 +14,14 @@ Prints JSON: the settings; ``criteria`` (the issue's); ``summary``
 the worst phone, whether the criterion is met; the sentences' peak lower-lip speeds);
 ``classes`` (:func:`~facemech.analysis.visible_speech.class_table`: lip gap and protrusion at
 the phones' middles per articulatory class); ``sentences`` (per sentence: the duration, the
-peak lower-lip speed, the wall time); ``between_bilabials``: the stressed open vowels of
+peak lower-lip speed, the wall time, the plan's simulations and kept iteration);
+``between_bilabials``: the stressed open vowels of
 :data:`BETWEEN_BILABIALS` in a carrier phrase (the open vowels' criterion between two bilabials;
 ``--no-carrier`` leaves them out). ``--phones`` adds every phone's row. Progress goes to
 stderr (about 20-40 s a sentence on the 2-core machine).
 
 ``python benchmarks/sentences.py [--voice en-gb] [--face default] [--rate 175]
-[--sentences N] [--no-carrier] [--phones]``
+[--sentences N] [--no-carrier] [--phones] [--no-plan] [--plan-iterations N]``
 """
 
 from __future__ import annotations
@@ -66,20 +69,21 @@ ESPEAK_DEFAULT_WPM = 175
 
 
 def spoken_phones(text: str, *, voice: str = "en-us", rate_wpm: int = ESPEAK_DEFAULT_WPM,
-                  face: str = "default"):
+                  face: str = "default", plan=True):
     """Speak ``text`` as ``facemech speak`` does (no movie, no liveliness) and measure it:
-    (phone measures, peak lower-lip speed m/s, the utterance's duration s)."""
+    (phone measures, peak lower-lip speed m/s, the utterance's duration s, the manifest's
+    ``plan``). ``plan``: as :func:`~facemech.workflows.speak.speak`'s."""
     from facemech.analysis.visible_speech import measure_phones, peak_lower_lip_speed
     from facemech.speech.alive import Liveliness
     from facemech.workflows.speak import speak
 
     with tempfile.TemporaryDirectory() as tmp:
-        sp = speak(tmp, text, voice=voice, rate_wpm=rate_wpm, face=face,
+        sp = speak(tmp, text, voice=voice, rate_wpm=rate_wpm, face=face, plan=plan,
                    video=False, alive=Liveliness.off())
     sim = sp.simulation
     phones = measure_phones(sp.alignment, sim.model, sim.time, sim.positions, voice=voice)
     return phones, peak_lower_lip_speed(sim.time, sim.positions, sim.model), \
-        float(sp.alignment.duration)
+        float(sp.alignment.duration), sp.manifest["plan"]
 
 
 def main(argv=None) -> int:
@@ -91,31 +95,38 @@ def main(argv=None) -> int:
     ap.add_argument("--no-carrier", action="store_true",
                     help="leave out the words with an open vowel between two bilabials")
     ap.add_argument("--phones", action="store_true", help="every phone's row")
+    ap.add_argument("--no-plan", action="store_true", help="the dominance blend, not planned")
+    ap.add_argument("--plan-iterations", type=int, default=None,
+                    help="the planner's iterations (default: speak's)")
     args = ap.parse_args(argv)
+    plan = False if args.no_plan else (True if args.plan_iterations is None
+                                        else args.plan_iterations)
     from facemech.analysis.visible_speech import CRITERIA, class_table, summarize
 
     rows, phones, speeds = [], [], []
     texts = HARVARD[: args.sentences]
     for k, text in enumerate(texts, 1):
         t0 = time.perf_counter()
-        ph, peak, dur = spoken_phones(text, voice=args.voice, rate_wpm=args.rate,
-                                      face=args.face)
+        ph, peak, dur, planned = spoken_phones(text, voice=args.voice, rate_wpm=args.rate,
+                                               face=args.face, plan=plan)
         wall = time.perf_counter() - t0
         phones += ph
         speeds.append(peak)
         rows.append({"text": text, "duration_s": round(dur, 3), "phones": len(ph),
                      "peak_lower_lip_speed_mm_s": round(1e3 * peak, 1),
-                     "wall_s": round(wall, 1)})
+                     "wall_s": round(wall, 1),
+                     "plan_simulations": planned.get("simulations"),
+                     "plan_kept_iteration": planned.get("kept_iteration")})
         print(f"[{k}/{len(texts)}] {wall:5.1f} s  peak {1e3 * peak:5.1f} mm/s  {text}",
               file=sys.stderr, flush=True)
-    out = {"voice": args.voice, "rate_wpm": args.rate, "face": args.face,
+    out = {"voice": args.voice, "rate_wpm": args.rate, "face": args.face, "plan": plan,
            "criteria": CRITERIA, "summary": summarize(phones, speeds),
            "classes": class_table(phones), "sentences": rows}
     if not args.no_carrier:
         between = []
         for k, word in enumerate(BETWEEN_BILABIALS, 1):
-            ph, _, _ = spoken_phones(CARRIER.format(word), voice=args.voice, rate_wpm=args.rate,
-                                     face=args.face)
+            ph, _, _, _ = spoken_phones(CARRIER.format(word), voice=args.voice,
+                                        rate_wpm=args.rate, face=args.face, plan=plan)
             between += [p for p in ph if p.between_bilabials]
             print(f"[{k}/{len(BETWEEN_BILABIALS)}] {CARRIER.format(word)}", file=sys.stderr,
                   flush=True)

@@ -100,7 +100,7 @@ def test_the_global_strength_is_the_same_as_a_number():
 def test_speak_takes_scale_rules_and_records_them(monkeypatch, capsys, tmp_path):
     code, _, err = run_cli(monkeypatch, capsys, "speak", "Bob saw Ann", "-o", tmp_path / "s",
                            "--no-video", "--no-blinks", "--no-gaze", "--no-head-motion",
-                           "--scale", "word:bob=1.5", "--scale", "class:open=0.8")
+                           "--no-plan", "--scale", "word:bob=1.5", "--scale", "class:open=0.8")
     assert code == 0, err
     manifest = json.loads((tmp_path / "s" / "manifest.json").read_text())
     assert manifest["scale"] == ["word:bob=1.5", "class:open=0.8"]

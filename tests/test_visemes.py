@@ -40,7 +40,7 @@ BILABIAL, ROUNDED, SPREAD, OPEN = ("bilabial", "close_back_rounded", "close_fron
     ("w", "espeak", ("w",)), ("r", "espeak", ("r",)), ("ɹ", "ipa", ("r",)),
     ("l/2", "espeak", ("l",)), ("j", "espeak", ("j",)), ("Y", "arpabet", ("j",)),
     ("@", "espeak", ("schwa",)), ("AH0", "arpabet", ("schwa",)), ("AH1", "arpabet", ("mid",)),
-    ("0", "espeak", ("mid_rounded",)), ("O:", "espeak", ("mid_rounded",)),
+    ("0", "espeak", ("mid_rounded",)), ("O:", "espeak", ("open_rounded",)),
     ("aI", "espeak", (OPEN, SPREAD)), ("'aI", "espeak", (OPEN, SPREAD)),
     ("AY1", "arpabet", (OPEN, SPREAD)), ("aɪ", "ipa", (OPEN, SPREAD)),
     ("aU", "espeak", (OPEN, ROUNDED)), ("oU", "espeak", ("mid_rounded", ROUNDED)),

@@ -92,6 +92,8 @@ size: frame size WIDTHxHEIGHT, pixels
 smooth: see --bend
 source: input marker file
 strength: scale of the visemes' departure from rest
+plan: plan the controls for the face's dynamics (--no-plan: the dominance blend as it is)
+plan_iterations: the planner's iterations, each one more simulation (0-20)
 substeps: steps per frame (implicit)
 test: held-out utterances, e.g. 31-40
 text: what to say (or --audio)
@@ -226,6 +228,9 @@ GROUPS: dict[str, dict[str, tuple]] = {
     # facemech.workflows.speak's Recording, and facemech.speech.alive.Liveliness
     "recording": {"audio": (Path | None, None), "textgrid": (Path | None, None),
                   "word_tier": (str | None, None), "phone_tier": (str | None, None)},
+    # facemech.speech.articulation.Articulation and facemech.speech.planning's plan
+    "articulation": {"strength": (float, 1.0), "scale": (list[str] | None, None),
+                     "plan": (bool, True), "plan_iterations": (int, 4)},
     "alive": {"blinks": (bool, True), "gaze": (bool, True), "head_motion": (bool, True),
               "seed": (int, 0)},
 }

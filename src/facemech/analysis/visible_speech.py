@@ -7,9 +7,9 @@ epidermis of the face that said it, each phone is measured for what its class as
 - bilabials (/p b m/): the lip gap at the phone's middle
   (:func:`facemech.speech.mouth.mouth_measures`, the lips' midline contact twins; 0 with the
   lips together);
-- open vowels (/ɑ æ a ɔ aɪ aʊ/: eSpeak labels whose first class is ``open``, and ``O:``,
-  ``O``, ``O2``): the largest lip gap within the phone's interval (the lip aperture), and
-  whether the phone stands between two bilabials;
+- open vowels (/ɑ æ a ɔ aɪ aʊ/: labels whose first class is ``open`` or ``open_rounded``,
+  the /ɔ/ of eSpeak's ``O:``, ``O``, ``O2``): the largest lip gap within the phone's interval
+  (the lip aperture), and whether the phone stands between two bilabials;
 - rounded phones (/u ʊ w oʊ/: :data:`ROUNDED_LABELS`): the largest forward (+z) displacement
   from rest within the phone reached by both lip centres at once (``lips_forward``, the smaller
   of ``upper_lip_center``'s and ``lower_lip_center``'s);
@@ -42,7 +42,7 @@ __all__ = ["CONTACT_MM", "CRITERIA", "OPEN_EXTRA_LABELS", "ROUNDED_LABELS", "Pho
 
 #: mm: the lower lip touches the upper incisors when it comes this close to their edge
 CONTACT_MM = 1.0
-#: eSpeak labels of /ɔ/ (phoneclass calls them mid rounded; the issue counts them open)
+#: eSpeak labels of /ɔ/ (the issue counts them open; phoneclass's class ``open_rounded``)
 OPEN_EXTRA_LABELS = frozenset({"O:", "O", "O2"})
 #: eSpeak labels of /u ʊ w oʊ/
 ROUNDED_LABELS = frozenset({"u:", "u", "U", "w", "w#", "W", "oU"})
@@ -121,7 +121,7 @@ def _group(label: str, classes: tuple[str, ...]) -> str | None:
         return "labiodental"
     if base in ROUNDED_LABELS:
         return "rounded"
-    if classes[:1] == ("open",) or base in OPEN_EXTRA_LABELS:
+    if classes[:1] in (("open",), ("open_rounded",)) or base in OPEN_EXTRA_LABELS:
         return "open"
     return None
 

@@ -57,6 +57,13 @@ class Gesture:
     end: float
     #: the factor on its targets' departure from rest (:mod:`.articulation`; 1: the table's)
     scale: float = 1.0
+    #: rad added to its jaw target after the scale (a plan's, :mod:`.planning`; 0: none)
+    jaw: float = 0.0
+    #: factors on the magnitudes alpha of its dominance, lips and jaw (a plan's; 1: the table's)
+    lips_dominance: float = 1.0
+    jaw_dominance: float = 1.0
+    #: factor on its dominance's rates, before and after its centre (a plan's; 1: the table's)
+    rate: float = 1.0
 
     @property
     def centre(self) -> float:
@@ -122,8 +129,9 @@ def blend(t: np.ndarray, items: list[Gesture], *, exponent: float = DOMINANCE_EX
     vis = [VISEMES[g.cls] for g in items]
     scale = np.array([g.scale for g in items])
     act_targets = np.array([v.activity_vector() for v in vis]) * scale[:, None]  # (S, groups)
-    jaw_targets = np.array([v.jaw for v in vis]) * scale  # (S,)
-    decay = np.stack([log_dominance(t, g, 1.0, v.anticipatory_rate, v.carryover_rate, exponent)
+    jaw_targets = np.array([v.jaw for v in vis]) * scale + np.array([g.jaw for g in items])
+    decay = np.stack([log_dominance(t, g, 1.0, v.anticipatory_rate * g.rate,
+                                    v.carryover_rate * g.rate, exponent)
                       for g, v in zip(items, vis, strict=True)], axis=1)  # (T, S)
 
     def weights(alpha):
@@ -132,8 +140,10 @@ def blend(t: np.ndarray, items: list[Gesture], *, exponent: float = DOMINANCE_EX
         w = np.exp(logd)
         return w / w.sum(axis=1, keepdims=True)
 
-    activity = weights(np.array([v.lips_dominance for v in vis])) @ act_targets
-    jaw = weights(np.array([v.jaw_dominance for v in vis])) @ jaw_targets
+    activity = weights(np.array([v.lips_dominance * g.lips_dominance
+                                 for g, v in zip(items, vis, strict=True)])) @ act_targets
+    jaw = weights(np.array([v.jaw_dominance * g.jaw_dominance
+                            for g, v in zip(items, vis, strict=True)])) @ jaw_targets
     return activity, jaw
 
 
@@ -182,13 +192,35 @@ def controls_from_alignment(alignment: Alignment, *, frame_rate: float = 60.0,
     if not alignment.duration > 0:
         raise InputError(f"the alignment lasts {alignment.duration!r} s: nothing to say",
                          source=src, field="duration")
-    frames = int(np.ceil(alignment.duration * frame_rate - 1e-9)) + 1
+    return controls_from_gestures(gestures(alignment, articulation), alignment.duration,
+                                  frame_rate=frame_rate, lead_s=lead_s, jaw_lead_s=jaw_lead_s,
+                                  strength=strength)
+
+
+def controls_from_gestures(items: list[Gesture], duration: float, *, frame_rate: float = 60.0,
+                           lead_s: float = LEAD_S, jaw_lead_s: float = JAW_LEAD_S,
+                           strength: float = 1.0
+                           ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`controls_from_alignment` from its gestures (:func:`gestures`), each possibly
+    adjusted (a plan's jaw offset, dominance and rate factors, :mod:`.planning`).
+
+    Parameters
+    ----------
+    items : the utterance's gestures in time order, without the pauses around it
+    duration : s, the utterance's length (the controls cover 0 to it)
+    frame_rate, lead_s, jaw_lead_s : as :func:`controls_from_alignment` (Hz, s, s)
+    strength : the global scale of every target's departure from rest (checked by the caller)
+
+    Returns
+    -------
+    time (frames,) s, activity (frames, groups) in [0, 1], jaw (frames,) rad >= 0
+    """
+    frames = int(np.ceil(duration * frame_rate - 1e-9)) + 1
     time = np.arange(frames) / frame_rate
-    items = [Gesture(PAUSE, -np.inf, 0.0), *gestures(alignment, articulation),
-             Gesture(PAUSE, alignment.duration, np.inf)]
+    items = [Gesture(PAUSE, -np.inf, 0.0), *items, Gesture(PAUSE, duration, np.inf)]
     activity, _ = blend(time + lead_s, items)
     _, jaw = blend(time + jaw_lead_s, items)
-    edge = taper(time, alignment.duration)
+    edge = taper(time, duration)
     activity = np.clip(strength * edge[:, None] * activity, 0.0, 1.0)
     jaw = np.maximum(strength * edge * jaw, 0.0)  # the teeth meet: never closed past rest
     return time, activity, jaw

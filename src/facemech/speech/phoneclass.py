@@ -44,6 +44,7 @@ VOWEL_CLASSES: dict[str, str] = {
     "close_front_spread": "i: close front, lips spread",
     "close_back_rounded": "u: close back, lips rounded and protruded",
     "open": "a: open, the jaw well open",
+    "open_rounded": "O: (the vowel of \"thought\", /ɔ/): open, the lips somewhat rounded",
     "mid": "e, E, V, 3: mid, the jaw half open, the lips neutral",
     "mid_rounded": "o: mid back, the lips rounded",
     "schwa": "@: central and short, the jaw a little open",
@@ -56,6 +57,7 @@ _B, _LD, _D, _A, _PA, _V, _G = ("bilabial", "labiodental", "dental", "alveolar",
                                 "velar", "glottal")
 _I, _U, _O, _M, _MR, _S = ("close_front_spread", "close_back_rounded", "open", "mid",
                            "mid_rounded", "schwa")
+_OR = "open_rounded"
 
 #: labels that mean silence, in every notation (compared after stripping, case-insensitive)
 PAUSE_LABELS = frozenset({"", "_", "_:", "_!", "_^_", "__", "|", "||", "#", "sil", "sp", "spn",
@@ -79,8 +81,8 @@ _ESPEAK: dict[str, tuple[str, ...]] = {
     **dict.fromkeys(("u:", "U", "u"), (_U,)),
     **dict.fromkeys(("a", "a2", "aa", "A:", "A@", "A#", "a#2", "A~", "A"), (_O,)),
     **dict.fromkeys(("e", "E", "E#", "E2", "e#", "e:", "V", "3:"), (_M,)),
-    **dict.fromkeys(("0", "0#", "02", "O", "O2", "O:", "O@", "o@", "o:", "o", "O~", "oU#"),
-                    (_MR,)),
+    **dict.fromkeys(("O", "O2", "O:"), (_OR,)),
+    **dict.fromkeys(("0", "0#", "02", "O@", "o@", "o:", "o", "O~", "oU#"), (_MR,)),
     **dict.fromkeys(("@", "@2", "@5", "3", "a#"), (_S,)),
     # diphthongs and triphthongs: their parts in order
     "aI": (_O, _I), "aU": (_O, _U), "eI": (_M, _I), "oU": (_MR, _U), "OI": (_MR, _I),
@@ -105,7 +107,7 @@ _ARPABET: dict[str, tuple[str, ...]] = {
     **dict.fromkeys(("AA", "AE"), (_O,)),
     **dict.fromkeys(("EH", "AH"), (_M,)),
     "ER": (_M, "r"), "AXR": (_S, "r"),
-    "AO": (_MR,), "AX": (_S,),
+    "AO": (_OR,), "AX": (_S,),
     "AY": (_O, _I), "AW": (_O, _U), "EY": (_M, _I), "OW": (_MR, _U), "OY": (_MR, _I),
 }
 
@@ -128,7 +130,7 @@ _IPA: dict[str, tuple[str, ...]] = {
     **dict.fromkeys(("a", "æ", "ɑ", "ɶ"), (_O,)),
     **dict.fromkeys(("e", "ɛ", "ʌ", "ɜ", "ø", "œ"), (_M,)),
     **dict.fromkeys(("ɝ", "ɜ˞"), (_M, "r")), **dict.fromkeys(("ɚ", "ə˞"), (_S, "r")),
-    **dict.fromkeys(("o", "ɔ", "ɒ"), (_MR,)),
+    **dict.fromkeys(("o", "ɒ"), (_MR,)), "ɔ": (_OR,),
     **dict.fromkeys(("ə", "ɐ", "ɘ", "ɵ"), (_S,)),
 }
 _IPA_STRIP = frozenset("ˈˌ.ːˑ‿͜͡ʰʲʷˠˤ˞'ˀ")

@@ -78,6 +78,7 @@ VISEMES: MappingProxyType = MappingProxyType({
                              DLI=0.15),
     "close_back_rounded": _v(2.5, 24.0, 1.5, 15.0, 15.0, OOS=0.9, OOI=1.0, MEN=0.5),
     "open": _v(12.0, 4.0, 8.0, 12.0, 15.0, DLI=0.3),
+    "open_rounded": _v(11.0, 4.0, 8.0, 12.0, 15.0, OOS=0.25, OOI=0.25),
     "mid": _v(6.0, 1.0, 2.0, 12.0, 15.0, DLI=0.1),
     "mid_rounded": _v(6.5, 2.0, 2.0, 12.0, 15.0, OOS=0.45, OOI=0.45),
     "schwa": _v(3.5, 0.5, 0.8, 15.0, 18.0),

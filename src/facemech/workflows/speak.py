@@ -5,8 +5,12 @@
    recorded WAV with a Praat TextGrid (:func:`facemech.speech.alignment_io.read_textgrid`, e.g.
    from the Montreal Forced Aligner or by hand).
 2. The muscle activity and jaw angle per 60-Hz frame: visemes blended by dominance functions
-   (:func:`facemech.speech.coarticulation.controls_from_alignment`), leading the acoustics.
-3. The forward simulation on the chosen face (:func:`facemech.simulate`); the tongue tip's pose
+   (:func:`facemech.speech.coarticulation.controls_from_alignment`), leading the acoustics;
+   by default planned for the face's dynamics (:func:`facemech.speech.planning.plan_controls`:
+   per-phone gains learnt over a few simulations of the utterance, so that the lips reach
+   each phone's target; ``plan=False`` leaves the blend as it is).
+3. The forward simulation on the chosen face (:func:`facemech.simulate`; when planned, the
+   simulation of the plan's kept iteration); the tongue tip's pose
    per frame (:func:`facemech.speech.tongue.tongue_tip`, render geometry) joins the results as
    ``tongue_tip``.
 4. Blinks, gaze shifts and head motion driven by the voice (:mod:`facemech.speech.alive`; on by
@@ -87,6 +91,7 @@ def speak(
     face: str | Path = "default",
     preset: str = "anatomical",
     strength=1.0,
+    plan: bool | int = True,
     video=True,
     alive=None,
     progress: Callable[[str, int, int], None] | None = None,
@@ -105,6 +110,11 @@ def speak(
     strength : scale of every viseme's departure from rest (1 = the table's), or a
         :class:`facemech.speech.articulation.Articulation` that adds rules scaling one phone,
         word or viseme class (e.g. ``Articulation.parse(["word:balloon=1.5"])``)
+    plan : plan the controls for the face's dynamics
+        (:func:`facemech.speech.planning.plan_controls`): True (its default iterations), a
+        number of iterations (0 to :data:`~facemech.speech.planning.MAX_ITERATIONS`; each
+        one more forward simulation), or False (the dominance blend's controls as they are);
+        the manifest's ``plan`` records what was done
     video : render the MP4 (H.264, the audio muxed in as AAC): True (frontal+profile, 720p),
         a :class:`facemech.viz.video.RenderOptions`, or False
     alive : :class:`facemech.speech.alive.Liveliness` (None: blinks, gaze and head motion on,
@@ -145,6 +155,7 @@ def speak(
         raise InputError("nothing to say: the text is empty", field="text")
     articulation = as_articulation(strength)
     check_value("strength", articulation.strength)  # the command line's interval (checks.py)
+    iterations = _plan_iterations(plan)
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
         raise InputError("output must be a folder", source=str(out), field="output")
@@ -182,13 +193,25 @@ def speak(
     write_wav(files["audio"], samples, rate)
     write_textgrid(files["textgrid"], alignment)
     write_alignment_csv(files["alignment"], alignment)
-    t, act, jaw = controls_from_alignment(alignment, frame_rate=params.frame_rate,
-                                          strength=articulation)
+    if iterations is None:
+        t, act, jaw = controls_from_alignment(alignment, frame_rate=params.frame_rate,
+                                              strength=articulation)
+        sim = simulate(model, act, jaw, params=params,
+                       progress=None if progress is None else
+                       (lambda d, n: progress("simulate", d, n)))
+        planned = {"planned": False}
+    else:
+        from ..speech.planning import plan_controls
+
+        report(progress, "plan", 0, iterations + 1)
+        made = plan_controls(alignment, model, params=params, strength=articulation,
+                             iterations=iterations,
+                             progress=None if progress is None else
+                             (lambda d, n: progress("plan", d, n)))
+        t, act, jaw, sim, planned = made.time, made.activity, made.jaw, made.simulation, \
+            made.record
     write_activity(files["controls"], t, np.column_stack([act, jaw]),
                    (*MUSCLE_GROUPS, "jaw_angle"))
-    sim = simulate(model, act, jaw, params=params,
-                   progress=None if progress is None else
-                   (lambda d, n: progress("simulate", d, n)))
     ds = with_tongue(to_dataset(sim, inputs),
                      tongue_tip(alignment, sim.time, strength=articulation))
     write_dataset(files["results"], ds)
@@ -211,6 +234,7 @@ def speak(
         "rate_wpm": rate_wpm if text is not None else None,
         "face": str(face), "preset": params.name,
         "strength": articulation.strength, "scale": [str(r) for r in articulation.rules],
+        "plan": planned,
         "inputs": inputs,
         "alignment": {"notation": alignment.notation, "duration_s": alignment.duration,
                       "words": [w.label for w in alignment.words],
@@ -229,6 +253,21 @@ def speak(
         tmp.write_text(json.dumps(manifest, indent=2, default=_json_default))
     return Spoken(files=files, alignment=alignment, simulation=sim, description=desc,
                   manifest=manifest, dataset=ds, alive=lively)
+
+
+def _plan_iterations(plan) -> int | None:
+    """``speak``'s ``plan`` as the planner's iterations (None: not planned); InputError naming
+    the field ``plan`` or ``plan_iterations``."""
+    from ..speech.planning import PLAN_ITERATIONS, check_iterations
+
+    if plan is True:
+        return PLAN_ITERATIONS
+    if plan is False or plan is None:
+        return None
+    if isinstance(plan, (int, float, np.integer, np.floating)):
+        return check_iterations(plan)
+    raise InputError(f"plan must be True, False or a number of iterations, got {plan!r}",
+                     field="plan")
 
 
 def _padded(samples, rate: int, alignment, before: float, after: float):

@@ -13,23 +13,34 @@ __all__ = ["describe_file", "describe_report", "describe_text", "speak",
 
 
 def speak(output: str | Path, text: str | None = None, *, video: bool = True, render=None,
-          recording: dict | None = None, alive=None, scale=None, **options):
+          recording: dict | None = None, alive=None, scale=None, articulation=None,
+          **options):
     """Make the face say ``text``, or speak in sync with a recorded voice, into the folder
     ``output``: :func:`facemech.workflows.speak.speak` (its keywords: ``voice``, ``rate_wpm``,
-    ``face``, ``preset``, ``strength``, ``progress``), the MP4 with ``video``, drawn with
+    ``face``, ``preset``, ``strength``, ``plan``, ``plan_iterations``, ``progress``), the MP4
+    with ``video``, drawn with
     ``render`` (a :class:`facemech.viz.video.RenderOptions`, :func:`.pictures.render_options`;
     None: frontal+profile, 1280x720).
 
     The recorded voice: ``recording`` (a dict of ``audio``, ``textgrid``, ``word_tier``,
     ``phone_tier``), or the keywords ``audio``, ``textgrid`` and ``tiers`` (word, phone).
     ``alive``: a :class:`facemech.speech.alive.Liveliness`, or a dict of ``blinks``, ``gaze``,
-    ``head_motion`` and ``seed`` (None: all on, seed 0). Returns its
+    ``head_motion`` and ``seed`` (None: all on, seed 0). ``articulation``: a dict of
+    ``strength``, ``scale``, ``plan`` and ``plan_iterations`` (the command line's). Returns its
     :class:`~facemech.workflows.speak.Spoken`."""
     from ..atomic import check_output
     from ..speech.alive import Liveliness
     from .speak import Recording
     from .speak import speak as run
 
+    for k, v in (articulation or {}).items():  # the CLI's group: strength, scale, plan
+        if k == "scale":
+            scale = v
+        else:
+            options[k] = v
+    if "plan_iterations" in options:  # the command line's two options, one keyword
+        iterations = options.pop("plan_iterations")
+        options["plan"] = iterations if options.get("plan", True) else False
     rec = {k: v for k, v in (recording or {}).items() if v is not None}
     rec.update({k: options.pop(k) for k in ("audio", "textgrid") if options.get(k) is not None})
     if options.get("tiers") is not None:

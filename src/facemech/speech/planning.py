@@ -1,0 +1,366 @@
+"""Controls planned for the face's dynamics: per-phone gains learnt on the simulated face.
+
+The dominance blend (:mod:`.coarticulation`) says where each phone's viseme wants the lips and
+the jaw; the face, with its muscles' activation, its tissue's inertia and its neighbours' pulls,
+may not get there in running speech: a short open vowel between two bilabials stays shut, a
+bilabial after a stressed vowel stays apart. The planner turns each phone into a kinematic
+target of the lips and the jaw at its middle and reaches it by iterative learning control over
+the phone instances: simulate the utterance's controls, measure each phone on the simulated
+face, adjust the gestures of the phones that missed, and simulate again.
+
+The targets (:data:`TARGETS`; measured as :mod:`facemech.analysis.visible_speech` does):
+
+- a bilabial (/p b m/): the lips together at the phone's middle (the midline lip gap 0);
+- a stressed open vowel (/ɑ æ a ɔ/, the open part of /aɪ aʊ/): a lip aperture of 12 mm
+  within the phone;
+- a rounded phone (/u ʊ w oʊ/): both lip centres 3 mm forward within the phone;
+- a labiodental (/f v/): the lower lip's top at the upper incisors' edge.
+
+What is adjusted, per phone instance (its gestures: :class:`~.coarticulation.Gesture`): the
+factor on its targets' departure from rest (the per-phone ``scale`` of :mod:`.articulation`,
+multiplying what the rules gave), an offset added to its jaw target, factors on its
+dominance magnitudes (lips and jaw), so that a phone can win the blend over its neighbours,
+and a factor on its neighbours' dominance rates (a missed open vowel, or bilabial, narrows the
+dominance of the gestures beside it, so that a short vowel between two bilabials gets its own
+interval). Each update is proportional to the phone's miss (mm) with a fixed gain
+(:data:`GAIN`), and bounded (:data:`BOUNDS`); the blended activity stays clipped to [0, 1]
+and the jaw target within [0, :data:`JAW_MAX_DEG`]. A labiodental's jaw offset moves the way
+its error's sign says (the lip's top above the incisors' edge: open) and turns back at half
+the step when the distance grows. An iteration whose total miss is larger than the best so
+far is undone: the next update starts again from the best gestures with half the step. Only
+the model is used: the simulation of the utterance itself, so nothing is tuned to a text.
+
+Cost: one forward simulation per iteration (``iterations + 1`` in all; fewer when every phone
+is within its tolerance); the controls returned are those of the iteration with the smallest
+total miss (the sum over the phones of their misses beyond the tolerances, mm), with their
+simulation.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from ..errors import InputError
+from .alignment import Alignment
+from .articulation import Articulation, as_articulation
+from .coarticulation import Gesture, controls_from_gestures, gestures
+from .phoneclass import PAUSE, phone_classes
+
+__all__ = ["BOUNDS", "GAIN", "JAW_MAX_DEG", "MAX_ITERATIONS", "PLAN_ITERATIONS", "TARGETS",
+           "Plan", "check_iterations", "plan_controls"]
+
+#: iterations of the planner by default (each one forward simulation after the first)
+PLAN_ITERATIONS = 4
+#: the largest number of iterations accepted
+MAX_ITERATIONS = 20
+#: the kinematic targets (m) and the tolerances within which a phone is left as it is (m)
+TARGETS = {
+    "bilabial": {"gap": 0.0, "tolerance": 0.2e-3},
+    "open": {"aperture": 12e-3, "tolerance": 1.0e-3, "too_wide": 17e-3},
+    "rounded": {"forward": 3e-3, "tolerance": 0.5e-3},
+    "labiodental": {"distance": 0.0, "tolerance": 0.5e-3},
+}
+#: bounds of the per-instance adjustments: scale factor, dominance factor, jaw offset (deg),
+#: factor on the dominance's rates
+BOUNDS = {"scale": (0.5, 1.6), "dominance": (1.0, 30.0), "jaw_deg": (-4.0, 14.0),
+          "rate": (1.0, 3.0)}
+#: deg, the largest jaw target a plan may ask for (the jaw's range is -5 to 35 deg)
+JAW_MAX_DEG = 24.0
+#: gains: per mm of miss, the jaw offset (deg), the dominance's relative growth, the scale's
+GAIN = {"open_jaw_deg": 0.8, "open_dominance": 0.1, "bilabial_dominance": 1.0,
+        "bilabial_scale": 0.15, "neighbour_rate": 0.1, "rounded_scale": 0.2,
+        "rounded_dominance": 0.5, "labiodental_jaw_deg": 0.5, "labiodental_dominance": 0.5}
+
+
+@dataclass(frozen=True)
+class Plan:
+    """Planned controls and what the planner did.
+
+    Attributes
+    ----------
+    time : (frames,) s
+    activity : (frames, groups) in [0, 1]
+    jaw : (frames,) rad
+    simulation : the forward simulation of these controls (:func:`facemech.simulate`)
+    gestures : the adjusted gestures (:class:`~.coarticulation.Gesture`)
+    record : for manifests: the iterations run, the one kept, the per-group misses of each
+        (mm) and its peak lower-lip speed (mm/s, recorded only), the wall time (s)
+    """
+
+    time: np.ndarray
+    activity: np.ndarray
+    jaw: np.ndarray
+    simulation: object
+    gestures: list = field(default_factory=list)
+    record: dict = field(default_factory=dict)
+
+
+def check_iterations(iterations) -> int:
+    """``iterations`` as an int in [0, :data:`MAX_ITERATIONS`]; InputError naming the field
+    ``plan_iterations`` otherwise."""
+    try:
+        n = int(iterations)
+        ok = n == float(iterations) and 0 <= n <= MAX_ITERATIONS
+    except (TypeError, ValueError, OverflowError):
+        ok = False
+    if not ok:
+        raise InputError(f"plan iterations must be a whole number in [0, {MAX_ITERATIONS}], "
+                         f"got {iterations!r}", field="plan_iterations")
+    return n
+
+
+def plan_controls(alignment: Alignment, model, *, params=None,
+                  strength: float | Articulation = 1.0, iterations: int = PLAN_ITERATIONS,
+                  progress: Callable[[int, int], None] | None = None) -> Plan:
+    """Controls of an alignment planned on the face that will say it (module doc).
+
+    Parameters
+    ----------
+    alignment : the phones (eSpeak, IPA or ARPABET), times in s
+    model : FaceModel, the face simulated
+    params : Parameters (default: the default preset); its frame rate is the controls'
+    strength : a global strength or an :class:`~.articulation.Articulation`, as
+        :func:`~.coarticulation.controls_from_alignment`; the plan starts from its gestures
+    iterations : updates after the first simulation (0: the blend's controls, simulated once)
+    progress : callable(done, total) over the ``iterations + 1`` simulations
+
+    Returns
+    -------
+    Plan
+
+    Raises
+    ------
+    InputError
+        Bad iterations (field ``plan_iterations``); what
+        :func:`~.coarticulation.controls_from_alignment` rejects.
+    """
+    import time as _time
+
+    from ..analysis.visible_speech import peak_lower_lip_speed
+    from ..params import preset as load_preset
+    from ..solvers.forward import simulate
+    from .coarticulation import controls_from_alignment
+
+    iterations = check_iterations(iterations)
+    params = load_preset("anatomical") if params is None else params
+    articulation = as_articulation(strength)
+    # the checks of the plain controls (frame rate, strength, duration, labels)
+    controls_from_alignment(alignment, frame_rate=params.frame_rate, strength=articulation)
+    items = gestures(alignment, articulation)
+    phones = _phone_gestures(alignment)
+    t0 = _time.perf_counter()
+    history, best, previous, turns, step = [], None, None, {}, 1.0
+    for it in range(iterations + 1):
+        t, act, jaw = controls_from_gestures(items, alignment.duration,
+                                             frame_rate=params.frame_rate,
+                                             strength=articulation.strength)
+        sim = simulate(model, act, jaw, params=params)
+        misses = _measure(alignment, sim, phones)
+        summary = _summary(misses)
+        summary["peak_lower_lip_speed_mm_s"] = round(1e3 * peak_lower_lip_speed(
+            sim.time, sim.positions, sim.model), 1)  # recorded, not planned for
+        history.append(summary)
+        better = best is None or summary["cost_mm"] < best[0]["cost_mm"] - 1e-9
+        if better:
+            best = (summary, it, t, act, jaw, sim, list(items), misses)
+        if progress is not None:
+            progress(it + 1, iterations + 1)
+        if summary["cost_mm"] == 0.0:
+            break  # every phone within its tolerance: nothing to learn
+        if it < iterations:
+            if not better:  # overshot: back to the best controls, half the step
+                step *= 0.5
+                misses = best[7]
+            items = _update(best[6], misses, previous, turns, step)
+            previous = misses
+    if progress is not None and len(history) < iterations + 1:
+        progress(iterations + 1, iterations + 1)  # stopped early: done
+    summary, kept, t, act, jaw, sim, items, _ = best
+    record = {"planned": True, "iterations": iterations, "simulations": len(history),
+              "kept_iteration": kept,
+              "targets_mm": {g: {k: round(1e3 * v, 2) for k, v in d.items()}
+                             for g, d in TARGETS.items()},
+              "misses": history, "final": summary,
+              "adjusted_gestures": sum(1 for g in items if _adjusted(g)),
+              "wall_s": round(_time.perf_counter() - t0, 2)}
+    return Plan(t, act, jaw, sim, items, record)
+
+
+def _adjusted(g: Gesture) -> bool:
+    return (g.jaw != 0.0 or g.lips_dominance != 1.0 or g.jaw_dominance != 1.0
+            or g.rate != 1.0 or g.scale != 1.0)
+
+
+def _phone_gestures(alignment: Alignment) -> list[list[int]]:
+    """Per phone that :func:`facemech.analysis.visible_speech.measure_phones` measures (those
+    with classes other than a pause), the indices of its gestures in :func:`gestures`."""
+    out, k = [], 0
+    voice = alignment.meta.get("voice")
+    for seg in alignment.phones:
+        parts = phone_classes(seg.label, alignment.notation, source=alignment.source,
+                              voice=voice)
+        if not parts:
+            continue
+        if parts != (PAUSE,):
+            out.append(list(range(k, k + len(parts))))
+        k += len(parts)
+    return out
+
+
+@dataclass(frozen=True)
+class _Miss:
+    """One phone's miss: its group, the signed error (m; positive: the update's direction),
+    its gestures and their classes."""
+
+    group: str
+    error: float
+    indices: tuple[int, ...]
+    classes: tuple[str, ...]
+    stressed: bool = False
+
+
+def _measure(alignment: Alignment, sim, phones: list[list[int]]) -> list[_Miss]:
+    """Each targeted phone's error on the simulated face (m): bilabial gap minus 0, open
+    aperture short of 12 mm (negative: wider than :data:`TARGETS`'s ``too_wide``), rounded
+    forward short of 3 mm, labiodental distance signed (positive: the lip's top above the
+    incisors' edge)."""
+    from ..analysis.visible_speech import (
+        lower_lip_top,
+        measure_phones,
+        upper_incisor_edge,
+    )
+
+    measured = measure_phones(alignment, sim.model, sim.time, sim.positions)
+    edge = upper_incisor_edge(sim.model)
+    front, _ = lower_lip_top(sim.model, np.asarray(sim.positions)[:, : sim.model.n_surface])
+    out = []
+    for m, idx in zip(measured, phones, strict=True):
+        if m.group == "bilabial":
+            err = m.lip_gap_mid - TARGETS["bilabial"]["gap"]
+        elif m.group == "open":
+            if m.stress is None and alignment.notation == "espeak":
+                continue
+            a = m.aperture_max
+            err = TARGETS["open"]["aperture"] - a
+            if a > TARGETS["open"]["too_wide"]:
+                err = TARGETS["open"]["too_wide"] - a
+        elif m.group == "rounded":
+            err = TARGETS["rounded"]["forward"] - m.forward_max
+        elif m.group == "labiodental":
+            k = (sim.time >= m.start) & (sim.time <= m.end)
+            above = float(np.median(front[k, 1])) > edge[1] if k.any() else True
+            err = m.incisor_distance if above else -m.incisor_distance
+        else:
+            continue
+        out.append(_Miss(m.group, float(err), tuple(idx), m.classes, m.stress is not None))
+    return out
+
+
+def _summary(misses: list[_Miss]) -> dict:
+    """Per group: n, the median and largest miss beyond the tolerance (mm), the share within
+    it; ``cost_mm``: the sum of the misses beyond the tolerances."""
+    out: dict = {}
+    cost = 0.0
+    for group, tol in ((g, TARGETS[g]["tolerance"]) for g in TARGETS):
+        sel = [m for m in misses if m.group == group]
+        if group == "open":
+            beyond = [max(abs(m.error) - tol, 0.0) if m.error < 0 else max(m.error - tol, 0.0)
+                      for m in sel]
+        elif group == "labiodental":
+            beyond = [max(abs(m.error) - tol, 0.0) for m in sel]
+        else:
+            beyond = [max(m.error - tol, 0.0) for m in sel]
+        v = 1e3 * np.asarray(beyond)
+        cost += float(v.sum())
+        out[group] = {"n": len(sel),
+                      "within": round(float(np.mean(v == 0.0)), 3) if v.size else None,
+                      "median_miss_mm": round(float(np.median(v)), 2) if v.size else None,
+                      "max_miss_mm": round(float(v.max()), 2) if v.size else None}
+    out["cost_mm"] = round(cost, 3)
+    return out
+
+
+def _bounded(x: float, name: str) -> float:
+    lo, hi = BOUNDS[name]
+    return float(min(max(x, lo), hi))
+
+
+def _jaw_offset(g: Gesture, add_deg: float) -> float:
+    """The gesture's new jaw offset (rad), bounded by :data:`BOUNDS` and :data:`JAW_MAX_DEG`."""
+    from .visemes import VISEMES
+
+    deg = _bounded(np.degrees(g.jaw) + add_deg, "jaw_deg")
+    deg = min(deg, JAW_MAX_DEG - np.degrees(VISEMES[g.cls].jaw * g.scale))
+    return float(np.radians(deg))
+
+
+def _sharpen(items: list[Gesture], k: int, own: tuple[int, ...], mm: float,
+             spare: tuple[str, ...] = ()) -> None:
+    """Narrow the dominance of gesture ``k``'s neighbours (not pauses, not its phone's own
+    gestures ``own``, not the classes ``spare``) in place: their rates grow with the miss
+    ``mm``."""
+    factor = 1.0 + GAIN["neighbour_rate"] * min(mm, 8.0)
+    for j in (k - 1, k + 1):
+        if 0 <= j < len(items) and j not in own and items[j].cls not in (PAUSE, *spare):
+            items[j] = replace(items[j], rate=_bounded(items[j].rate * factor, "rate"))
+
+
+def _update(items: list[Gesture], misses: list[_Miss], previous: list[_Miss] | None,
+            turns: dict, step: float = 1.0) -> list[Gesture]:
+    """The gestures after one step of learning from the misses (module doc), the gains times
+    ``step`` (halved after an iteration that did worse than the best). A labiodental's
+    jaw moves in the direction its error's sign says (the lip's top above the incisors' edge:
+    open) until the distance grows from the ``previous`` iteration's; then it turns back at
+    half the step (``turns``: phone -> (direction, step factor), updated in place)."""
+    out = list(items)
+    before = {m.indices: m for m in previous or ()}
+    for m in misses:
+        tol = TARGETS[m.group]["tolerance"]
+        if abs(m.error) <= tol:
+            continue
+        mm = step * 1e3 * (abs(m.error) - tol)
+        for k in m.indices:
+            g = out[k]
+            if m.group == "open":
+                if g.cls not in ("open", "open_rounded") and len(m.indices) > 1:
+                    continue  # a diphthong: its open part
+                if m.error > 0:
+                    grow = 1.0 + GAIN["open_dominance"] * min(mm, 8.0)
+                    _sharpen(out, k, m.indices, mm)
+                    g = replace(g, lips_dominance=_bounded(g.lips_dominance * grow, "dominance"),
+                                jaw_dominance=_bounded(g.jaw_dominance * grow, "dominance"))
+                    g = replace(g, jaw=_jaw_offset(g, GAIN["open_jaw_deg"] * mm))
+                else:
+                    g = replace(g, jaw=_jaw_offset(g, -0.5 * GAIN["open_jaw_deg"] * mm))
+            elif m.group == "bilabial":
+                if m.error < 0:
+                    continue
+                grow = 1.0 + GAIN["bilabial_dominance"] * min(mm, 3.0)
+                _sharpen(out, k, m.indices, mm, spare=("open", "open_rounded"))
+                g = replace(g, scale=_bounded(g.scale * (1 + GAIN["bilabial_scale"]
+                                                         * min(mm, 3.0)), "scale"),
+                            lips_dominance=_bounded(g.lips_dominance * grow, "dominance"),
+                            jaw_dominance=_bounded(g.jaw_dominance * grow, "dominance"))
+            elif m.group == "rounded":
+                if m.error < 0:
+                    continue
+                g = replace(g, scale=_bounded(g.scale * (1 + GAIN["rounded_scale"] * mm),
+                                              "scale"),
+                            lips_dominance=_bounded(
+                                g.lips_dominance * (1 + GAIN["rounded_dominance"] * mm),
+                                "dominance"))
+            elif m.group == "labiodental":
+                sign, share = turns.get(m.indices, (1.0 if m.error > 0 else -1.0, 1.0))
+                last = before.get(m.indices)
+                if last is not None and abs(m.error) > abs(last.error) + 0.02e-3:
+                    sign, share = -sign, 0.5 * share
+                turns[m.indices] = (sign, share)
+                grow = 1.0 + GAIN["labiodental_dominance"] * min(mm, 4.0)
+                g = replace(g, jaw=_jaw_offset(g, sign * share * GAIN["labiodental_jaw_deg"]
+                                               * mm),
+                            jaw_dominance=_bounded(g.jaw_dominance * grow, "dominance"))
+            out[k] = g
+    return out
