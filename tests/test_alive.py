@@ -191,7 +191,8 @@ def test_speak_records_them_and_describe_stays_relative_to_the_head(tmp_path, mo
     from facemech.workflows.speak import speak
 
     text = "Bob"
-    lively = speak(tmp_path / "on", text, video=False, alive=A.Liveliness(seed=4))
+    lively = speak(tmp_path / "on", text, video=False, alive=A.Liveliness(seed=4),
+                   plan=False)
     man = lively.manifest["alive"]
     assert man["laws"]["settings"] == {"blinks": True, "gaze": True, "head": True, "seed": 4,
                                        "blink_rate_per_min": A.BLINK_RATE_PER_MIN}
@@ -203,7 +204,8 @@ def test_speak_records_them_and_describe_stays_relative_to_the_head(tmp_path, mo
     written = json.loads((tmp_path / "on" / "manifest.json").read_text())
     assert written["alive"]["gaze_shifts"] == man["gaze_shifts"]
     code, _, err = run_cli(monkeypatch, capsys, "speak", text, "-o", tmp_path / "off",
-                           "--no-video", "--no-blinks", "--no-gaze", "--no-head-motion")
+                           "--no-video", "--no-blinks", "--no-gaze", "--no-head-motion",
+                           "--no-plan")
     assert code == 0, err
     still = json.loads((tmp_path / "off" / "manifest.json").read_text())
     assert still["alive"]["laws"]["settings"] == {

@@ -100,11 +100,12 @@ def test_speak_with_a_recorded_voice_and_its_textgrid(tmp_path, monkeypatch, cap
     """A recording and its alignment (here: a first run's WAV and TextGrid, as a lab's take and
     its MFA output would be) give the same controls as the text they came from."""
     first = tmp_path / "first"
-    assert run_cli(monkeypatch, capsys, "speak", "a puppy", "-o", first, "--no-video")[0] == 0
+    assert run_cli(monkeypatch, capsys, "speak", "a puppy", "-o", first, "--no-video",
+                   "--no-plan")[0] == 0
     again = tmp_path / "again"
     code, _, err = run_cli(monkeypatch, capsys, "speak", "--audio", first / "speech.wav",
                            "--textgrid", first / "alignment.TextGrid", "-o", again,
-                           "--no-video")
+                           "--no-video", "--no-plan")
     assert code == 0, err
     a = np.loadtxt(first / "controls.csv", delimiter=",", skiprows=1)
     b = np.loadtxt(again / "controls.csv", delimiter=",", skiprows=1)

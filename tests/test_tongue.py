@@ -196,7 +196,7 @@ def test_speak_writes_the_series(tmp_path):
     write_textgrid(tmp_path / "v.TextGrid", _alignment(*THETA))
     spoken = speak(tmp_path / "out", recording=Recording(tmp_path / "v.wav",
                                                          tmp_path / "v.TextGrid"),
-                   face="default-coarse", video=False)
+                   face="default-coarse", video=False, plan=False)
     back = read_results(spoken.files["results"])
     pose = results_tongue(back)
     assert pose is not None and len(pose) == back.sizes["time"]
