@@ -123,11 +123,12 @@ def test_speak_with_a_recorded_voice_and_its_textgrid(tmp_path, monkeypatch, cap
 
 def test_a_design_of_text_items_makes_a_mcgurk_set(tmp_path, monkeypatch, capsys):
     table = tmp_path / "mcgurk.csv"
-    table.write_text("id,text,dub_from,dub_align,av_offset_ms,amplitude,amplitude_region\n"
-                     "ba,bah,,,,,\nga,gah,,,,,\n"
-                     "ba_on_ga,gah,ba,onset,,,\n"
-                     "ba_on_ga_late,gah,ba,onset,80,,\n"
-                     "ga_half,gah,,,,0.5,\"lips,jaw\"\n")
+    # the dubbing and the scaling are what is tested: the syllables are spoken unplanned
+    table.write_text("id,text,plan,dub_from,dub_align,av_offset_ms,amplitude,amplitude_region\n"
+                     "ba,bah,no,,,,,\nga,gah,no,,,,,\n"
+                     "ba_on_ga,gah,no,ba,onset,,,\n"
+                     "ba_on_ga_late,gah,no,ba,onset,80,,\n"
+                     "ga_half,gah,no,,,,0.5,\"lips,jaw\"\n")
     out = tmp_path / "movies"
     code, stdout, err = run_cli(monkeypatch, capsys, "stimuli", table, "-o", out, "--no-video")
     assert code == 0, err
@@ -149,6 +150,28 @@ def test_a_design_of_text_items_makes_a_mcgurk_set(tmp_path, monkeypatch, capsys
     # a rerun with nothing changed makes nothing
     code, stdout, _ = run_cli(monkeypatch, capsys, "stimuli", table, "-o", out, "--no-video")
     assert code == 0 and "0 made, 5 unchanged" in stdout
+
+
+def test_a_design_rows_plan_column(tmp_path, monkeypatch, capsys):
+    """A text row's ``plan`` cell: no (the blend alone), a number of the planner's iterations,
+    or yes (the default); the item's own manifest records it. A bad cell refuses the table in
+    one line naming the column, and nothing is written."""
+    table = tmp_path / "plans.csv"
+    table.write_text("id,text,face,plan\nblend,bah,default-coarse,no\n"
+                     "once,bah,default-coarse,1\n")
+    out = tmp_path / "out"
+    code, stdout, err = run_cli(monkeypatch, capsys, "stimuli", table, "-o", out, "--no-video")
+    assert code == 0, err
+    plans = sorted((m["plan"]["planned"], m["plan"].get("iterations", 0)) for m in (
+        json.loads(p.read_text()) for p in (out / "items").glob("*/manifest.json")))
+    assert plans == [(False, 0), (True, 1)]
+    for cell in ("maybe", "2.5", "21", "-1"):
+        bad = tmp_path / f"bad{cell}.csv"
+        bad.write_text(f"id,text,plan\nx,bah,{cell}\n")
+        code, _, err = run_cli(monkeypatch, capsys, "stimuli", bad, "-o", tmp_path / "no",
+                               "--no-video")
+        assert code == 2 and "plan" in err and len(err.strip().splitlines()) == 1, err
+        assert not (tmp_path / "no").exists()
 
 
 def test_version_option(monkeypatch, capsys):

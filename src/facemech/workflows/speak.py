@@ -303,7 +303,27 @@ def _json_default(v):
 
 
 #: the columns a design table's text row may carry (besides the manipulations)
-TEXT_ROW_COLUMNS = ("text", "face", "voice", "rate_wpm", "strength", "scale", "preset")
+TEXT_ROW_COLUMNS = ("text", "face", "voice", "rate_wpm", "strength", "scale", "preset", "plan")
+#: a text row's ``plan`` cell: yes or no (as the design's other switches), or a whole number of
+#: the planner's iterations (0 to 20)
+PLAN_CELLS = {"yes": True, "true": True, "on": True, "no": False, "false": False, "off": False}
+
+
+def _plan_cell(value) -> bool | int:
+    """A design row's ``plan`` cell as :func:`speak`'s ``plan`` (InputError naming ``plan``)."""
+    from ..speech.planning import MAX_ITERATIONS
+
+    text = str(value).strip().lower()
+    if text in PLAN_CELLS:
+        return PLAN_CELLS[text]
+    try:
+        number = float(text)
+    except ValueError:
+        number = float("nan")
+    if not (number.is_integer() and 0 <= number <= MAX_ITERATIONS):
+        raise InputError(f"{value!r} is not yes, no or a whole number of iterations from 0 to "
+                         f"{MAX_ITERATIONS}", field="plan")
+    return int(number)
 
 
 def text_items(work_dir: str | Path, *, preset: str = "anatomical"):
@@ -311,7 +331,9 @@ def text_items(work_dir: str | Path, *, preset: str = "anatomical"):
     row's text spoken by :func:`speak` (no movie) into ``work_dir/<key>/``.
 
     A row may set ``text``, ``face``, ``voice``, ``rate_wpm``, ``strength``, ``scale`` (rules
-    ``KIND:KEY=FACTOR`` separated by ``;``, :mod:`facemech.speech.articulation`) and ``preset``.
+    ``KIND:KEY=FACTOR`` separated by ``;``, :mod:`facemech.speech.articulation`), ``preset``
+    and ``plan`` (yes, the default, or no, or a number of the planner's iterations:
+    :func:`speak`'s ``plan``).
     """
     from .._version import __version__
 
@@ -334,6 +356,7 @@ def text_items(work_dir: str | Path, *, preset: str = "anatomical"):
             if not (np.isfinite(v) and v > 0):
                 raise InputError(f"{text!r} must be a positive number", field=column)
             values.append(kind(v))
+        _plan_cell(row.get("plan") or "yes")
         return values[0], Articulation.parse(row.get("scale") or None, strength=values[1])
 
     from ..speech.articulation import Articulation
@@ -348,7 +371,7 @@ def text_items(work_dir: str | Path, *, preset: str = "anatomical"):
         spoken = speak(work / key, str(row["text"]), voice=str(row.get("voice", "en-us")),
                        rate_wpm=rate, face=row.get("face", "default"),
                        preset=str(row.get("preset", preset)), strength=strength, video=False,
-                       alive=Liveliness.off())
+                       alive=Liveliness.off(), plan=_plan_cell(row.get("plan") or "yes"))
         return spoken.dataset, spoken.files["audio"]
 
     make_item.version = f"speak {__version__}"
