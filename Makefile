@@ -61,7 +61,8 @@ test-lowest: $(LOW_STAMP) chromium
 PORTABLE_TESTS := tests/test_inverse.py tests/test_inversion_rolls.py tests/test_inversion_steps.py \
 	tests/test_inversion_trust.py tests/test_subject.py tests/test_regions.py tests/test_realism.py \
 	tests/test_calibrate.py tests/test_speak.py tests/test_docs_tables.py tests/test_visemes.py \
-	tests/test_lip_reach.py tests/test_control_pick.py tests/test_jaw_bone.py tests/test_contacts.py
+	tests/test_lip_reach.py tests/test_control_pick.py tests/test_jaw_bone.py tests/test_contacts.py \
+	tests/test_planning.py tests/test_visible_speech.py
 CORETYPE ?= Prescott
 test-portable: $(STAMP)
 	OPENBLAS_CORETYPE=$(CORETYPE) MPLBACKEND=Agg $(BIN)/python -m pytest -q $(XDIST) $(PORTABLE_TESTS)
