@@ -374,7 +374,9 @@ def text_items(work_dir: str | Path, *, preset: str = "anatomical"):
                        alive=Liveliness.off(), plan=_plan_cell(row.get("plan") or "yes"))
         return spoken.dataset, spoken.files["audio"]
 
-    make_item.version = f"speak {__version__}"
+    # the hook's version enters each item's key: items spoken before the planner became speak's
+    # default (same package version) are made again, not reused
+    make_item.version = f"speak {__version__}, controls planned by default"
     make_item.check = check
     return make_item
 
