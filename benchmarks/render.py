@@ -202,17 +202,28 @@ def _movie(positions: np.ndarray, jaw: np.ndarray, frames: int, rounds: int) -> 
 
 def _rounds(run, frames: int, rounds: int) -> dict:
     """``run(workers)`` for 1 and 2 workers, alternately, ``rounds`` times: the medians (s,
-    ms per frame), every round's seconds, the CPU time over the wall time and the ratio."""
+    ms per frame), every round's seconds, the CPU time over the wall time, the encoder's
+    (ffmpeg's) CPU time per frame (0 where nothing is encoded) and the ratio."""
+    import resource
+
+    def children() -> float:  # s of CPU time of the finished child processes (ffmpeg)
+        r = resource.getrusage(resource.RUSAGE_CHILDREN)
+        return r.ru_utime + r.ru_stime
+
     times: dict[int, list[float]] = {1: [], 2: []}
     cpu: dict[int, list[float]] = {1: [], 2: []}
+    child: dict[int, list[float]] = {1: [], 2: []}
     for _ in range(rounds):
         for workers in times:
-            t, c = time.perf_counter(), time.process_time()
+            t, c, e = time.perf_counter(), time.process_time(), children()
             run(workers)
             times[workers].append(time.perf_counter() - t)
             cpu[workers].append(time.process_time() - c)
+            child[workers].append(children() - e)
     med = {w: float(np.median(v)) for w, v in times.items()}
     return {
+        "encoder_cpu_ms_per_frame": round(1e3 * float(np.median(child[1] + child[2])) / frames,
+                                          1),
         "seconds": {f"{w}_workers": round(v, 3) for w, v in med.items()},
         "ms_per_frame": {f"{w}_workers": round(1e3 * v / frames, 1) for w, v in med.items()},
         "all_rounds_s": {f"{w}_workers": [round(x, 3) for x in v] for w, v in times.items()},
