@@ -31,7 +31,10 @@ DEFAULT_WORKERS = 2
 
 
 def available_cores() -> int:
-    """The cores this process may run on (its CPU affinity where the system tells it)."""
+    """The cores this process may run on (its CPU affinity where the system tells it).
+
+    Not :func:`facemech.physics.threads.available_cores`, which is capped at numba's thread
+    pool: these are Python threads, not numba's."""
     try:
         return len(os.sched_getaffinity(0))
     except AttributeError:  # macOS, Windows
