@@ -196,3 +196,21 @@ def test_default_workers_and_the_kernels_release_the_gil():
     assert frame_pool.check_workers(1) == 1
     for kernel in (raster.rasterise_grid, raster.shade_resolve, raster._vertex_light):
         assert kernel.targetoptions.get("nogil") is True
+
+
+def test_a_command_ended_by_a_signal_stops_the_threads_first():
+    """The signal handler of the command line (facemech.interrupts) exits without unwinding:
+    the pool's clean-up, registered while frames are drawn, waits for the frames being drawn
+    and cancels the rest before the temporary files go."""
+    from facemech import interrupts
+
+    started = []
+    frames = frame_pool.in_order(object, lambda r, k: started.append(k) or k, 1000, workers=2)
+    before = len(interrupts._CLEANUPS)
+    with closing(frames):
+        next(frames)
+        assert len(interrupts._CLEANUPS) == before + 1
+        interrupts._CLEANUPS[-1]()  # what the handler runs
+        assert not _threads()
+        assert len(started) <= 1 + 2 * 2 + 2
+    assert len(interrupts._CLEANUPS) == before

@@ -19,9 +19,11 @@ from collections import deque
 from collections.abc import Callable, Iterator
 from concurrent.futures import Future, ThreadPoolExecutor
 from contextlib import contextmanager
+from functools import partial
 from typing import TypeVar
 
 from ..checks import check_value
+from ..interrupts import on_interrupt
 from .render import Renderer
 
 T = TypeVar("T")
@@ -106,9 +108,15 @@ def _threaded(make, task, count: int, n: int):
 @contextmanager
 def _pool(n: int):
     """A thread pool of ``n`` threads, shut down on leaving: the frames not yet started are
-    cancelled (an error or interrupt), the ones being drawn are waited for."""
+    cancelled (an error or interrupt), the ones being drawn are waited for. A command ended by
+    a signal (:mod:`facemech.interrupts`, which exits without unwinding) does the same before
+    it removes its temporary files, so that no thread writes a frame into a folder being
+    removed."""
     pool = ThreadPoolExecutor(max_workers=n, thread_name_prefix="facemech-frame")
+    stop = partial(pool.shutdown, wait=True, cancel_futures=True)
+    forget = on_interrupt(stop)
     try:
         yield pool
     finally:
-        pool.shutdown(wait=True, cancel_futures=True)
+        forget()
+        stop()
