@@ -12,8 +12,16 @@ timed in both, one subprocess each, alternately for ``--rounds`` rounds (so that
 same load), and the medians over all rounds (wall clock and process CPU time) and their
 ratios are printed.
 
+``--movie N`` instead times a movie's rendering: N frontal 720p frames with 2x2 anti-aliasing
+(the demo's opening jaw, back and forth), drawn as :func:`facemech.viz.movie.write_movie`
+draws them (:func:`facemech.viz.frame_pool.in_order`, without the encoder: ``draw``) and
+written by it to an H.264 MP4 (``write_movie``), each on 1 and on 2 threads, alternately for
+``--rounds`` rounds in this one process; it prints the medians (s for the N frames, ms per
+frame), the ratio of 2 threads to 1, and that of their best rounds.
+
     python benchmarks/render.py [--frames 15] [--mesa]
     python benchmarks/render.py --against ../main/src [--rounds 5] [--frames 9]
+    python benchmarks/render.py --movie 60 [--rounds 3]
 """
 
 from __future__ import annotations
@@ -48,6 +56,7 @@ def main() -> None:
     ap.add_argument("--mesa", action="store_true")
     ap.add_argument("--against", help="another checkout's src folder to compare with")
     ap.add_argument("--rounds", type=int, default=5)
+    ap.add_argument("--movie", type=int, help="time N movie frames on 1 and 2 threads")
     ap.add_argument("--skin", help=argparse.SUPPRESS)  # child: time one tree on this skin
     args = ap.parse_args()
     if args.skin:
@@ -76,6 +85,8 @@ def main() -> None:
     skin, angle = sim.positions[-1], float(jaw[-1])
     if args.against:
         return _compare(args, skin, angle)
+    if args.movie:
+        return _movie(sim.positions, jaw, args.movie, args.rounds)
     t0 = time.perf_counter()
     scene = build_scene(look_from_model(face))
     build_s = time.perf_counter() - t0
@@ -143,6 +154,87 @@ def main() -> None:
         except json.JSONDecodeError:
             out["mesa"] = {"available": False, "why": run.stderr.strip()[-300:]}
     print(json.dumps(out, indent=2))
+
+
+def _movie(positions: np.ndarray, jaw: np.ndarray, frames: int, rounds: int) -> None:
+    """Print the seconds that ``frames`` frontal 720p frames take on 1 and on 2 threads.
+
+    ``positions`` (T, n, 3) m and ``jaw`` (T,) rad are played back and forth to ``frames``
+    frames; each thread count draws them all once per round, the counts alternating."""
+    from facemech.geometry.builder import default_face
+    from facemech.viz.frame_pool import available_cores, in_order
+    from facemech.viz.render import RenderOptions
+    from facemech.viz.scene import build_scene, look_from_model
+
+    scene = build_scene(look_from_model(default_face()))
+    opt = RenderOptions(view="frontal", size=(720, 1280), supersample=2)
+    cycle = np.concatenate([np.arange(len(positions)), np.arange(len(positions))[::-1]])
+    order = cycle[np.arange(frames) % len(cycle)]
+
+    def draw(render, k: int) -> np.ndarray:
+        f = order[k]
+        return np.ascontiguousarray(render(positions[f], jaw[f])[..., :3])
+
+    opt.renderer(scene)(positions[0], jaw[0])  # compile and build the scene's caches
+    def drawn(workers: int) -> None:
+        for _ in in_order(lambda: opt.renderer(scene), draw, frames, workers):
+            pass
+
+    def encoded(workers: int) -> None:  # the movie as write_movie makes it, H.264 included
+        with tempfile.TemporaryDirectory() as tmp:
+            pos = positions[order]
+            write_movie(Path(tmp) / "m.mp4", scene, pos, jaw[order], options=opt,
+                        workers=workers)
+
+    import tempfile
+
+    from facemech.viz.movie import write_movie
+
+    opt.renderer(scene)(positions[0], jaw[0])  # compile and build the scene's caches
+    out = {"frames": frames, "frame": "720p frontal aa2", "rounds": rounds,
+           "cores_available": available_cores(),
+           "load_average_1min_before": round(os.getloadavg()[0], 2)}
+    with threadpool_limits(1):
+        for name, run in (("draw", drawn), ("write_movie", encoded)):
+            out[name] = _rounds(run, frames, rounds)
+    print(json.dumps(out, indent=2))
+
+
+def _rounds(run, frames: int, rounds: int) -> dict:
+    """``run(workers)`` for 1 and 2 workers, alternately, ``rounds`` times: the medians (s,
+    ms per frame), every round's seconds, the CPU time over the wall time, the encoder's
+    (ffmpeg's) CPU time per frame (0 where nothing is encoded) and the ratio."""
+    import resource
+
+    def children() -> float:  # s of CPU time of the finished child processes (ffmpeg)
+        r = resource.getrusage(resource.RUSAGE_CHILDREN)
+        return r.ru_utime + r.ru_stime
+
+    times: dict[int, list[float]] = {1: [], 2: []}
+    cpu: dict[int, list[float]] = {1: [], 2: []}
+    child: dict[int, list[float]] = {1: [], 2: []}
+    for _ in range(rounds):
+        for workers in times:
+            t, c, e = time.perf_counter(), time.process_time(), children()
+            run(workers)
+            times[workers].append(time.perf_counter() - t)
+            cpu[workers].append(time.process_time() - c)
+            child[workers].append(children() - e)
+    med = {w: float(np.median(v)) for w, v in times.items()}
+    return {
+        "encoder_cpu_ms_per_frame": round(1e3 * float(np.median(child[1] + child[2])) / frames,
+                                          1),
+        "seconds": {f"{w}_workers": round(v, 3) for w, v in med.items()},
+        "ms_per_frame": {f"{w}_workers": round(1e3 * v / frames, 1) for w, v in med.items()},
+        "all_rounds_s": {f"{w}_workers": [round(x, 3) for x in v] for w, v in times.items()},
+        # this process's CPU time over the wall time: near the number of threads when each has
+        # a core to itself (the encoder, ffmpeg, is another process)
+        "cores_busy": {f"{w}_workers": round(float(np.sum(cpu[w]) / np.sum(times[w])), 2)
+                       for w in times},
+        "ratio_2_to_1": round(med[2] / med[1], 3),
+        # the least disturbed round of each (a shared machine's load comes and goes)
+        "best_ratio_2_to_1": round(min(times[2]) / min(times[1]), 3),
+    }
 
 
 def _frontal_child(path: str, frames: int) -> None:

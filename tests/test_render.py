@@ -349,3 +349,27 @@ def test_render_reports_progress_when_piped(open_mouth, tmp_path):
     n = len(open_mouth.time)
     lines = [ln for ln in run.stderr.splitlines() if ln.startswith("facemech: render:")]
     assert lines and lines[-1].startswith(f"facemech: render: {n}/{n} (")
+
+
+def test_edge_fade_of_a_bounded_search_is_the_unbounded_distance(face):
+    """The skin texture's edge fade stops its tree search at EDGE_FADE: the same weights, to
+    the bit, as the full nearest distance to the skin's edge, on the texture's own grid."""
+    from scipy.spatial import cKDTree
+
+    from facemech.viz import textures as T
+    from facemech.viz.closure import boundary_loops
+    from facemech.viz.face_parts import EDGE_FADE, _edge_fade
+
+    look = look_from_model(face)
+    loop = boundary_loops(look.triangles)[0]
+    a = look.rest[loop, :2]
+    k = np.linspace(0.0, 1.0, 12, endpoint=False)[None, :, None]
+    edge = (a[:, None] + k * (np.roll(a, -1, axis=0) - a)[:, None]).reshape(-1, 2)
+    lo, hi = look.rest[:, :2].min(0), look.rest[:, :2].max(0)
+    x, y = np.meshgrid(np.arange(lo[0], hi[0], 2 * T.SKIN_TEXEL),
+                       np.arange(lo[1], hi[1], 2 * T.SKIN_TEXEL))
+    d, _ = cKDTree(edge).query(np.stack([x.ravel(), y.ravel()], -1))
+    want = np.clip(d / EDGE_FADE, 0.0, 1.0).reshape(x.shape)
+    got = _edge_fade(look)(x, y)
+    np.testing.assert_array_equal(got, want)
+    assert 0.05 < np.mean(want < 1.0) < 0.95  # both sides of the fade are on the grid

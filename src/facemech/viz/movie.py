@@ -4,6 +4,10 @@ Encoding uses the ffmpeg that ships with imageio-ffmpeg (``pip install 'facemech
 an optional WAV is muxed in as AAC. PNG frames keep an alpha channel, so a transparent
 background (``background="transparent"``) gives frames ready to composite. Files are written
 atomically; a frame folder is filled in a temporary folder and renamed into place.
+
+Frames are drawn on ``workers`` threads (default: two where two cores are available), each
+with its own renderer (:mod:`.frame_pool`), and written in order; the frames are the same
+bytes as those drawn on one thread.
 """
 
 from __future__ import annotations
@@ -12,6 +16,7 @@ import shutil
 import subprocess
 import tempfile
 from collections.abc import Callable
+from contextlib import closing
 from pathlib import Path
 
 import numpy as np
@@ -19,6 +24,7 @@ import numpy as np
 from ..atomic import atomic_path, pending_folder
 from ..errors import InputError
 from ..params import FRAME_RATE_HZ
+from .frame_pool import check_workers, in_order
 from .render import FrameMotion, RenderOptions
 from .scene import Scene
 
@@ -77,6 +83,7 @@ def write_movie(
     progress: Callable[[int, int], None] | None = None,
     source: str | None = None,
     motion: FrameMotion | None = None,
+    workers: int | None = None,
 ) -> Path:
     """Render skin trajectories to an H.264 MP4.
 
@@ -94,6 +101,11 @@ def write_movie(
     source : name of the input, for error messages
     motion : blinks, gaze, head pose and the tongue tip's pose per frame
         (:class:`.render.FrameMotion`; None: still eyes, open lids, the head and tongue at rest)
+    progress : called with (frames done, frames) after each frame is written, in order
+    workers : threads that draw the frames, each with its own renderer, whole number 1 to
+        1024 (None: ``min(2, available cores)``; 1: the caller's thread only); the frames
+        reach the encoder in order and are the same whatever the number
+        (:mod:`.frame_pool`)
     """
     import imageio_ffmpeg
 
@@ -110,9 +122,13 @@ def write_movie(
     seconds = None if audio is None else _wav_seconds(audio)
     if seconds is not None:  # the frames the audio covers: the last one ends at or after it
         frames = max(1, min(frames, int(np.ceil(seconds * fps - 1e-6))))
-    render = opt.renderer(scene)
     h, w = opt.size
     path = Path(path)
+
+    def draw(render, k: int) -> np.ndarray:
+        return np.ascontiguousarray(render(positions[k], jaw[k], **poses[k])[..., :3])
+
+    drawn = in_order(lambda: opt.renderer(scene), draw, frames, workers)
     with atomic_path(path, suffix=".mp4") as video:
         writer = imageio_ffmpeg.write_frames(
             str(video), (w, h), fps=fps, codec="libx264", pix_fmt_out="yuv420p",
@@ -120,11 +136,11 @@ def write_movie(
         )
         writer.send(None)
         try:
-            for k in range(frames):
-                img = render(positions[k], jaw[k], **poses[k])
-                writer.send(np.ascontiguousarray(img[..., :3]))
-                if progress is not None:
-                    progress(k + 1, frames)
+            with closing(drawn):
+                for k, rgb in enumerate(drawn):
+                    writer.send(rgb)
+                    if progress is not None:
+                        progress(k + 1, frames)
         finally:
             writer.close()
         if audio is not None:
@@ -182,11 +198,13 @@ def write_frames(
     progress: Callable[[int, int], None] | None = None,
     source: str | None = None,
     motion: FrameMotion | None = None,
+    workers: int | None = None,
 ) -> Path:
     """Render every frame to ``folder/frame_00000.png`` ... (RGBA PNG).
 
     The folder must not exist or be empty; it appears complete or not at all. ``motion``:
-    blinks, gaze and head pose per frame, as :func:`write_movie`.
+    blinks, gaze and head pose per frame, ``progress`` and ``workers`` as :func:`write_movie`
+    (each thread draws and writes its frames; ``progress`` reports them in order).
     """
     import matplotlib.image as mpimg
 
@@ -196,15 +214,21 @@ def write_frames(
                          field="frames")
     jaw = _check(positions, jaw_angle, scene, source)
     poses = _poses(motion, len(positions), source)
-    render = (options or RenderOptions()).renderer(scene)
+    check_workers(workers)
+    opt = options or RenderOptions()
     folder.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", dir=folder.parent))
+
+    def draw(render, k: int) -> None:
+        mpimg.imsave(tmp / f"frame_{k:05d}.png", render(positions[k], jaw[k], **poses[k]))
+
     try:
         with pending_folder(tmp):  # removed whole if the command is interrupted
-            for k in range(len(positions)):
-                mpimg.imsave(tmp / f"frame_{k:05d}.png", render(positions[k], jaw[k], **poses[k]))
-                if progress is not None:
-                    progress(k + 1, len(positions))
+            drawn = in_order(lambda: opt.renderer(scene), draw, len(positions), workers)
+            with closing(drawn):
+                for k, _ in enumerate(drawn):
+                    if progress is not None:
+                        progress(k + 1, len(positions))
             if folder.exists():
                 folder.rmdir()
             tmp.rename(folder)

@@ -1,4 +1,4 @@
-"""Headless software rasteriser (numba, one core, no display, no GPU).
+"""Headless software rasteriser (numba, one core per call, no display, no GPU).
 
 A visibility-buffer renderer: a first pass scan-converts the triangles into a supersampled
 z-buffer that keeps, per sample, the nearest triangle and two barycentric weights; a second pass
@@ -9,6 +9,9 @@ rim lights under a sky/ground ambient, and a Blinn-Phong highlight of the key li
 interpolated (Gouraud); the albedo comes per pixel from the texture or per vertex. Texture
 lookups are bilinear in a single RGBA atlas; where the bilinear alpha is below one half the
 sample is discarded (the eye fissures are cut this way).
+
+The kernels release the GIL (``nogil``): a movie's frames are drawn on several threads at
+once, each with its own buffers (:mod:`.frame_pool`).
 
 The projection (:class:`facemech.viz.camera.Camera`) has already taken the vertices to image
 sample coordinates: ``x`` right, ``y`` down, ``z`` towards the viewer (larger is nearer).
@@ -43,7 +46,7 @@ _LUT = np.clip(
 LINEAR_TO_SRGB_LUT = (_LUT + 0.5).astype(np.uint8)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, nogil=True)
 def _atlas_alpha(atlas, u, v):
     """The atlas's alpha at texel coordinates (u, v): the nearest texel's where it is 0 or 1,
     else bilinear (as the colour is). A cut-out whose alpha ramps over two texels across its
@@ -66,7 +69,7 @@ def _atlas_alpha(atlas, u, v):
 TILE = 8  #: samples per side of the tiles whose nearest depth culls the inner sides
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, nogil=True)
 def rasterise(px, py, pz, tris, uv, tex, alpha_test, two_sided, atlas, zbuf, tid, bary):
     """Scan-convert triangles into a visibility buffer (in place), one sample at the centre of
     each cell (:func:`rasterise_grid` with s = 1; its parameters)."""
@@ -74,7 +77,7 @@ def rasterise(px, py, pz, tris, uv, tex, alpha_test, two_sided, atlas, zbuf, tid
                    1)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, nogil=True)
 def rasterise_grid(px, py, pz, tris, uv, tex, alpha_test, two_sided, atlas, buffers, s):
     """Scan-convert triangles into a visibility buffer (in place).
 
@@ -153,7 +156,7 @@ def rasterise_grid(px, py, pz, tris, uv, tex, alpha_test, two_sided, atlas, buff
                        max(ymin, ty * TILE), min(ymax, ty * TILE + TILE - 1)), s)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, nogil=True, inline="always")
 def sample_offsets(index, s):
     """Offset (in samples) of a sample from its cell's centre, along the other axis: a
     sample in buffer row r lies at x + (s - 1 - r % s + 0.5) / s - 0.5 and one in column c at
@@ -166,7 +169,7 @@ def sample_offsets(index, s):
     return (s - 1 - k + 0.5) / s - 0.5, (k + 0.5) / s - 0.5
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, nogil=True, inline="always")
 def _scan(f, label, points, tris, uv, test, atlas, buffers, rect, s):
     """Scan-convert triangle ``f`` inside the sample rectangle ``rect`` = (cx0, cx1, cy0, cy1),
     recording ``label``; ``points`` = (px, py, pz) the projected vertices, ``buffers`` = (zbuf,
@@ -272,7 +275,7 @@ def vertex_light(normals: np.ndarray, gloss: np.ndarray, lights: np.ndarray, sky
     return out
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, nogil=True)
 def _vertex_light(n, gloss, lights, half, sky, ground, wrap, out):
     for i in range(n.shape[0]):
         nx, ny, nz = n[i, 0], n[i, 1], n[i, 2]
@@ -289,7 +292,7 @@ def _vertex_light(n, gloss, lights, half, sky, ground, wrap, out):
         out[i, 1] = spec
 
 
-@nb.njit(cache=True, fastmath=True)
+@nb.njit(cache=True, nogil=True, fastmath=True)
 def _texel(atlas, u, v):
     """Bilinear linear (r, g, b) of the atlas at texel coordinates (u, v)."""
     h, w = atlas.shape[0], atlas.shape[1]
@@ -308,7 +311,7 @@ def _texel(atlas, u, v):
     return r, g, b
 
 
-@nb.njit(cache=True, fastmath=True)
+@nb.njit(cache=True, nogil=True, fastmath=True)
 def shade_resolve(tid, bary, s, tris, light, albedo, uv, tex, atlas, background, lut, rgba):
     """Shade the samples and box-filter s x s of them per pixel into sRGB uint8 RGBA.
 

@@ -29,6 +29,7 @@
 
 from __future__ import annotations
 
+import threading
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -45,6 +46,8 @@ from .raster import srgb_to_linear
 
 __all__ = ["FaceLook", "MAX_TEXTURE", "Part", "SKIRT_DEPTH", "Scene", "build_scene",
            "head_pivot", "head_rotation", "look_from_dataset", "look_from_model"]
+
+_REST_LOCK = threading.Lock()  #: guards the one-time build of a scene's rest arrays
 
 
 @dataclass(frozen=True)
@@ -81,6 +84,11 @@ class Scene:
         part turns about :func:`head_pivot` (:func:`head_rotation`); ``tongue``: None, or the
         tongue tip's pose (2,) m (protrusion, elevation) in the mandible's frame
         (:func:`.dentition.bend_tongue`; :mod:`facemech.speech.tongue`).
+
+        Safe to call from several threads at once (a movie's frame pool,
+        :mod:`.frame_pool`): the scene's packed arrays are only read; each call starts from
+        its own copy of the rest vertices and normals (N, 3) and overwrites the moving parts
+        there, so no call sees another's.
         """
         look = self.look
         yaw, pitch = (float(g) for g in gaze)
@@ -158,14 +166,19 @@ class Scene:
         """Every part's vertices (N, 3) and unit normals (N, 3, inward parts' turned) at rest,
         and per part a :class:`.mesh.VertexNormals` of its faces (built once per scene)."""
         cached = self.__dict__.get("_rest_cache")
-        if cached is None:
+        if cached is not None:
+            return cached
+        with _REST_LOCK:  # built once, also when a movie's threads ask for it together
+            cached = self.__dict__.get("_rest_cache")
+            if cached is not None:
+                return cached
             verts = np.concatenate([np.asarray(p.rest, float) for p in self.parts])
             norms = np.concatenate([-n if p.inward else n
                                     for p, n in zip(self.parts, self.rest_normals, strict=True)])
             normals = [VertexNormals(p.faces, len(p.rest)) for p in self.parts]
             cached = (verts, norms.astype(float), normals)
             object.__setattr__(self, "_rest_cache", cached)  # a cache on a frozen scene
-        return cached
+            return cached
 
 #: m, the head's pivot (the top of the neck, about the occipital condyles) below the centre of
 #: the head's sphere (:func:`.head.head_centre`), our estimate

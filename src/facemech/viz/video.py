@@ -35,7 +35,8 @@ def scene_of(source) -> Scene:
 def render_results(ds, output: str | Path, *, options: RenderOptions | None = None,
                    audio: str | Path | None = None, fps: float | None = None,
                    progress: Callable[[int, int], None] | None = None,
-                   source: str | None = None, motion: FrameMotion | None = None) -> Path:
+                   source: str | None = None, motion: FrameMotion | None = None,
+                   workers: int | None = None) -> Path:
     """Render a results dataset to ``output``: an ``.mp4`` movie, or a folder of PNG frames.
 
     Parameters
@@ -49,6 +50,8 @@ def render_results(ds, output: str | Path, *, options: RenderOptions | None = No
     motion : blinks, gaze and head pose per frame (:class:`FrameMotion`; None: at rest); the
         tongue tip's pose is the results' ``tongue_tip`` where ``motion`` carries none
         (:func:`motion_with_tongue`)
+    workers : threads drawing the frames, 1 to 1024 (None: ``min(2, available cores)``);
+        the frames are the same whatever the number (:func:`.movie.write_movie`)
     """
     from .movie import write_frames, write_movie
 
@@ -63,14 +66,14 @@ def render_results(ds, output: str | Path, *, options: RenderOptions | None = No
     output = Path(output)
     if output.suffix.lower() == ".mp4":
         return write_movie(output, scene, pos, jaw, fps=fps, audio=audio, options=opt,
-                           progress=progress, source=source, motion=motion)
+                           progress=progress, source=source, motion=motion, workers=workers)
     if output.suffix:
         raise InputError(f"output {output.name!r}: give a .mp4 file or a folder for PNG frames",
                          field="output")
     if audio is not None:
         raise InputError("audio goes into a movie, not into PNG frames", field="audio")
     return write_frames(output, scene, pos, jaw, options=opt, progress=progress,
-                        source=source, motion=motion)
+                        source=source, motion=motion, workers=workers)
 
 
 def motion_with_tongue(motion: FrameMotion | None, ds) -> FrameMotion | None:
