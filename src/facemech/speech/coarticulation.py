@@ -33,6 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
+from ..params import MARGINAL_GROUPS, MUSCLE_GROUPS
 from .alignment import Alignment
 from .articulation import Articulation, as_articulation
 from .phoneclass import PAUSE, phone_classes
@@ -64,6 +65,9 @@ class Gesture:
     jaw_dominance: float = 1.0
     #: factor on its dominance's rates, before and after its centre (a plan's; 1: the table's)
     rate: float = 1.0
+    #: activity added to its target's marginal orbicularis oris, both lips (``OOSM``,
+    #: ``OOIM``: the lips pressed together; a plan's, for a bilabial that stayed apart; 0: none)
+    press: float = 0.0
 
     @property
     def centre(self) -> float:
@@ -129,6 +133,8 @@ def blend(t: np.ndarray, items: list[Gesture], *, exponent: float = DOMINANCE_EX
     vis = [VISEMES[g.cls] for g in items]
     scale = np.array([g.scale for g in items])
     act_targets = np.array([v.activity_vector() for v in vis]) * scale[:, None]  # (S, groups)
+    act_targets[:, [MUSCLE_GROUPS.index(g) for g in MARGINAL_GROUPS]] += \
+        np.array([g.press for g in items])[:, None]
     jaw_targets = np.array([v.jaw for v in vis]) * scale + np.array([g.jaw for g in items])
     decay = np.stack([log_dominance(t, g, 1.0, v.anticipatory_rate * g.rate,
                                     v.carryover_rate * g.rate, exponent)

@@ -11,8 +11,9 @@ face, adjust the gestures of the phones that missed, and simulate again.
 The targets (:data:`TARGETS`; measured as :mod:`facemech.analysis.visible_speech` does):
 
 - a bilabial (/p b m/): the lips together at the phone's middle (the midline lip gap 0);
-- a stressed open vowel (/ɑ æ a ɔ/, the open part of /aɪ aʊ/): a lip aperture of 12 mm
-  within the phone;
+- a stressed open vowel (/ɑ æ a ɔ/, the open part of /aɪ aʊ/): a lip aperture of 12 to 17 mm
+  within the phone (real open vowels open the lips 10-20 mm; a wider one is not narrowed
+  below 17 mm);
 - a rounded phone (/u ʊ w oʊ/): both lip centres 3 mm forward within the phone;
 - a labiodental (/f v/): the lower lip's top at the upper incisors' edge.
 
@@ -24,9 +25,11 @@ and a factor on its neighbours' dominance rates (a missed open vowel, or bilabia
 dominance of the gestures beside it, so that a short vowel between two bilabials gets its own
 interval). Each update is proportional to the phone's miss (mm) with a fixed gain
 (:data:`GAIN`), and bounded (:data:`BOUNDS`); the blended activity stays clipped to [0, 1]
-and the jaw target within [0, :data:`JAW_MAX_DEG`]. A labiodental's jaw offset moves the way
-its error's sign says (the lip's top above the incisors' edge: open) and turns back at half
-the step when the distance grows. An iteration whose total miss is larger than the best so
+and the jaw target within [0, :data:`JAW_MAX_DEG`]. A labiodental moves the way its error's
+sign says (the lip's top above the incisors' edge: its jaw opens and its own gesture, scaled
+by its own bound ``labiodental_scale`` down to 0, grows; below the edge: both shrink), its
+dominance over the lips and the jaw growing, at half the step each time the sign flips (the
+lip's top passed the edge). An iteration whose total miss is larger than the best so
 far is undone: the next update starts again from the best gestures with half the step. Only
 the model is used: the simulation of the utterance itself, so nothing is tuned to a text.
 
@@ -66,13 +69,14 @@ TARGETS = {
 #: bounds of the per-instance adjustments: scale factor, dominance factor, jaw offset (deg),
 #: factor on the dominance's rates
 BOUNDS = {"scale": (0.5, 1.6), "dominance": (1.0, 30.0), "jaw_deg": (-4.0, 14.0),
-          "rate": (1.0, 3.0)}
+          "rate": (1.0, 3.0), "labiodental_scale": (0.0, 1.6), "press": (0.0, 0.5)}
 #: deg, the largest jaw target a plan may ask for (the jaw's range is -5 to 35 deg)
 JAW_MAX_DEG = 24.0
 #: gains: per mm of miss, the jaw offset (deg), the dominance's relative growth, the scale's
 GAIN = {"open_jaw_deg": 0.8, "open_dominance": 0.1, "bilabial_dominance": 1.0,
-        "bilabial_scale": 0.15, "neighbour_rate": 0.1, "rounded_scale": 0.2,
-        "rounded_dominance": 0.5, "labiodental_jaw_deg": 0.5, "labiodental_dominance": 0.5}
+        "bilabial_scale": 0.15, "bilabial_press": 0.06, "neighbour_rate": 0.1, "rounded_scale": 0.2,
+        "rounded_dominance": 0.5, "labiodental_jaw_deg": 0.5, "labiodental_dominance": 0.5,
+        "labiodental_scale": 0.2}
 
 
 @dataclass(frozen=True)
@@ -152,7 +156,7 @@ def plan_controls(alignment: Alignment, model, *, params=None,
     items = gestures(alignment, articulation)
     phones = _phone_gestures(alignment)
     t0 = _time.perf_counter()
-    history, best, previous, turns, step = [], None, None, {}, 1.0
+    history, best, turns, step = [], None, {}, 1.0
     for it in range(iterations + 1):
         t, act, jaw = controls_from_gestures(items, alignment.duration,
                                              frame_rate=params.frame_rate,
@@ -174,8 +178,7 @@ def plan_controls(alignment: Alignment, model, *, params=None,
             if not better:  # overshot: back to the best controls, half the step
                 step *= 0.5
                 misses = best[7]
-            items = _update(best[6], misses, previous, turns, step)
-            previous = misses
+            items = _update(best[6], misses, turns, step)
     if progress is not None and len(history) < iterations + 1:
         progress(iterations + 1, iterations + 1)  # stopped early: done
     summary, kept, t, act, jaw, sim, items, _ = best
@@ -191,7 +194,7 @@ def plan_controls(alignment: Alignment, model, *, params=None,
 
 def _adjusted(g: Gesture) -> bool:
     return (g.jaw != 0.0 or g.lips_dominance != 1.0 or g.jaw_dominance != 1.0
-            or g.rate != 1.0 or g.scale != 1.0)
+            or g.rate != 1.0 or g.scale != 1.0 or g.press != 0.0)
 
 
 def _phone_gestures(alignment: Alignment) -> list[list[int]]:
@@ -224,7 +227,7 @@ class _Miss:
 
 def _measure(alignment: Alignment, sim, phones: list[list[int]]) -> list[_Miss]:
     """Each targeted phone's error on the simulated face (m): bilabial gap minus 0, open
-    aperture short of 12 mm (negative: wider than :data:`TARGETS`'s ``too_wide``), rounded
+    aperture short of 12 mm (0 up to :data:`TARGETS`'s ``too_wide``, negative beyond), rounded
     forward short of 3 mm, labiodental distance signed (positive: the lip's top above the
     incisors' edge)."""
     from ..analysis.visible_speech import (
@@ -244,7 +247,8 @@ def _measure(alignment: Alignment, sim, phones: list[list[int]]) -> list[_Miss]:
             if m.stress is None and alignment.notation == "espeak":
                 continue
             a = m.aperture_max
-            err = TARGETS["open"]["aperture"] - a
+            # a miss only outside [aperture, too_wide]: real open vowels open 10-20 mm
+            err = max(TARGETS["open"]["aperture"] - a, 0.0)
             if a > TARGETS["open"]["too_wide"]:
                 err = TARGETS["open"]["too_wide"] - a
         elif m.group == "rounded":
@@ -308,15 +312,14 @@ def _sharpen(items: list[Gesture], k: int, own: tuple[int, ...], mm: float,
             items[j] = replace(items[j], rate=_bounded(items[j].rate * factor, "rate"))
 
 
-def _update(items: list[Gesture], misses: list[_Miss], previous: list[_Miss] | None,
-            turns: dict, step: float = 1.0) -> list[Gesture]:
+def _update(items: list[Gesture], misses: list[_Miss], turns: dict,
+            step: float = 1.0) -> list[Gesture]:
     """The gestures after one step of learning from the misses (module doc), the gains times
-    ``step`` (halved after an iteration that did worse than the best). A labiodental's
-    jaw moves in the direction its error's sign says (the lip's top above the incisors' edge:
-    open) until the distance grows from the ``previous`` iteration's; then it turns back at
-    half the step (``turns``: phone -> (direction, step factor), updated in place)."""
+    ``step`` (halved after an iteration that did worse than the best). A labiodental's jaw
+    and own gesture move in the direction its error's sign says (the lip's top above the
+    incisors' edge: open, larger), at half the step each time the sign differs from its last
+    update's (``turns``: phone -> (sign, step factor), updated in place)."""
     out = list(items)
-    before = {m.indices: m for m in previous or ()}
     for m in misses:
         tol = TARGETS[m.group]["tolerance"]
         if abs(m.error) <= tol:
@@ -343,7 +346,9 @@ def _update(items: list[Gesture], misses: list[_Miss], previous: list[_Miss] | N
                 g = replace(g, scale=_bounded(g.scale * (1 + GAIN["bilabial_scale"]
                                                          * min(mm, 3.0)), "scale"),
                             lips_dominance=_bounded(g.lips_dominance * grow, "dominance"),
-                            jaw_dominance=_bounded(g.jaw_dominance * grow, "dominance"))
+                            jaw_dominance=_bounded(g.jaw_dominance * grow, "dominance"),
+                            press=_bounded(g.press + GAIN["bilabial_press"] * min(mm, 3.0),
+                                           "press"))
             elif m.group == "rounded":
                 if m.error < 0:
                     continue
@@ -353,14 +358,20 @@ def _update(items: list[Gesture], misses: list[_Miss], previous: list[_Miss] | N
                                 g.lips_dominance * (1 + GAIN["rounded_dominance"] * mm),
                                 "dominance"))
             elif m.group == "labiodental":
-                sign, share = turns.get(m.indices, (1.0 if m.error > 0 else -1.0, 1.0))
-                last = before.get(m.indices)
-                if last is not None and abs(m.error) > abs(last.error) + 0.02e-3:
-                    sign, share = -sign, 0.5 * share
+                sign = 1.0 if m.error > 0 else -1.0
+                last_sign, share = turns.get(m.indices, (sign, 1.0))
+                if sign != last_sign:  # passed the edge since the last update: half the step
+                    share *= 0.5
                 turns[m.indices] = (sign, share)
                 grow = 1.0 + GAIN["labiodental_dominance"] * min(mm, 4.0)
+                # the lip's own gesture (its depressor and the jaw's small opening) grows
+                # while the lip's top is above the edge and shrinks while below; its lips'
+                # dominance grows, so that its neighbours' lips give way
+                lip = 1.0 + sign * share * GAIN["labiodental_scale"] * min(mm, 4.0)
                 g = replace(g, jaw=_jaw_offset(g, sign * share * GAIN["labiodental_jaw_deg"]
                                                * mm),
-                            jaw_dominance=_bounded(g.jaw_dominance * grow, "dominance"))
+                            jaw_dominance=_bounded(g.jaw_dominance * grow, "dominance"),
+                            lips_dominance=_bounded(g.lips_dominance * grow, "dominance"),
+                            scale=_bounded(g.scale * max(lip, 0.1), "labiodental_scale"))
             out[k] = g
     return out
