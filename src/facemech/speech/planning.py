@@ -19,19 +19,22 @@ The targets (:data:`TARGETS`; measured as :mod:`facemech.analysis.visible_speech
 
 What is adjusted, per phone instance (its gestures: :class:`~.coarticulation.Gesture`): the
 factor on its targets' departure from rest (the per-phone ``scale`` of :mod:`.articulation`,
-multiplying what the rules gave), an offset added to its jaw target, factors on its
-dominance magnitudes (lips and jaw), so that a phone can win the blend over its neighbours,
-and a factor on its neighbours' dominance rates (a missed open vowel, or bilabial, narrows the
-dominance of the gestures beside it, so that a short vowel between two bilabials gets its own
-interval). Each update is proportional to the phone's miss (mm) with a fixed gain
-(:data:`GAIN`), and bounded (:data:`BOUNDS`); the blended activity stays clipped to [0, 1]
-and the jaw target within [0, :data:`JAW_MAX_DEG`]. A labiodental moves the way its error's
-sign says (the lip's top above the incisors' edge: its jaw opens and its own gesture, scaled
-by its own bound ``labiodental_scale`` down to 0, grows; below the edge: both shrink), its
-dominance over the lips and the jaw growing, at half the step each time the sign flips (the
-lip's top passed the edge). An iteration whose total miss is larger than the best so
-far is undone: the next update starts again from the best gestures with half the step. Only
-the model is used: the simulation of the utterance itself, so nothing is tuned to a text.
+multiplying what the rules gave), an offset added to its jaw target, factors on its dominance
+magnitudes (lips and jaw), so that a phone can win the blend over its neighbours, and a factor
+on its neighbours' dominance rates (a missed open vowel, or bilabial, narrows the dominance of
+the gestures beside it, so that a short vowel between two bilabials gets its own interval),
+and, for a bilabial whose lips stayed apart, activity of the marginal orbicularis oris of both
+lips (``OOSM``, ``OOIM``) added to its own target (``press``: it lowers the upper lip and lifts
+the lower one; not in the bilabial's viseme, where it would narrow the mouth of every bilabial
+by about 10 mm, docs/stimuli.md). Each update is proportional to the phone's miss (mm) with a
+fixed gain (:data:`GAIN`), and bounded (:data:`BOUNDS`); the blended activity stays clipped to
+[0, 1] and the jaw target within [0, :data:`JAW_MAX_DEG`]. A labiodental moves the way its
+error's sign says (the lip's top above the incisors' edge: its jaw opens and its own gesture,
+scaled by its own bound ``labiodental_scale`` down to 0, grows; below the edge: both shrink),
+its dominance over the lips and the jaw growing, at half the step each time the sign flips (the
+lip's top passed the edge). An iteration whose total miss is larger than the best so far is
+undone: the next update starts again from the best gestures with half the step. Only the model
+is used: the simulation of the utterance itself, so nothing is tuned to a text.
 
 Cost: one forward simulation per iteration (``iterations + 1`` in all; fewer when every phone
 is within its tolerance); the controls returned are those of the iteration with the smallest
@@ -67,16 +70,17 @@ TARGETS = {
     "labiodental": {"distance": 0.0, "tolerance": 0.5e-3},
 }
 #: bounds of the per-instance adjustments: scale factor, dominance factor, jaw offset (deg),
-#: factor on the dominance's rates
+#: factor on the dominance's rates, a labiodental's own scale factor, and a bilabial's press
+#: (activity added to OOSM and OOIM, :attr:`~.coarticulation.Gesture.press`)
 BOUNDS = {"scale": (0.5, 1.6), "dominance": (1.0, 30.0), "jaw_deg": (-4.0, 14.0),
           "rate": (1.0, 3.0), "labiodental_scale": (0.0, 1.6), "press": (0.0, 0.5)}
 #: deg, the largest jaw target a plan may ask for (the jaw's range is -5 to 35 deg)
 JAW_MAX_DEG = 24.0
 #: gains: per mm of miss, the jaw offset (deg), the dominance's relative growth, the scale's
 GAIN = {"open_jaw_deg": 0.8, "open_dominance": 0.1, "bilabial_dominance": 1.0,
-        "bilabial_scale": 0.15, "bilabial_press": 0.06, "neighbour_rate": 0.1, "rounded_scale": 0.2,
-        "rounded_dominance": 0.5, "labiodental_jaw_deg": 0.5, "labiodental_dominance": 0.5,
-        "labiodental_scale": 0.2}
+        "bilabial_scale": 0.15, "bilabial_press": 0.06, "neighbour_rate": 0.1,
+        "rounded_scale": 0.2, "rounded_dominance": 0.5, "labiodental_jaw_deg": 0.5,
+        "labiodental_dominance": 0.5, "labiodental_scale": 0.2}
 
 
 @dataclass(frozen=True)
