@@ -26,14 +26,19 @@ from numba.extending import intrinsic
 from ..errors import InputError
 
 
-def available_cores() -> int:
-    """The cores this process may run on (its CPU affinity), at most numba's thread pool
-    (``NUMBA_NUM_THREADS``)."""
+def affinity_cores() -> int:
+    """The cores this process may run on: its CPU affinity where the system tells it, else
+    the machine's CPU count (at least 1)."""
     try:
-        cores = len(os.sched_getaffinity(0))
+        return max(1, len(os.sched_getaffinity(0)))
     except AttributeError:  # not on Linux
-        cores = os.cpu_count() or 1
-    return max(1, min(cores, nb.config.NUMBA_NUM_THREADS))
+        return os.cpu_count() or 1
+
+
+def available_cores() -> int:
+    """The cores this process may run on (:func:`affinity_cores`), at most numba's thread pool
+    (``NUMBA_NUM_THREADS``)."""
+    return max(1, min(affinity_cores(), nb.config.NUMBA_NUM_THREADS))
 
 
 def default_threads(environ=None) -> int:
@@ -121,5 +126,5 @@ def kernel_threads():
 # facemech changes no thread count (the command line and the caller set it, set_threads)
 nb.get_num_threads()
 
-__all__ = ["set_threads", "get_threads", "available_cores", "default_threads",
+__all__ = ["set_threads", "get_threads", "affinity_cores", "available_cores", "default_threads",
            "kernel_threads"]

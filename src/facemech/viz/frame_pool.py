@@ -13,7 +13,6 @@ cancels the frames not yet started and waits only for the ones being drawn.
 
 from __future__ import annotations
 
-import os
 import queue
 from collections import deque
 from collections.abc import Callable, Iterator
@@ -24,6 +23,7 @@ from typing import TypeVar
 
 from ..checks import check_value
 from ..interrupts import on_interrupt
+from ..physics.threads import affinity_cores
 from .render import Renderer
 
 T = TypeVar("T")
@@ -33,14 +33,11 @@ DEFAULT_WORKERS = 2
 
 
 def available_cores() -> int:
-    """The cores this process may run on (its CPU affinity where the system tells it).
+    """The cores this process may run on (:func:`facemech.physics.threads.affinity_cores`).
 
     Not :func:`facemech.physics.threads.available_cores`, which is capped at numba's thread
     pool: these are Python threads, not numba's."""
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:  # macOS, Windows
-        return os.cpu_count() or 1
+    return affinity_cores()
 
 
 def check_workers(workers: int | None) -> int:
