@@ -37,6 +37,24 @@ def pytest_configure(config):
     # pytest-xdist registers it too; here so that a run without xdist (-p no:xdist) knows it
     config.addinivalue_line("markers", "xdist_group(name): run on one worker under "
                             "pytest-xdist's --dist loadgroup")
+    _check_loadgroup(config)
+
+
+def _check_loadgroup(config):
+    """pytest 9.2 derives a test's id from elsewhere than pytest-xdist 3.8 writes its group to,
+    so under ``--dist loadgroup`` the groups are silently lost and every worker builds each
+    module fixture again (two minutes more on ``make test``): such a run stops here."""
+    if config.getoption("dist", "no") != "loadgroup" or not config.getoption("numprocesses"):
+        return
+    import xdist
+
+    def version(text):
+        return tuple(int(p) for p in re.findall(r"\d+", text)[:2])
+
+    if version(pytest.__version__) >= (9, 2) and version(xdist.__version__) <= (3, 8):
+        raise pytest.UsageError(
+            f"pytest {pytest.__version__} loses pytest-xdist {xdist.__version__}'s --dist "
+            "loadgroup groups: install the pinned versions (pip install -c constraints.txt)")
 
 
 @pytest.hookimpl(tryfirst=True)
