@@ -74,8 +74,8 @@ VISEMES: MappingProxyType = MappingProxyType({
     "l": _v(3.5, 0.4, 1.5, 20.0, 25.0),
     "j": _v(1.5, 2.0, 2.0, 18.0, 22.0, ZYG=0.4, RIS=0.5, LLS=0.15, DLI=0.1),
     # vowels
-    "close_front_spread": _v(2.5, 4.0, 1.5, 12.0, 15.0, ZYG=1.0, RIS=1.0, LAO=0.2, LLS=0.25,
-                             DLI=0.15),
+    "close_front_spread": _v(2.5, 8.0, 1.5, 12.0, 15.0, ZYG=0.6, RIS=0.6, LAO=0.15, LLS=0.2,
+                             DLI=0.12),
     "close_back_rounded": _v(2.5, 24.0, 1.5, 15.0, 15.0, OOS=0.9, OOI=1.0, MEN=0.5),
     "open": _v(12.0, 4.0, 8.0, 12.0, 15.0, DLI=0.3),
     "open_rounded": _v(11.0, 4.0, 8.0, 12.0, 15.0, OOS=0.25, OOI=0.25),
