@@ -73,7 +73,8 @@ VISEMES: MappingProxyType = MappingProxyType({
     "r": _v(2.0, 2.0, 1.5, 18.0, 22.0, OOS=0.35, OOI=0.3),
     "l": _v(3.5, 0.4, 1.5, 20.0, 25.0),
     "j": _v(1.5, 2.0, 2.0, 18.0, 22.0, ZYG=0.4, RIS=0.5, LLS=0.15, DLI=0.1),
-    # vowels
+    # vowels (/i/: ZYG and RIS at 0.6 widen 2.7 mm a side; at 1.0 the lower lip went 7 mm
+    # back along the teeth, rolled in, docs/stimuli.md)
     "close_front_spread": _v(2.5, 8.0, 1.5, 12.0, 15.0, ZYG=0.6, RIS=0.6, LAO=0.15, LLS=0.2,
                              DLI=0.12),
     "close_back_rounded": _v(2.5, 24.0, 1.5, 15.0, 15.0, OOS=0.9, OOI=1.0, MEN=0.5),
