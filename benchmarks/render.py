@@ -162,7 +162,8 @@ def _movie(positions: np.ndarray, jaw: np.ndarray, frames: int, rounds: int) -> 
     ``positions`` (T, n, 3) m and ``jaw`` (T,) rad are played back and forth to ``frames``
     frames; each thread count draws them all once per round, the counts alternating."""
     from facemech.geometry.builder import default_face
-    from facemech.viz.frame_pool import available_cores, in_order
+    from facemech.physics.threads import affinity_cores
+    from facemech.viz.frame_pool import in_order
     from facemech.viz.render import RenderOptions
     from facemech.viz.scene import build_scene, look_from_model
 
@@ -192,7 +193,7 @@ def _movie(positions: np.ndarray, jaw: np.ndarray, frames: int, rounds: int) -> 
 
     opt.renderer(scene)(positions[0], jaw[0])  # compile and build the scene's caches
     out = {"frames": frames, "frame": "720p frontal aa2", "rounds": rounds,
-           "cores_available": available_cores(),
+           "cores_available": affinity_cores(),
            "load_average_1min_before": round(os.getloadavg()[0], 2)}
     with threadpool_limits(1):
         for name, run in (("draw", drawn), ("write_movie", encoded)):

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from facemech.errors import InputError
+from facemech.physics.threads import affinity_cores
 from facemech.viz import frame_pool, movie
 from facemech.viz.render import FrameMotion, RenderOptions
 from facemech.viz.scene import build_scene, look_from_model
@@ -192,7 +193,7 @@ def test_bad_numbers_of_workers_are_refused_before_any_frame(scene, motion, tmp_
 def test_default_workers_and_the_kernels_release_the_gil():
     from facemech.viz import raster
 
-    assert frame_pool.check_workers(None) == min(2, frame_pool.available_cores())
+    assert frame_pool.check_workers(None) == min(2, affinity_cores())
     assert frame_pool.check_workers(1) == 1
     for kernel in (raster.rasterise_grid, raster.shade_resolve, raster._vertex_light):
         assert kernel.targetoptions.get("nogil") is True

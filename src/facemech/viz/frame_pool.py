@@ -32,20 +32,14 @@ T = TypeVar("T")
 DEFAULT_WORKERS = 2
 
 
-def available_cores() -> int:
-    """The cores this process may run on (:func:`facemech.physics.threads.affinity_cores`).
-
-    Not :func:`facemech.physics.threads.available_cores`, which is capped at numba's thread
-    pool: these are Python threads, not numba's."""
-    return affinity_cores()
-
-
 def check_workers(workers: int | None) -> int:
     """The number of drawing threads: ``workers`` checked (a whole number 1 to 1024, else an
     :class:`~facemech.errors.InputError` naming the field ``workers``), or for None
-    ``min(2, available cores)``. 1 draws every frame in the caller's thread."""
+    ``min(2, the cores of this process's CPU affinity)`` (Python threads, so not capped at
+    numba's pool as :func:`facemech.physics.threads.available_cores` is). 1 draws every frame in
+    the caller's thread."""
     if workers is None:
-        return max(1, min(DEFAULT_WORKERS, available_cores()))
+        return max(1, min(DEFAULT_WORKERS, affinity_cores()))
     check_value("workers", workers)
     return int(workers)
 
