@@ -24,6 +24,7 @@ from facemech.speech.visemes import VISEMES, viseme
 MID_ROUNDED = "mid_rounded"
 BILABIAL, ROUNDED, SPREAD, OPEN = ("bilabial", "close_back_rounded", "close_front_spread",
                                    "open")
+LAX = "close_front_lax"
 
 
 @pytest.mark.parametrize("label, notation, expected", [
@@ -41,11 +42,12 @@ BILABIAL, ROUNDED, SPREAD, OPEN = ("bilabial", "close_back_rounded", "close_fron
     ("l/2", "espeak", ("l",)), ("j", "espeak", ("j",)), ("Y", "arpabet", ("j",)),
     ("@", "espeak", ("schwa",)), ("AH0", "arpabet", ("schwa",)), ("AH1", "arpabet", ("mid",)),
     ("0", "espeak", ("mid_rounded",)), ("O:", "espeak", ("open_rounded",)),
-    ("aI", "espeak", (OPEN, SPREAD)), ("'aI", "espeak", (OPEN, SPREAD)),
-    ("AY1", "arpabet", (OPEN, SPREAD)), ("aɪ", "ipa", (OPEN, SPREAD)),
+    ("I", "espeak", (LAX,)), ("IH1", "arpabet", (LAX,)), ("ˈɪ", "ipa", (LAX,)),
+    ("aI", "espeak", (OPEN, LAX)), ("'aI", "espeak", (OPEN, LAX)),
+    ("AY1", "arpabet", (OPEN, LAX)), ("aɪ", "ipa", (OPEN, LAX)),
     ("aU", "espeak", (OPEN, ROUNDED)), ("oU", "espeak", ("mid_rounded", ROUNDED)),
-    ("əʊ", "ipa", ("schwa", ROUNDED)), ("eI", "espeak", ("mid", SPREAD)),
-    ("I@", "espeak", (SPREAD, "schwa")), ("e@", "espeak", ("mid", "schwa")),
+    ("əʊ", "ipa", ("schwa", ROUNDED)), ("eI", "espeak", ("mid", LAX)),
+    ("I@", "espeak", (LAX, "schwa")), ("e@", "espeak", ("mid", "schwa")),
     ("_", "espeak", (PAUSE,)), ("_:", "espeak", (PAUSE,)), ("sil", "arpabet", (PAUSE,)),
     ("sp", "arpabet", (PAUSE,)), ("", "ipa", (PAUSE,)),
 ])  # fmt: skip
@@ -133,7 +135,7 @@ def test_diphthongs_share_their_interval_and_pauses_hold_rest():
     al = Alignment((), (Segment("_", 0.0, 0.3), Segment("aI", 0.3, 0.5),
                         Segment("_", 0.5, 1.5)), "espeak", 1.5)
     assert gestures(al) == [Gesture(PAUSE, 0.0, 0.3), Gesture(OPEN, 0.3, 0.4),
-                            Gesture(SPREAD, 0.4, 0.5), Gesture(PAUSE, 0.5, 1.5)]
+                            Gesture(LAX, 0.4, 0.5), Gesture(PAUSE, 0.5, 1.5)]
     t, act, jaw = controls_from_alignment(al)
     late = t > 0.9  # deep in the final pause: at rest to within 0.1 % of the open target
     assert np.abs(act[late]).max() < 1e-3 and jaw[late].max() < 1e-3 * VISEMES[OPEN].jaw
@@ -278,3 +280,24 @@ def test_a_held_i_widens_like_real_lips_and_keeps_the_lower_lip_in_range(face):
     assert 4e-3 <= m["width_change"] <= 8e-3, m
     assert m["lip_gap"] > 1.5e-3, m
     assert -6e-3 < m["lower_forward"] < 0.0, m
+
+
+def test_a_held_lax_i_is_less_spread_and_more_open_than_i(face):
+    """/ɪ/ (the vowel of "kit", and the ends of /eɪ aɪ ɔɪ/), ramped and held as /i/ above: the
+    jaw between /i/'s and the mid vowels', the corners 0.5-2 mm wider each side (less than
+    /i/'s 2-4), the lips further apart than in /i/ and the lower lip drawn back less. With
+    /i/'s spread, its ZYG and RIS held the lower lip up over the teeth through whole sentences
+    (docs/stimuli.md)."""
+    rate = 60.0
+    shape = np.clip(np.arange(int(0.4 * rate) + 1) / rate / 0.1, 0.0, 1.0)
+    got = {}
+    for cls in (SPREAD, LAX):
+        v = VISEMES[cls]
+        sim = simulate(face, shape[:, None] * v.activity_vector()[None], shape * v.jaw)
+        got[cls] = mouth_measures(sim.model, sim.positions[-1])
+    lax, spread = got[LAX], got[SPREAD]
+    assert VISEMES[SPREAD].jaw < VISEMES[LAX].jaw < VISEMES["mid"].jaw
+    assert 1e-3 <= lax["width_change"] <= 4e-3, lax
+    assert lax["width_change"] < spread["width_change"] - 1.5e-3
+    assert lax["lip_gap"] > spread["lip_gap"] + 1e-3, (lax, spread)
+    assert spread["lower_forward"] < lax["lower_forward"] < 0.0, (lax, spread)

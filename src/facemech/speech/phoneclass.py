@@ -42,6 +42,8 @@ CONSONANT_CLASSES: dict[str, str] = {
 #: vowel classes: (name, description)
 VOWEL_CLASSES: dict[str, str] = {
     "close_front_spread": "i: close front, lips spread",
+    "close_front_lax": "I (the vowel of \"kit\", /ɪ/, and the end of /eɪ aɪ ɔɪ/): lax, the jaw "
+                       "and the lips' spreading halfway from i: to the mid vowels",
     "close_back_rounded": "u: close back, lips rounded and protruded",
     "open": "a: open, the jaw well open",
     "open_rounded": "O: (the vowel of \"thought\", /ɔ/): open, the lips somewhat rounded",
@@ -58,6 +60,7 @@ _B, _LD, _D, _A, _PA, _V, _G = ("bilabial", "labiodental", "dental", "alveolar",
 _I, _U, _O, _M, _MR, _S = ("close_front_spread", "close_back_rounded", "open", "mid",
                            "mid_rounded", "schwa")
 _OR = "open_rounded"
+_IL = "close_front_lax"
 
 #: labels that mean silence, in every notation (compared after stripping, case-insensitive)
 PAUSE_LABELS = frozenset({"", "_", "_:", "_!", "_^_", "__", "|", "||", "#", "sil", "sp", "spn",
@@ -77,7 +80,8 @@ _ESPEAK: dict[str, tuple[str, ...]] = {
     **dict.fromkeys(("l", "L", "l-"), ("l",)),
     "j": ("j",), "@L": (_S, "l"),
     # vowels
-    **dict.fromkeys(("i:", "i", "I", "I2", "I#", "I2#", "@#", "i2"), (_I,)),
+    **dict.fromkeys(("i:", "i", "i2"), (_I,)),
+    **dict.fromkeys(("I", "I2", "I#", "I2#", "@#"), (_IL,)),
     **dict.fromkeys(("u:", "U", "u"), (_U,)),
     **dict.fromkeys(("a", "a2", "aa", "A:", "A@", "A#", "a#2", "A~", "A"), (_O,)),
     **dict.fromkeys(("e", "E", "E#", "E2", "e#", "e:", "V", "3:"), (_M,)),
@@ -85,9 +89,9 @@ _ESPEAK: dict[str, tuple[str, ...]] = {
     **dict.fromkeys(("0", "0#", "02", "O@", "o@", "o:", "o", "O~", "oU#"), (_MR,)),
     **dict.fromkeys(("@", "@2", "@5", "3", "a#"), (_S,)),
     # diphthongs and triphthongs: their parts in order
-    "aI": (_O, _I), "aU": (_O, _U), "eI": (_M, _I), "oU": (_MR, _U), "OI": (_MR, _I),
-    "e@": (_M, _S), "i@": (_I, _S), "i@3": (_I, _S), "I@": (_I, _S), "U@": (_U, _S),
-    "aI@": (_O, _I, _S), "aI3": (_O, _I, _S), "aU@": (_O, _U, _S), "IR": (_S, "r"),
+    "aI": (_O, _IL), "aU": (_O, _U), "eI": (_M, _IL), "oU": (_MR, _U), "OI": (_MR, _IL),
+    "e@": (_M, _S), "i@": (_I, _S), "i@3": (_I, _S), "I@": (_IL, _S), "U@": (_U, _S),
+    "aI@": (_O, _IL, _S), "aI3": (_O, _IL, _S), "aU@": (_O, _U, _S), "IR": (_S, "r"),
     "VR": (_M, "r"), "ju:": ("j", _U),
 }
 
@@ -102,13 +106,13 @@ _ARPABET: dict[str, tuple[str, ...]] = {
     **dict.fromkeys(("HH", "Q", "HV"), (_G,)),
     **dict.fromkeys(("W", "WH"), ("w",)),
     "R": ("r",), "L": ("l",), "EL": (_S, "l"), "Y": ("j",),
-    **dict.fromkeys(("IY", "IH", "IX"), (_I,)),
+    "IY": (_I,), **dict.fromkeys(("IH", "IX"), (_IL,)),
     **dict.fromkeys(("UW", "UH", "UX"), (_U,)),
     **dict.fromkeys(("AA", "AE"), (_O,)),
     **dict.fromkeys(("EH", "AH"), (_M,)),
     "ER": (_M, "r"), "AXR": (_S, "r"),
     "AO": (_OR,), "AX": (_S,),
-    "AY": (_O, _I), "AW": (_O, _U), "EY": (_M, _I), "OW": (_MR, _U), "OY": (_MR, _I),
+    "AY": (_O, _IL), "AW": (_O, _U), "EY": (_M, _IL), "OW": (_MR, _U), "OY": (_MR, _IL),
 }
 
 # IPA segments (matched longest first); affricates and diphthongs as written with or without a
@@ -125,7 +129,7 @@ _IPA: dict[str, tuple[str, ...]] = {
     **dict.fromkeys(("r", "ɹ", "ɻ", "ʁ"), ("r",)),
     **dict.fromkeys(("l", "ɫ"), ("l",)),
     **dict.fromkeys(("j", "c", "ɟ", "ʝ"), ("j",)),  # palatals (ç decomposes to c)
-    **dict.fromkeys(("i", "ɪ", "y", "ʏ", "ɨ"), (_I,)),
+    **dict.fromkeys(("i", "y", "ʏ", "ɨ"), (_I,)), "ɪ": (_IL,),
     **dict.fromkeys(("u", "ʊ", "ʉ", "ɯ"), (_U,)),
     **dict.fromkeys(("a", "æ", "ɑ", "ɶ"), (_O,)),
     **dict.fromkeys(("e", "ɛ", "ʌ", "ɜ", "ø", "œ"), (_M,)),

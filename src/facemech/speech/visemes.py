@@ -77,6 +77,11 @@ VISEMES: MappingProxyType = MappingProxyType({
     # back along the teeth, rolled in, docs/stimuli.md)
     "close_front_spread": _v(2.5, 8.0, 1.5, 12.0, 15.0, ZYG=0.6, RIS=0.6, LAO=0.15, LLS=0.2,
                              DLI=0.12),
+    # /ɪ/ and the ends of /eɪ aɪ ɔɪ/: lax, every number halfway from /i/ to the mid vowel (a
+    # near-close near-front vowel); with /i/'s spread, ZYG and RIS held the lower lip up over
+    # the teeth through whole sentences (docs/stimuli.md)
+    "close_front_lax": _v(4.25, 4.5, 1.75, 12.0, 15.0, ZYG=0.3, RIS=0.3, LAO=0.075,
+                          LLS=0.1, DLI=0.11),
     "close_back_rounded": _v(2.5, 24.0, 1.5, 15.0, 15.0, OOS=0.9, OOI=1.0, MEN=0.5),
     "open": _v(12.0, 4.0, 8.0, 12.0, 15.0, DLI=0.3),
     "open_rounded": _v(11.0, 4.0, 8.0, 12.0, 15.0, OOS=0.25, OOI=0.25),
