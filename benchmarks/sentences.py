@@ -17,7 +17,9 @@ the phones' middles per articulatory class); ``sentences`` (per sentence: the du
 peak lower-lip speed, the wall time, the plan's simulations and kept iteration);
 ``between_bilabials``: the stressed open vowels of
 :data:`BETWEEN_BILABIALS` in a carrier phrase (the open vowels' criterion between two bilabials;
-``--no-carrier`` leaves them out). ``--phones`` adds every phone's row. Progress goes to
+``--no-carrier`` leaves them out), with ``their_bilabials``, the bilabials of the same words (the
+bilabials' criterion on them), and ``bilabial_with_the_words``: the bilabials' criterion on the
+sentences' bilabials and those together. ``--phones`` adds every phone's row. Progress goes to
 stderr (about 20-40 s a sentence on the 2-core machine).
 
 ``python benchmarks/sentences.py [--voice en-gb] [--face default] [--rate 175]
@@ -123,17 +125,21 @@ def main(argv=None) -> int:
            "criteria": CRITERIA, "summary": summarize(phones, speeds),
            "classes": class_table(phones), "sentences": rows}
     if not args.no_carrier:
-        between = []
+        between, flanking = [], []
         for k, word in enumerate(BETWEEN_BILABIALS, 1):
             ph, _, _, _ = spoken_phones(CARRIER.format(word), voice=args.voice,
                                         rate_wpm=args.rate, face=args.face, plan=plan)
             between += [p for p in ph if p.between_bilabials]
+            flanking += [p for p in ph if p.group == "bilabial"]
             print(f"[{k}/{len(BETWEEN_BILABIALS)}] {CARRIER.format(word)}", file=sys.stderr,
                   flush=True)
         out["between_bilabials"] = summarize(between)["open"]["between_bilabials"]
         out["between_bilabials"]["words"] = list(BETWEEN_BILABIALS)
+        # the bilabials of the same words, beside those open vowels, and every bilabial said
+        out["between_bilabials"]["their_bilabials"] = summarize(flanking)["bilabial"]
+        out["bilabial_with_the_words"] = summarize(phones + flanking)["bilabial"]
         if args.phones:
-            out["between_bilabials"]["phones"] = [p.to_dict() for p in between]
+            out["between_bilabials"]["phones"] = [p.to_dict() for p in between + flanking]
     if args.phones:
         out["phones"] = [p.to_dict() for p in phones]
     print(json.dumps(out, indent=1))

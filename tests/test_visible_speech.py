@@ -177,12 +177,15 @@ def spoken_summary(tmp_path_factory):
         speeds.append(peak_lower_lip_speed(sim.time, sim.positions, sim.model))
     out = summarize(phones, speeds)
     out["between_bilabials"] = summarize(between)["open"]["between_bilabials"]
+    # the bilabials of the same words: the open vowel between them must not open them
+    out["their_bilabials"] = summarize([p for p in between if p.group == "bilabial"])["bilabial"]
     print(json.dumps(out))  # the numbers the marks below quote (pytest -s shows them)
     return out
 
 
 def test_sentences_cover_every_group(spoken_summary):
-    for group in ("bilabial", "open", "rounded", "labiodental", "speed", "between_bilabials"):
+    for group in ("bilabial", "open", "rounded", "labiodental", "speed", "between_bilabials",
+                  "their_bilabials"):
         assert spoken_summary[group]["n"] >= 2, group
 
 
@@ -200,6 +203,9 @@ def not_met(group: str, measured: str):
     "labiodental",  # planned: 5 of 5 within 1 mm of the incisors' edge, the farthest 0.73 mm
     not_met("speed", "planned, peak lower-lip speed 82 mm/s in 'Four hours of steady work "
             "faced us.' (133 and 179 mm/s in the others)"),
+    not_met("their_bilabials", "planned, the /m/ of 'map' stays 0.61 mm apart at its middle "
+            "(3 of the 4 bilabials of 'pop' and 'map' within 0.5 mm): the face cannot open the "
+            "lips 10 mm and close them again in the vowel's 100 ms (issue 27's speed)"),
 ])
 def test_sentences_meet_the_issues_criteria(spoken_summary, group):
     assert spoken_summary[group]["met"], spoken_summary[group]
