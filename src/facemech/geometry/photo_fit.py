@@ -30,7 +30,7 @@ camera that sees it as the photo did (:class:`PhotoCamera`), to paint the photo 
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.interpolate import RBFInterpolator
@@ -85,6 +85,16 @@ JAW = np.arange(17)
 #: renders through dlib the landmarks' worst error is 1.67-1.82 mm from 0.15 to 1, 2.0 mm at 0.1
 #: (``tests/test_photo.py``; docs/photo.md)
 JAW_SMOOTHING = 0.2
+#: iBUG points a face's turn about the vertical is read from (:func:`estimate_yaw`): the nose
+#: (27-35), the eyes (36-47) and the mouth's corners (48, 54); not the jaw line or the brows,
+#: which a detector places least surely on a turned face
+YAW_POINTS = np.r_[27:48, 48, 54]
+#: rad, the smallest turn :func:`fit_frontal` takes out of the points; a smaller one is fitted
+#: as frontal, as before (frontal renders of the test faces read 0.25-0.5 degrees through dlib)
+YAW_MIN = float(np.radians(3.0))
+#: rad, the turns :func:`estimate_yaw` tries (0.25-degree steps; photos turned more than 20
+#: degrees are refused before, :func:`facemech.io.photo.frontal_landmarks`)
+YAW_SEARCH = np.radians(np.arange(-25.0, 25.0 + 1e-9, 0.25))
 #: the generic mesh the photo face is made from: (rows, columns) of :func:`generic.make_surface`,
 #: the built-in face's (about 2 mm between nodes at the lips)
 PHOTO_RESOLUTION = (48, 41)
@@ -108,6 +118,8 @@ class PhotoCamera:
     distance : m from the camera to the reference plane
     roll : rad, the image's turn about the camera axis (counter-clockwise in the image)
     size : (height, width) of the photo, pixels
+    yaw : rad, the face's turn to its left about the vertical through ``(centre_x, plane_z)``
+        (:func:`turn_about_vertical`) before the view; 0 for a frontal photo
     """
 
     centre_px: np.ndarray
@@ -117,10 +129,18 @@ class PhotoCamera:
     distance: float
     roll: float
     size: tuple[int, int]
+    yaw: float = 0.0
+
+    @property
+    def pivot(self) -> np.ndarray:
+        """(3,) m, a point of the vertical the face turns about (its y is the eyes')."""
+        return np.array([self.centre_m[0], self.centre_m[1], self.plane_z])
 
     def project(self, points: np.ndarray) -> np.ndarray:
         """Image points (n, 2) px (x right, y down) of model points (n, 3) m."""
         p = np.atleast_2d(np.asarray(points, float))
+        if self.yaw:
+            p = turn_about_vertical(p, self.yaw, self.pivot)
         k = self.distance / np.maximum(self.distance - (p[:, 2] - self.plane_z), 1e-3)
         dx = (p[:, 0] - self.centre_m[0]) * k / self.metres_per_px
         dy = -(p[:, 1] - self.centre_m[1]) * k / self.metres_per_px
@@ -129,7 +149,10 @@ class PhotoCamera:
                                 self.centre_px[1] - s * dx + c * dy])
 
     def back_project(self, image_points: np.ndarray, z: np.ndarray) -> np.ndarray:
-        """Model points (n, 3) m on the rays of image points (n, 2) px, at depths z (n,) m."""
+        """Model points (n, 3) m on the rays of image points (n, 2) px, at depths z (n,) m; a
+        camera without a turn (``yaw`` 0) only."""
+        if self.yaw:
+            raise ValueError("back_project needs a camera without a turn (yaw 0)")
         q = np.asarray(image_points, float) - self.centre_px
         c, s = np.cos(self.roll), np.sin(self.roll)
         dx = c * q[:, 0] - s * q[:, 1]
@@ -141,6 +164,8 @@ class PhotoCamera:
     def view_direction(self, points: np.ndarray) -> np.ndarray:
         """Unit vectors (n, 3) from model points towards the camera."""
         eye = np.array([self.centre_m[0], self.centre_m[1], self.plane_z + self.distance])
+        if self.yaw:  # the camera, turned back into the face's frame
+            eye = turn_about_vertical(eye[None], -self.yaw, self.pivot)[0]
         d = eye - np.atleast_2d(points)
         return d / np.linalg.norm(d, axis=1, keepdims=True)
 
@@ -178,8 +203,11 @@ class PhotoFit:
 
     def note(self) -> str:
         """One line: the scale and where it came from."""
+        turn = (f"; turned {abs(np.degrees(self.camera.yaw)):.1f} degrees to its "
+                f"{'left' if self.camera.yaw > 0 else 'right'}, taken out"
+                if self.camera.yaw else "")
         return (f"scale: interpupillary distance {self.ipd * 1e3:.1f} mm ({self.scale_source}); "
-                f"face {self.size_factor:.3f} x the generic face")
+                f"face {self.size_factor:.3f} x the generic face{turn}")
 
 
 def eye_centres(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -196,8 +224,15 @@ def _generic_grid() -> tuple[np.ndarray, np.ndarray]:
 def fit_frontal(points: np.ndarray, size: tuple[int, int], *, ipd: float | None = None,
                 distance: float = 1.0, profile: ProfileSilhouette | None = None,
                 offsets: np.ndarray | None = DLIB_OFFSETS_MM,
-                loose_jaw: bool | None = None, source: str | None = None) -> PhotoFit:
+                loose_jaw: bool | None = None, yaw: float | None = None,
+                source: str | None = None) -> PhotoFit:
     """Fit the generic face to the 68 iBUG points of a frontal photo.
+
+    A face turned a little from the camera (at least :data:`YAW_MIN`) is turned back first: its
+    turn is read from the points (:func:`estimate_yaw`), each point is moved by as much as the
+    turn moves the generic face's (scaled) point in the photo's camera, the frontal fit is made
+    of the moved points, and the fit's camera keeps the turn (``camera.yaw``) for the photo's
+    texture.
 
     Parameters
     ----------
@@ -215,6 +250,8 @@ def fit_frontal(points: np.ndarray, size: tuple[int, int], *, ipd: float | None 
         its middle (:func:`symmetric_jaw`) and followed loosely by the spline
         (:data:`JAW_SMOOTHING`), the chin's heights apart (:func:`chin_points`); None: when
         ``offsets`` are given (a detector's points), not for points in facemech's placement
+    yaw : rad, the face's turn to its left (positive) to take out; None reads it from the points
+        (:func:`estimate_yaw`, none under :data:`YAW_MIN`); 0 fits the points as frontal
     source : the photo's name, for errors
 
     Returns
@@ -240,27 +277,23 @@ def fit_frontal(points: np.ndarray, size: tuple[int, int], *, ipd: float | None 
     own = generic_ibug68()
     gen = own if offsets is None else _detector_points(offsets)
     v_gen, faces = _generic_grid()
-    er, el = eye_centres(pts)
-    if el[0] <= er[0]:
-        raise InputError("the landmarks' left and right are swapped (a mirrored image?)",
-                         source=source, field="landmarks")
-    roll = float(np.arctan2(-(el[1] - er[1]), el[0] - er[0]))
     ipd_m = IPD_NORM if ipd is None else float(ipd)
-    g_er, g_el = eye_centres(gen)
     own_ipd = float(np.linalg.norm(np.subtract(*eye_centres(own))))
     size_factor = ipd_m / own_ipd
-    # the detector's eye centres lie apart by the generic face's ratio of its two placements
-    eyes_m = ipd_m * float(np.linalg.norm(g_el - g_er)) / own_ipd
-    # the reference plane: the eyes' depth on the fitted face; the generic face is scaled
-    # about its eye midpoint, which stays where the generic face has it
-    g_mid = 0.5 * (g_er + g_el)
-    cam = PhotoCamera(centre_px=0.5 * (er + el), centre_m=g_mid[:2].copy(),
-                      plane_z=float(g_mid[2]), metres_per_px=0.0, distance=float(distance),
-                      roll=roll, size=(int(size[0]), int(size[1])))
-    z = g_mid[2] + size_factor * (gen[:, 2] - g_mid[2])
-    # the eye centres lie at their own depth; the pixel size on the plane follows from them
-    cam = _with_pixel(cam, eyes_m, er, el, z[RIGHT_EYE].mean(), z[LEFT_EYE].mean())
-    fitted = cam.back_project(pts, z)
+    cam, z, g_mid = _frontal_camera(pts, gen, size, ipd_m, own_ipd, size_factor, distance,
+                                    source)
+    scaled = g_mid + size_factor * (gen - g_mid)  # the generic points on the fitted face
+    turn = estimate_yaw(pts, scaled, cam) if yaw is None else float(yaw)
+    if yaw is None and abs(turn) < YAW_MIN:
+        turn = 0.0
+    used = pts
+    if turn:
+        # each point moved back by as much as the turn moves the generic face's in the photo
+        used = pts + cam.project(scaled) - cam.project(turn_about_vertical(scaled, turn,
+                                                                            g_mid))
+        cam, z, g_mid = _frontal_camera(used, gen, size, ipd_m, own_ipd, size_factor,
+                                        distance, source)
+    fitted = cam.back_project(used, z)
     _check_order(fitted, source)
     smooth_x, smooth_y = np.zeros(len(SPLINE_POINTS)), np.zeros(len(SPLINE_POINTS))
     if offsets is not None if loose_jaw is None else loose_jaw:
@@ -285,9 +318,81 @@ def fit_frontal(points: np.ndarray, size: tuple[int, int], *, ipd: float | None 
         verts[:, 2] += correction(verts)
         ibug[:, 2] += correction(ibug)
     lm = ibug_to_landmarks(ibug, verts, faces)
+    if turn:
+        cam = replace(cam, yaw=float(turn))
     return PhotoFit(verts, faces, v_gen, ibug, lm, cam, pts.copy(), ipd_m,
                     "given" if ipd is not None else "adult norm, Dodgson 2004",
                     float(size_factor), None if correction is None else correction.values)
+
+
+def _frontal_camera(pts: np.ndarray, gen: np.ndarray, size, ipd_m: float, own_ipd: float,
+                    size_factor: float, distance: float, source: str | None):
+    """The frontal camera of 68 image points: its roll from the eye line, its pixel size from
+    the eye centres ``ipd_m`` apart; with the generic (detector's) points' depths (68,) m on the
+    fitted face and the generic eye midpoint (3,) m the face is scaled about."""
+    er, el = eye_centres(pts)
+    if el[0] <= er[0]:
+        raise InputError("the landmarks' left and right are swapped (a mirrored image?)",
+                         source=source, field="landmarks")
+    roll = float(np.arctan2(-(el[1] - er[1]), el[0] - er[0]))
+    g_er, g_el = eye_centres(gen)
+    # the detector's eye centres lie apart by the generic face's ratio of its two placements
+    eyes_m = ipd_m * float(np.linalg.norm(g_el - g_er)) / own_ipd
+    # the reference plane: the eyes' depth on the fitted face; the generic face is scaled
+    # about its eye midpoint, which stays where the generic face has it
+    g_mid = 0.5 * (g_er + g_el)
+    cam = PhotoCamera(centre_px=0.5 * (er + el), centre_m=g_mid[:2].copy(),
+                      plane_z=float(g_mid[2]), metres_per_px=0.0, distance=float(distance),
+                      roll=roll, size=(int(size[0]), int(size[1])))
+    z = g_mid[2] + size_factor * (gen[:, 2] - g_mid[2])
+    # the eye centres lie at their own depth; the pixel size on the plane follows from them
+    cam = _with_pixel(cam, eyes_m, er, el, z[RIGHT_EYE].mean(), z[LEFT_EYE].mean())
+    return cam, z, g_mid
+
+
+def turn_about_vertical(points: np.ndarray, angle: float, pivot: np.ndarray) -> np.ndarray:
+    """Points (n, 3) m turned by ``angle`` (rad) about the vertical through ``pivot`` (3,): a
+    positive angle turns the face to its left (its front, +z, towards +x)."""
+    p = np.atleast_2d(np.asarray(points, float))
+    c, s = np.cos(angle), np.sin(angle)
+    dx, dz = p[:, 0] - pivot[0], p[:, 2] - pivot[2]
+    return np.column_stack([pivot[0] + c * dx + s * dz, p[:, 1], pivot[2] - s * dx + c * dz])
+
+
+def estimate_yaw(points: np.ndarray, generic_points: np.ndarray | None = None,
+                 camera: PhotoCamera | None = None) -> float:
+    """How far (rad) a face is turned to its left about the vertical, from its image points.
+
+    The generic face's points (``generic_points``, (68, 3) m; default: where dlib puts them,
+    :data:`DLIB_OFFSETS_MM`) are turned by each angle of :data:`YAW_SEARCH` about the vertical
+    through their eyes' midpoint, seen through ``camera`` (a pinhole near the face: the turned
+    face's near side looks larger) or from far (None: x right, y down), and fitted to the image
+    points (68, 2) px by a 2-D similarity (scale, rotation, translation; least squares over
+    :data:`YAW_POINTS`); the angle that leaves the least residual is returned, refined by a
+    parabola through its neighbours. The generic face's own points turned and seen so give
+    their angle back (tests/test_photo.py).
+    """
+    pts = np.asarray(points, float)[YAW_POINTS]
+    gen = _detector_points(DLIB_OFFSETS_MM) if generic_points is None else np.asarray(
+        generic_points, float)
+    pivot = 0.5 * np.add(*eye_centres(gen))
+    b = pts - pts.mean(axis=0)
+    res = np.empty(len(YAW_SEARCH))
+    for i, a in enumerate(YAW_SEARCH):
+        g = turn_about_vertical(gen, a, pivot)[YAW_POINTS]
+        q = (np.column_stack([g[:, 0], -g[:, 1]]) if camera is None
+             else camera.project(g))
+        q -= q.mean(axis=0)
+        # the best similarity's residual: |b|^2 - (sum of singular values of q^T b)^2 / |q|^2
+        sv = np.linalg.svd(q.T @ b, compute_uv=False)
+        res[i] = float((b * b).sum() - sv.sum() ** 2 / (q * q).sum())
+    k = int(np.argmin(res))
+    if 0 < k < len(res) - 1:
+        den = res[k - 1] - 2.0 * res[k] + res[k + 1]
+        if den > 0:
+            step = YAW_SEARCH[1] - YAW_SEARCH[0]
+            return float(YAW_SEARCH[k] + 0.5 * step * (res[k - 1] - res[k + 1]) / den)
+    return float(YAW_SEARCH[k])
 
 
 def _spline(src: np.ndarray, disp: np.ndarray, smooth_x: np.ndarray, smooth_y: np.ndarray):
@@ -346,8 +451,6 @@ def _detector_points(offsets_mm: np.ndarray) -> np.ndarray:
 
 def _with_pixel(cam: PhotoCamera, ipd_m: float, er, el, z_r: float, z_l: float) -> PhotoCamera:
     """The camera whose pixel size puts the two eye centres ``ipd_m`` apart at their depths."""
-    from dataclasses import replace
-
     probe = replace(cam, metres_per_px=1.0)
     a = probe.back_project(np.array([er]), np.array([z_r]))[0]
     b = probe.back_project(np.array([el]), np.array([z_l]))[0]
