@@ -90,7 +90,8 @@ JAW_SMOOTHING = 0.2
 #: which a detector places least surely on a turned face
 YAW_POINTS = np.r_[27:48, 48, 54]
 #: rad, the smallest turn :func:`fit_frontal` takes out of the points; a smaller one is fitted
-#: as frontal, as before (frontal renders of the test faces read 0.25-0.5 degrees through dlib)
+#: as frontal, as before (frontal renders of the test faces read 0.2 and 2.6 degrees through
+#: dlib: the variant's mouth and chin are its own, the generic face's are not)
 YAW_MIN = float(np.radians(3.0))
 #: rad, the turns :func:`estimate_yaw` tries (0.25-degree steps; photos turned more than 20
 #: degrees are refused before, :func:`facemech.io.photo.frontal_landmarks`)
