@@ -377,10 +377,11 @@ def estimate_yaw(points: np.ndarray, generic_points: np.ndarray | None = None,
     gen = _detector_points(DLIB_OFFSETS_MM) if generic_points is None else np.asarray(
         generic_points, float)
     pivot = 0.5 * np.add(*eye_centres(gen))
+    used = gen[YAW_POINTS]
     b = pts - pts.mean(axis=0)
     res = np.empty(len(YAW_SEARCH))
     for i, a in enumerate(YAW_SEARCH):
-        g = turn_about_vertical(gen, a, pivot)[YAW_POINTS]
+        g = turn_about_vertical(used, a, pivot)
         q = (np.column_stack([g[:, 0], -g[:, 1]]) if camera is None
              else camera.project(g))
         q -= q.mean(axis=0)
