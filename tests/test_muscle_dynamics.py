@@ -10,7 +10,7 @@ import pytest
 from conftest import run_cli
 from facemech.errors import InputError
 from facemech.io.activity import write_activity
-from facemech.params import MUSCLE_GROUPS, Parameters, preset, read_preset
+from facemech.params import FACIAL_VMAX, MUSCLE_GROUPS, Parameters, preset, read_preset
 from facemech.physics import muscle
 from facemech.physics.assembly import Physics
 
@@ -38,6 +38,25 @@ def test_the_damped_filter_is_exact_and_the_seeds_filter_unchanged():
     for state in [(0.0, 0.0), (0.7, -3.0), (1.3, 40.0)]:
         assert (muscle.activation_exact_damped(*state, 1.0, 0.015, 1.0, 4e-3)
                 == muscle.activation_exact(*state, 1.0, 0.015, 4e-3))
+
+
+def _rise_10_90(tau, zeta):
+    """10-90 % rise time (s) of eq. (4)'s step response, from its closed form."""
+    t = np.linspace(0.0, 0.4, 400_001)
+    y = np.maximum.accumulate(muscle.activation_response(t, 1.0, tau, zeta))
+    return np.interp(0.9, y, t) - np.interp(0.1, y, t)
+
+
+def test_the_lip_filter_rises_as_the_lips_measured_response():
+    """The perioral critically damped filter (params.LIP_ACTIVATION_TAU, 16.5 ms) has the
+    10-90 % rise of the lips' measured response (6.1 Hz, damping 0.7: 55.5 ms), 10 % slower
+    than the seeds' 15 ms (50.4 ms)."""
+    from facemech.params import ITO_ACTIVATION, LIP_ACTIVATION_TAU
+
+    ito = _rise_10_90(ITO_ACTIVATION["tau_activation"], ITO_ACTIVATION["activation_damping"])
+    assert ito == pytest.approx(55.5e-3, abs=0.1e-3)
+    assert _rise_10_90(LIP_ACTIVATION_TAU, 1.0) == pytest.approx(ito, rel=0.005)
+    assert _rise_10_90(0.015, 1.0) == pytest.approx(50.4e-3, abs=0.1e-3)
 
 
 def test_the_damped_filter_by_euler_converges_at_first_order():
@@ -101,6 +120,11 @@ def test_each_muscle_gets_its_own_f4_and_the_seeds_keep_theirs(face, seeds_face)
     np.testing.assert_allclose(f4, (p.f3 - x) / (20.0 / 6.0 * ph.forces.muscles.rest_length),
                                rtol=1e-12)
     assert f4[names.index("MEN_R")] > f4[names.index("ZYG_R")]
+    # at the facial muscles' 11 fibre lengths per second (params.FACIAL_VMAX) zygomaticus
+    # halves its force at 88 mm/s of shortening, mentalis at 39 (docs/model.md)
+    v_half = 1e3 * FACIAL_VMAX / 6.0 * ph.forces.muscles.rest_length
+    assert v_half[names.index("ZYG_R")] == pytest.approx(88.0, abs=1.5)
+    assert v_half[names.index("MEN_R")] == pytest.approx(39.0, abs=1.5)
     # the default anatomical preset keeps the seeds' f4 and filter until its default changes
     assert np.all(Physics.build(face, preset("anatomical")).forces.muscles.f4 == 20.0)
 

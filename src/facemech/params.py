@@ -331,6 +331,30 @@ CALIBRATED_K_FORCE = 16 * 2500 * DYNE / CM**2
 #: (1984, J Appl Physiol 57:1715) found 22.5 N/cm^2, Narici et al. (1992) about 25 N/cm^2.
 SPECIFIC_TENSION = 26.8 * 1e4
 
+#: Intrinsic speed of the facial muscles' fibres, fibre lengths per second (``fv_vmax``; not
+#: yet the anatomical preset's: docs/model.md, Speed laws). Human muscle is modelled at 10
+#: (Zajac 1989, Crit Rev Biomed Eng 17:359), taken here as that of a limb muscle of 42 % type I
+#: fibres (gracilis 36 %, rectus femoris 48 %), scaled by the mimic muscles' larger share of
+#: fast fibres measured in the same cadavers: zygomaticus major, levator labii superioris,
+#: levator and depressor anguli oris 27-38 % type I (Happak et al. 1988, J Neurol Sci 83:25;
+#: orbicularis oris 27-34 %). A muscle's speed mixes its fibres' as ``s_I + r (1 - s_I)`` for
+#: fast fibres ``r`` times as fast as slow ones: 1.09-1.12 times the limb muscle's for r = 3-5,
+#: and at most 0.68 / 0.58 = 1.17 for any r. Hence 11.
+FACIAL_VMAX = 11.0
+#: Activation dynamics for the perioral muscles (not yet the anatomical preset's): eq. (4)'s
+#: critically damped filter, its tau chosen so that its 10-90 % rise (55.5 ms) equals that of
+#: the lips' measured force response to a stimulus, second order at 6.1 Hz with damping ratio
+#: 0.7 (orbicularis oris superior 0.71, inferior 0.68; eight subjects, Ito, Murano & Gomi 2004,
+#: J Appl Physiol 96:2318). The measured damping itself (tau 26.1 ms, zeta 0.7:
+#: :data:`ITO_ACTIVATION`), tried as the default, left the dynamic inversion's three-frame
+#: window blind to part of the activity (docs/model.md). The 14.5-15.6 ms delay is left out
+#: (an inversion's activity absorbs it as a lead).
+LIP_ACTIVATION_TAU = 16.5e-3
+LIP_ACTIVATION_DAMPING = 1.0
+#: The lips' measured activation response as eq. (4) with a damping ratio (Ito et al. 2004)
+ITO_ACTIVATION = MappingProxyType({"tau_activation": 1.0 / (2.0 * np.pi * 6.1),
+                                   "activation_damping": 0.7})
+
 #: The two global scales of the anatomical preset fitted to the gesture targets of docs/model.md
 #: (``facemech calibrate --builtin``, analysis/calibration.py): the muscle force as a factor on
 #: the specific tension (fitted 1.28, rounded up to leave risorius a margin on its 3-mm target:
@@ -367,6 +391,9 @@ def anatomical(scales: dict | None = None) -> Parameters:
     - viscosity: a viscous time (viscosity / modulus) of 3 ms (no published facial-tissue
       viscosity serves): small enough not to slow gestures, large enough for the step's stability
       (docs/model.md);
+    - muscle speed: still the seeds' eq. (4) and (6) constants (f4 = 20 s/m, tau = 15 ms).
+      The measured laws are :data:`FACIAL_VMAX` and :data:`LIP_ACTIVATION_TAU` (a preset
+      file's ``muscle`` block takes them); docs/model.md has what switching to them did;
     - integration: linearly implicit Euler, 4 steps per 60-Hz frame, with the bone and lip
       contacts stepped on their own after each solve (``implicit_contacts``, issue 32).
     """
