@@ -31,11 +31,12 @@ GESTURES = ((("ZYG",), "mouth_corner_right", 1), (("LLS",), "upper_lip_center", 
 ITO = {"tau_activation": 1.0 / (2.0 * np.pi * 6.1), "activation_damping": 0.7}
 
 VARIANTS = {
-    # the anatomical preset (still the seeds' law: f4 = 20 s/m, tau 15 ms)
+    # the anatomical preset: since 2026-11-29 the laws the measured data support
+    # (facemech.params: FACIAL_VMAX, LIP_ACTIVATION_TAU): 11 fibre lengths/s, eq. (4) critically
+    # damped with the rise of Ito's response
     "default": {},
-    # the laws the measured data support (facemech.params: FACIAL_VMAX, LIP_ACTIVATION_TAU):
-    # 11 fibre lengths/s, eq. (4) critically damped with the rise of Ito's response
-    "facial_vmax11": {"fv_vmax": 11.0, "tau_activation": 16.5e-3, "activation_damping": 1.0},
+    # the seeds' law and filter (f4 = 20 s/m, tau 15 ms), the preset's before
+    "seeds_law": {"fv_vmax": 0.0, "tau_activation": 0.015, "activation_damping": 1.0},
     "facial_vmax11_ito": {"fv_vmax": 11.0, **ITO},
     "fibre_vmax10": {"fv_vmax": 10.0, **ITO},
     "fibre_vmax20": {"fv_vmax": 20.0, **ITO},

@@ -48,7 +48,7 @@ def _rise_10_90(tau, zeta):
 
 
 def test_the_lip_filter_rises_as_the_lips_measured_response():
-    """The perioral critically damped filter (params.LIP_ACTIVATION_TAU, 16.5 ms) has the
+    """The anatomical preset's critically damped filter (params.LIP_ACTIVATION_TAU, 16.5 ms) has the
     10-90 % rise of the lips' measured response (6.1 Hz, damping 0.7: 55.5 ms), 10 % slower
     than the seeds' 15 ms (50.4 ms)."""
     from facemech.params import ITO_ACTIVATION, LIP_ACTIVATION_TAU
@@ -125,8 +125,12 @@ def test_each_muscle_gets_its_own_f4_and_the_seeds_keep_theirs(face, seeds_face)
     v_half = 1e3 * FACIAL_VMAX / 6.0 * ph.forces.muscles.rest_length
     assert v_half[names.index("ZYG_R")] == pytest.approx(88.0, abs=1.5)
     assert v_half[names.index("MEN_R")] == pytest.approx(39.0, abs=1.5)
-    # the default anatomical preset keeps the seeds' f4 and filter until its default changes
-    assert np.all(Physics.build(face, preset("anatomical")).forces.muscles.f4 == 20.0)
+    # the default anatomical preset: those speeds, and eq. (4) with the rise of the lips'
+    # measured response; none of the seeds' constants
+    a = preset("anatomical")
+    assert (a.fv_vmax, a.tau_activation, a.activation_damping) == (FACIAL_VMAX, 16.5e-3, 1.0)
+    np.testing.assert_allclose(Physics.build(face, a).forces.muscles.f4,
+                               (p.f3 - x) / (v_half * 1e-3), rtol=1e-12)
 
 
 @pytest.mark.parametrize("field,value", [("activation_damping", 1.5),

@@ -331,8 +331,8 @@ CALIBRATED_K_FORCE = 16 * 2500 * DYNE / CM**2
 #: (1984, J Appl Physiol 57:1715) found 22.5 N/cm^2, Narici et al. (1992) about 25 N/cm^2.
 SPECIFIC_TENSION = 26.8 * 1e4
 
-#: Intrinsic speed of the facial muscles' fibres, fibre lengths per second (``fv_vmax``; not
-#: yet the anatomical preset's: docs/model.md, Speed laws). Human muscle is modelled at 10
+#: Intrinsic speed of the facial muscles' fibres, fibre lengths per second (``fv_vmax`` of the
+#: anatomical preset; docs/model.md, Speed laws). Human muscle is modelled at 10
 #: (Zajac 1989, Crit Rev Biomed Eng 17:359), taken here as that of a limb muscle of 42 % type I
 #: fibres (gracilis 36 %, rectus femoris 48 %), scaled by the mimic muscles' larger share of
 #: fast fibres measured in the same cadavers: zygomaticus major, levator labii superioris,
@@ -341,7 +341,7 @@ SPECIFIC_TENSION = 26.8 * 1e4
 #: fast fibres ``r`` times as fast as slow ones: 1.09-1.12 times the limb muscle's for r = 3-5,
 #: and at most 0.68 / 0.58 = 1.17 for any r. Hence 11.
 FACIAL_VMAX = 11.0
-#: Activation dynamics for the perioral muscles (not yet the anatomical preset's): eq. (4)'s
+#: Activation dynamics of the anatomical preset (the perioral muscles'): eq. (4)'s
 #: critically damped filter, its tau chosen so that its 10-90 % rise (55.5 ms) equals that of
 #: the lips' measured force response to a stimulus, second order at 6.1 Hz with damping ratio
 #: 0.7 (orbicularis oris superior 0.71, inferior 0.68; eight subjects, Ito, Murano & Gomi 2004,
@@ -391,9 +391,12 @@ def anatomical(scales: dict | None = None) -> Parameters:
     - viscosity: a viscous time (viscosity / modulus) of 3 ms (no published facial-tissue
       viscosity serves): small enough not to slow gestures, large enough for the step's stability
       (docs/model.md);
-    - muscle speed: still the seeds' eq. (4) and (6) constants (f4 = 20 s/m, tau = 15 ms).
-      The measured laws are :data:`FACIAL_VMAX` and :data:`LIP_ACTIVATION_TAU` (a preset
-      file's ``muscle`` block takes them); docs/model.md has what switching to them did;
+    - muscle speed: eq. (6)'s force-velocity term per muscle from an intrinsic speed of
+      :data:`FACIAL_VMAX` = 11 fibre lengths per second (Zajac 1989 scaled by the facial
+      muscles' fibre types, Happak et al. 1988) and each muscle's fibre length; eq. (4)'s
+      critically damped filter with tau :data:`LIP_ACTIVATION_TAU` = 16.5 ms, whose 10-90 %
+      rise is that of the lips' measured force response (55.5 ms; Ito, Murano & Gomi 2004).
+      The seeds' f4 = 20 s/m and tau = 15 ms stay in their presets;
     - integration: linearly implicit Euler, 4 steps per 60-Hz frame, with the bone and lip
       contacts stepped on their own after each solve (``implicit_contacts``, issue 32).
     """
@@ -420,6 +423,8 @@ def anatomical(scales: dict | None = None) -> Parameters:
         areas_cm2=ANATOMICAL_AREA_CM2, incisive_area_cm2=0.25, tether=0.0,
         k_bone_contact=1e7, jaw_kinematics="glide", glide_rate=GLIDE_RATE,
         glide_slope=GLIDE_SLOPE, implicit_contacts=True,
+        fv_vmax=FACIAL_VMAX, tau_activation=LIP_ACTIVATION_TAU,
+        activation_damping=LIP_ACTIVATION_DAMPING,
     )
 
 

@@ -18,12 +18,12 @@ interval, 0 inside it), so the face rests for the whole pause; the time before 0
 alignment's duration count as pauses. A diphthong is its parts (:mod:`.phoneclass`) sharing its
 interval equally, each with its own centre.
 
-The muscles take time to act: their activation filter (tau 15 ms, eq. 4 of Lucero & Munhall 1999)
-and the tissue delay the visible motion behind the activity. The controls are therefore
-computed ``lead_s`` ahead: the activity of frame t is the blend at t + lead_s, so that the face is
-at a phone's target at the phone's acoustic centre (the lead and the lag it makes up for were
-measured on the default face: docs/stimuli.md). The jaw is a kinematic drive whose skin follows
-within a few ms, so its lead is ``jaw_lead_s``.
+The muscles take time to act: their activation filter (eq. 4 of Lucero & Munhall 1999; tau
+16.5 ms under the anatomical preset) and the tissue delay the visible motion behind the
+activity. The controls are therefore computed ``lead_s`` ahead: the activity of frame t is the
+blend at t + lead_s, so that the face is at a phone's target at the phone's acoustic centre (the
+lead and the lag it makes up for were measured on the default face: docs/stimuli.md). The jaw is
+a kinematic drive whose skin follows within a few ms, so its lead is ``jaw_lead_s``.
 """
 
 from __future__ import annotations
