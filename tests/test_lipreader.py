@@ -31,14 +31,15 @@ from facemech.errors import InputError
 TEXT = "Rice is often served in round bowls."
 #: the issue's least Pearson r between the tracker's inner-lip distance and the model's aperture
 R_ISSUE = 0.9
-#: r measured on this sentence at 300x360 as ``speak`` plans it by default (0.849 since /ɪ/ is
+#: r measured on this sentence at 300x360 as ``speak`` plans it by default (0.815 under the
+#: measured muscle laws, 2026-11-29; 0.849 since /ɪ/ is
 #: a lax vowel of its own, not /i/, 2026-11-28: its lips spread half as much; 0.707 with the
 #: /i/ target's ZYG and RIS at 0.6, not 1.0; 0.632 before, after the labiodental's retune;
 #: 0.669 before that; benchmarks/lipreader.py at 640x360: docs/lipreader.md)
-R_MEASURED = 0.85
+R_MEASURED = 0.81
 #: the least r this test holds the tracker to: the measured r less 0.13, about 1.5 times the most
 #: a change of frame size moved r on the sentences tried (0.09)
-R_FLOOR = 0.72
+R_FLOOR = 0.68
 #: the least share of frames in which the face is found (measured: every frame)
 FOUND_MIN = 0.95
 
@@ -83,7 +84,7 @@ def test_the_tracker_finds_the_face_and_sees_the_mouth_open(read):
 
 
 @pytest.mark.xfail(strict=True, reason=(
-    f"measured r = {R_MEASURED} on this sentence, 0.54-0.91 over six Harvard sentences at "
+    f"measured r = {R_MEASURED} on this sentence, 0.57-0.92 over six Harvard sentences at "
     "640x360 (docs/lipreader.md): dlib's predictor puts the inner-lip points inside the "
     "vermilion of the rounded, protruded lips (reading their thickness as opening) and on the "
     "teeth between spread lips (reading them as closed)"))
