@@ -108,10 +108,11 @@ def _measured(al, sim):
 def test_the_plan_opens_the_vowel_between_bilabials_and_closes_them(coarse):
     """ "map" on the coarse face: the blend keeps the lips shut through the /a/ (0.0 mm,
     docs/visible-speech.md); the plan opens it past the issue's 8 mm and keeps the /m/ and
-    /p/ closed. Measured (2026-11-28, 4 iterations, the last kept; total miss 9.2, 9.1, 5.3,
-    4.7, 1.3 mm): the /a/ 10.4 mm, the /m/ 0.95 mm and the /p/ 0.05 mm apart at their middles
-    (without the press of the marginal orbicularis, `Gesture.press`: 10.1, 0.6 and 0.0 mm; with
-    6 iterations 10.9, 1.0 and 0.2 mm: the /m/ after the pause and the /a/ trade)."""
+    /p/ closed. Measured (2026-11-29, the measured muscle laws, 4 iterations, the last kept;
+    total miss 9.1, 9.0, 5.4, 4.8, 1.2 mm): the /a/ 10.5 mm, the /m/ 0.98 mm and the /p/ 0.06
+    mm apart at their middles (under the seeds' laws 10.4, 0.95 and 0.05 mm; without the press
+    of the marginal orbicularis, `Gesture.press`, 10.1, 0.6 and 0.0 mm; with 6 iterations 10.9,
+    1.0 and 0.2 mm: the /m/ after the pause and the /a/ trade)."""
     plan = plan_controls(MAP, coarse, iterations=4)
     assert plan.activity.min() >= 0.0 and plan.activity.max() <= 1.0
     assert plan.jaw.min() >= 0.0 and np.degrees(plan.jaw.max()) <= 35.0
