@@ -337,7 +337,8 @@ SPECIFIC_TENSION = 26.8 * 1e4
 #: fibres (gracilis 36 %, rectus femoris 48 %), scaled by the mimic muscles' larger share of
 #: fast fibres measured in the same cadavers: zygomaticus major, levator labii superioris,
 #: levator and depressor anguli oris 27-38 % type I (Happak et al. 1988, J Neurol Sci 83:25;
-#: orbicularis oris 27-34 %). A muscle's speed mixes its fibres' as ``s_I + r (1 - s_I)`` for
+#: orbicularis oris has 66-73 % fast fibres, as a study of the eyelid's fibre types reports beside
+#: the orbicularis oculi's 88 %). A muscle's speed mixes its fibres' as ``s_I + r (1 - s_I)`` for
 #: fast fibres ``r`` times as fast as slow ones: 1.09-1.12 times the limb muscle's for r = 3-5,
 #: and at most 0.68 / 0.58 = 1.17 for any r. Hence 11.
 FACIAL_VMAX = 11.0
