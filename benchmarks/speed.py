@@ -18,6 +18,8 @@ import time
 
 import numpy as np
 
+from facemech.params import ITO_ACTIVATION, Parameters
+
 #: (groups, landmark, axis) of each gesture, as in benchmarks/realism.py's dynamics table
 #: and the two of issue 27's speed targets: the marginal orbicularis lowering the upper lip,
 #: and its lower part with mentalis raising the lower lip
@@ -27,8 +29,12 @@ GESTURES = ((("ZYG",), "mouth_corner_right", 1), (("LLS",), "upper_lip_center", 
             (("OOSM",), "upper_lip_center", 1), (("OOIM", "MEN"), "lower_lip_center", 1))
 
 #: Ito, Murano & Gomi (2004, J Appl Physiol 96:2318): the lips' force response to a stimulus,
-#: 6.1 Hz natural frequency and damping ratio 0.7 (facemech.params.ITO_ACTIVATION)
-ITO = {"tau_activation": 1.0 / (2.0 * np.pi * 6.1), "activation_damping": 0.7}
+#: 6.1 Hz natural frequency and damping ratio 0.7
+ITO = dict(ITO_ACTIVATION)
+#: the seeds' force-velocity constant and activation filter (eqs. 4 and 6: f4 = 20 s/m, tau
+#: 15 ms, critically damped), the defaults of ``Parameters``
+SEEDS = {"fv_vmax": 0.0, "tau_activation": Parameters.tau_activation,
+         "activation_damping": Parameters.activation_damping}
 
 VARIANTS = {
     # the anatomical preset: since 2026-11-29 the laws the measured data support
@@ -36,7 +42,7 @@ VARIANTS = {
     # damped with the rise of Ito's response
     "default": {},
     # the seeds' law and filter (f4 = 20 s/m, tau 15 ms), the preset's before
-    "seeds_law": {"fv_vmax": 0.0, "tau_activation": 0.015, "activation_damping": 1.0},
+    "seeds_law": SEEDS,
     "facial_vmax11_ito": {"fv_vmax": 11.0, **ITO},
     "fibre_vmax10": {"fv_vmax": 10.0, **ITO},
     "fibre_vmax20": {"fv_vmax": 20.0, **ITO},
