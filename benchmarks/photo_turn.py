@@ -10,9 +10,11 @@ landmarks are compared with the face's own in x and y (a frontal photo cannot se
 mean offset removed.
 
 Prints JSON: per angle the turn read (degrees), and for each fit the worst landmark (its name
-and error, mm) and the median error (mm). Needs the ``photo`` extra (dlib); about 20 s.
+and error, mm) and the median error (mm). ``--face variant``: the variant face of
+tests/test_photo.py (a wider mouth, a longer lower face, a nose 6 mm longer) instead. Needs the
+``photo`` extra (dlib); about 20 s.
 
-``python benchmarks/photo_turn.py [--degrees -15 -10 -5 0 5 10 15]``
+``python benchmarks/photo_turn.py [--degrees -15 -10 -5 0 5 10 15] [--face variant]``
 """
 
 from __future__ import annotations
@@ -33,22 +35,20 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--degrees", type=float, nargs="+",
                     default=[-15.0, -10.0, -5.0, 0.0, 5.0, 10.0, 15.0])
+    ap.add_argument("--face", choices=("built-in", "variant"), default="built-in")
     args = ap.parse_args(argv)
-    from facemech import default_face
-    from facemech.geometry import generic
-    from facemech.geometry.ibug import generic_ibug68
     from facemech.geometry.photo_fit import fit_frontal
     from facemech.io.photo import DlibDetector
     from facemech.viz.camera import Camera, view_camera, view_rotation
     from facemech.viz.look import look_from_model
     from facemech.viz.render import parse_background, render_panel
     from facemech.viz.scene import build_scene
+    from photo_sizes import faces  # benchmarks/photo_sizes.py: the two test faces
 
-    truth = {k: v * 1e-3 for k, v in generic.landmarks().items()}
+    _, model, truth, ibug = next(f for f in faces() if f[0] == args.face)
     names = list(truth)
-    ibug = generic_ibug68()
     ipd = float(np.linalg.norm(ibug[42:48].mean(axis=0) - ibug[36:42].mean(axis=0)))
-    look = look_from_model(default_face())
+    look = look_from_model(model)
     scene = build_scene(look)
     frontal = view_camera("frontal", scene.framing, SIZE, DISTANCE)
     # the fit's camera distance is to the eyes; the renderer's to the framing's centre
@@ -80,7 +80,8 @@ def main(argv=None) -> int:
         rows.append({"view_degrees": deg,
                      "turn_read_degrees": round(float(np.degrees(turned.camera.yaw)), 2),
                      "turned_back": errors(turned), "as_frontal": errors(flat)})
-    print(json.dumps({"size": list(SIZE), "distance_m": DISTANCE, "rows": rows}, indent=1))
+    print(json.dumps({"face": args.face, "size": list(SIZE), "distance_m": DISTANCE,
+                      "rows": rows}, indent=1))
     return 0
 
 

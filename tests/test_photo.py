@@ -379,27 +379,42 @@ def test_a_turned_face_is_turned_back_before_the_fit(degrees):
     assert "turned" in fit.note() and "turned" not in flat.note()
 
 
-def test_a_turned_photo_through_dlib_is_turned_back(built_in, detector):
-    """A render of the built-in face from a camera 15 degrees to its left, through dlib: the
-    turn taken out leaves the worst landmark (x and y) under 4 mm and halves the median, where
-    the points fitted as frontal are 8 mm off (measured: 3.5 and 1.04 mm, against 8.1 and
-    3.6; docs/photo.md)."""
-    from facemech.geometry.photo_fit import fit_frontal
-    from facemech.io.photo import frontal_landmarks
-    from facemech.viz.camera import Camera, view_rotation
+#: mm, the worst landmark (x and y) of a photo turned 15 or 10 degrees, the turn taken out.
+#: Measured (2026-11-29, dlib's points the median over its boxes): 4.11 mm at -15 degrees (a jaw
+#: angle; median 2.34, against 6.45 and 3.29 fitted as frontal) and 2.26 mm at +10 (median
+#: 0.80, against 6.54 and 2.30); from the detector's box alone 3.53 and 6.53 mm
+TURNED_MM = 4.5
+
+
+def _render_view(subject, degrees: float, size=SIZE, distance=DISTANCE) -> np.ndarray:
+    """The subject rendered from a camera turned ``degrees`` about the vertical (negative: the
+    face seen turned to its left), (h, w, 3) uint8."""
+    from facemech.viz.camera import Camera, view_camera, view_rotation
     from facemech.viz.look import look_from_model
     from facemech.viz.render import parse_background, render_panel
     from facemech.viz.scene import build_scene
 
-    look = look_from_model(built_in.model)
+    look = look_from_model(subject.model)
     scene = build_scene(look)
-    frontal = _frontal_camera(scene)
-    cam = Camera(view_rotation(-15.0, 0.0), frontal.target, frontal.half_height, SIZE,
-                 DISTANCE)
+    frontal = view_camera("frontal", scene.framing, size, distance)
+    cam = Camera(view_rotation(degrees, 0.0), frontal.target, frontal.half_height, size,
+                 distance)
     verts, norms = scene.frame(look.rest, 0.0)
-    photo = np.ascontiguousarray(render_panel(scene, verts, norms, cam, background=(
+    return np.ascontiguousarray(render_panel(scene, verts, norms, cam, background=(
         parse_background("#8a9099")))[..., :3])
-    pts = frontal_landmarks(photo, source="turned.png", detector=detector).points
+
+
+@pytest.mark.parametrize("degrees", [-15.0, 10.0])
+def test_a_turned_photo_through_dlib_is_turned_back(built_in, detector, degrees):
+    """A render of the built-in face from a camera turned about the vertical, through dlib:
+    the turn taken out leaves the worst landmark (x and y) under :data:`TURNED_MM` and below
+    that of the points fitted as frontal, and lowers the median by a fifth at least (measured:
+    by 29 and 65 %; docs/photo.md)."""
+    from facemech.geometry.photo_fit import fit_frontal
+    from facemech.io.photo import frontal_landmarks
+
+    pts = frontal_landmarks(_render_view(built_in, degrees), source="turned.png",
+                            detector=detector).points
 
     def xy(fit):
         e = built_in.errors(fit.landmarks)
@@ -407,9 +422,43 @@ def test_a_turned_photo_through_dlib_is_turned_back(built_in, detector):
 
     fit = fit_frontal(pts, SIZE, ipd=built_in.ipd, distance=built_in.distance)
     flat = fit_frontal(pts, SIZE, ipd=built_in.ipd, distance=built_in.distance, yaw=0.0)
-    assert 10.0 < np.degrees(fit.camera.yaw) < 20.0
-    assert xy(fit).max() < 4.0 < xy(flat).max()
-    assert np.median(xy(fit)) < 0.5 * np.median(xy(flat))
+    # the face seen turned to its left (a negative view) is turned to its left (positive)
+    assert 0.5 * abs(degrees) < -np.sign(degrees) * np.degrees(fit.camera.yaw) < 1.5 * abs(
+        degrees)
+    assert xy(fit).max() < min(TURNED_MM, xy(flat).max())
+    assert np.median(xy(fit)) < 0.8 * np.median(xy(flat))
+
+
+#: mm, the worst landmark (x and y) of the built-in face's photos at 640 x 480 from 1.2 m and
+#: 720 x 540 from 1.5 m through dlib. Measured (2026-11-29): 2.00 and 1.69 mm with the points
+#: the median over the predictor's boxes, 3.74 and 5.19 mm from the detector's box alone (the
+#: eye centres 3-5 % closer than on the tests' photo, and the whole face that much larger;
+#: ``python benchmarks/photo_sizes.py``)
+SIZES_MM = 2.5
+
+
+@pytest.mark.parametrize(("size", "distance"), [((640, 480), 1.2), ((720, 540), 1.5)])
+def test_photos_of_other_sizes_fit_as_well(built_in, detector, size, distance):
+    """dlib's detector box moves on the face with the image's size (an image pyramid), and the
+    predictor's points with it; from the median over boxes around it the fit stays within
+    :data:`SIZES_MM` on photos where one box put it 3.7-5.2 mm off."""
+    from facemech.geometry.photo_fit import fit_frontal
+    from facemech.io.photo import frontal_landmarks
+    from facemech.viz.look import look_from_model
+    from facemech.viz.render import Renderer
+    from facemech.viz.scene import build_scene
+
+    look = look_from_model(built_in.model)
+    render = Renderer(build_scene(look), "frontal", size, background="#8a9099",
+                      distance=distance)
+    ibug = built_in.ibug
+    eyes = distance - float(ibug[36:48, 2].mean() - render.cameras[0].target[2])
+    photo = np.ascontiguousarray(render(look.rest)[..., :3])
+    pts = frontal_landmarks(photo, source="photo.png", detector=detector).points
+    fit = fit_frontal(pts, size, ipd=built_in.ipd, distance=eyes)
+    e = built_in.errors(fit.landmarks)
+    worst = max(np.hypot(v[0], v[1]) for v in e.values())
+    assert worst < SIZES_MM
 
 
 def test_a_frontal_photo_is_not_turned(built_in, from_dlib):

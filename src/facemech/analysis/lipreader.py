@@ -148,7 +148,8 @@ def read_lips(frames: Iterable[np.ndarray], *, detector=None, upsample: int = 0)
         if img.ndim != 3 or img.shape[2] not in (3, 4) or img.dtype != np.uint8:
             raise InputError(f"frame {k} of shape {img.shape} and type {img.dtype}; expected "
                              "(h, w, 3) uint8 RGB", field="frames")
-        faces = detector.faces(np.ascontiguousarray(img[..., :3]), upsample=upsample)
+        faces = detector.faces(np.ascontiguousarray(img[..., :3]), upsample=upsample,
+                                  boxes=False)
         if faces:
             points.append(max(faces, key=lambda f: f.width).points)
         else:
