@@ -16,8 +16,11 @@ lips' shape explains besides their opening. ``--picture FILE.jpg``: three frames
 with the lowest r, the 68 points drawn on them (the inner lips' six in red), side by side: the
 widest aperture, and the frames the tracker reads most below and most above its fitted line.
 
+``--boxes``: each point the median of the predictor's from 45 boxes around the detector's, as
+``face from-photo`` reads a photo (the default: one box per frame, as dlib's examples track).
+
 ``python benchmarks/lipreader.py [--face default] [--size 640x360] [--aa 2] [--upsample 0]
-[--sentences N] [--picture docs/img/lipreader.jpg]``
+[--sentences N] [--picture docs/img/lipreader.jpg] [--boxes]``
 """
 
 from __future__ import annotations
@@ -39,7 +42,7 @@ DEFAULT_SENTENCES = 6
 
 
 def measure(text: str, *, face: str, size: tuple[int, int], aa: int, upsample: int,
-            detector) -> tuple[dict, tuple]:
+            detector, boxes: bool = False) -> tuple[dict, tuple]:
     """The sentence's row of the report, and what :func:`draw` needs to draw it."""
     from facemech.analysis.lipreader import compare, frontal_frames, model_aperture, read_lips
     from facemech.speech.alive import Liveliness
@@ -53,7 +56,7 @@ def measure(text: str, *, face: str, size: tuple[int, int], aa: int, upsample: i
     ds = spoken.dataset
     frames = list(frontal_frames(ds, size=size, supersample=aa))
     t2 = time.perf_counter()
-    reading = read_lips(frames, detector=detector, upsample=upsample)
+    reading = read_lips(frames, detector=detector, upsample=upsample, boxes=boxes)
     t3 = time.perf_counter()
     aperture = model_aperture(ds)
     agreement = compare(reading.distance, aperture)
@@ -112,6 +115,8 @@ def main(argv=None) -> int:
     ap.add_argument("--upsample", type=int, default=0, help="detector upsampling (0 or 1)")
     ap.add_argument("--sentences", type=int, default=DEFAULT_SENTENCES)
     ap.add_argument("--picture", help="JPEG of three frames with their points (module doc)")
+    ap.add_argument("--boxes", action="store_true",
+                    help="each point the median over 45 predictor boxes (as face from-photo)")
     args = ap.parse_args(argv)
     from facemech.io.photo import DlibDetector
 
@@ -120,7 +125,7 @@ def main(argv=None) -> int:
     rows, worst = [], None
     for text in HARVARD[: args.sentences]:
         row, keep = measure(text, face=args.face, size=(h, w), aa=args.aa,
-                            upsample=args.upsample, detector=detector)
+                            upsample=args.upsample, detector=detector, boxes=args.boxes)
         if worst is None or row["r"] < worst[0]:
             worst = (row["r"], keep)
         rows.append(row)
@@ -128,7 +133,8 @@ def main(argv=None) -> int:
         draw(args.picture, *worst[1])
     rs = [row["r"] for row in rows]
     print(json.dumps({"face": args.face, "size": args.size, "aa": args.aa,
-                      "upsample": args.upsample, "r_min": min(rs), "r_mean": sum(rs) / len(rs),
+                      "upsample": args.upsample, "boxes": args.boxes, "r_min": min(rs),
+                      "r_mean": sum(rs) / len(rs),
                       "sentences": rows}, indent=2))
     return 0
 

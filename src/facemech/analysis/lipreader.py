@@ -116,7 +116,8 @@ def inner_lip_distance(points: np.ndarray) -> np.ndarray:
     return (p[..., list(LOWER_INNER), 1] - p[..., list(UPPER_INNER), 1]).mean(axis=-1)
 
 
-def read_lips(frames: Iterable[np.ndarray], *, detector=None, upsample: int = 0) -> LipReading:
+def read_lips(frames: Iterable[np.ndarray], *, detector=None, upsample: int = 0,
+              boxes: bool = False) -> LipReading:
     """Run dlib's face detector and 68-point predictor on each frame.
 
     Parameters
@@ -126,6 +127,9 @@ def read_lips(frames: Iterable[np.ndarray], *, detector=None, upsample: int = 0)
     upsample : times the detector doubles each frame before it looks: 0 finds faces from about
         80 px across (the frontal face of a 360-pixel-high frame is about 190 px), 1 from
         about 40 px at about four times the cost
+    boxes : each point the median of the predictor's from 45 boxes around the detector's
+        (:meth:`~facemech.io.photo.DlibDetector.faces`, as ``face from-photo`` reads a photo);
+        False (default): from the detector's box alone, as dlib's examples track a face
 
     Returns
     -------
@@ -149,7 +153,7 @@ def read_lips(frames: Iterable[np.ndarray], *, detector=None, upsample: int = 0)
             raise InputError(f"frame {k} of shape {img.shape} and type {img.dtype}; expected "
                              "(h, w, 3) uint8 RGB", field="frames")
         faces = detector.faces(np.ascontiguousarray(img[..., :3]), upsample=upsample,
-                                  boxes=False)
+                                  boxes=boxes)
         if faces:
             points.append(max(faces, key=lambda f: f.width).points)
         else:
