@@ -142,6 +142,29 @@ def test_nothing_of_the_mouth_shows_through_closed_lips(mouth, view):
             assert (seen == names.index(n)).sum() > 20, n
 
 
+@pytest.mark.parametrize("view", ["frontal", "mouth"])
+def test_the_seeds_thin_tissue_hides_the_mouth_too(view):
+    """The seeds' uniform tissue is 4 mm deep under the upper lip; the incisors stand at least
+    12 mm behind the lip's surface all the same (``teeth_depth``), so nothing of the mouth shows
+    through its closed lips (at 4 mm the central incisors did, and the gums above and below)."""
+    from facemech.geometry.builder import default_face
+    from facemech.geometry.teeth import TEETH_DEPTH_DEFAULT, teeth_depth
+
+    face = default_face(tissue="uniform")
+    n = face.n_surface
+    ul = face.landmarks["upper_lip_center"]
+    assert np.linalg.norm(face.rest_positions[ul] - face.rest_positions[ul + 2 * n]) < 0.005
+    assert teeth_depth(face) == TEETH_DEPTH_DEFAULT
+    look = look_from_model(face)
+    scene = build_scene(look)
+    cam = view_camera(view, scene.framing, (360, 480), 1.2)
+    names = [p.name for p in scene.parts]
+    inner = [names.index(n) for n in ("upper_teeth", "lower_teeth", "upper_gum", "lower_gum",
+                                      "tongue")]
+    _, tid = _seen(scene, look.rest, 0.0, cam)
+    assert not np.isin(_part_of(scene, tid), inner).any()
+
+
 def test_the_gums_are_pink_above_the_upper_crowns(face):
     """The dentition alone, from the front: over the middle of each upper front crown the
     first pixels above it are gingiva (red well over green and blue), and between the crowns

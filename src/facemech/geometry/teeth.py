@@ -10,7 +10,10 @@ from __future__ import annotations
 
 import numpy as np
 
-TEETH_DEPTH_DEFAULT = 0.012  #: m, lip surface to the incisors where a file does not say
+#: m, lip surface to the incisors where a file does not say, and the least taken: the adult
+#: upper lip is 11-15 mm thick from its vermilion to the incisors' labial face (cephalometric
+#: soft-tissue norms, e.g. Holdaway 1983)
+TEETH_DEPTH_DEFAULT = 0.012
 #: the lower arch of the renderer (:mod:`facemech.viz.face_parts`): the incisal edge this far
 #: above the stomion (m) and this far behind the upper incisors (m)
 LOWER_EDGE_ABOVE_STOMION = 0.0005
@@ -19,12 +22,18 @@ LOWER_ARCH_SETBACK = 0.0025
 
 def teeth_depth(model) -> float:
     """Depth (m) of the upper incisors behind the upper lip's surface: the tissue's depth under
-    the upper lip's centre (skin to skull node), or :data:`TEETH_DEPTH_DEFAULT` for a face
-    without that landmark."""
+    the upper lip's centre (skin to skull node), at least :data:`TEETH_DEPTH_DEFAULT`; that
+    for a face without the landmark.
+
+    The seeds' uniform tissue is 4 mm deep under the lip; incisors that close behind it stood
+    through the closed lips in renders (and the gums through the skin above and below them).
+    The anatomical tissue is 13.8 mm deep there on the built-in face."""
     n = model.n_surface
     ul = model.landmarks.get("upper_lip_center")
-    return (TEETH_DEPTH_DEFAULT if ul is None else float(
-        np.linalg.norm(model.rest_positions[ul] - model.rest_positions[ul + 2 * n])))
+    if ul is None:
+        return TEETH_DEPTH_DEFAULT
+    depth = float(np.linalg.norm(model.rest_positions[ul] - model.rest_positions[ul + 2 * n]))
+    return max(depth, TEETH_DEPTH_DEFAULT)
 
 
 def lower_incisor_point(model) -> np.ndarray:

@@ -30,6 +30,11 @@ RINGS = 26  #: rings from the skin's edge to the back of the head
 BLEND_DEG = 35.0  #: degrees over which the closure relaxes from the skin's edge to the cranium
 SMOOTHING_STEPS = 10  #: Taubin iterations over the closure (away from the skin's edge)
 MAX_SLOPE = 0.03  #: m/rad, the edge slope continued into the closure is clipped to this
+#: rad: the largest step back in ``phi`` along the edge that is allowed (and flattened in the
+#: rings). A scan's edge where it turns sharply (the corners of a neck cut straight across)
+#: goes back by a fraction of a degree between neighbours (0.9 degrees at most on the
+#: scan-like head of tests/scans.py built as it comes)
+PHI_REVERSAL = np.radians(2.0)
 
 
 @dataclass(frozen=True)
@@ -115,8 +120,8 @@ def outer_loop(rest: np.ndarray, triangles: np.ndarray, centre: np.ndarray):
     """The skin's outer edge as ordered nodes (e,), or None where no closure can be built.
 
     The outer edge is the longest boundary loop; it must go once round the back of the head
-    seen from ``centre`` (its ``phi`` strictly monotonic, one turn in all) and stay in front
-    of the back pole.
+    seen from ``centre`` (its ``phi`` monotonic but for steps back of at most
+    :data:`PHI_REVERSAL`, one turn in all) and stay in front of the back pole.
     """
     loops = boundary_loops(triangles)
     if not loops:
@@ -126,11 +131,36 @@ def outer_loop(rest: np.ndarray, triangles: np.ndarray, centre: np.ndarray):
     d = rel / np.linalg.norm(rel, axis=1, keepdims=True)
     theta, phi = back_polar(d)
     step = np.diff(np.unwrap(np.append(phi, phi[0])))
-    if theta.min() < np.radians(30) or not (np.all(step > 0) or np.all(step < 0)):
+    turn = step.sum()
+    if theta.min() < np.radians(30) or abs(abs(turn) - 2 * np.pi) > 1e-6:
         return None
-    if abs(abs(step.sum()) - 2 * np.pi) > 1e-6:
+    if np.any(np.sign(turn) * step < -PHI_REVERSAL):
         return None
     return loop
+
+
+def monotone_phi(phi: np.ndarray) -> np.ndarray:
+    """The edge's ``phi`` (e,) rad made strictly monotonic in its direction of turn: each step
+    back (at most :data:`PHI_REVERSAL`) is taken out and the run it ends is spread evenly
+    between the angles on either side; unchanged where it already is."""
+    u = np.unwrap(phi)
+    sign = 1.0 if u[-1] > u[0] else -1.0  # the edge's net turn (nearly a whole one)
+    v = sign * u
+    if np.all(np.diff(v) > 0):
+        return phi
+    env = np.maximum.accumulate(v)
+    out = env.copy()
+    k = 0
+    n = len(v)
+    while k < n:
+        j = k
+        while j + 1 < n and env[j + 1] <= env[k]:
+            j += 1
+        if j > k:  # a flat run k..j: spread it up to the next angle (a turn on at the end)
+            nxt = env[j + 1] if j + 1 < n else v[0] + 2 * np.pi
+            out[k:j + 1] = env[k] + (nxt - env[k]) * np.arange(j - k + 1) / (j - k + 1)
+        k = j + 1
+    return sign * out
 
 
 def _edge_slope(rest, triangles, loop, centre, theta_loop):
@@ -186,12 +216,13 @@ def build_closure(rest: np.ndarray, triangles: np.ndarray, cranium: Cranium,
     slope, inner, beta = _edge_slope(rest, triangles, loop, c, th0)
     delta = r_edge - cranium.radius(rel / r_edge[:, None], c)
     verts, nodes, weights, thetas, phis = [rest[loop]], [loop], [np.ones(e)], [th0], [ph0]
+    ph_rings = monotone_phi(ph0)  # the rings turn one way even where the edge steps back
     inners, reach = [inner], [np.zeros(e)]
     a0 = np.radians(BLEND_DEG)
     for k in range(1, rings):
         th = th0 * (1.0 - k / rings)
         alpha = th0 - th
-        d = from_back_polar(th, ph0)
+        d = from_back_polar(th, ph_rings)
         s = np.clip(alpha / a0, 0.0, 1.0)
         g = 1.0 - s * s * (3.0 - 2.0 * s)
         sigma = 1.0 + k
@@ -206,7 +237,7 @@ def build_closure(rest: np.ndarray, triangles: np.ndarray, cranium: Cranium,
         inners.append(inner)
         reach.append(np.where(beta > 0, lean / np.maximum(beta, 1e-9), 0.0))
         thetas.append(th)
-        phis.append(ph0)
+        phis.append(ph_rings)
     pole = np.array([[0.0, 0.0, -1.0]])
     verts.append(c + pole * cranium.radius(pole, c)[:, None])
     nodes.append(loop[:1])

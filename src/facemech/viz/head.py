@@ -164,6 +164,15 @@ def closed_head(look: FaceLook) -> list[Part] | None:
         return None
     c, top, nasion = head_centre(look)
     albedo = np.tile(T.SKIN, (len(closure.rest), 1))
+    tone = None
+    if look.textured:
+        # a scan's or a photo's own skin: each vertex takes the colour of the edge node its ray
+        # leaves from, fading into the edge's mean colour away from it, so that the head goes
+        # on from the skin's edge in the skin's colour
+        edge = skin_colours(look)
+        tone = edge[closure.loop].mean(axis=0)
+        w = closure.weights[:, None]
+        albedo = w * edge[closure.nodes] + (1.0 - w) * tone
     # its inner side is drawn dark, as the skin's: a line of sight through a palpebral fissure
     # or the parted lips ends on the inside of the head
     head = Part("head", closure.rest, closure.faces, albedo, SKIN_GLOSS, "follow",
@@ -171,11 +180,27 @@ def closed_head(look: FaceLook) -> list[Part] | None:
     n = len(look.rest)
     verts = np.concatenate([look.rest, closure.rest])
     faces = np.concatenate([look.triangles, closure.joint_faces(n)])
-    hair = hair_parts(verts, faces, c, lambda lon: hairline(lon, top, nasion[1]))
+    hair = hair_parts(verts, faces, c, lambda lon: hairline(lon, top, nasion[1]), skin=tone)
     from ..geometry.mesh import vertex_normals
     from .ears import ear_parts as auricles
 
     return [head, *hair, *auricles(verts, vertex_normals(verts, faces), nasion)]
+
+
+def skin_colours(look: FaceLook) -> np.ndarray:
+    """(n, 3) in [0, 1]: each skin node's colour (sRGB) from a textured face's vertex colours
+    or texture (the texel at one of its triangle corners); the plain skin's without either."""
+    n = len(look.rest)
+    if look.vertex_colours is not None:
+        return look.vertex_colours[:n] / 255.0
+    if look.image is None or look.uv is None:
+        return np.tile(T.SKIN, (n, 1))
+    corner_uv = np.zeros((n, 2))
+    corner_uv[look.triangles.reshape(-1)] = look.uv.reshape(-1, 2)
+    h, w = look.image.shape[:2]
+    col = np.clip((corner_uv[:, 0] * w).astype(int), 0, w - 1)
+    row = np.clip(((1.0 - corner_uv[:, 1]) * h).astype(int), 0, h - 1)
+    return look.image[row, col, :3] / 255.0
 
 
 def head_shell(look: FaceLook) -> Part | None:

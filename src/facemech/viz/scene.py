@@ -215,7 +215,7 @@ def jaw_pose_of(jaw) -> tuple[float, np.ndarray]:
 def build_scene(look: FaceLook, *, eyes: bool = True, mouth: bool = True,
                 head: bool = True) -> Scene:
     """Assemble and pack the parts of a face's scene."""
-    closed = closed_head(look) if head and not look.textured else None
+    closed = closed_head(look) if head else None
     parts = [skin_part(look, painted_hair=closed is None)]
     if eyes and not look.textured:
         parts += eye_parts(look)
