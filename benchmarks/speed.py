@@ -59,6 +59,23 @@ VARIANTS = {
     "fibre_vmax20_stiffening4": {"fv_vmax": 20.0, **ITO, "stiffening": 4.0},
     "fibre_vmax20_floor_stiffening4": {"fv_vmax": 20.0, **ITO, "volume_floor": 0.5,
                                        "volume_floor_modulus": 1e6, "stiffening": 4.0},
+    # the preset's measured laws with the step about its predictor solved on the true
+    # linearisation (GMRES, the constant matrix its preconditioner) and Kelvin-Voigt dashpots
+    **{name: {"predictor": True, "implicit_stiffness_share": 0.75, "implicit_volume_scale": 3.0,
+              "dashpot_isotropy": 0.0, "krylov_iterations": 2, **extra}
+       for name, extra in (("kv_krylov2", {}),
+                           ("kv_krylov2_floor_stiff4", {"volume_floor": 0.5,
+                                                        "volume_floor_modulus": 1e6,
+                                                        "stiffening": 4.0}),
+                           ("kv_krylov2_2_steps", {"substeps": 2}),
+                           ("kv_krylov3_2_steps", {"substeps": 2, "krylov_iterations": 3}),
+                           ("kv_krylov4_floor_stiff4", {"volume_floor": 0.5,
+                                                        "volume_floor_modulus": 1e6,
+                                                        "stiffening": 4.0,
+                                                        "krylov_iterations": 4}),
+                           ("kv_krylov4_floor_stiff4_2_steps", {
+                               "volume_floor": 0.5, "volume_floor_modulus": 1e6,
+                               "stiffening": 4.0, "krylov_iterations": 4, "substeps": 2}))},
     # no force-velocity term at 4 and at 32 steps per frame: what is left is the step's drag
     # and the tissue's own slowness
     "no_force_velocity_32_steps": {"f4": 0.0, "substeps": 32},
@@ -83,7 +100,14 @@ VARIANTS = {
                                                                     "substeps": 64}),
                            ("predictor_stretch_dashpots_5ms_64_steps", {
                                "dashpot_isotropy": 0.0, "viscous_time": 5e-3,
-                               "substeps": 64}))},
+                               "substeps": 64}),
+                           ("krylov2", {"dashpot_isotropy": 0.0, "krylov_iterations": 2}),
+                           ("krylov4", {"dashpot_isotropy": 0.0, "krylov_iterations": 4}),
+                           ("krylov3_2_steps", {"dashpot_isotropy": 0.0, "krylov_iterations": 3,
+                                                "substeps": 2}),
+                           ("krylov4_2_steps", {"dashpot_isotropy": 0.0, "krylov_iterations": 4,
+                                                "substeps": 2}),
+                           ("krylov8", {"dashpot_isotropy": 0.0, "krylov_iterations": 8}))},
 }
 
 

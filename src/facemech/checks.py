@@ -86,6 +86,7 @@ skin_modulus_thickness: float [0, inf)
 viscous_time: float [0, inf)
 dashpot_isotropy: float [0, 1]
 predictor: bool
+krylov_iterations: int [0, 8]
 implicit_stiffness_share: float [0, 10]
 implicit_volume_scale: float [0, 10]
 stiffening: float [0, inf)

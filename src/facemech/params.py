@@ -147,6 +147,11 @@ class Parameters:
     #: correction -h K v, which resists rigid turns as it resists stretch (numerical drag); the
     #: matrix must then hold most of each stiffness (below)
     predictor: bool = False
+    #: with the predictor: GMRES iterations on the step's true linearisation (the forces'
+    #: Jacobian applied by a finite difference of the forces), the constant matrix its
+    #: preconditioner; 0: the constant matrix's solve alone (its excess over the true stiffness
+    #: acts as inertia)
+    krylov_iterations: int = 0
     #: the share of each spring's stiff branch, and the factor on the prisms' volume Gram
     #: matrices, that the implicit methods' constant matrix holds (solvers/implicit.py)
     implicit_stiffness_share: float = 0.3
@@ -262,8 +267,12 @@ PREDICTOR_LEAST_SHARES = {"implicit_stiffness_share": 0.75, "implicit_volume_sca
 
 def check_predictor(params: Parameters) -> None:
     """The predictor's step needs most of each stiffness in the matrix: InputError naming the
-    field that holds too little (:data:`PREDICTOR_LEAST_SHARES`)."""
+    field that holds too little (:data:`PREDICTOR_LEAST_SHARES`); the Krylov correction is a
+    solve of the predictor's step and needs it."""
     if not params.predictor:
+        if params.krylov_iterations:
+            raise InputError("krylov_iterations solves the step about its predictor: it needs "
+                             "predictor=True", field="krylov_iterations")
         return
     for name, least in PREDICTOR_LEAST_SHARES.items():
         if getattr(params, name) < least:
@@ -466,6 +475,7 @@ def read_preset(path) -> Parameters:
 STEP_KEYS = MappingProxyType({
     "substeps": ("substeps", int, 1),
     "predictor": ("predictor", bool, 1),
+    "krylov_iterations": ("krylov_iterations", int, 1),
     "implicit_stiffness_share": ("implicit_stiffness_share", float, 1.0),
     "implicit_volume_scale": ("implicit_volume_scale", float, 1.0),
     "dashpot_isotropy": ("dashpot_isotropy", float, 1.0),

@@ -60,6 +60,9 @@ from .state import Controls, State
 from .volume_floor import resolve_volume_floor
 
 ROS2_GAMMA = 1.0 + 1.0 / np.sqrt(2.0)
+#: the most the Krylov correction may grow the constant matrix's step (its largest velocity
+#: change); beyond it the correction is not taken (see :func:`_krylov_step`)
+KRYLOV_GROWTH = 10.0
 #: share of the springs' stiffness (of their stiff branch) that the constant matrix of the
 #: continuum carries by default (``Parameters.implicit_stiffness_share``): with the exact
 #: damping in the matrix, the rest left explicit is stable at 4 steps per frame and the lips do
@@ -91,6 +94,7 @@ class ImplicitSystem:
     factor_step: float
     muscles: MuscleJacobian | None
     predictor: bool = False
+    krylov: int = 0
 
     def linearise(self, pos, vel, m_force, m_steady):
         """The muscles' Jacobian at a state (None: no muscle in the solve)."""
@@ -173,7 +177,7 @@ def implicit_system(physics: Physics, h: float) -> ImplicitSystem:
     return ImplicitSystem(stiffness=stiff.tocsr(), damping=damp.tocsr(), mass=mass, lu=lu,
                           factor_step=h,
                           muscles=MuscleJacobian(physics, lu) if p.is_continuum else None,
-                          predictor=bool(p.predictor))
+                          predictor=bool(p.predictor), krylov=int(p.krylov_iterations))
 
 
 def _graph_matrix(i: np.ndarray, j: np.ndarray, w: np.ndarray, nd: int) -> sp.csc_matrix:
@@ -267,12 +271,19 @@ class LinearImplicitEuler:
             if system.predictor:
                 # the forces at the explicit predictor x + h v: the matrix then only corrects
                 # the change of velocity, and resists no steady rigid turn
-                accumulate_forces(solver_state.forces, pos + h * vel, vel, m_force, anchors, out)
+                x_p = pos + h * vel
+                accumulate_forces(solver_state.forces, x_p, vel, m_force, anchors, out)
                 rhs = h * out[dyn]
+                if system.krylov:
+                    dv = _krylov_step(solver_state, system, x_p, vel, m_force, anchors, out,
+                                      rhs, jac, h)
+                else:
+                    dv = system.solve(rhs, jac, h)
             else:
                 accumulate_forces(solver_state.forces, pos, vel, m_force, anchors, out)
                 rhs = h * (out[dyn] - h * system.apply_stiffness(v0, jac))
-            vel[dyn] = v0 + system.solve(rhs, jac, h)
+                dv = system.solve(rhs, jac, h)
+            vel[dyn] = v0 + dv
             pos[dyn] += h * vel[dyn]
             _contacts(solver_state, pos, vel, anchors)
             m_force, m_rate = filter_exact(m_force, m_rate, m_steady, solver_state.tau, h,
@@ -336,6 +347,63 @@ class Rosenbrock2:
             vel[dyn] = v0 + h * (1.5 * k1v + 0.5 * k2v)
             _contacts(solver_state, pos, vel, anchors)
         return finish_frame(solver_state, state, controls, pos, vel, m_force, m_rate, f.jaw_rate)
+
+
+def _krylov_step(solver_state, system, x_p, vel, m_force, anchors, f_p, rhs, jac, h):
+    """The predictor's step ``A_t dv = h f(x + h v, v)`` with the forces' true linearisation
+    ``A_t u = M u - h (df/dx h u + df/dv u)`` (a finite difference of the forces about the
+    predictor), solved by right-preconditioned GMRES started from the constant matrix's solve,
+    ``system.krylov`` iterations, the constant matrix (with the muscles' Woodbury terms) the
+    preconditioner: its excess stiffness no longer acts as inertia."""
+    dyn = solver_state.dynamic
+    mass = system.mass[:, None]
+    base = f_p[dyn].copy()
+    xp = x_p.copy()
+    vp = vel.copy()
+    work = np.zeros_like(f_p)
+
+    def apply(u):
+        scale = float(np.abs(u).max())
+        if scale == 0.0:
+            return np.zeros_like(u)
+        eps = 1e-7 / (h * scale)  # moves a node by 1e-7 m at most
+        xp[dyn] = x_p[dyn] + eps * h * u
+        vp[dyn] = vel[dyn] + eps * u
+        accumulate_forces(solver_state.forces, xp, vp, m_force, anchors, work)
+        return mass * u - h * (work[dyn] - base) / eps
+
+    def precond(r):
+        return system.solve(r, jac, h)
+
+    x0 = precond(rhs)
+    r0 = rhs - apply(x0)
+    beta = float(np.sqrt((r0 * r0).sum()))
+    if beta == 0.0:
+        return x0
+    m = system.krylov
+    basis = [r0 / beta]
+    z = []
+    hess = np.zeros((m + 1, m))
+    for j in range(m):
+        z.append(precond(basis[j]))
+        w = apply(z[j])
+        for i in range(j + 1):
+            hess[i, j] = float((w * basis[i]).sum())
+            w = w - hess[i, j] * basis[i]
+        hess[j + 1, j] = float(np.sqrt((w * w).sum()))
+        if hess[j + 1, j] < 1e-14 * beta:
+            m = j + 1
+            break
+        basis.append(w / hess[j + 1, j])
+    e1 = np.zeros(m + 1)
+    e1[0] = beta
+    y, *_ = np.linalg.lstsq(hess[: m + 1, :m], e1, rcond=None)
+    dv = x0 + sum(y[k] * z[k] for k in range(m))
+    # where the true linearisation is not positive (tissue giving way: a prism turning inside
+    # out) its solve can run away; the constant matrix's step is kept there (it is stable)
+    if not np.all(np.isfinite(dv)) or np.abs(dv).max() > KRYLOV_GROWTH * np.abs(x0).max():
+        return x0
+    return dv
 
 
 def _contacts(solver_state: SolverState, pos: np.ndarray, vel: np.ndarray, anchors) -> None:
