@@ -108,14 +108,15 @@ def test_a_preset_files_step_block_sets_the_options(tmp_path, monkeypatch, capsy
     for the viscous time), and ``facemech simulate --preset`` runs with them; a bad entry is
     one line naming the file and ``step.KEY``, exit 2, nothing written."""
     step = {"predictor": True, "implicit_stiffness_share": 0.75, "implicit_volume_scale": 3,
-            "dashpot_isotropy": 0.25, "viscous_time_ms": 4.5, "substeps": 8}
+            "dashpot_isotropy": 0.25, "viscous_time_ms": 4.5, "substeps": 8,
+            "krylov_iterations": 2}
     good = {"format": "facemech-preset", "version": 1, "name": "fast", "base": "anatomical",
             "scales": {}, "step": step}
     path = tmp_path / "fast.json"
     path.write_text(json.dumps(good))
     p = read_preset(path)
     assert (p.predictor, p.implicit_stiffness_share, p.implicit_volume_scale,
-            p.dashpot_isotropy, p.substeps) == (True, 0.75, 3.0, 0.25, 8)
+            p.dashpot_isotropy, p.substeps, p.krylov_iterations) == (True, 0.75, 3.0, 0.25, 8, 2)
     assert p.viscous_time == pytest.approx(4.5e-3, rel=1e-12)
     act = tmp_path / "act.csv"
     level = np.zeros((7, len(MUSCLE_GROUPS)))
@@ -126,7 +127,8 @@ def test_a_preset_files_step_block_sets_the_options(tmp_path, monkeypatch, capsy
                            "--activity", act, "--preset", path, "-o", out)
     assert code == 0, err
     for entry, value in [("predictor", "yes"), ("implicit_stiffness_share", 0.3),
-                         ("substeps", 2.5), ("dashpot_isotropy", 1.5), ("warp", 1)]:
+                         ("substeps", 2.5), ("dashpot_isotropy", 1.5), ("warp", 1),
+                         ("krylov_iterations", 9)]:
         path.write_text(json.dumps({**good, "step": {**step, entry: value}}))
         out2 = tmp_path / "r2.nc"
         code, _, err = run_cli(monkeypatch, capsys, "simulate", "--face", "default-coarse",
