@@ -71,6 +71,12 @@ VARIANTS = {
                                                         "volume_floor_modulus": 1e6,
                                                         "stiffening": 4.0,
                                                         "krylov_iterations": 4}),
+                           ("kv_krylov4_floor_stiff4_drag50", {
+                               "volume_floor": 0.5, "volume_floor_modulus": 1e6,
+                               "stiffening": 4.0, "krylov_iterations": 4, "mass_drag": 50.0}),
+                           ("kv_krylov4_floor_stiff4_drag200", {
+                               "volume_floor": 0.5, "volume_floor_modulus": 1e6,
+                               "stiffening": 4.0, "krylov_iterations": 4, "mass_drag": 200.0}),
                            ("kv_krylov4_floor_stiff4_2_steps", {
                                "volume_floor": 0.5, "volume_floor_modulus": 1e6,
                                "stiffening": 4.0, "krylov_iterations": 4, "substeps": 2}))},

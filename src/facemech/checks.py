@@ -87,6 +87,7 @@ viscous_time: float [0, inf)
 dashpot_isotropy: float [0, 1]
 predictor: bool
 krylov_iterations: int [0, 8]
+mass_drag: float [0, 1000]
 implicit_stiffness_share: float [0, 10]
 implicit_volume_scale: float [0, 10]
 stiffening: float [0, inf)

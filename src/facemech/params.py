@@ -152,6 +152,10 @@ class Parameters:
     #: preconditioner; 0: the constant matrix's solve alone (its excess over the true stiffness
     #: acts as inertia)
     krylov_iterations: int = 0
+    #: s^-1, a drag on every moving node proportional to its mass and its velocity against the
+    #: skull (Rayleigh's mass-proportional damping), taken exactly into the implicit matrix;
+    #: the linearly implicit step only; 0: none
+    mass_drag: float = 0.0
     #: the share of each spring's stiff branch, and the factor on the prisms' volume Gram
     #: matrices, that the implicit methods' constant matrix holds (solvers/implicit.py)
     implicit_stiffness_share: float = 0.3
@@ -269,6 +273,9 @@ def check_predictor(params: Parameters) -> None:
     """The predictor's step needs most of each stiffness in the matrix: InputError naming the
     field that holds too little (:data:`PREDICTOR_LEAST_SHARES`); the Krylov correction is a
     solve of the predictor's step and needs it."""
+    if params.mass_drag and params.integrator != "implicit":
+        raise InputError(f"mass_drag is taken into the linearly implicit step's matrix: it needs "
+                         f"integrator 'implicit' (got {params.integrator!r})", field="mass_drag")
     if not params.predictor:
         if params.krylov_iterations:
             raise InputError("krylov_iterations solves the step about its predictor: it needs "
@@ -476,6 +483,7 @@ STEP_KEYS = MappingProxyType({
     "substeps": ("substeps", int, 1),
     "predictor": ("predictor", bool, 1),
     "krylov_iterations": ("krylov_iterations", int, 1),
+    "mass_drag_per_s": ("mass_drag", float, 1.0),
     "implicit_stiffness_share": ("implicit_stiffness_share", float, 1.0),
     "implicit_volume_scale": ("implicit_volume_scale", float, 1.0),
     "dashpot_isotropy": ("dashpot_isotropy", float, 1.0),

@@ -95,6 +95,7 @@ class ImplicitSystem:
     muscles: MuscleJacobian | None
     predictor: bool = False
     krylov: int = 0
+    drag: float = 0.0
 
     def linearise(self, pos, vel, m_force, m_steady):
         """The muscles' Jacobian at a state (None: no muscle in the solve)."""
@@ -169,7 +170,8 @@ def implicit_system(physics: Physics, h: float) -> ImplicitSystem:
         damp = _graph_matrix(si, sj, springs.damping, nd)
         mass = np.full(nd, p.node_mass)
     stiff = stiff.tocsc()
-    a_mat = (sp.diags(mass) + h * damp + h * h * stiff).tocsc()
+    # a drag proportional to the mass (Parameters.mass_drag) is diagonal: exactly in the matrix
+    a_mat = (sp.diags(mass * (1.0 + h * p.mass_drag)) + h * damp + h * h * stiff).tocsc()
     # the matrix is symmetric positive definite: no pivoting and a symmetric ordering fill in
     # less than SuperLU's general settings (a third faster to solve here)
     lu = splu(a_mat, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
@@ -177,7 +179,8 @@ def implicit_system(physics: Physics, h: float) -> ImplicitSystem:
     return ImplicitSystem(stiffness=stiff.tocsr(), damping=damp.tocsr(), mass=mass, lu=lu,
                           factor_step=h,
                           muscles=MuscleJacobian(physics, lu) if p.is_continuum else None,
-                          predictor=bool(p.predictor), krylov=int(p.krylov_iterations))
+                          predictor=bool(p.predictor), krylov=int(p.krylov_iterations),
+                          drag=float(p.mass_drag))
 
 
 def _graph_matrix(i: np.ndarray, j: np.ndarray, w: np.ndarray, nd: int) -> sp.csc_matrix:
@@ -273,6 +276,8 @@ class LinearImplicitEuler:
                 # the change of velocity, and resists no steady rigid turn
                 x_p = pos + h * vel
                 accumulate_forces(solver_state.forces, x_p, vel, m_force, anchors, out)
+                if system.drag:
+                    out[dyn] -= system.drag * system.mass[:, None] * v0
                 rhs = h * out[dyn]
                 if system.krylov:
                     dv = _krylov_step(solver_state, system, x_p, vel, m_force, anchors, out,
@@ -281,6 +286,8 @@ class LinearImplicitEuler:
                     dv = system.solve(rhs, jac, h)
             else:
                 accumulate_forces(solver_state.forces, pos, vel, m_force, anchors, out)
+                if system.drag:
+                    out[dyn] -= system.drag * system.mass[:, None] * v0
                 rhs = h * (out[dyn] - h * system.apply_stiffness(v0, jac))
                 dv = system.solve(rhs, jac, h)
             vel[dyn] = v0 + dv
@@ -357,7 +364,7 @@ def _krylov_step(solver_state, system, x_p, vel, m_force, anchors, f_p, rhs, jac
     preconditioner: its excess stiffness no longer acts as inertia."""
     dyn = solver_state.dynamic
     mass = system.mass[:, None]
-    base = f_p[dyn].copy()
+    base = f_p[dyn] + system.drag * mass * vel[dyn]  # the forces alone (the drag is exact)
     xp = x_p.copy()
     vp = vel.copy()
     work = np.zeros_like(f_p)
@@ -370,7 +377,7 @@ def _krylov_step(solver_state, system, x_p, vel, m_force, anchors, f_p, rhs, jac
         xp[dyn] = x_p[dyn] + eps * h * u
         vp[dyn] = vel[dyn] + eps * u
         accumulate_forces(solver_state.forces, xp, vp, m_force, anchors, work)
-        return mass * u - h * (work[dyn] - base) / eps
+        return (1.0 + h * system.drag) * mass * u - h * (work[dyn] - base) / eps
 
     def precond(r):
         return system.solve(r, jac, h)
