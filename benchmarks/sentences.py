@@ -22,8 +22,12 @@ bilabials' criterion on them), and ``bilabial_with_the_words``: the bilabials' c
 sentences' bilabials and those together. ``--phones`` adds every phone's row. Progress goes to
 stderr (about 20-40 s a sentence on the 2-core machine).
 
+``--preset FILE.json``: another physical preset (a preset file, e.g. the anatomical preset with
+a ``step`` block; docs/formats.md).
+
 ``python benchmarks/sentences.py [--voice en-gb] [--face default] [--rate 175]
-[--sentences N] [--no-carrier] [--phones] [--no-plan] [--plan-iterations N]``
+[--sentences N] [--no-carrier] [--phones] [--no-plan] [--plan-iterations N]
+[--preset anatomical]``
 """
 
 from __future__ import annotations
@@ -71,7 +75,7 @@ ESPEAK_DEFAULT_WPM = 175
 
 
 def spoken_phones(text: str, *, voice: str = "en-us", rate_wpm: int = ESPEAK_DEFAULT_WPM,
-                  face: str = "default", plan=True):
+                  face: str = "default", plan=True, preset: str = "anatomical"):
     """Speak ``text`` as ``facemech speak`` does (no movie, no liveliness) and measure it:
     (phone measures, peak lower-lip speed m/s, the utterance's duration s, the manifest's
     ``plan``). ``plan``: as :func:`~facemech.workflows.speak.speak`'s."""
@@ -81,7 +85,7 @@ def spoken_phones(text: str, *, voice: str = "en-us", rate_wpm: int = ESPEAK_DEF
 
     with tempfile.TemporaryDirectory() as tmp:
         sp = speak(tmp, text, voice=voice, rate_wpm=rate_wpm, face=face, plan=plan,
-                   video=False, alive=Liveliness.off())
+                   video=False, alive=Liveliness.off(), preset=preset)
     sim = sp.simulation
     phones = measure_phones(sp.alignment, sim.model, sim.time, sim.positions, voice=voice)
     return phones, peak_lower_lip_speed(sim.time, sim.positions, sim.model), \
@@ -100,6 +104,7 @@ def main(argv=None) -> int:
     ap.add_argument("--no-plan", action="store_true", help="the dominance blend, not planned")
     ap.add_argument("--plan-iterations", type=int, default=None,
                     help="the planner's iterations (default: speak's)")
+    ap.add_argument("--preset", default="anatomical", help="a preset name or a preset file")
     args = ap.parse_args(argv)
     plan = False if args.no_plan else (True if args.plan_iterations is None
                                         else args.plan_iterations)
@@ -110,7 +115,7 @@ def main(argv=None) -> int:
     for k, text in enumerate(texts, 1):
         t0 = time.perf_counter()
         ph, peak, dur, planned = spoken_phones(text, voice=args.voice, rate_wpm=args.rate,
-                                               face=args.face, plan=plan)
+                                               face=args.face, plan=plan, preset=args.preset)
         wall = time.perf_counter() - t0
         phones += ph
         speeds.append(peak)
@@ -122,13 +127,15 @@ def main(argv=None) -> int:
         print(f"[{k}/{len(texts)}] {wall:5.1f} s  peak {1e3 * peak:5.1f} mm/s  {text}",
               file=sys.stderr, flush=True)
     out = {"voice": args.voice, "rate_wpm": args.rate, "face": args.face, "plan": plan,
+           "preset": args.preset,
            "criteria": CRITERIA, "summary": summarize(phones, speeds),
            "classes": class_table(phones), "sentences": rows}
     if not args.no_carrier:
         between, flanking = [], []
         for k, word in enumerate(BETWEEN_BILABIALS, 1):
             ph, _, _, _ = spoken_phones(CARRIER.format(word), voice=args.voice,
-                                        rate_wpm=args.rate, face=args.face, plan=plan)
+                                        rate_wpm=args.rate, face=args.face, plan=plan,
+                                        preset=args.preset)
             between += [p for p in ph if p.between_bilabials]
             flanking += [p for p in ph if p.group == "bilabial"]
             print(f"[{k}/{len(BETWEEN_BILABIALS)}] {CARRIER.format(word)}", file=sys.stderr,

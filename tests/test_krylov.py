@@ -95,3 +95,19 @@ def test_the_mass_drag_needs_the_linearly_implicit_step():
         preset("anatomical").with_(integrator="rosenbrock", mass_drag=50.0)
     with pytest.raises(InputError, match="mass_drag"):
         preset("anatomical").with_(mass_drag=-1.0)
+
+
+def test_the_fast_lips_preset_file_is_the_measured_step():
+    """benchmarks/presets/fast-lips.json, the preset file of docs/model.md's measurements of
+    visible speech on the step solved on its tangent, reads as the anatomical preset with the
+    step the speed table measured (4 iterations, the mass drag 200 s^-1)."""
+    from pathlib import Path
+
+    from facemech.params import read_preset
+
+    p = read_preset(Path(__file__).resolve().parents[1] / "benchmarks" / "presets"
+                    / "fast-lips.json")
+    want = preset("anatomical").with_(**KV, krylov_iterations=4, mass_drag=200.0)
+    for field in (*KV, "krylov_iterations", "mass_drag", "fv_vmax", "tau_activation",
+                  "k_force", "substeps"):
+        assert getattr(p, field) == pytest.approx(getattr(want, field), rel=1e-12), field
