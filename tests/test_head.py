@@ -364,7 +364,8 @@ def test_a_scan_cut_at_the_neck_is_closed_into_one_head(tmp_path, monkeypatch, c
     """The scan-like head (a neck cut straight across, ears, jaw angles), written as OBJ + LJSON
     v3 and built through ``facemech face build``: its edge steps back by up to 0.9 degrees at the
     neck's corners, seen from behind the head; it is closed all the same, into one watertight,
-    consistently wound surface of a sphere's topology."""
+    consistently wound surface of a sphere's topology, without the renderer's ears beside its
+    own."""
     import json
 
     from conftest import run_cli
@@ -390,6 +391,8 @@ def test_a_scan_cut_at_the_neck_is_closed_into_one_head(tmp_path, monkeypatch, c
     assert 0 < back.max() < PHI_REVERSAL  # the edge does step back, a little
     scene = build_scene(look)
     head = next(p for p in scene.parts if p.name == "head")
+    # its skin goes on round its own ears (fins standing out of it): no second pair is added
+    assert not any(p.name.startswith("ear") for p in scene.parts)
     verts, faces = closed_surface(look.rest, head.follow, look.triangles, look.rest)
     mesh = trimesh.Trimesh(verts, faces, process=False)
     assert mesh.is_watertight and mesh.is_winding_consistent and mesh.euler_number == 2

@@ -78,18 +78,12 @@ def ear_parts(look: FaceLook) -> list[Part]:
     nasion = lm.get("nasion")
     if nasion is None:
         return []
-    from ..geometry.mesh import boundary_nodes
-
-    edge = boundary_nodes(look.triangles)
     parts = []
     yc = nasion[1] - 0.024
+    stops = skin_stops_at_the_ears(look)
     for side, name in ((1, "ear_left"), (-1, "ear_right")):
-        band = np.abs(r[:, 1] - yc) < 0.02
-        xs = side * r[band, 0]
-        if not band.any():
-            continue
-        i_max = np.flatnonzero(band)[np.argmax(xs)]
-        if i_max not in set(edge.tolist()):
+        i_max = stops.get(side)
+        if i_max is None:
             continue  # the skin goes on round the side: a scan with its own ears
         a = r[i_max].copy()
         a[1] = yc
@@ -113,6 +107,28 @@ def ear_parts(look: FaceLook) -> list[Part]:
         parts.append(Part(name + "_back", v, f[:, ::-1], albedo * 0.9, (0.05, 10.0), "skull",
                           inward=True))
     return parts
+
+
+def skin_stops_at_the_ears(look: FaceLook) -> dict:
+    """Side (1: the subject's left, -1: right) -> the skin node furthest out at ear height (24 mm
+    under the nasion, within 20 mm), for each side where that node is on the skin's edge: the
+    skin stops in front of the ear there and the renderer adds one. A side whose furthest node
+    is inside the skin (a scan with its own ears, which stand out of it) is left out."""
+    from ..geometry.mesh import boundary_nodes
+
+    r = look.rest
+    nasion = look.landmarks.get("nasion")
+    if nasion is None:
+        return {}
+    edge = set(boundary_nodes(look.triangles).tolist())
+    band = np.abs(r[:, 1] - (nasion[1] - 0.024)) < 0.02
+    out = {}
+    if band.any():
+        for side in (1, -1):
+            i_max = int(np.flatnonzero(band)[np.argmax(side * r[band, 0])])
+            if i_max in edge:
+                out[side] = i_max
+    return out
 
 
 def head_centre(look: FaceLook) -> tuple[np.ndarray, float, np.ndarray]:
@@ -184,7 +200,12 @@ def closed_head(look: FaceLook) -> list[Part] | None:
     from ..geometry.mesh import vertex_normals
     from .ears import ear_parts as auricles
 
-    return [head, *hair, *auricles(verts, vertex_normals(verts, faces), nasion)]
+    # the renderer's ears only where the skin stops in front of them (a scan's own stay alone)
+    sides = {"ear_left": 1, "ear_right": -1}
+    stops = skin_stops_at_the_ears(look)
+    ears = [p for p in auricles(verts, vertex_normals(verts, faces), nasion)
+            if sides[p.name.removesuffix("_back")] in stops]
+    return [head, *hair, *ears]
 
 
 def skin_colours(look: FaceLook) -> np.ndarray:
