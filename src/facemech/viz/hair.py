@@ -65,7 +65,7 @@ def surface_radius(verts: np.ndarray, faces: np.ndarray, centre: np.ndarray, lat
 
 
 def hair_parts(verts: np.ndarray, faces: np.ndarray, centre: np.ndarray,
-               hairline, skin: np.ndarray | None = None) -> list[Part]:
+               hairline) -> list[Part]:
     """The hair layer over a closed head, and the skin-coloured strip under its fringe.
 
     Parameters
@@ -73,8 +73,6 @@ def hair_parts(verts: np.ndarray, faces: np.ndarray, centre: np.ndarray,
     verts, faces : the head's closed surface at rest (skin and closure), m
     centre : (3,) m, the head's centre
     hairline : function (longitude deg, 0 forward) -> height (m) of the hairline
-    skin : (3,) sRGB in [0, 1], the strip's colour: the head's skin under the fringe (default:
-        the plain skin's)
     """
     lat = np.arange(-60.0, 90.0 + 1e-9, STEP_DEG)
     lon = np.arange(-180.0, 180.0 + 1e-9, STEP_DEG)
@@ -116,8 +114,7 @@ def hair_parts(verts: np.ndarray, faces: np.ndarray, centre: np.ndarray,
     # sees skin, also where the fringe stands against the background at the head's silhouette
     fringe = f[(above.ravel()[f] < 0.5 * FRINGE + 0.002).any(axis=1)]
     under = centre + d * (r + 0.5 * LIFT)[..., None]
-    tone = T.SKIN if skin is None else np.asarray(skin, float)
-    strip = Part("hair_under", under.reshape(-1, 3), fringe, np.tile(tone, (n_lat * n_lon, 1)),
+    strip = Part("hair_under", under.reshape(-1, 3), fringe, np.tile(T.SKIN, (n_lat * n_lon, 1)),
                  SKIN_GLOSS, "skull")
     return [hair, strip]
 

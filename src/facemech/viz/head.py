@@ -180,7 +180,6 @@ def closed_head(look: FaceLook) -> list[Part] | None:
         return None
     c, top, nasion = head_centre(look)
     albedo = np.tile(T.SKIN, (len(closure.rest), 1))
-    tone = None
     if look.textured:
         # a scan's or a photo's own skin: each vertex takes the colour of the edge node its ray
         # leaves from, fading into the edge's mean colour away from it, so that the head goes
@@ -196,7 +195,17 @@ def closed_head(look: FaceLook) -> list[Part] | None:
     n = len(look.rest)
     verts = np.concatenate([look.rest, closure.rest])
     faces = np.concatenate([look.triangles, closure.joint_faces(n)])
-    hair = hair_parts(verts, faces, c, lambda lon: hairline(lon, top, nasion[1]), skin=tone)
+    hair = hair_parts(verts, faces, c, lambda lon: hairline(lon, top, nasion[1]))
+    if look.textured:
+        # the strip under the fringe takes the colour of the skin or head nearest it, as the
+        # plain skin's strip has the plain skin's (it shows below the strands' ends)
+        from dataclasses import replace
+
+        from scipy.spatial import cKDTree
+
+        colours = np.concatenate([skin_colours(look), albedo])
+        hair = [replace(p, albedo=colours[cKDTree(verts).query(p.rest)[1]])
+                if p.name == "hair_under" else p for p in hair]
     from ..geometry.mesh import vertex_normals
     from .ears import ear_parts as auricles
 
