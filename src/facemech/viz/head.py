@@ -1,15 +1,16 @@
 """The head round a face surface.
 
-For a face without its own texture (the built-in face), :func:`closed_head`: the closure that
-makes skin and head one surface (:mod:`.closure`), the hair over it (:mod:`.hair`) and the ears
-(:mod:`.ears`).
+For the built-in face, and any face whose skin edge goes once round the back of the head (a
+photo talker; a scan cropped to the face), :func:`closed_head`: the closure that makes skin and
+head one surface (:mod:`.closure`; a textured face's in its own skin colour), the hair over it
+(:mod:`.hair`) and the ears (:mod:`.ears`) where the skin stops in front of them.
 
-For a scan with its own colours, the earlier head: a closed head shell with hair and neck, the
-hairline shared with the skin, the ears, and the skirt that joins the skin's moving edge to the
-shell. The shell is a radial surface about the head's centre: behind the skin it follows the
-skin a little inside it and sinks deep under the face, and where the skin stops it continues as
-an adult head (ellipsoid 150 x 230 x 190 mm) and a neck (cylinder of 52 mm radius), blended so
-that it meets the skin's edge.
+For a face whose edge does not allow it, the earlier head: a closed head shell with hair and
+neck, the hairline shared with the skin, the ears, and the skirt that joins the skin's moving
+edge to the shell. The shell is a radial surface about the head's centre: behind the skin it
+follows the skin a little inside it and sinks deep under the face, and where the skin stops it
+continues as an adult head (ellipsoid 150 x 230 x 190 mm) and a neck (cylinder of 52 mm radius),
+blended so that it meets the skin's edge.
 """
 
 from __future__ import annotations

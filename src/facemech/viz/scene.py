@@ -17,11 +17,13 @@
 * **head motion**: the whole head (every part above) turns rigidly about :func:`head_pivot`
   (the top of the neck) by a pose (pitch, yaw, roll) rad (:func:`head_rotation`); the skin's
   positions, from the simulation, stay in the head's frame;
-* **head**: for a face without its own texture, the closure that makes skin and head one
+* **head**: where the skin's edge goes once round the back of the head (the built-in face, a
+  photo talker, most scans cropped to the face), the closure that makes skin and head one
   surface from the crown to the neck, its edge ring the skin's edge nodes (:mod:`.closure`,
-  :mod:`.cranium`), hair with volume and a strand fringe (:mod:`.hair`) and ears with relief
-  (:mod:`.ears`); for a scan with its own colours, a head shell with hair, ears and a skirt
-  from the skin's edge into the shell (:mod:`.head`).
+  :mod:`.cranium`; a textured face's in its own skin colour), hair with volume and a strand
+  fringe (:mod:`.hair`) and ears with relief (:mod:`.ears`) where the skin stops in front of
+  them; elsewhere a head shell with hair, ears and a skirt from the skin's edge into the shell
+  (:mod:`.head`).
 
 :func:`build_scene` packs the parts for the rasteriser (one vertex array, one texture atlas);
 :meth:`Scene.frame` places them for one time step.
