@@ -167,3 +167,27 @@ def write_landmark_csv(path, landmarks, scale=1e3):
         fh.write("name,x,y,z\n")
         fh.writelines(f"{n},{p[0] * scale:.6f},{p[1] * scale:.6f},{p[2] * scale:.6f}\n"
                       for n, p in landmarks.items())
+
+
+def write_head_scan(folder, *, uv=None, texture=None):
+    """The scan-like head (:func:`scan_head`) written as a scanner would: ``head.obj`` in mm
+    (with ``uv``, (f, 3, 2) per-corner texture coordinates, and ``texture``, (h, w, 3) uint8:
+    its material ``head.mtl`` and image ``head.png``) and its 68 points in menpo's LJSON
+    version 3 (``head.ljson``). Returns the OBJ's and the landmarks' paths."""
+    import json
+    from pathlib import Path
+
+    from facemech.geometry.ibug import generic_ibug68
+    from test_ljson import v3
+
+    folder = Path(folder)
+    v, f, _ = scan_head()
+    write_obj(folder / "head.obj", v * 1e3, f, uv=uv,
+              material=None if texture is None else "head")
+    if texture is not None:
+        from PIL import Image
+
+        (folder / "head.mtl").write_text("newmtl skin\nmap_Kd head.png\n")
+        Image.fromarray(texture).save(folder / "head.png")
+    (folder / "head.ljson").write_text(json.dumps(v3(reshape(generic_ibug68()) * 1e3)))
+    return folder / "head.obj", folder / "head.ljson"

@@ -249,19 +249,14 @@ def test_a_head_scan_with_menpo_v3_landmarks_builds_as_it_comes(tmp_path, monkey
     """The scan-like head written as a scanner would (OBJ in mm) with its 68 points in menpo's
     LJSON version 3, parts stored in a landmarker.io order: ``facemech face build`` reads,
     crops, refines and builds it (exit 0), and the model keeps every prism whole."""
-    import json
-
     from conftest import run_cli
-    from facemech.geometry.ibug import generic_ibug68
     from facemech.geometry.model import FaceModel
-    from scans import reshape, write_obj
-    from test_ljson import v3
+    from scans import write_head_scan
 
-    v, f, lm = scan_head()
-    write_obj(tmp_path / "head.obj", v * 1e3, f)
-    (tmp_path / "head.ljson").write_text(json.dumps(v3(reshape(generic_ibug68()) * 1e3)))
-    code, _, err = run_cli(monkeypatch, capsys, "face", "build", tmp_path / "head.obj",
-                           tmp_path / "head.ljson", "-o", tmp_path / "head.npz")
+    _, _, lm = scan_head()
+    obj, ljson = write_head_scan(tmp_path)
+    code, _, err = run_cli(monkeypatch, capsys, "face", "build", obj, ljson, "-o",
+                           tmp_path / "head.npz")
     assert code == 0, err
     assert "68 iBUG points" in err
     assert "thinned by up to" in err  # the mending notes reach the user

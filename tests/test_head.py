@@ -366,21 +366,15 @@ def test_a_scan_cut_at_the_neck_is_closed_into_one_head(tmp_path, monkeypatch, c
     neck's corners, seen from behind the head; it is closed all the same, into one watertight,
     consistently wound surface of a sphere's topology, without the renderer's ears beside its
     own."""
-    import json
-
     from conftest import run_cli
-    from facemech.geometry.ibug import generic_ibug68
     from facemech.geometry.model import FaceModel
     from facemech.viz.closure import PHI_REVERSAL, RAY_ORIGIN, back_polar, boundary_loops
     from facemech.viz.head import cranium_of
-    from scans import reshape, scan_head, write_obj
-    from test_ljson import v3
+    from scans import write_head_scan
 
-    v, f, _ = scan_head()
-    write_obj(tmp_path / "head.obj", v * 1e3, f)
-    (tmp_path / "head.ljson").write_text(json.dumps(v3(reshape(generic_ibug68()) * 1e3)))
-    code, _, err = run_cli(monkeypatch, capsys, "face", "build", tmp_path / "head.obj",
-                           tmp_path / "head.ljson", "-o", tmp_path / "head.npz")
+    obj, ljson = write_head_scan(tmp_path)
+    code, _, err = run_cli(monkeypatch, capsys, "face", "build", obj, ljson, "-o",
+                           tmp_path / "head.npz")
     assert code == 0, err
     look = look_from_model(FaceModel.load(tmp_path / "head.npz"))
     loop = boundary_loops(look.triangles)[0]

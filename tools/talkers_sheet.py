@@ -24,7 +24,6 @@ Usage::
 
 from __future__ import annotations
 
-import json
 import subprocess
 import sys
 import tempfile
@@ -44,8 +43,7 @@ from facemech.viz.scene import build_scene, look_from_dataset
 from facemech.viz.sheet import Block, contact_sheet
 from facemech.viz.video import jaw_poses_of
 from facemech.workflows.speak import speak
-from scans import NECK_BOTTOM, _parameter_mesh, reshape, scan_head, write_obj
-from test_ljson import v3
+from scans import NECK_BOTTOM, _parameter_mesh, scan_head, write_head_scan
 
 #: what each talker says
 SENTENCE = "Bob bought a map of Maine."
@@ -71,7 +69,7 @@ def photo_talker(folder: Path) -> tuple[Path, np.ndarray]:
 def scan_talker(folder: Path, texture: np.ndarray) -> Path:
     """The scan talker: the scan-like head as OBJ (mm) + MTL + PNG + LJSON v3, built by
     ``facemech face build``."""
-    v, f, _ = scan_head()
+    _, f, _ = scan_head()
     # the head's sample points in (angle deg, height mm), as scan_head made them: their texture
     # coordinates are the photo texture's (photo_texture.grid_uv: the angle over the generic
     # grid's 86 degrees, the height from the throat to the hairline)
@@ -79,13 +77,10 @@ def scan_talker(folder: Path, texture: np.ndarray) -> Path:
     u = 0.5 + 0.5 * pts[:, 0] / 86.0
     w = (pts[:, 1] - generic.Y_BOTTOM) / (generic.Y_TOP - generic.Y_BOTTOM)
     uv = np.clip(np.column_stack([u, w]), 0.0, 1.0)[f]
-    write_obj(folder / "head.obj", v * 1e3, f, uv=uv, material="head")
-    (folder / "head.mtl").write_text("newmtl skin\nmap_Kd head.png\n")
-    Image.fromarray(texture).save(folder / "head.png")
-    (folder / "head.ljson").write_text(json.dumps(v3(reshape(generic_ibug68()) * 1e3)))
+    obj, ljson = write_head_scan(folder, uv=uv, texture=texture)
     out = folder / "scan.npz"
-    subprocess.run([sys.executable, "-m", "facemech", "face", "build", str(folder / "head.obj"),
-                    str(folder / "head.ljson"), "-o", str(out)], check=True)
+    subprocess.run([sys.executable, "-m", "facemech", "face", "build", str(obj), str(ljson),
+                    "-o", str(out)], check=True)
     return out
 
 

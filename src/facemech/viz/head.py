@@ -204,7 +204,7 @@ def closed_head(look: FaceLook) -> list[Part] | None:
 
         from scipy.spatial import cKDTree
 
-        colours = np.concatenate([skin_colours(look), albedo])
+        colours = np.concatenate([edge, albedo])
         hair = [replace(p, albedo=colours[cKDTree(verts).query(p.rest)[1]])
                 if p.name == "hair_under" else p for p in hair]
     from ..geometry.mesh import vertex_normals
