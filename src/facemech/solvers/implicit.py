@@ -271,25 +271,20 @@ class LinearImplicitEuler:
             anchors = place_jaw_into(solver_state.jaw, f.jaw_start + f.jaw_rate * (step * h),
                                      f.jaw_rate, pos, vel)
             v0 = vel[dyn]
-            if system.predictor:
-                # the forces at the explicit predictor x + h v: the matrix then only corrects
-                # the change of velocity, and resists no steady rigid turn
-                x_p = pos + h * vel
-                accumulate_forces(solver_state.forces, x_p, vel, m_force, anchors, out)
-                if system.drag:
-                    out[dyn] -= system.drag * system.mass[:, None] * v0
-                rhs = h * out[dyn]
-                if system.krylov:
-                    dv = _krylov_step(solver_state, system, x_p, vel, m_force, anchors, out,
-                                      rhs, jac, h)
-                else:
-                    dv = system.solve(rhs, jac, h)
-            else:
-                accumulate_forces(solver_state.forces, pos, vel, m_force, anchors, out)
-                if system.drag:
-                    out[dyn] -= system.drag * system.mass[:, None] * v0
+            # with the predictor the forces at x + h v: the matrix then only corrects the change
+            # of velocity, and resists no steady rigid turn
+            at = pos + h * vel if system.predictor else pos
+            accumulate_forces(solver_state.forces, at, vel, m_force, anchors, out)
+            if system.drag:
+                out[dyn] -= system.drag * system.mass[:, None] * v0
+            if not system.predictor:
                 rhs = h * (out[dyn] - h * system.apply_stiffness(v0, jac))
                 dv = system.solve(rhs, jac, h)
+            elif system.krylov:
+                dv = _krylov_step(solver_state, system, at, vel, m_force, anchors, out,
+                                  h * out[dyn], jac, h)
+            else:
+                dv = system.solve(h * out[dyn], jac, h)
             vel[dyn] = v0 + dv
             pos[dyn] += h * vel[dyn]
             _contacts(solver_state, pos, vel, anchors)
