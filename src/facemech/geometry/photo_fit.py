@@ -8,9 +8,11 @@ A frontal photo gives the face's outline in the image plane; its size and depth 
 2. back-projects every 2-D point to the depth the generic face has there (scaled by the
    interpupillary distance over the generic face's), so that the perspective of a close
    camera does not widen the nose or shrink the ears;
-3. warps the generic surface (:func:`generic.make_surface`) by the 2-D thin-plate spline that
-   takes the generic face's iBUG points (:func:`ibug.generic_ibug68`) onto the back-projected
-   ones, and scales its depth by the face's size;
+3. warps the generic surface (:func:`generic.make_surface`) by the 2-D spline that takes the
+   generic face's iBUG points (:func:`ibug.generic_ibug68`) onto the back-projected ones
+   (:func:`_spline`: the linear radial kernel with a constant part, which levels off beyond
+   the points instead of carrying their trend outward), and scales its depth by the face's
+   size;
 4. optionally corrects the depth along the midline from a profile photo's silhouette
    (:func:`profile_depth`), carried sideways by the same spline's smooth falloff.
 
@@ -79,12 +81,13 @@ DLIB_OFFSETS_MM = np.array([
 #: the jaw line's iBUG points (0 on the subject's right, 8 the menton, 16 on the left)
 JAW = np.arange(17)
 #: how loosely the spline follows a detector's jaw-line points (their x, and their y but at the
-#: chin): scipy's thin-plate smoothing (:class:`scipy.interpolate.RBFInterpolator`, the spline
-#: in metres; the inner points get 0, interpolated). 0 would interpolate the jaw line; a large
-#: value leaves it out, the inner points alone shaping the face's width there. On facemech's
-#: renders through dlib the landmarks' worst error is 1.67-1.82 mm from 0.15 to 1, 2.0 mm at 0.1
-#: (``tests/test_photo.py``; docs/photo.md)
-JAW_SMOOTHING = 0.2
+#: chin): scipy's smoothing (:class:`scipy.interpolate.RBFInterpolator`, the spline's kernel
+#: in metres; the inner points get 0, interpolated). 0 would interpolate the jaw line; a value
+#: much larger than the kernel (|r|, about 0.1 m) leaves it out, the inner points alone shaping
+#: the face's width there. On facemech's renders through dlib (24 photos of two faces, six
+#: sizes and six turns each; docs/photo.md) the worst landmark's mean falls by 0.4-1.6 mm from
+#: 0.002 to 1 and moves by 0.25 mm at most from 0.5 to 1000
+JAW_SMOOTHING = 1.0
 #: iBUG points a face's turn about the vertical is read from (:func:`estimate_yaw`): the nose
 #: (27-35), the eyes (36-47) and the mouth's corners (48, 54); not the jaw line or the brows,
 #: which a detector places least surely on a turned face
@@ -398,11 +401,22 @@ def estimate_yaw(points: np.ndarray, generic_points: np.ndarray | None = None,
 
 
 def _spline(src: np.ndarray, disp: np.ndarray, smooth_x: np.ndarray, smooth_y: np.ndarray):
-    """The thin-plate spline (degree 1) of 2-D displacements ``disp`` (n, 2) m at ``src`` (n, 2)
-    m, its x and y each with its own smoothing per point (n,) (0: interpolated). Returns a
-    function of points (k, 2) m giving their displacements (k, 2) m."""
-    fx, fy = (RBFInterpolator(src, disp[:, i], kernel="thin_plate_spline", degree=1,
-                              smoothing=sm) for i, sm in enumerate((smooth_x, smooth_y)))
+    """The spline of 2-D displacements ``disp`` (n, 2) m at ``src`` (n, 2) m, its x and y each
+    with its own smoothing per point (n,) (0: interpolated). Returns a function of points
+    (k, 2) m giving their displacements (k, 2) m.
+
+    The kernel is the linear radial one, -|r| (the polyharmonic spline of order 1), with a
+    constant part only. Its weights sum to zero, so far from the points the displacement levels
+    off to a bounded value. The thin-plate spline with an affine part (the usual choice, and
+    this fit's until 2026-11-29) carries the inner points' trend outward instead: a mouth wider
+    than the generic face's, with eyes as wide, reads as a width growing downward and widened
+    the jaw angles 50 mm out from the mouth's corners by 2-2.4 mm too much. Over 24 renders of
+    two faces through dlib the worst landmark's mean fell from 1.43 to 1.14 mm (built-in face,
+    six sizes), 2.43 to 2.16 (six turns), 2.28 to 1.47 (the variant's sizes), 3.43 to 2.84
+    (its turns); from exact points nothing changes by more than 0.1 mm (docs/photo.md).
+    """
+    fx, fy = (RBFInterpolator(src, disp[:, i], kernel="linear", degree=0, smoothing=sm)
+              for i, sm in enumerate((smooth_x, smooth_y)))
     return lambda p: np.column_stack([fx(p), fy(p)])
 
 
