@@ -529,6 +529,34 @@ def test_the_rerendered_talker_matches_the_photo(built_in, from_dlib):
     assert 0.3 < made.texture.coverage.mean() < 0.9
 
 
+def test_the_photo_talker_blinks_and_its_iris_is_the_photos(built_in, from_dlib):
+    """The photo's eyes are cut from its texture and drawn (:mod:`facemech.viz.fissures`): the
+    talker's iris takes the photo's (the built-in face's ``IRIS``; measured within 0.01), the
+    lids its skin; open, the eye shows its white (measured: 25 % of a 16 x 50 px box round
+    each eye above 200 in every channel); in a blink, none of it (0 %)."""
+    from facemech.viz import textures as T
+    from facemech.viz.face_parts import textured_fissures
+    from facemech.viz.look import look_from_model
+    from facemech.viz.render import Renderer
+    from facemech.viz.scene import build_scene
+
+    found, made = from_dlib
+    look = look_from_model(made.model)
+    cut = textured_fissures(look)
+    for name in ("eye_left", "eye_right"):
+        np.testing.assert_allclose(cut.colours[name].iris, T.IRIS, atol=0.03)
+        assert np.abs(cut.colours[name].lid - T.SKIN).max() < 0.08
+    render = Renderer(build_scene(look), "frontal", SIZE, background="#8a9099",
+                      distance=built_in.distance)
+    cam = render.cameras[0]
+    for name in ("eye_left", "eye_right"):
+        x, y = cam.project(look.landmarks[name][None])[0, :2]
+        box = np.s_[int(y) - 8:int(y) + 8, int(x) - 25:int(x) + 25]
+        white = [np.mean(np.all(render(look.rest, blink=b)[box][..., :3] > 200, axis=-1))
+                 for b in (0.0, 1.0)]
+        assert white[0] > 0.08 and white[1] < 0.005, (name, white)
+
+
 def test_the_scale_is_the_adult_norm_when_not_given(built_in, from_dlib):
     found, _ = from_dlib
     made = _fit(built_in, found.points, ipd=None)

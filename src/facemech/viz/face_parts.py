@@ -8,6 +8,7 @@ import numpy as np
 
 from . import dentition
 from . import textures as T
+from .fissures import Fissures, can_cut, cut_fissures
 from .head import HAIR, hair_on_skin
 from .lids import lid_mesh, lid_of, lower_lid_of, margin_mesh
 from .look import FaceLook
@@ -18,20 +19,25 @@ SOCKET = np.array([0.55, 0.30, 0.28])
 EYE_RADIUS = 0.012  #: m
 
 
-def skin_part(look: FaceLook, painted_hair: bool = True) -> Part:
+def skin_part(look: FaceLook, painted_hair: bool = True,
+              fissures: Fissures | None = None) -> Part:
     """The skin. ``painted_hair``: paint the scalp hair over the skin's top band (for a head
-    without the hair layer of :mod:`.hair`)."""
+    without the hair layer of :mod:`.hair`). ``fissures``: a textured face's fissures cut
+    from its image (:func:`.fissures.cut_fissures`; its alpha is tested), else its image is
+    drawn whole."""
     n = len(look.rest)
     gloss = (0.10, 16.0)
     if look.image is not None and look.uv is not None:
-        img = _fit_texture(look.image).astype(float) / 255.0
+        img = (_fit_texture(look.image).astype(float) / 255.0 if fissures is None
+               else fissures.image)
         h, w = img.shape[:2]
-        tex = np.concatenate([img, np.ones((h, w, 1))], axis=-1)
+        alpha = np.ones((h, w)) if fissures is None else fissures.alpha
+        tex = np.concatenate([img[..., :3], alpha[..., None]], axis=-1)
         uv = np.empty((len(look.triangles), 3, 2))
         uv[..., 0] = look.uv[..., 0] * w
         uv[..., 1] = (1.0 - look.uv[..., 1]) * h
         return Part("skin", look.rest, look.triangles, np.tile(T.SKIN, (n, 1)), gloss, "skin",
-                    uv, tex, False, two_sided=_inner_side(look))
+                    uv, tex, fissures is not None, two_sided=_inner_side(look))
     if look.vertex_colours is not None:
         return Part("skin", look.rest, look.triangles, look.vertex_colours / 255.0, gloss,
                     "skin", two_sided=_inner_side(look))
@@ -122,15 +128,29 @@ def _inner_side(look: FaceLook) -> np.ndarray:
     return np.ones(len(look.triangles), bool)
 
 
-def eye_parts(look: FaceLook) -> list[Part]:
+def textured_fissures(look: FaceLook) -> Fissures | None:
+    """A textured face's fissures cut from its image as the renderer uses it (None for a face
+    without a texture image, or without both eye landmarks)."""
+    if look.image is None or look.uv is None or not can_cut(look):
+        return None
+    return cut_fissures(look, _fit_texture(look.image).astype(float) / 255.0)
+
+
+def eye_parts(look: FaceLook, fissures: Fissures | None = None) -> list[Part]:
+    """Eyeballs, lids, lid margins and socket linings behind the fissures. A textured face's
+    (``fissures``, :func:`textured_fissures`) take its lids' skin and its iris colour."""
     depth = skin_depth(look)
     parts = []
-    iris = T.iris_texture()
-    ni = iris.shape[0]
     for side, name in ((1, "eye_left"), (-1, "eye_right")):
         if name not in look.landmarks:
             continue
-        e = look.landmarks[name]
+        colours = None if fissures is None else fissures.colours.get(name)
+        e = look.landmarks[name] if fissures is None else fissures.eyes.get(
+            name, look.landmarks[name])
+        iris = T.iris_texture(colour=T.IRIS if colours is None else colours.iris)
+        ni = iris.shape[0]
+        # a textured face's lids in the skin it has round the eye: the generic albedo scaled
+        tint = np.ones(3) if colours is None else colours.lid / T.SKIN
         unit, faces = sphere(24, 36)
         radii = np.array([EYE_RADIUS * 1.22, EYE_RADIUS, EYE_RADIUS])
         # as far forward as the lids allow: behind the skin on a ring round the fissure
@@ -157,15 +177,15 @@ def eye_parts(look: FaceLook) -> list[Part]:
                           tex_mask=front, pivot=centre))
         lid = lid_of(e, centre, radii, side, depth)
         lv, lf, lalb = lid_mesh(lid)
-        parts.append(Part(name.replace("eye", "lid"), lv, lf, lalb, (0.10, 16.0), "lid",
-                          follow=lid, pivot=centre))
+        parts.append(Part(name.replace("eye", "lid"), lv, lf, np.clip(lalb * tint, 0, 1),
+                          (0.10, 16.0), "lid", follow=lid, pivot=centre))
         lower = lower_lid_of(lid)
         lv, lf, lalb = lid_mesh(lower)
-        parts.append(Part(name.replace("eye", "lower_lid"), lv, lf, lalb, (0.10, 16.0), "lid",
-                          follow=lower, pivot=centre))
+        parts.append(Part(name.replace("eye", "lower_lid"), lv, lf, np.clip(lalb * tint, 0, 1),
+                          (0.10, 16.0), "lid", follow=lower, pivot=centre))
         mv, mf, malb = margin_mesh(e, centre, radii, side, depth)
-        parts.append(Part(name.replace("eye", "lid_margin"), mv, mf, malb, (0.12, 24.0),
-                          "skull"))
+        parts.append(Part(name.replace("eye", "lid_margin"), mv, mf, np.clip(malb * tint, 0, 1),
+                          (0.12, 24.0), "skull"))
         # the socket's lining (conjunctiva), seen past the eyeball from the side
         lining = fit_inside(centre + np.array([0, 0, 0.003]), unit,
                              radii * np.array([1.5, 1.35, 1.7]), depth, 0.0005)

@@ -160,7 +160,7 @@ def lid_of(eye: np.ndarray, centre: np.ndarray, radii: np.ndarray, side: int,
     x = eye[0] + side * s * T.FISSURE_HALF_LENGTH
     up, lo = T.fissure_heights(s)
     tilt = 0.001 * np.clip(s, -1.5, 1.5)
-    y_up = eye[1] - 0.0005 + tilt + up  # margins in model y (textures._eye_frame)
+    y_up = eye[1] - 0.0005 + tilt + up  # margins in model y (textures.eye_frame)
     y_lo = eye[1] - 0.0005 + tilt + lo
     az = np.arcsin(np.clip((x - centre[0]) / r[0], -0.99, 0.99))
     if side < 0:

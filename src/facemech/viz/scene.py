@@ -7,7 +7,10 @@
 * **eyes**: eyeballs (sclera, iris, pupil) set behind the fissures, as far forward as the lids
   allow, in socket linings, turned by the gaze, upper lids that close with the blink and
   follow the gaze down, and lower lids that rise a little in a blink and looking up
-  (:mod:`.face_parts`, :mod:`.lids`);
+  (:mod:`.face_parts`, :mod:`.lids`); a face with its own texture image (a scan, a photo
+  talker) has the same fissures cut from that image, and its lids and irises take the
+  colours the image has round and inside them (:mod:`.fissures`); a face coloured per vertex
+  keeps its eyes painted;
 * **mouth**: a dark oral cavity, the upper teeth and gums fixed to the skull, the lower teeth,
   gums and the tongue moving with the mandible (the results' jaw angle about the model's
   hinge, plus the hinge's shift), the tongue's tip bent per frame by its pose (protrusion,
@@ -39,7 +42,7 @@ import numpy as np
 from ..geometry.builder import vertex_normals
 from ..solvers.jaw import rotation_matrix
 from .dentition import bend_tongue, tongue_modes
-from .face_parts import MAX_TEXTURE, eye_parts, mouth_parts, skin_part
+from .face_parts import MAX_TEXTURE, eye_parts, mouth_parts, skin_part, textured_fissures
 from .head import SKIRT_DEPTH, closed_head, ear_parts, head_centre, head_shell, skirt_part
 from .lids import gaze_rotation
 from .look import FaceLook, look_from_dataset, look_from_model
@@ -218,9 +221,11 @@ def build_scene(look: FaceLook, *, eyes: bool = True, mouth: bool = True,
                 head: bool = True) -> Scene:
     """Assemble and pack the parts of a face's scene."""
     closed = closed_head(look) if head else None
-    parts = [skin_part(look, painted_hair=closed is None)]
-    if eyes and not look.textured:
-        parts += eye_parts(look)
+    # a textured face's fissures are cut from its image where its eyes are drawn
+    fissures = textured_fissures(look) if eyes else None
+    parts = [skin_part(look, painted_hair=closed is None, fissures=fissures)]
+    if eyes and (not look.textured or fissures is not None):
+        parts += eye_parts(look, fissures)
     if mouth:
         parts += mouth_parts(look)
     if head:

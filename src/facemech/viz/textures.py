@@ -45,7 +45,7 @@ def fissure_heights(s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return upper, lower
 
 
-def _eye_frame(x, y, eye, side):
+def eye_frame(x, y, eye, side):
     """Coordinates along the canthal line (s, -1 medial .. 1 lateral) and height above it (m)."""
     s = side * (x - eye[0]) / FISSURE_HALF_LENGTH
     tilt = 0.001 * np.clip(s, -1.5, 1.5)  # the lateral canthus 2 mm above the medial
@@ -54,7 +54,7 @@ def _eye_frame(x, y, eye, side):
 
 def eye_mask(x: np.ndarray, y: np.ndarray, eye: np.ndarray, side: int) -> np.ndarray:
     """Signed distance-like depth inside the palpebral fissure (m; > 0 inside)."""
-    s, h = _eye_frame(x, y, eye, side)
+    s, h = eye_frame(x, y, eye, side)
     up, lo = fissure_heights(s)
     inside = np.minimum(up - h, h - lo)
     return np.where(np.abs(s) < 1.0, inside, -np.abs(s) + 1.0 - 1e-3)
@@ -141,7 +141,7 @@ def skin_texture(landmarks: dict, bounds: tuple[float, float, float, float], hai
             rgb = rgb * (1 - m) + m * BROW
         if eye_name in landmarks:
             e = landmarks[eye_name]
-            s, hh = _eye_frame(x, y, e, side)
+            s, hh = eye_frame(x, y, e, side)
             up, lo = fissure_heights(s)
             inside = np.abs(s) < 1.0
             crease = np.exp(-0.5 * ((hh - up - 0.0035) / 0.0009) ** 2) * np.clip(
@@ -175,8 +175,9 @@ def _brow_hairs(h: int, w: int, rng) -> np.ndarray:
     return n / max(float(n.std()), 1e-12)
 
 
-def iris_texture(n: int = 192) -> np.ndarray:
-    """RGBA front of an eyeball over [-R, R]^2 (R = 12 mm), row 0 at the top."""
+def iris_texture(n: int = 192, colour=IRIS) -> np.ndarray:
+    """RGBA front of an eyeball over [-R, R]^2 (R = 12 mm), row 0 at the top; ``colour`` (3,)
+    sRGB the iris's mean (its fibres 0.75-1.25 of it, its limbus darker)."""
     r_eye = 0.012
     c = (np.arange(n) + 0.5) / n * 2 * r_eye - r_eye
     x, y = np.meshgrid(c, -c)
@@ -186,7 +187,7 @@ def iris_texture(n: int = 192) -> np.ndarray:
     spokes = np.interp(ang, np.linspace(-np.pi, np.pi, 97), rng.random(97))
     rgb = np.broadcast_to(SCLERA, (n, n, 3)).copy()
     rgb *= (1.0 - 0.08 * np.clip(r / r_eye, 0, 1) ** 2)[..., None]
-    iris = IRIS * (0.75 + 0.5 * spokes[..., None])
+    iris = np.asarray(colour, float) * (0.75 + 0.5 * spokes[..., None])
     limbus = np.clip((r - 0.0052) / 0.0007, 0, 1)[..., None]
     iris = iris * (1 - 0.55 * limbus)
     m = _smooth(0.0059 - r, 2.5e-4)[..., None]
