@@ -2,7 +2,8 @@
 
 :class:`LinearImplicitEuler`
     linearly implicit (Baraff-Witkin) Euler with a constant matrix ``A = M + h C + h^2 K``
-    (masses M, damping C, a rest stiffness K), factorised once with SuperLU and reused:
+    (masses M, damping C, a rest stiffness K), factorised once (a sparse Cholesky factor,
+    :mod:`.cholesky`) and reused:
     ``A dv = h (f(x, v) - h K v)``. The nonlinear forces are evaluated exactly each step, so
     only the stability, not the consistency, rests on K.
 :class:`Rosenbrock2`
@@ -40,12 +41,12 @@ from typing import ClassVar
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse.linalg import splu
 
 from ..errors import InputError
 from ..geometry.prism import volume_gradients
 from ..params import Parameters
 from ..physics.assembly import Physics, accumulate_forces, rest_anchors
+from .cholesky import factorise
 from .contacts import resolve_contacts
 from .muscle_implicit import MuscleJacobian
 from .solver_state import (
@@ -79,7 +80,7 @@ class ImplicitSystem:
     stiffness : (d, d) sparse CSR, N/m -- the constant stiffness K
     damping : (d, d) sparse CSR, N s/m -- the damping C
     mass : (d,) kg
-    lu : SuperLU -- the factorisation of ``M + g C + g^2 K``
+    lu : the factorisation of ``M + g C + g^2 K`` (:func:`.cholesky.factorise`: a ``solve``)
     factor_step : float, s -- g (h for linear implicit Euler, gamma h for ROS2)
     muscles : MuscleJacobian or None -- the muscles' bead-space Jacobian and the Woodbury solve
         (the continuum tissue); None: the muscles stay explicit
@@ -172,10 +173,8 @@ def implicit_system(physics: Physics, h: float) -> ImplicitSystem:
     stiff = stiff.tocsc()
     # a drag proportional to the mass (Parameters.mass_drag) is diagonal: exactly in the matrix
     a_mat = (sp.diags(mass * (1.0 + h * p.mass_drag)) + h * damp + h * h * stiff).tocsc()
-    # the matrix is symmetric positive definite: no pivoting and a symmetric ordering fill in
-    # less than SuperLU's general settings (a third faster to solve here)
-    lu = splu(a_mat, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-              options={"SymmetricMode": True})
+    # the matrix is symmetric positive definite: its Cholesky factor
+    lu = factorise(a_mat)
     return ImplicitSystem(stiffness=stiff.tocsr(), damping=damp.tocsr(), mass=mass, lu=lu,
                           factor_step=h,
                           muscles=MuscleJacobian(physics, lu) if p.is_continuum else None,
