@@ -79,7 +79,16 @@ VARIANTS = {
                                "stiffening": 4.0, "krylov_iterations": 4, "mass_drag": 200.0}),
                            ("kv_krylov4_floor_stiff4_2_steps", {
                                "volume_floor": 0.5, "volume_floor_modulus": 1e6,
-                               "stiffening": 4.0, "krylov_iterations": 4, "substeps": 2}))},
+                               "stiffening": 4.0, "krylov_iterations": 4, "substeps": 2}),
+                           # the drag of the fast-lips preset at 2 steps per frame, 4 and 2
+                           # iterations: what a step of half the cost does
+                           ("kv_krylov4_floor_stiff4_drag200_2_steps", {
+                               "volume_floor": 0.5, "volume_floor_modulus": 1e6,
+                               "stiffening": 4.0, "krylov_iterations": 4, "mass_drag": 200.0,
+                               "substeps": 2}),
+                           ("kv_krylov2_floor_stiff4_drag200_2_steps", {
+                               "volume_floor": 0.5, "volume_floor_modulus": 1e6,
+                               "stiffening": 4.0, "mass_drag": 200.0, "substeps": 2}))},
     # no force-velocity term at 4 and at 32 steps per frame: what is left is the step's drag
     # and the tissue's own slowness
     "no_force_velocity_32_steps": {"f4": 0.0, "substeps": 32},
