@@ -13,16 +13,20 @@ SUDO   := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
 .PHONY: demo test test-lowest test-portable lint bench clean chromium docs docs-check
 
+# every package pinned, then the lip-reader's face-mesh model, kept from the mediapipe 0.10.21
+# wheel (pip download; facemech.io.face_mesh): that wheel pins numpy < 2 and is not installed
 $(STAMP): pyproject.toml $(CONSTRAINTS)
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip
 	$(BIN)/python -m pip install -q -c $(CONSTRAINTS) -e ".[dev]"
+	$(BIN)/python -m facemech.io.face_mesh
 	touch $(STAMP)
 
 $(LOW_STAMP): pyproject.toml constraints-lowest.txt
 	$(PYTHON) -m venv $(LOW_VENV)
 	$(LOW_BIN)/python -m pip install -q --upgrade pip
 	$(LOW_BIN)/python -m pip install -q -c constraints-lowest.txt -e ".[dev]"
+	$(LOW_BIN)/python -m facemech.io.face_mesh
 	touch $(LOW_STAMP)
 
 # a headless browser for the viewer's test (tests/test_viewer.py): installed with apt-get only

@@ -2,9 +2,11 @@
 
 Each sentence is spoken by :func:`facemech.workflows.speak.speak` (eSpeak NG, the built-in face,
 no movie file, blinks, gaze and head motion off), its frontal frames are rendered in memory
-(:func:`facemech.analysis.lipreader.frontal_frames`), dlib's 68-point tracker reads the
-inner-lip distance off each (:func:`~facemech.analysis.lipreader.read_lips`) and that is
-correlated with the model's lip aperture (:func:`~facemech.analysis.lipreader.compare`).
+(:func:`facemech.analysis.lipreader.frontal_frames`), a face tracker reads the inner-lip
+distance off each (:func:`~facemech.analysis.lipreader.read_lips`) and that is correlated with
+the model's lip aperture (:func:`~facemech.analysis.lipreader.compare`). ``--tracker dlib``
+(default): dlib's 68-point predictor; ``--tracker mesh``: MediaPipe's face mesh, tracked as
+MediaPipe tracks a video (:mod:`facemech.io.face_mesh`).
 
 Prints JSON: per sentence Pearson's r, the frames with a face out of all, the fitted line (px
 per mm of aperture, px at zero), the aperture's largest value (mm), and the wall time of
@@ -19,8 +21,8 @@ widest aperture, and the frames the tracker reads most below and most above its 
 ``--boxes``: each point the median of the predictor's from 45 boxes around the detector's, as
 ``face from-photo`` reads a photo (the default: one box per frame, as dlib's examples track).
 
-``python benchmarks/lipreader.py [--face default] [--size 640x360] [--aa 2] [--upsample 0]
-[--sentences N] [--picture docs/img/lipreader.jpg] [--boxes]``
+``python benchmarks/lipreader.py [--tracker dlib|mesh] [--face default] [--size 640x360]
+[--aa 2] [--upsample 0] [--sentences N] [--picture docs/img/lipreader.jpg] [--boxes]``
 """
 
 from __future__ import annotations
@@ -42,7 +44,7 @@ DEFAULT_SENTENCES = 6
 
 
 def measure(text: str, *, face: str, size: tuple[int, int], aa: int, upsample: int,
-            detector, boxes: bool = False) -> tuple[dict, tuple]:
+            detector, boxes: bool = False, tracker: str = "dlib") -> tuple[dict, tuple]:
     """The sentence's row of the report, and what :func:`draw` needs to draw it."""
     from facemech.analysis.lipreader import compare, frontal_frames, model_aperture, read_lips
     from facemech.speech.alive import Liveliness
@@ -56,7 +58,8 @@ def measure(text: str, *, face: str, size: tuple[int, int], aa: int, upsample: i
     ds = spoken.dataset
     frames = list(frontal_frames(ds, size=size, supersample=aa))
     t2 = time.perf_counter()
-    reading = read_lips(frames, detector=detector, upsample=upsample, boxes=boxes)
+    reading = read_lips(frames, detector=detector, upsample=upsample, boxes=boxes,
+                        tracker=tracker)
     t3 = time.perf_counter()
     aperture = model_aperture(ds)
     agreement = compare(reading.distance, aperture)
@@ -81,8 +84,12 @@ def draw(path: str, frames, points, aperture, which: tuple[int, ...]) -> None:
     """Frames ``which`` with their points, cropped to the face, side by side."""
     from PIL import Image, ImageDraw
 
-    from facemech.analysis.lipreader import LOWER_INNER, UPPER_INNER, inner_lip_distance
+    from facemech.analysis import lipreader
+    from facemech.io import face_mesh
 
+    inner_lip_distance = lipreader.inner_lip_distance
+    # the inner lips' points of the tracker that drew them (68 iBUG points or the 468 of the mesh)
+    own = lipreader if points.shape[1] == 68 else face_mesh
     tiles = []
     for k in which:
         im = Image.fromarray(frames[k])
@@ -92,12 +99,14 @@ def draw(path: str, frames, points, aperture, which: tuple[int, ...]) -> None:
         zoom = 2
         im = im.crop(box).resize(((box[2] - box[0]) * zoom, h * zoom), Image.LANCZOS)
         pen = ImageDraw.Draw(im)
-        inner = set(UPPER_INNER) | set(LOWER_INNER)
+        inner = set(own.UPPER_INNER) | set(own.LOWER_INNER)
+        radius = 2.5 if points.shape[1] == 68 else 1.2
         for i, (x, y) in enumerate(points[k]):
             if np.isfinite(x):
                 x, y = (x - box[0]) * zoom, y * zoom
                 colour = (230, 30, 30) if i in inner else (40, 230, 60)
-                pen.ellipse((x - 2.5, y - 2.5, x + 2.5, y + 2.5), fill=colour)
+                r = 2.5 if i in inner else radius
+                pen.ellipse((x - r, y - r, x + r, y + r), fill=colour)
         pen.text((8, 8), f"model aperture {aperture[k] * 1e3:.1f} mm, tracker's inner-lip "
                   f"distance {inner_lip_distance(points[k]):.1f} px", fill=(255, 255, 255))
         tiles.append(im)
@@ -115,6 +124,7 @@ def main(argv=None) -> int:
     ap.add_argument("--upsample", type=int, default=0, help="detector upsampling (0 or 1)")
     ap.add_argument("--sentences", type=int, default=DEFAULT_SENTENCES)
     ap.add_argument("--picture", help="JPEG of three frames with their points (module doc)")
+    ap.add_argument("--tracker", choices=("dlib", "mesh"), default="dlib")
     ap.add_argument("--boxes", action="store_true",
                     help="each point the median over 45 predictor boxes (as face from-photo)")
     args = ap.parse_args(argv)
@@ -125,14 +135,16 @@ def main(argv=None) -> int:
     rows, worst = [], None
     for text in HARVARD[: args.sentences]:
         row, keep = measure(text, face=args.face, size=(h, w), aa=args.aa,
-                            upsample=args.upsample, detector=detector, boxes=args.boxes)
+                            upsample=args.upsample, detector=detector, boxes=args.boxes,
+                            tracker=args.tracker)
         if worst is None or row["r"] < worst[0]:
             worst = (row["r"], keep)
         rows.append(row)
     if args.picture:
         draw(args.picture, *worst[1])
     rs = [row["r"] for row in rows]
-    print(json.dumps({"face": args.face, "size": args.size, "aa": args.aa,
+    print(json.dumps({"tracker": args.tracker, "face": args.face, "size": args.size,
+                      "aa": args.aa,
                       "upsample": args.upsample, "boxes": args.boxes, "r_min": min(rs),
                       "r_mean": sum(rs) / len(rs),
                       "sentences": rows}, indent=2))

@@ -1,4 +1,4 @@
-"""A machine lip-reader on rendered frames: dlib's 68-point face tracker against the model.
+"""A machine lip-reader on rendered frames: a standard face tracker against the model.
 
 An independent check of the movies: a standard face tracker, trained on photos of real faces
 and knowing nothing of facemech, reads the mouth opening off each rendered frame, and that
@@ -7,13 +7,17 @@ reading is compared with the lip aperture the simulation computed.
 The tracker is dlib's frontal face detector (histogram of oriented gradients) and its 68-point
 shape predictor trained on iBUG 300-W (Kazemi & Sullivan 2014), whose model file ships in the
 ``face-recognition-models`` package (``pip install 'facemech[photo]'``); they are loaded
-through :class:`facemech.io.photo.DlibDetector`, imported when first needed.
+through :class:`facemech.io.photo.DlibDetector`, imported when first needed. The other is
+MediaPipe's face mesh (468 points; :mod:`facemech.io.face_mesh`, the ``lipreader`` extra), run
+as MediaPipe tracks a video: ``read_lips(..., tracker="mesh")``.
 
 inner-lip distance
     The mean vertical distance, pixels (image y grows downwards), from the upper inner lip's
     three middle points to the lower inner lip's: iBUG points 62, 63, 64 against 68, 67, 66
     counted from 1 as in the iBUG papers (0-based :data:`UPPER_INNER` and :data:`LOWER_INNER`,
-    paired column by column). NaN in a frame where no face is found.
+    paired column by column); of the face mesh, its points 82, 13, 312 against 87, 14, 317
+    (:data:`facemech.io.face_mesh.UPPER_INNER`, ``LOWER_INNER``: the midline and one either
+    side). NaN in a frame where no face is found.
 model aperture
     The vertical distance (m) between the midline twins of the mouth slit, upper minus lower
     (:func:`facemech.analysis.describe.lip_facing_nodes`): 0 at rest and with the lips closed,
@@ -49,9 +53,9 @@ class LipReading:
 
     Attributes
     ----------
-    points : (T, 68, 2) float array
-        The iBUG landmarks per frame, pixels (x right, y down; pixel centres at integers +
-        0.5); NaN in frames without a face.
+    points : (T, 68, 2) or (T, 468, 2) float array
+        The iBUG landmarks (dlib) or the face mesh's points per frame, pixels (x right, y down;
+        pixel centres at integers + 0.5); NaN in frames without a face.
     distance : (T,) float array
         The inner-lip distance per frame, pixels (module doc); NaN without a face.
     """
@@ -98,31 +102,41 @@ class Agreement:
 
 
 def inner_lip_distance(points: np.ndarray) -> np.ndarray:
-    """The inner-lip distance of iBUG landmarks.
+    """The inner-lip distance of iBUG landmarks or of the face mesh's points.
 
     Parameters
     ----------
-    points : (..., 68, 2) array, pixels (y down)
+    points : (..., 68, 2) or (..., 468, 2) array, pixels (y down)
 
     Returns
     -------
     (...) array, pixels: the mean of lower minus upper y over the pairs of :data:`UPPER_INNER`
-    and :data:`LOWER_INNER` (positive with the mouth open; NaN where the points are)
+    and :data:`LOWER_INNER` (of the mesh's, :mod:`facemech.io.face_mesh`) (positive with the
+    mouth open; NaN where the points are)
     """
+    from ..io import face_mesh
+
     p = np.asarray(points, float)
-    if p.ndim < 2 or p.shape[-2:] != (68, 2):
-        raise InputError(f"points of shape {p.shape}; expected (..., 68, 2) image points",
-                         field="points")
-    return (p[..., list(LOWER_INNER), 1] - p[..., list(UPPER_INNER), 1]).mean(axis=-1)
+    pairs = {68: (UPPER_INNER, LOWER_INNER),
+             468: (face_mesh.UPPER_INNER, face_mesh.LOWER_INNER)}
+    if p.ndim < 2 or p.shape[-1] != 2 or p.shape[-2] not in pairs:
+        raise InputError(f"points of shape {p.shape}; expected (..., 68, 2) or (..., 468, 2) "
+                         "image points", field="points")
+    upper, lower = pairs[p.shape[-2]]
+    return (p[..., list(lower), 1] - p[..., list(upper), 1]).mean(axis=-1)
 
 
 def read_lips(frames: Iterable[np.ndarray], *, detector=None, upsample: int = 0,
-              boxes: bool = False) -> LipReading:
-    """Run dlib's face detector and 68-point predictor on each frame.
+              boxes: bool = False, tracker: str = "dlib") -> LipReading:
+    """Run a face tracker on each frame: dlib's face detector and 68-point predictor, or
+    MediaPipe's face mesh.
 
     Parameters
     ----------
     frames : iterable of (h, w, 3) uint8 RGB arrays (an alpha channel, (h, w, 4), is dropped)
+    tracker : ``"dlib"`` (default) or ``"mesh"`` (:class:`facemech.io.face_mesh.
+        FaceMeshTracker`, each frame's region from the previous frame's points; ``detector``,
+        ``upsample`` and ``boxes`` are dlib's alone)
     detector : a :class:`facemech.io.photo.DlibDetector` to reuse (default: a new one)
     upsample : times the detector doubles each frame before it looks: 0 finds faces from about
         80 px across (the frontal face of a 360-pixel-high frame is about 190 px), 1 from
@@ -139,9 +153,17 @@ def read_lips(frames: Iterable[np.ndarray], *, detector=None, upsample: int = 0,
     Raises
     ------
     InputError
-        dlib or its model is not installed (the ``photo`` extra), or a frame is not an RGB
-        image.
+        dlib or its model is not installed (the ``photo`` extra), LiteRT or the mesh's model
+        (the ``lipreader`` extra, ``python -m facemech.io.face_mesh``) for the mesh, a tracker
+        of another name, or a frame is not an RGB image.
     """
+    if tracker == "mesh":
+        from ..io.face_mesh import FaceMeshTracker
+
+        pts = FaceMeshTracker().points(frames)
+        return LipReading(points=pts, distance=inner_lip_distance(pts))
+    if tracker != "dlib":
+        raise InputError(f"no tracker {tracker!r}; expected 'dlib' or 'mesh'", field="tracker")
     if detector is None:
         from ..io.photo import DlibDetector
 
