@@ -61,21 +61,21 @@ def detector():
 
 @pytest.fixture(scope="module")
 def spoken(tmp_path_factory):
-    """(the sentence's frontal frames, the model's aperture m)."""
+    """(the sentence's frontal frames, the model's aperture m, its results file)."""
     from facemech.speech.alive import Liveliness
     from facemech.workflows.speak import speak
 
-    ds = speak(tmp_path_factory.mktemp("lipreader"), TEXT, face="default", video=False,
-               alive=Liveliness.off()).dataset
+    folder = tmp_path_factory.mktemp("lipreader")
+    ds = speak(folder, TEXT, face="default", video=False, alive=Liveliness.off()).dataset
     aperture = model_aperture(ds)
     assert len(aperture) == ds.sizes["time"]
-    return list(frontal_frames(ds, size=(360, 300))), aperture
+    return list(frontal_frames(ds, size=(360, 300))), aperture, folder / "result.nc"
 
 
 @pytest.fixture(scope="module")
 def read(spoken, detector):
     """(dlib's lip reading, the model's aperture m, their agreement) of the sentence."""
-    frames, aperture = spoken
+    frames, aperture, _ = spoken
     reading = read_lips(frames, detector=detector)
     return reading, aperture, compare(reading.distance, aperture)
 
@@ -84,7 +84,7 @@ def read(spoken, detector):
 def mesh_read(spoken, detector):
     """(the face mesh's lip reading, the model's aperture m, their agreement)."""
     pytest.importorskip("ai_edge_litert")
-    frames, aperture = spoken
+    frames, aperture, _ = spoken
     reading = read_lips(frames, tracker="mesh")
     return reading, aperture, compare(reading.distance, aperture)
 
@@ -115,6 +115,34 @@ def test_the_face_mesh_reads_the_aperture_as_the_issue_asks(mesh_read):
     pts = reading.points[reading.found]
     assert reading.points.shape[1:] == (468, 2)
     assert np.all(pts[:, 13, 1] >= pts[:, 0, 1] - 1) and np.all(pts[:, 14, 1] <= pts[:, 17, 1] + 1)
+
+
+def test_lipread_on_the_command_line_gives_the_same_reading(spoken, mesh_read, tmp_path,
+                                                            monkeypatch, capsys):
+    """``facemech lipread RESULT`` draws the same frames and reads the same r as the Python
+    API; ``-o`` writes the series per frame; a bad tracker is one line, exit 2, nothing
+    written."""
+    import json
+
+    from conftest import run_cli
+
+    _, aperture, result = spoken
+    reading, _, agreement = mesh_read
+    table = tmp_path / "lips.csv"
+    code, out, err = run_cli(monkeypatch, capsys, "lipread", result, "--size", "300x360",
+                             "-o", table, "--json")
+    assert code == 0, err
+    got = json.loads(out)
+    assert got["tracker"] == "mesh" and got["frames"] == len(aperture)
+    assert got["r"] == pytest.approx(agreement.r, abs=1e-9) and got["r"] >= R_ISSUE
+    rows = np.loadtxt(table, delimiter=",", skiprows=1)
+    assert rows.shape == (len(aperture), 3)
+    np.testing.assert_allclose(rows[:, 1], aperture * 1e3, rtol=1e-5, atol=1e-6)
+    np.testing.assert_allclose(rows[:, 2], reading.distance, rtol=1e-5, atol=1e-4)
+    code, out, err = run_cli(monkeypatch, capsys, "lipread", result, "--tracker", "openface",
+                             "-o", tmp_path / "no.csv")
+    assert code == 2 and len(err.strip().splitlines()) == 1 and "--tracker" in err
+    assert not (tmp_path / "no.csv").exists()
 
 
 @pytest.mark.xfail(strict=True, reason=(

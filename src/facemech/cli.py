@@ -238,6 +238,12 @@ def describe(result: Path, as_json: bool = False, series: bool = False):
     print(text) if as_json else out.print(text, markup=False, highlight=False)
 
 @command()
+def lipread(result: Path, tracker: str = "mesh", size: str = "640x360", aa: int = 2,
+            output: Path | None = None, as_json: bool = False):
+    """A machine lip-reader on RESULT's frontal movie: r of its inner lips and the aperture."""
+    return _staged(workflows.lipread.lines, **locals())
+
+@command()
 def stimuli(design: Path, output: Path = ..., video: bool = True, view: str = "frontal",
             size: str = "1280x720", background: str = "#2a2c33", aa: int = 2):
     """Make the stimuli of a design table (docs/stimuli.md) as results, WAV, MP4, manifest."""

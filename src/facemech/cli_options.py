@@ -185,6 +185,9 @@ analyse.subject: a subject folder (facemech subject)
 recording: a recording of the subject's markers (C3D, TRC, CSV), any rate
 analyse.output: the results folder
 lowpass: low-pass cut-off of the recording, Hz (0: none)
+tracker: mesh (MediaPipe's face mesh) or dlib (68 points)
+lipread.size: the frames' WIDTHxHEIGHT, px
+lipread.output: CSV of the series per frame (time, aperture, inner-lip distance)
 analyse.window: lsq: frames fitted per frame
 analyse.smooth: lsq: smoothness weight, mm/unit
 analyse.video: also render movie.mp4

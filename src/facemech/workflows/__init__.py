@@ -28,6 +28,7 @@ if TYPE_CHECKING:
         faces,
         invert,
         landmarks,
+        lipread,
         markers,
         outcome,
         photo,
@@ -41,7 +42,7 @@ if TYPE_CHECKING:
     )
 
 __all__ = ["batch", "batch_jobs", "calibrate", "compare", "demo", "emg", "experiments", "faces",
-           "invert", "landmarks", "markers", "outcome", "photo", "pictures", "regions",
+           "invert", "landmarks", "lipread", "markers", "outcome", "photo", "pictures", "regions",
            "simulate", "speak", "speech", "stimuli", "subject"]
 
 
