@@ -157,31 +157,37 @@ def read_lips(frames: Iterable[np.ndarray], *, detector=None, upsample: int = 0,
         (the ``lipreader`` extra, ``python -m facemech.io.face_mesh``) for the mesh, a tracker
         of another name, or a frame is not an RGB image.
     """
+    if tracker not in ("dlib", "mesh"):
+        raise InputError(f"no tracker {tracker!r}; expected 'dlib' or 'mesh'", field="tracker")
+    checked = (_rgb(k, frame) for k, frame in enumerate(frames))
     if tracker == "mesh":
         from ..io.face_mesh import FaceMeshTracker
 
-        pts = FaceMeshTracker().points(frames)
+        pts = FaceMeshTracker().points(checked)
         return LipReading(points=pts, distance=inner_lip_distance(pts))
-    if tracker != "dlib":
-        raise InputError(f"no tracker {tracker!r}; expected 'dlib' or 'mesh'", field="tracker")
     if detector is None:
         from ..io.photo import DlibDetector
 
         detector = DlibDetector()
     points = []
-    for k, frame in enumerate(frames):
-        img = np.asarray(frame)
-        if img.ndim != 3 or img.shape[2] not in (3, 4) or img.dtype != np.uint8:
-            raise InputError(f"frame {k} of shape {img.shape} and type {img.dtype}; expected "
-                             "(h, w, 3) uint8 RGB", field="frames")
-        faces = detector.faces(np.ascontiguousarray(img[..., :3]), upsample=upsample,
-                                  boxes=boxes)
+    for img in checked:
+        faces = detector.faces(img, upsample=upsample, boxes=boxes)
         if faces:
             points.append(max(faces, key=lambda f: f.width).points)
         else:
             points.append(np.full((68, 2), np.nan))
     pts = np.array(points, float).reshape(-1, 68, 2)
     return LipReading(points=pts, distance=inner_lip_distance(pts))
+
+
+def _rgb(k: int, frame) -> np.ndarray:
+    """Frame ``k`` as a contiguous (h, w, 3) uint8 RGB array (an alpha channel dropped), or
+    InputError."""
+    img = np.asarray(frame)
+    if img.ndim != 3 or img.shape[2] not in (3, 4) or img.dtype != np.uint8:
+        raise InputError(f"frame {k} of shape {img.shape} and type {img.dtype}; expected "
+                         "(h, w, 3) uint8 RGB", field="frames")
+    return np.ascontiguousarray(img[..., :3])
 
 
 def compare(distance: np.ndarray, aperture: np.ndarray) -> Agreement:

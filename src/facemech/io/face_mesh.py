@@ -233,14 +233,11 @@ class FaceMeshTracker:
     def points(self, frames) -> np.ndarray:
         """The 468 points (T, 468, 2) px of each frame (x right, y down; NaN without a face).
 
-        Frames are (h, w, 3) uint8 RGB arrays (an alpha channel is dropped)."""
+        Frames are (h, w, 3) uint8 RGB arrays (:func:`facemech.analysis.lipreader.read_lips`
+        checks them)."""
         out, reg = [], None
-        for k, frame in enumerate(frames):
-            img = np.asarray(frame)
-            if img.ndim != 3 or img.shape[2] not in (3, 4) or img.dtype != np.uint8:
-                raise InputError(f"frame {k} of shape {img.shape} and type {img.dtype}; "
-                                 "expected (h, w, 3) uint8 RGB", field="frames")
-            img = np.ascontiguousarray(img[..., :3])
+        for frame in frames:
+            img = np.ascontiguousarray(frame)
             if reg is None or not self.track:
                 reg = self._detected(img)
             pts, presence = (None, 0.0) if reg is None else self._run(img, reg)

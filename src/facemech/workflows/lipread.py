@@ -92,16 +92,14 @@ def lipread(result: str | Path, *, tracker: str = "mesh", size: str = "640x360",
         check_output(output, [result], field="-o")
     ds = read_results(result)
     n = int(ds.sizes["time"])
-    frames = []
-    for k, frame in enumerate(frontal_frames(ds, size=(height, width), supersample=aa)):
-        frames.append(frame)
-        if progress is not None:
-            progress("render", k + 1, n)
-    if progress is not None:
-        progress("track", 0, 1)
-    reading = read_lips(frames, tracker=tracker)
-    if progress is not None:
-        progress("track", 1, 1)
+
+    def frames():  # drawn as they are read, one frame in memory at a time
+        for k, frame in enumerate(frontal_frames(ds, size=(height, width), supersample=aa)):
+            yield frame
+            if progress is not None:
+                progress("render and read", k + 1, n)
+
+    reading = read_lips(frames(), tracker=tracker)
     aperture = model_aperture(ds)
     time = np.asarray(ds["time"].values, float)
     written = None
