@@ -11,10 +11,13 @@ chosen face, planned for the face's dynamics as ``speak`` plans them by default
 
 Prints JSON: the settings; ``criteria`` (the issue's); ``summary``
 (:func:`~facemech.analysis.visible_speech.summarize`: per group the share passing, the median,
-the worst phone, whether the criterion is met; the sentences' peak lower-lip speeds);
+the worst phone, whether the criterion is met; the sentences' peak lower-lip speeds;
+``incisor_speed``: the sentences' peak lower-incisor speeds, the jaw's, and how many exceed the
+fastest jaw of issue 27's real recordings, 186 mm/s);
 ``classes`` (:func:`~facemech.analysis.visible_speech.class_table`: lip gap and protrusion at
 the phones' middles per articulatory class); ``sentences`` (per sentence: the duration, the
-peak lower-lip speed, the wall time, the plan's simulations and kept iteration);
+peak lower-lip and lower-incisor speeds, the wall time, the plan's simulations and kept
+iteration);
 ``between_bilabials``: the stressed open vowels of
 :data:`BETWEEN_BILABIALS` in a carrier phrase (the open vowels' criterion between two bilabials;
 ``--no-carrier`` leaves them out), with ``their_bilabials``, the bilabials of the same words (the
@@ -38,6 +41,8 @@ import os
 import sys
 import tempfile
 import time
+
+import numpy as np
 
 os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 
@@ -78,8 +83,13 @@ def spoken_phones(text: str, *, voice: str = "en-us", rate_wpm: int = ESPEAK_DEF
                   face: str = "default", plan=True, preset: str = "anatomical"):
     """Speak ``text`` as ``facemech speak`` does (no movie, no liveliness) and measure it:
     (phone measures, peak lower-lip speed m/s, the utterance's duration s, the manifest's
-    ``plan``). ``plan``: as :func:`~facemech.workflows.speak.speak`'s."""
-    from facemech.analysis.visible_speech import measure_phones, peak_lower_lip_speed
+    ``plan``, the lower incisor's peak speed m/s). ``plan``: as
+    :func:`~facemech.workflows.speak.speak`'s."""
+    from facemech.analysis.visible_speech import (
+        incisor_speed,
+        measure_phones,
+        peak_lower_lip_speed,
+    )
     from facemech.speech.alive import Liveliness
     from facemech.workflows.speak import speak
 
@@ -88,8 +98,18 @@ def spoken_phones(text: str, *, voice: str = "en-us", rate_wpm: int = ESPEAK_DEF
                    video=False, alive=Liveliness.off(), preset=preset)
     sim = sp.simulation
     phones = measure_phones(sp.alignment, sim.model, sim.time, sim.positions, voice=voice)
+    jaw = float(incisor_speed(sim.time, sim.jaw_pose, sim.model).max())
     return phones, peak_lower_lip_speed(sim.time, sim.positions, sim.model), \
-        float(sp.alignment.duration), sp.manifest["plan"]
+        float(sp.alignment.duration), sp.manifest["plan"], jaw
+
+
+def _jaw_row(peaks, real_mm_s: float) -> dict:
+    """The utterances' peak lower-incisor speeds (m/s) in mm/s: min, median, max, and how many
+    are faster than the fastest real jaw (``real_mm_s``)."""
+    v = 1e3 * np.asarray(peaks, float)
+    return {"n": int(v.size), "min_mm_s": round(float(v.min()), 1),
+            "median_mm_s": round(float(np.median(v)), 1), "max_mm_s": round(float(v.max()), 1),
+            "real_peak_mm_s": real_mm_s, "faster_than_real": int((v > real_mm_s).sum())}
 
 
 def main(argv=None) -> int:
@@ -108,34 +128,44 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     plan = False if args.no_plan else (True if args.plan_iterations is None
                                         else args.plan_iterations)
-    from facemech.analysis.visible_speech import CRITERIA, class_table, summarize
+    from facemech.analysis.visible_speech import (
+        CRITERIA,
+        REAL_JAW_PEAK_MM_S,
+        class_table,
+        summarize,
+    )
 
-    rows, phones, speeds = [], [], []
+    rows, phones, speeds, jaws = [], [], [], []
     texts = HARVARD[: args.sentences]
     for k, text in enumerate(texts, 1):
         t0 = time.perf_counter()
-        ph, peak, dur, planned = spoken_phones(text, voice=args.voice, rate_wpm=args.rate,
-                                               face=args.face, plan=plan, preset=args.preset)
+        ph, peak, dur, planned, jaw = spoken_phones(text, voice=args.voice, rate_wpm=args.rate,
+                                                    face=args.face, plan=plan,
+                                                    preset=args.preset)
         wall = time.perf_counter() - t0
         phones += ph
         speeds.append(peak)
+        jaws.append(jaw)
         rows.append({"text": text, "duration_s": round(dur, 3), "phones": len(ph),
                      "peak_lower_lip_speed_mm_s": round(1e3 * peak, 1),
+                     "peak_incisor_speed_mm_s": round(1e3 * jaw, 1),
                      "wall_s": round(wall, 1),
                      "plan_simulations": planned.get("simulations"),
                      "plan_kept_iteration": planned.get("kept_iteration")})
-        print(f"[{k}/{len(texts)}] {wall:5.1f} s  peak {1e3 * peak:5.1f} mm/s  {text}",
-              file=sys.stderr, flush=True)
+        print(f"[{k}/{len(texts)}] {wall:5.1f} s  peak {1e3 * peak:5.1f} mm/s  "
+              f"incisor {1e3 * jaw:5.1f} mm/s  {text}", file=sys.stderr, flush=True)
     out = {"voice": args.voice, "rate_wpm": args.rate, "face": args.face, "plan": plan,
            "preset": args.preset,
            "criteria": CRITERIA, "summary": summarize(phones, speeds),
            "classes": class_table(phones), "sentences": rows}
+    out["summary"]["incisor_speed"] = _jaw_row(jaws, REAL_JAW_PEAK_MM_S)
     if not args.no_carrier:
-        between, flanking = [], []
+        between, flanking, word_jaws = [], [], []
         for k, word in enumerate(BETWEEN_BILABIALS, 1):
-            ph, _, _, _ = spoken_phones(CARRIER.format(word), voice=args.voice,
-                                        rate_wpm=args.rate, face=args.face, plan=plan,
-                                        preset=args.preset)
+            ph, _, _, _, jaw = spoken_phones(CARRIER.format(word), voice=args.voice,
+                                             rate_wpm=args.rate, face=args.face, plan=plan,
+                                             preset=args.preset)
+            word_jaws.append(jaw)
             between += [p for p in ph if p.between_bilabials]
             flanking += [p for p in ph if p.group == "bilabial"]
             print(f"[{k}/{len(BETWEEN_BILABIALS)}] {CARRIER.format(word)}", file=sys.stderr,
@@ -144,6 +174,7 @@ def main(argv=None) -> int:
         out["between_bilabials"]["words"] = list(BETWEEN_BILABIALS)
         # the bilabials of the same words, beside those open vowels, and every bilabial said
         out["between_bilabials"]["their_bilabials"] = summarize(flanking)["bilabial"]
+        out["between_bilabials"]["incisor_speed"] = _jaw_row(word_jaws, REAL_JAW_PEAK_MM_S)
         out["bilabial_with_the_words"] = summarize(phones + flanking)["bilabial"]
         if args.phones:
             out["between_bilabials"]["phones"] = [p.to_dict() for p in between + flanking]

@@ -18,7 +18,10 @@ epidermis of the face that said it, each phone is measured for what its class as
   face of the mouth slit under the lower lip (:func:`lower_lip_top`), and contact when it is
   :data:`CONTACT_MM` or less (on the default face at rest, the lips closed, the lip's top
   passes 4.1 mm above the edge);
-- the sentence: the peak speed of the landmark ``lower_lip_center`` (:func:`peak_lower_lip_speed`).
+- the sentence: the peak speed of the landmark ``lower_lip_center`` (:func:`peak_lower_lip_speed`),
+  and, beside it, the peak speed of the lower incisor tip (:func:`incisor_speed`), the jaw's
+  speed as articulography measures it, against the fastest jaw of issue 27's recordings
+  (:data:`REAL_JAW_PEAK_MM_S`).
 
 Every phone keeps its eSpeak stress (``'`` primary, ``,`` secondary), read off the label.
 :func:`summarize` tabulates the phones against the issue's criteria (:data:`CRITERIA`).
@@ -37,11 +40,16 @@ from ..speech.mouth import midline_lip_pair, mouth_measures
 from ..speech.phoneclass import phone_classes
 
 __all__ = ["CONTACT_MM", "CRITERIA", "OPEN_EXTRA_LABELS", "ROUNDED_LABELS", "PhoneMeasure",
-           "class_table", "incisor_distance", "lower_lip_speed", "lower_lip_top",
+           "REAL_JAW_PEAK_MM_S", "class_table", "incisor_distance", "incisor_speed",
+           "lower_lip_speed", "lower_lip_top",
            "measure_phones", "peak_lower_lip_speed", "summarize", "upper_incisor_edge"]
 
 #: mm: the lower lip touches the upper incisors when it comes this close to their edge
 CONTACT_MM = 1.0
+#: mm/s, the fastest lower incisor of issue 27's real recordings (EMA and X-ray microbeam, a
+#: read sentence and repeated syllables: peak jaw speeds 58-186 mm/s); recorded beside the
+#: lower lip's speed, not a criterion of issue 29
+REAL_JAW_PEAK_MM_S = 186.0
 #: eSpeak labels of /ɔ/ (the issue counts them open; phoneclass's class ``open_rounded``)
 OPEN_EXTRA_LABELS = frozenset({"O:", "O", "O2"})
 #: eSpeak labels of /u ʊ w oʊ/
@@ -192,6 +200,22 @@ def lower_lip_speed(time: np.ndarray, positions: np.ndarray, model) -> np.ndarra
 def peak_lower_lip_speed(time: np.ndarray, positions: np.ndarray, model) -> float:
     """The largest speed (m/s) of ``lower_lip_center`` over the whole utterance."""
     return float(lower_lip_speed(time, positions, model).max())
+
+
+def incisor_speed(time: np.ndarray, jaw_pose: np.ndarray, model) -> np.ndarray:
+    """Speed (m/s) per frame of the lower incisor tip
+    (:func:`facemech.geometry.teeth.lower_incisor_point`) moved by the jaw's poses (frames, 3:
+    angle rad, shift_y m, shift_z m; ``Simulation.jaw_pose``): the norm of its velocity by
+    central differences over ``time`` (s)."""
+    from ..geometry.teeth import lower_incisor_point
+    from ..solvers.jaw import move_points
+
+    tip = lower_incisor_point(model)
+    poses = np.atleast_2d(np.asarray(jaw_pose, float))
+    p = np.array([move_points(tip, q, model.hinge_point, model.hinge_axis)[0] for q in poses])
+    if len(p) < 2:
+        return np.zeros(len(p))
+    return np.linalg.norm(np.gradient(p, np.asarray(time, float), axis=0), axis=1)
 
 
 def _window(time: np.ndarray, start: float, end: float) -> np.ndarray:

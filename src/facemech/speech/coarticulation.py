@@ -68,10 +68,14 @@ class Gesture:
     #: activity added to its target's marginal orbicularis oris, both lips (``OOSM``,
     #: ``OOIM``: the lips pressed together; a plan's, for a bilabial that stayed apart; 0: none)
     press: float = 0.0
+    #: s added to its dominance's centre (a plan's, :mod:`.planning`: positive later; 0: at
+    #: the phone's acoustic centre). The phone's interval is unchanged.
+    shift: float = 0.0
 
     @property
     def centre(self) -> float:
-        return 0.5 * (self.start + self.end)
+        """s, where its dominance peaks: the middle of its interval, plus its ``shift``."""
+        return 0.5 * (self.start + self.end) + self.shift
 
 
 def gestures(alignment: Alignment, articulation: Articulation | None = None) -> list[Gesture]:

@@ -26,8 +26,17 @@ the gestures beside it, so that a short vowel between two bilabials gets its own
 and, for a bilabial whose lips stayed apart, activity of the marginal orbicularis oris of both
 lips (``OOSM``, ``OOIM``) added to its own target (``press``: it lowers the upper lip and lifts
 the lower one; not in the bilabial's viseme, where it would narrow the mouth of every bilabial
-by about 10 mm, docs/stimuli.md). Each update is proportional to the phone's miss (mm) with a
-fixed gain (:data:`GAIN`), and bounded (:data:`BOUNDS`); the blended activity stays clipped to
+by about 10 mm, docs/stimuli.md), and, for a bilabial whose lips closed before its middle and
+opened again by it, a shift of its dominance later in time (``shift``, by a share of how early
+the closure's centre was, :func:`_timing`; up to 40 ms). A bilabial wins the blend with a
+large dominance, so with the activity led by 100 ms for the muscles' lag
+(:data:`~.coarticulation.LEAD_S`) its lips can close early: measured, the /m/ of "Say mom
+again." was shut at its start and 3.8 mm apart at its middle. It is never shifted earlier: a
+bilabial that closes late has lips too slow for its neighbours, and moving it earlier took the
+lips from the phone before it (the /m/ of "lemons", 34 ms earlier, held the lower lip forward
+through the /v/ of "of" before it, 1.3 mm from the upper incisors' edge instead of 0.7).
+Each update is proportional to the phone's miss (mm) with a fixed gain (:data:`GAIN`), and
+bounded (:data:`BOUNDS`); the blended activity stays clipped to
 [0, 1] and the jaw target within [0, :data:`JAW_MAX_DEG`]. A labiodental moves the way its
 error's sign says (the lip's top above the incisors' edge: its jaw opens and its own gesture,
 scaled by its own bound ``labiodental_scale`` down to 0, grows; below the edge: both shrink),
@@ -70,17 +79,22 @@ TARGETS = {
     "labiodental": {"distance": 0.0, "tolerance": 0.5e-3},
 }
 #: bounds of the per-instance adjustments: scale factor, dominance factor, jaw offset (deg),
-#: factor on the dominance's rates, a labiodental's own scale factor, and a bilabial's press
-#: (activity added to OOSM and OOIM, :attr:`~.coarticulation.Gesture.press`)
+#: factor on the dominance's rates, a labiodental's own scale factor, a bilabial's press
+#: (activity added to OOSM and OOIM, :attr:`~.coarticulation.Gesture.press`) and a bilabial's
+#: shift in time (s, :attr:`~.coarticulation.Gesture.shift`; later only, module doc)
 BOUNDS = {"scale": (0.5, 1.6), "dominance": (1.0, 30.0), "jaw_deg": (-4.0, 14.0),
-          "rate": (1.0, 3.0), "labiodental_scale": (0.0, 1.6), "press": (0.0, 0.5)}
+          "rate": (1.0, 3.0), "labiodental_scale": (0.0, 1.6), "press": (0.0, 0.5),
+          "shift_s": (0.0, 0.04)}
 #: deg, the largest jaw target a plan may ask for (the jaw's range is -5 to 35 deg)
 JAW_MAX_DEG = 24.0
-#: gains: per mm of miss, the jaw offset (deg), the dominance's relative growth, the scale's
+#: gains: per mm of miss, the jaw offset (deg), the dominance's relative growth, the scale's;
+#: ``bilabial_timing``: the share of a missed bilabial's timing error (s) its shift takes
 GAIN = {"open_jaw_deg": 0.8, "open_dominance": 0.1, "bilabial_dominance": 1.0,
         "bilabial_scale": 0.15, "bilabial_press": 0.06, "neighbour_rate": 0.1,
         "rounded_scale": 0.2, "rounded_dominance": 0.5, "labiodental_jaw_deg": 0.5,
-        "labiodental_dominance": 0.5, "labiodental_scale": 0.2}
+        "labiodental_dominance": 0.5, "labiodental_scale": 0.2, "bilabial_timing": 0.7}
+#: s, how far beyond a bilabial's interval its closure is looked for (its timing, :func:`_timing`)
+TIMING_WINDOW_S = 0.06
 
 
 @dataclass(frozen=True)
@@ -95,7 +109,8 @@ class Plan:
     simulation : the forward simulation of these controls (:func:`facemech.simulate`)
     gestures : the adjusted gestures (:class:`~.coarticulation.Gesture`)
     record : for manifests: the iterations run, the one kept, the per-group misses of each
-        (mm) and its peak lower-lip speed (mm/s, recorded only), the wall time (s)
+        (mm), its peak lower-lip and lower-incisor speeds (mm/s, recorded only), the wall time
+        (s)
     """
 
     time: np.ndarray
@@ -147,7 +162,7 @@ def plan_controls(alignment: Alignment, model, *, params=None,
     """
     import time as _time
 
-    from ..analysis.visible_speech import peak_lower_lip_speed
+    from ..analysis.visible_speech import incisor_speed, peak_lower_lip_speed
     from ..params import preset as load_preset
     from ..solvers.forward import simulate
     from .coarticulation import controls_from_alignment
@@ -170,6 +185,8 @@ def plan_controls(alignment: Alignment, model, *, params=None,
         summary = _summary(misses)
         summary["peak_lower_lip_speed_mm_s"] = round(1e3 * peak_lower_lip_speed(
             sim.time, sim.positions, sim.model), 1)  # recorded, not planned for
+        summary["peak_incisor_speed_mm_s"] = round(1e3 * float(incisor_speed(
+            sim.time, sim.jaw_pose, sim.model).max()), 1)  # the jaw's; recorded too
         history.append(summary)
         better = best is None or summary["cost_mm"] < best[0]["cost_mm"] - 1e-9
         if better:
@@ -198,7 +215,7 @@ def plan_controls(alignment: Alignment, model, *, params=None,
 
 def _adjusted(g: Gesture) -> bool:
     return (g.jaw != 0.0 or g.lips_dominance != 1.0 or g.jaw_dominance != 1.0
-            or g.rate != 1.0 or g.scale != 1.0 or g.press != 0.0)
+            or g.rate != 1.0 or g.scale != 1.0 or g.press != 0.0 or g.shift != 0.0)
 
 
 def _phone_gestures(alignment: Alignment) -> list[list[int]]:
@@ -227,6 +244,9 @@ class _Miss:
     indices: tuple[int, ...]
     classes: tuple[str, ...]
     stressed: bool = False
+    #: s, a bilabial's closure centre minus the phone's middle (positive: the lips closed
+    #: late; :func:`_timing`)
+    timing: float = 0.0
 
 
 def _measure(alignment: Alignment, sim, phones: list[list[int]]) -> list[_Miss]:
@@ -239,14 +259,19 @@ def _measure(alignment: Alignment, sim, phones: list[list[int]]) -> list[_Miss]:
         measure_phones,
         upper_incisor_edge,
     )
+    from .mouth import mouth_measures
 
     measured = measure_phones(alignment, sim.model, sim.time, sim.positions)
     edge = upper_incisor_edge(sim.model)
-    front, _ = lower_lip_top(sim.model, np.asarray(sim.positions)[:, : sim.model.n_surface])
+    surface = np.asarray(sim.positions)[:, : sim.model.n_surface]
+    front, _ = lower_lip_top(sim.model, surface)
+    gap = mouth_measures(sim.model, surface)["lip_gap"]
     out = []
     for m, idx in zip(measured, phones, strict=True):
+        timing = 0.0
         if m.group == "bilabial":
             err = m.lip_gap_mid - TARGETS["bilabial"]["gap"]
+            timing = _timing(sim.time, gap, m.start, m.end)
         elif m.group == "open":
             if m.stress is None and alignment.notation == "espeak":
                 continue
@@ -263,8 +288,28 @@ def _measure(alignment: Alignment, sim, phones: list[list[int]]) -> list[_Miss]:
             err = m.incisor_distance if above else -m.incisor_distance
         else:
             continue
-        out.append(_Miss(m.group, float(err), tuple(idx), m.classes, m.stress is not None))
+        out.append(_Miss(m.group, float(err), tuple(idx), m.classes, m.stress is not None,
+                         timing))
     return out
+
+
+def _timing(time: np.ndarray, gap: np.ndarray, start: float, end: float) -> float:
+    """s, when a bilabial's lips are closest, against its middle: the centre of the run of
+    frames within :data:`TIMING_WINDOW_S` of its interval whose midline gap (m) is within the
+    bilabial's tolerance of the smallest there, minus the phone's middle (positive: late)."""
+    k = np.nonzero((time >= start - TIMING_WINDOW_S) & (time <= end + TIMING_WINDOW_S))[0]
+    if k.size == 0:
+        return 0.0
+    g = gap[k]
+    low = g <= g.min() + TARGETS["bilabial"]["tolerance"]
+    j = int(np.argmin(g))
+    a = j
+    while a > 0 and low[a - 1]:
+        a -= 1
+    b = j
+    while b < len(k) - 1 and low[b + 1]:
+        b += 1
+    return float(0.5 * (time[k[a]] + time[k[b]]) - 0.5 * (start + end))
 
 
 def _summary(misses: list[_Miss]) -> dict:
@@ -352,7 +397,10 @@ def _update(items: list[Gesture], misses: list[_Miss], turns: dict,
                             lips_dominance=_bounded(g.lips_dominance * grow, "dominance"),
                             jaw_dominance=_bounded(g.jaw_dominance * grow, "dominance"),
                             press=_bounded(g.press + GAIN["bilabial_press"] * min(mm, 3.0),
-                                           "press"))
+                                           "press"),
+                            # its lips closed before its middle: its dominance later
+                            shift=_bounded(g.shift - step * GAIN["bilabial_timing"]
+                                           * m.timing, "shift_s"))
             elif m.group == "rounded":
                 if m.error < 0:
                     continue
