@@ -28,8 +28,11 @@ stderr (about 20-40 s a sentence on the 2-core machine).
 ``--preset FILE.json``: another physical preset (a preset file, e.g. the anatomical preset with
 a ``step`` block; docs/formats.md).
 
+``--held-out``: Harvard lists 3 and 4 instead (20 sentences never used to set the planner's
+targets, gains or bounds), the check of issue 29's "sentences that are not in the repository".
+
 ``python benchmarks/sentences.py [--voice en-gb] [--face default] [--rate 175]
-[--sentences N] [--no-carrier] [--phones] [--no-plan] [--plan-iterations N]
+[--sentences N] [--held-out] [--no-carrier] [--phones] [--no-plan] [--plan-iterations N]
 [--preset anatomical]``
 """
 
@@ -70,6 +73,32 @@ HARVARD = (
     "The soft cushion broke the man's fall.",
     "The salt breeze came across from the sea.",
     "The girl at the booth sold fifty bonds.",
+)
+#: Harvard sentences (IEEE 1969), lists 3 and 4: a held-out set (``--held-out``), never used
+#: to set a target, a gain or a bound
+HELD_OUT = (
+    # list 3
+    "The small pup gnawed a hole in the sock.",
+    "The fish twisted and turned on the bent hook.",
+    "Press the pants and sew a button on the vest.",
+    "The swan dive was far short of perfect.",
+    "The beauty of the view stunned the young boy.",
+    "Two blue fish swam in the tank.",
+    "Her purse was full of useless trash.",
+    "The colt reared and threw the tall rider.",
+    "It snowed, rained, and hailed the same morning.",
+    "Read verse out loud for pleasure.",
+    # list 4
+    "Hoist the load to your left shoulder.",
+    "Take the winding path to reach the lake.",
+    "Note closely the size of the gas tank.",
+    "Wipe the grease off his dirty face.",
+    "Mend the coat before you go out.",
+    "The wrist was badly strained and hung limp.",
+    "The stray cat gave birth to kittens.",
+    "The young girl gave no clear response.",
+    "The meal was cooked before the bell rang.",
+    "What joy there is in living.",
 )
 #: words with an open vowel between two bilabials, none of which the Harvard lists above has,
 #: each said in the carrier phrase "Say ___ again." (in en-us "o" is [ɑ])
@@ -118,6 +147,8 @@ def main(argv=None) -> int:
     ap.add_argument("--face", default="default")
     ap.add_argument("--rate", type=int, default=ESPEAK_DEFAULT_WPM, help="words per minute")
     ap.add_argument("--sentences", type=int, default=len(HARVARD))
+    ap.add_argument("--held-out", action="store_true",
+                    help="Harvard lists 3 and 4 instead of 1 and 2 (never tuned on)")
     ap.add_argument("--no-carrier", action="store_true",
                     help="leave out the words with an open vowel between two bilabials")
     ap.add_argument("--phones", action="store_true", help="every phone's row")
@@ -136,7 +167,7 @@ def main(argv=None) -> int:
     )
 
     rows, phones, speeds, jaws = [], [], [], []
-    texts = HARVARD[: args.sentences]
+    texts = (HELD_OUT if args.held_out else HARVARD)[: args.sentences]
     for k, text in enumerate(texts, 1):
         t0 = time.perf_counter()
         ph, peak, dur, planned, jaw = spoken_phones(text, voice=args.voice, rate_wpm=args.rate,
@@ -155,6 +186,8 @@ def main(argv=None) -> int:
         print(f"[{k}/{len(texts)}] {wall:5.1f} s  peak {1e3 * peak:5.1f} mm/s  "
               f"incisor {1e3 * jaw:5.1f} mm/s  {text}", file=sys.stderr, flush=True)
     out = {"voice": args.voice, "rate_wpm": args.rate, "face": args.face, "plan": plan,
+           "sentences_set": "Harvard lists 3-4 (held out)" if args.held_out else
+           "Harvard lists 1-2",
            "preset": args.preset,
            "criteria": CRITERIA, "summary": summarize(phones, speeds),
            "classes": class_table(phones), "sentences": rows}

@@ -63,6 +63,24 @@ def test_bob_bought_a_puppy_audio_and_alignment(bob):
         assert p.end - p.start > 0.06
 
 
+def test_a_word_final_phone_before_a_vowel_keeps_its_time():
+    """eSpeak gives the word event of "again" at the last /m/ of "mom": only a stop's closure is
+    taken back to its word's event, so that /m/ keeps its 58 ms (it had none), and it is the
+    nasal murmur, quieter than the open vowel before it; a word-initial /m/ starts at its own
+    event. No phone of the sentence is empty."""
+    sp = synthesize("Say mom again.", rate_wpm=175)
+    a = sp.alignment
+    labels = [p.label for p in a.phones]
+    assert labels[2:5] == ["m", "'0", "m"], labels
+    m1, vowel, m2 = a.phones[2:5]
+    assert all(p.end - p.start > 0.03 for p in a.phones), [(p.label, p.end - p.start)
+                                                         for p in a.phones]
+    assert 0.04 < m2.end - m2.start < 0.09
+    for m in (m1, m2):
+        assert _rms(sp.audio, 22050, m.start, m.end) < 0.8 * _rms(sp.audio, 22050, vowel.start,
+                                                                  vowel.end)
+
+
 def test_faster_rate_is_shorter_and_output_is_repeatable(bob):
     fast = synthesize(TEXT, rate_wpm=300)
     assert fast.duration < 0.7 * bob.duration

@@ -12,8 +12,12 @@ The alignment (notation ``"espeak"``):
 * pauses (mnemonics starting with ``_``, e.g. ``_:`` at a clause end) are left out, so they are
   gaps between phones, as in alignments read from TextGrids;
 * eSpeak's event for a voiceless stop marks its release; the closure comes before it. A
-  word's first phone therefore starts at the word's event when that comes earlier (the closure
-  of "puppy"'s first /p/ lies between the two), and a phone inside a word that follows at least
+  word's first phone, when it is a stop or an affricate (:func:`_has_closure`), therefore
+  starts at the word's event when that comes earlier (the closure of "puppy"'s first /p/ lies
+  between the two). Any other first phone keeps its own event: eSpeak gives the word's event
+  at the previous word's last phone's event, so moving it there left that phone no time at all
+  (the /m/ of "mom" in "Say mom again.", of "swam" in "swam in", of "from" in "from the", and
+  many word-final /l/). A phone inside a word that follows at least
   10 ms of digital silence at the end of the previous phone starts where that silence starts
   (the closure of the second /p/); so at a bilabial's middle the lips are shut;
 * a word runs from its first phone's start to its last phone's end; labels keep eSpeak's stress
@@ -217,6 +221,14 @@ CLOSURE_MIN_S = 0.010
 """Shortest run of digital silence before a phone that is taken as its closure (s)."""
 
 
+def _has_closure(label: str) -> bool:
+    """Whether an eSpeak phoneme mnemonic is a stop or an affricate, whose closure comes
+    before its event: p b t d k g and their variants (``t2``, ``t#``, ``d#``), ``tS``,
+    ``dZ``; the stress marks are ignored (θ ð are ``T D``, upper case)."""
+    base = label.lstrip("',%=")
+    return base[:1] in ("p", "b", "t", "d", "k", "g")
+
+
 def _alignment(text: str, events: list[tuple], pcm: np.ndarray, rate: int,
                meta: dict) -> Alignment:
     """Words and phones from eSpeak's word and phoneme events (see the module's notes).
@@ -244,7 +256,7 @@ def _alignment(text: str, events: list[tuple], pcm: np.ndarray, rate: int,
         if w["phones"]:
             k = w["phones"][0]
             floor = marks[k - 1][1] if k > 0 else 0.0
-            if floor <= w["event"] < marks[k][1]:
+            if _has_closure(marks[k][0]) and floor <= w["event"] < marks[k][1]:
                 marks[k][1] = w["event"]
     # a stop inside a word (the second /p/ of "puppy") follows its closure: eSpeak writes the
     # closure as digital silence at the end of the previous phone; give it to the stop
