@@ -66,8 +66,8 @@ def test_bob_bought_a_puppy_audio_and_alignment(bob):
 def test_a_word_final_phone_before_a_vowel_keeps_its_time():
     """eSpeak gives the word event of "again" at the last /m/ of "mom": only a stop's closure is
     taken back to its word's event, so that /m/ keeps its 58 ms (it had none), and it is the
-    nasal murmur, quieter than the open vowel before it; a word-initial /m/ starts at its own
-    event. No phone of the sentence is empty."""
+    nasal murmur, quieter than the open vowel before it, as the first /m/ is. No phone of the
+    sentence is empty."""
     sp = synthesize("Say mom again.", rate_wpm=175)
     a = sp.alignment
     labels = [p.label for p in a.phones]
