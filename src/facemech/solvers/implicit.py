@@ -5,7 +5,11 @@
     (masses M, damping C, a rest stiffness K), factorised once (a sparse Cholesky factor,
     :mod:`.cholesky`) and reused:
     ``A dv = h (f(x, v) - h K v)``. The nonlinear forces are evaluated exactly each step, so
-    only the stability, not the consistency, rests on K.
+    only the stability, not the consistency, rests on K. The matrix is over the moving nodes;
+    ``K v`` takes in its coupling to the kinematic nodes (the jaw's bone) and to the tethers'
+    anchors moving with it (:meth:`ImplicitSystem.apply_boundary`), so that tissue carried by
+    the jaw meets no drag from a bone taken as still (docs/model.md, "The bone's motion in
+    the step").
 :class:`Rosenbrock2`
     the two-stage Rosenbrock-W method ROS2 (Verwer et al. 1999), second order for any
     approximation of the Jacobian, so one constant factorised matrix (gamma h in place of h)
@@ -48,6 +52,7 @@ from ..params import Parameters
 from ..physics.assembly import Physics, accumulate_forces, rest_anchors
 from .cholesky import factorise
 from .contacts import resolve_contacts
+from .mandible import moved_anchors
 from .muscle_implicit import MuscleJacobian
 from .solver_state import (
     SolverState,
@@ -97,6 +102,13 @@ class ImplicitSystem:
     predictor: bool = False
     krylov: int = 0
     drag: float = 0.0
+    #: (d, nodes) sparse CSR, N/m -- the constant stiffness's coupling of the moving nodes to
+    #: the kinematic ones (the jaw's and the skull's nodes; zero columns for the moving nodes)
+    boundary: sp.csr_matrix | None = None
+    #: (t,) N/m -- the tethers' stiffness, coupling each tied node to its anchor on the bone
+    tether_k: np.ndarray | None = None
+    #: (t,) int64 -- the tied nodes' rows among the moving nodes
+    tether_rows: np.ndarray | None = None
 
     def linearise(self, pos, vel, m_force, m_steady):
         """The muscles' Jacobian at a state (None: no muscle in the solve)."""
@@ -115,6 +127,14 @@ class ImplicitSystem:
         out = self.stiffness @ v
         if self.muscles is not None:
             out += self.muscles.apply_stiffness(v, jac)
+        return out
+
+    def apply_boundary(self, vel: np.ndarray, anchor_vel: np.ndarray) -> np.ndarray:
+        """The constant stiffness's coupling to the kinematic nodes moving at ``vel`` (nodes,
+        3) and to the tethers' anchors moving at ``anchor_vel`` (t, 3): (d, 3), N/m times m/s.
+        Zero when neither moves."""
+        out = self.boundary @ vel
+        np.subtract.at(out, self.tether_rows, self.tether_k[:, None] * anchor_vel)
         return out
 
 
@@ -158,6 +178,10 @@ def implicit_system(physics: Physics, h: float) -> ImplicitSystem:
         stiff = (k_springs + sp.csc_matrix((gram.reshape(-1)[ok], (ra[ok], rb[ok])),
                                            shape=(nd, nd)) + sp.diags(tether)).tocsc()
         mass = 1.0 / physics.inv_mass[physics.dynamic]
+        boundary = _boundary_matrix(si, sj, springs, p.implicit_stiffness_share, pn,
+                                    prisms.nodes, gram, nd, physics.model.n_nodes)
+        tether_rows = row[restoration.nodes]
+        tether_k = np.asarray(restoration.k_restore, float)
     else:
         k_tan = springs.k_low * 0.5 * (1.0 + 0.5 * np.pi * p.sigma)
         stiff = _graph_matrix(si, sj, k_tan, nd)
@@ -170,6 +194,7 @@ def implicit_system(physics: Physics, h: float) -> ImplicitSystem:
         stiff = stiff + sp.diags(restore)
         damp = _graph_matrix(si, sj, springs.damping, nd)
         mass = np.full(nd, p.node_mass)
+        boundary, tether_rows, tether_k = None, None, None
     stiff = stiff.tocsc()
     # a drag proportional to the mass (Parameters.mass_drag) is diagonal: exactly in the matrix
     a_mat = (sp.diags(mass * (1.0 + h * p.mass_drag)) + h * damp + h * h * stiff).tocsc()
@@ -179,7 +204,40 @@ def implicit_system(physics: Physics, h: float) -> ImplicitSystem:
                           factor_step=h,
                           muscles=MuscleJacobian(physics, lu) if p.is_continuum else None,
                           predictor=bool(p.predictor), krylov=int(p.krylov_iterations),
-                          drag=float(p.mass_drag))
+                          drag=float(p.mass_drag), boundary=boundary, tether_k=tether_k,
+                          tether_rows=tether_rows)
+
+
+def _boundary_matrix(si, sj, springs, share, pn, prism_nodes, gram, nd, n_nodes):
+    """(d, nodes) CSR: the constant stiffness's entries between a moving node's row and a
+    kinematic node's column (springs with one kinematic end, the volume Gram blocks of prisms
+    with kinematic corners), which :func:`_graph_matrix` leaves out of the matrix."""
+    k = share * springs.k_high
+    i_kin, j_kin = si < 0, sj < 0
+    a = (~i_kin) & j_kin
+    b = i_kin & (~j_kin)
+    rows = [si[a], sj[b]]
+    cols = [np.asarray(springs.j)[a], np.asarray(springs.i)[b]]
+    vals = [-k[a], -k[b]]
+    a_idx = np.repeat(np.arange(6), 6)
+    b_idx = np.tile(np.arange(6), 6)
+    ra = pn[:, a_idx].reshape(-1)
+    rb = pn[:, b_idx].reshape(-1)
+    cb = np.asarray(prism_nodes)[:, b_idx].reshape(-1)
+    sel = (ra >= 0) & (rb < 0)
+    rows.append(ra[sel])
+    cols.append(cb[sel])
+    vals.append(gram.reshape(-1)[sel])
+    return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                         shape=(nd, n_nodes))
+
+
+def _anchor_velocity(jaw, pose, rate, anchors, h):
+    """(t, 3) m/s: the tethers' anchors' velocity over the step (their places at the step's
+    end less at its start, over h)."""
+    nxt, _ = moved_anchors(pose + rate * h, jaw.hinge_point, jaw.hinge_axis,
+                           jaw.anchor_weights, jaw.anchor_rest, jaw.anchor_normal)
+    return (nxt - anchors.rest) / h
 
 
 def _graph_matrix(i: np.ndarray, j: np.ndarray, w: np.ndarray, nd: int) -> sp.csc_matrix:
@@ -277,7 +335,12 @@ class LinearImplicitEuler:
             if system.drag:
                 out[dyn] -= system.drag * system.mass[:, None] * v0
             if not system.predictor:
-                rhs = h * (out[dyn] - h * system.apply_stiffness(v0, jac))
+                kv = system.apply_stiffness(v0, jac)
+                if system.boundary is not None:
+                    kv += system.apply_boundary(vel, _anchor_velocity(
+                        solver_state.jaw, f.jaw_start + f.jaw_rate * (step * h), f.jaw_rate,
+                        anchors, h))
+                rhs = h * (out[dyn] - h * kv)
                 dv = system.solve(rhs, jac, h)
             elif system.krylov:
                 dv = _krylov_step(solver_state, system, at, vel, m_force, anchors, out,
