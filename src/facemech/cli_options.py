@@ -233,7 +233,7 @@ GROUPS: dict[str, dict[str, tuple]] = {
                   "word_tier": (str | None, None), "phone_tier": (str | None, None)},
     # facemech.speech.articulation.Articulation and facemech.speech.planning's plan
     "articulation": {"strength": (float, 1.0), "scale": (list[str] | None, None),
-                     "plan": (bool, True), "plan_iterations": (int, 4)},
+                     "plan": (bool, True), "plan_iterations": (int, 8)},
     "alive": {"blinks": (bool, True), "gaze": (bool, True), "head_motion": (bool, True),
               "seed": (int, 0)},
 }

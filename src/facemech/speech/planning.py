@@ -64,11 +64,12 @@ from .articulation import Articulation, as_articulation
 from .coarticulation import Gesture, controls_from_gestures, gestures
 from .phoneclass import PAUSE, phone_classes
 
-__all__ = ["BOUNDS", "GAIN", "JAW_MAX_DEG", "MAX_ITERATIONS", "PLAN_ITERATIONS", "TARGETS",
-           "Plan", "check_iterations", "plan_controls"]
+__all__ = ["BOUNDS", "GAIN", "JAW_MAX_DEG", "JAW_SPEED_MAX", "MAX_ITERATIONS", "PLAN_ITERATIONS",
+           "TARGETS", "Plan", "check_iterations", "jaw_rate_limit", "plan_controls",
+           "slew_limited"]
 
 #: iterations of the planner by default (each one forward simulation after the first)
-PLAN_ITERATIONS = 4
+PLAN_ITERATIONS = 8
 #: the largest number of iterations accepted
 MAX_ITERATIONS = 20
 #: the kinematic targets (m) and the tolerances within which a phone is left as it is (m)
@@ -95,6 +96,12 @@ GAIN = {"open_jaw_deg": 0.8, "open_dominance": 0.1, "bilabial_dominance": 1.0,
         "labiodental_dominance": 0.5, "labiodental_scale": 0.2, "bilabial_timing": 0.7}
 #: s, how far beyond a bilabial's interval its closure is looked for (its timing, :func:`_timing`)
 TIMING_WINDOW_S = 0.06
+#: m/s, the fastest a plan moves the lower incisor's tip: the jaw is a kinematic drive, and the
+#: planner, left free, sped it to 400-800 mm/s (the fastest jaw of issue 27's recordings moves
+#: at 186, :data:`facemech.analysis.visible_speech.REAL_JAW_PEAK_MM_S`; real lower lips at
+#: 115-233). 250 mm/s, the top of issue 29's range for the lower lip, which rides the jaw: a
+#: faster jaw alone carried the lower lip past it (docs/visible-speech.md, "The jaw's speed")
+JAW_SPEED_MAX = 0.25
 
 
 @dataclass(frozen=True)
@@ -137,6 +144,7 @@ def check_iterations(iterations) -> int:
 
 def plan_controls(alignment: Alignment, model, *, params=None,
                   strength: float | Articulation = 1.0, iterations: int = PLAN_ITERATIONS,
+                  jaw_speed: float | None = JAW_SPEED_MAX,
                   progress: Callable[[int, int], None] | None = None) -> Plan:
     """Controls of an alignment planned on the face that will say it (module doc).
 
@@ -148,6 +156,8 @@ def plan_controls(alignment: Alignment, model, *, params=None,
     strength : a global strength or an :class:`~.articulation.Articulation`, as
         :func:`~.coarticulation.controls_from_alignment`; the plan starts from its gestures
     iterations : updates after the first simulation (0: the blend's controls, simulated once)
+    jaw_speed : m/s, the fastest the lower incisor's tip may move (:data:`JAW_SPEED_MAX`; the
+        jaw's series slew-limited to it, :func:`slew_limited`); None: no limit
     progress : callable(done, total) over the ``iterations + 1`` simulations
 
     Returns
@@ -168,18 +178,24 @@ def plan_controls(alignment: Alignment, model, *, params=None,
     from .coarticulation import controls_from_alignment
 
     iterations = check_iterations(iterations)
+    if jaw_speed is not None and not (np.isfinite(jaw_speed) and jaw_speed > 0):
+        raise InputError(f"the jaw's speed limit must be a positive number of m/s, got "
+                         f"{jaw_speed!r}", field="jaw_speed")
     params = load_preset("anatomical") if params is None else params
     articulation = as_articulation(strength)
     # the checks of the plain controls (frame rate, strength, duration, labels)
     controls_from_alignment(alignment, frame_rate=params.frame_rate, strength=articulation)
     items = gestures(alignment, articulation)
     phones = _phone_gestures(alignment)
+    jaw_limit = None if jaw_speed is None else jaw_rate_limit(model, params, jaw_speed)
     t0 = _time.perf_counter()
     history, best, turns, step = [], None, {}, 1.0
     for it in range(iterations + 1):
         t, act, jaw = controls_from_gestures(items, alignment.duration,
                                              frame_rate=params.frame_rate,
                                              strength=articulation.strength)
+        if jaw_limit is not None:
+            jaw = np.maximum(slew_limited(jaw, jaw_limit / params.frame_rate), 0.0)
         sim = simulate(model, act, jaw, params=params)
         misses = _measure(alignment, sim, phones)
         summary = _summary(misses)
@@ -207,10 +223,45 @@ def plan_controls(alignment: Alignment, model, *, params=None,
               "kept_iteration": kept,
               "targets_mm": {g: {k: round(1e3 * v, 2) for k, v in d.items()}
                              for g, d in TARGETS.items()},
+              "jaw_speed_limit_mm_s": None if jaw_speed is None else round(1e3 * jaw_speed, 1),
               "misses": history, "final": summary,
               "adjusted_gestures": sum(1 for g in items if _adjusted(g)),
               "wall_s": round(_time.perf_counter() - t0, 2)}
     return Plan(t, act, jaw, sim, items, record)
+
+
+def jaw_rate_limit(model, params, speed: float) -> float:
+    """rad/s: the jaw's angular speed that moves the lower incisor's tip at ``speed`` (m/s) on
+    ``model`` under the preset's jaw kinematics (measured between 4 and 8 degrees open)."""
+    from ..geometry.teeth import lower_incisor_point
+    from ..solvers.jaw import jaw_poses, move_points
+
+    tip = lower_incisor_point(model)
+    a = np.radians([4.0, 8.0])
+    q = jaw_poses(a, params)
+    p = [move_points(tip, pose, model.hinge_point, model.hinge_axis)[0] for pose in q]
+    return float(speed * (a[1] - a[0]) / np.linalg.norm(p[1] - p[0]))
+
+
+def slew_limited(x: np.ndarray, step: float) -> np.ndarray:
+    """``x`` (frames,) with no change between frames larger than ``step``: of all such series,
+    the one closest to ``x`` in least squares (a bounded least-squares problem in the first
+    value and the changes, :func:`scipy.optimize.lsq_linear`). A series within the limit is
+    returned as it is; a move too fast for it becomes a move at the limit, starting earlier and
+    ending later by the same amount when the move is symmetric (a step: a ramp at ``step`` a
+    frame centred on it)."""
+    from scipy.optimize import lsq_linear
+
+    x = np.asarray(x, float)
+    if len(x) < 2 or np.abs(np.diff(x)).max() <= step:
+        return x.copy()
+    n = len(x)
+    a = np.tril(np.ones((n, n)))  # y = a @ [y0, d1, ..., d(n-1)]
+    lo = np.full(n, -step)
+    hi = np.full(n, step)
+    lo[0], hi[0] = -np.inf, np.inf
+    sol = lsq_linear(a, x, bounds=(lo, hi), method="bvls")
+    return a @ sol.x
 
 
 def _adjusted(g: Gesture) -> bool:
