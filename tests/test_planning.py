@@ -22,8 +22,11 @@ from facemech.speech.coarticulation import (
 )
 from facemech.speech.phoneclass import phone_classes
 from facemech.speech.planning import (
+    GAIN,
     JAW_SPEED_MAX,
+    _Miss,
     _timing,
+    _update,
     check_iterations,
     jaw_rate_limit,
     plan_controls,
@@ -250,6 +253,24 @@ def test_speak_plans_by_default_records_it_and_no_plan_keeps_the_blend(monkeypat
     code, _, err = run_cli(monkeypatch, capsys, "speak", "Bob", "-o", tmp_path / "bad",
                            "--no-video", "--plan-iterations", "50")
     assert code == 2 and "plan" in err and "Traceback" not in err
+
+
+def test_a_rounded_phone_that_missed_closes_its_jaw():
+    """A rounded phone whose lips stayed back grows its targets and its dominance over the lips
+    and over the jaw, and closes its jaw by 0.5 degrees per mm of miss: an open vowel after a
+    /w/ had opened the jaw within it and carried the lower lip back (held out, 27 of 31 rounded
+    phones forward 2 mm with the lips' dominance alone, 30 of 31 with the jaw's too,
+    docs/visible-speech.md). Its neighbours are left as they are."""
+    items = [Gesture("w", 0.3, 0.38), Gesture("open", 0.38, 0.5)]
+    miss = _Miss("rounded", 1.5e-3, (0,), ("w",))  # 1.5 mm forward of the 3 asked: 1 mm beyond
+    w, vowel = _update(items, [miss], {}, 1.0)
+    assert np.degrees(w.jaw) == pytest.approx(-GAIN["rounded_jaw_deg"] * 1.0)
+    assert w.jaw_dominance == pytest.approx(1.0 + GAIN["rounded_dominance"])
+    assert w.lips_dominance == pytest.approx(1.0 + GAIN["rounded_dominance"])
+    assert w.scale == pytest.approx(1.0 + GAIN["rounded_scale"])
+    assert vowel == items[1]
+    # within its tolerance (0.5 mm): nothing moves
+    assert _update(items, [_Miss("rounded", 0.4e-3, (0,), ("w",))], {}, 1.0) == items
 
 
 def test_the_open_rounded_vowel():

@@ -41,9 +41,13 @@ bounded (:data:`BOUNDS`); the blended activity stays clipped to
 error's sign says (the lip's top above the incisors' edge: its jaw opens and its own gesture,
 scaled by its own bound ``labiodental_scale`` down to 0, grows; below the edge: both shrink),
 its dominance over the lips and the jaw growing, at half the step each time the sign flips (the
-lip's top passed the edge). An iteration whose total miss is larger than the best so far is
-undone: the next update starts again from the best gestures with half the step. Only the model
-is used: the simulation of the utterance itself, so nothing is tuned to a text.
+lip's top passed the edge). A rounded phone whose lips stayed back also closes its jaw (0.5
+degrees per mm of miss) and grows its dominance over the jaw: an open vowel after a /w/ had
+opened the jaw within it and carried the lower lip back. The plan's jaw is held to
+:data:`JAW_SPEED_MAX` at the lower incisor (:func:`slew_limited`). An iteration whose total
+miss is larger than the best so far is undone: the next update starts again from the best
+gestures with half the step. Only the model is used: the simulation of the utterance itself,
+so nothing is tuned to a text.
 
 Cost: one forward simulation per iteration (``iterations + 1`` in all; fewer when every phone
 is within its tolerance); the controls returned are those of the iteration with the smallest
@@ -93,7 +97,8 @@ JAW_MAX_DEG = 24.0
 GAIN = {"open_jaw_deg": 0.8, "open_dominance": 0.1, "bilabial_dominance": 1.0,
         "bilabial_scale": 0.15, "bilabial_press": 0.06, "neighbour_rate": 0.1,
         "rounded_scale": 0.2, "rounded_dominance": 0.5, "labiodental_jaw_deg": 0.5,
-        "labiodental_dominance": 0.5, "labiodental_scale": 0.2, "bilabial_timing": 0.7}
+        "labiodental_dominance": 0.5, "labiodental_scale": 0.2, "bilabial_timing": 0.7,
+        "rounded_jaw_deg": 0.5}
 #: s, how far beyond a bilabial's interval its closure is looked for (its timing, :func:`_timing`)
 TIMING_WINDOW_S = 0.06
 #: m/s, the fastest a plan moves the lower incisor's tip: the jaw is a kinematic drive, and the
@@ -459,7 +464,11 @@ def _update(items: list[Gesture], misses: list[_Miss], turns: dict,
                                               "scale"),
                             lips_dominance=_bounded(
                                 g.lips_dominance * (1 + GAIN["rounded_dominance"] * mm),
-                                "dominance"))
+                                "dominance"),
+                            jaw_dominance=_bounded(
+                                g.jaw_dominance * (1 + GAIN["rounded_dominance"] * mm),
+                                "dominance"),
+                            jaw=_jaw_offset(g, -GAIN["rounded_jaw_deg"] * mm))
             elif m.group == "labiodental":
                 sign = 1.0 if m.error > 0 else -1.0
                 last_sign, share = turns.get(m.indices, (sign, 1.0))
