@@ -208,6 +208,17 @@ def test_a_slew_limit_keeps_slow_moves_and_centres_fast_ones():
     out = slew_limited(spike, 0.05)
     assert np.abs(np.diff(out)).max() <= 0.05 + 1e-12
     assert out.sum() == pytest.approx(1.0) and np.argmax(out) == 20
+    # solved about each cluster of fast frames, the series is the whole problem's solution
+    from facemech.speech.planning import _slew_window
+
+    t = np.arange(240) / 60.0
+    jaw = 0.15 * (np.tanh((t - 0.8) / 0.01) + 1) - 0.15 * (np.tanh((t - 3.0) / 0.02) + 1) \
+        + 0.05 * np.sin(2 * np.pi * t)
+    jaw[150:158] += 0.2  # a burst in the middle
+    out = slew_limited(jaw, 0.03)
+    assert np.abs(np.diff(out)).max() <= 0.03 + 1e-12
+    assert np.abs(out - _slew_window(jaw, 0.03)).max() < 1e-9
+    assert np.array_equal(out[100:130], jaw[100:130])  # far from every fast move: untouched
 
 
 def test_the_jaw_speed_limit_is_the_incisors(coarse):

@@ -105,7 +105,8 @@ TIMING_WINDOW_S = 0.06
 #: planner, left free, sped it to 400-800 mm/s (the fastest jaw of issue 27's recordings moves
 #: at 186, :data:`facemech.analysis.visible_speech.REAL_JAW_PEAK_MM_S`; real lower lips at
 #: 115-233). 250 mm/s, the top of issue 29's range for the lower lip, which rides the jaw: a
-#: faster jaw alone carried the lower lip past it (docs/visible-speech.md, "The jaw's speed")
+#: faster jaw alone carried the lower lip past it (docs/visible-speech.md, "The jaw carries
+#: the lips")
 JAW_SPEED_MAX = 0.25
 
 
@@ -250,23 +251,53 @@ def jaw_rate_limit(model, params, speed: float) -> float:
 
 def slew_limited(x: np.ndarray, step: float) -> np.ndarray:
     """``x`` (frames,) with no change between frames larger than ``step``: of all such series,
-    the one closest to ``x`` in least squares (a bounded least-squares problem in the first
-    value and the changes, :func:`scipy.optimize.lsq_linear`). A series within the limit is
-    returned as it is; a move too fast for it becomes a move at the limit, starting earlier and
-    ending later by the same amount when the move is symmetric (a step: a ramp at ``step`` a
-    frame centred on it)."""
+    the one closest to ``x`` in least squares. A series within the limit is returned as it is;
+    a move too fast for it becomes a move at the limit, starting earlier and ending later by the
+    same amount when the move is symmetric (a step: a ramp at ``step`` a frame centred on it).
+
+    The solution differs from ``x`` only about the frames that break the limit, so it is solved
+    there: each cluster of such frames in a window (:func:`_slew_window`) widened until the
+    window's solution meets ``x`` at both of its ends, where it then joins ``x`` (and is the
+    whole series' solution there, the problem being strictly convex)."""
+    x = np.asarray(x, float)
+    y = x.copy()
+    if len(x) < 2:
+        return y
+    fast = np.nonzero(np.abs(np.diff(x)) > step)[0]
+    if fast.size == 0:
+        return y
+    margin = 15
+    # clusters of fast frames closer than two margins to each other
+    breaks = np.nonzero(np.diff(fast) > 2 * margin)[0]
+    starts = np.concatenate([[fast[0]], fast[breaks + 1]])
+    ends = np.concatenate([fast[breaks], [fast[-1]]])
+    tol = 1e-9 * max(float(np.abs(x).max()), step)
+    for a, b in zip(starts, ends, strict=True):
+        m = margin
+        while True:
+            lo, hi = max(a - m, 0), min(b + 1 + m, len(x) - 1)
+            z = _slew_window(x[lo:hi + 1], step)
+            ok_lo = lo == 0 or abs(z[0] - x[lo]) <= tol
+            ok_hi = hi == len(x) - 1 or abs(z[-1] - x[hi]) <= tol
+            if (ok_lo and ok_hi) or (lo == 0 and hi == len(x) - 1):
+                break
+            m *= 2
+        y[lo:hi + 1] = z
+    return y
+
+
+def _slew_window(x: np.ndarray, step: float) -> np.ndarray:
+    """The least-squares closest series to ``x`` whose changes stay within ``step``: a bounded
+    least-squares problem in the first value and the changes
+    (:func:`scipy.optimize.lsq_linear`)."""
     from scipy.optimize import lsq_linear
 
-    x = np.asarray(x, float)
-    if len(x) < 2 or np.abs(np.diff(x)).max() <= step:
-        return x.copy()
     n = len(x)
     a = np.tril(np.ones((n, n)))  # y = a @ [y0, d1, ..., d(n-1)]
     lo = np.full(n, -step)
     hi = np.full(n, step)
     lo[0], hi[0] = -np.inf, np.inf
-    sol = lsq_linear(a, x, bounds=(lo, hi), method="bvls")
-    return a @ sol.x
+    return a @ lsq_linear(a, x, bounds=(lo, hi), method="bvls").x
 
 
 def _adjusted(g: Gesture) -> bool:
