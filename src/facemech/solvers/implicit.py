@@ -178,8 +178,9 @@ def implicit_system(physics: Physics, h: float) -> ImplicitSystem:
         stiff = (k_springs + sp.csc_matrix((gram.reshape(-1)[ok], (ra[ok], rb[ok])),
                                            shape=(nd, nd)) + sp.diags(tether)).tocsc()
         mass = 1.0 / physics.inv_mass[physics.dynamic]
-        boundary = _boundary_matrix(si, sj, springs, p.implicit_stiffness_share, pn,
-                                    prisms.nodes, gram, nd, physics.model.n_nodes)
+        boundary = _boundary_matrix(si, sj, springs, p.implicit_stiffness_share, ra, rb,
+                                    prisms.nodes[:, b_idx].reshape(-1), gram, nd,
+                                    physics.model.n_nodes)
         tether_rows = row[restoration.nodes]
         tether_k = np.asarray(restoration.k_restore, float)
     else:
@@ -208,10 +209,12 @@ def implicit_system(physics: Physics, h: float) -> ImplicitSystem:
                           tether_rows=tether_rows)
 
 
-def _boundary_matrix(si, sj, springs, share, pn, prism_nodes, gram, nd, n_nodes):
+def _boundary_matrix(si, sj, springs, share, ra, rb, cb, gram, nd, n_nodes):
     """(d, nodes) CSR: the constant stiffness's entries between a moving node's row and a
     kinematic node's column (springs with one kinematic end, the volume Gram blocks of prisms
-    with kinematic corners), which :func:`_graph_matrix` leaves out of the matrix."""
+    with kinematic corners), which :func:`_graph_matrix` and the Gram assembly leave out of the
+    matrix. ``ra``, ``rb``: the Gram entries' moving rows (-1: kinematic), ``cb``: their
+    column nodes."""
     k = share * springs.k_high
     i_kin, j_kin = si < 0, sj < 0
     a = (~i_kin) & j_kin
@@ -219,11 +222,6 @@ def _boundary_matrix(si, sj, springs, share, pn, prism_nodes, gram, nd, n_nodes)
     rows = [si[a], sj[b]]
     cols = [np.asarray(springs.j)[a], np.asarray(springs.i)[b]]
     vals = [-k[a], -k[b]]
-    a_idx = np.repeat(np.arange(6), 6)
-    b_idx = np.tile(np.arange(6), 6)
-    ra = pn[:, a_idx].reshape(-1)
-    rb = pn[:, b_idx].reshape(-1)
-    cb = np.asarray(prism_nodes)[:, b_idx].reshape(-1)
     sel = (ra >= 0) & (rb < 0)
     rows.append(ra[sel])
     cols.append(cb[sel])
@@ -336,7 +334,7 @@ class LinearImplicitEuler:
                 out[dyn] -= system.drag * system.mass[:, None] * v0
             if not system.predictor:
                 kv = system.apply_stiffness(v0, jac)
-                if system.boundary is not None:
+                if system.boundary is not None and np.any(f.jaw_rate):  # the bone moves
                     kv += system.apply_boundary(vel, _anchor_velocity(
                         solver_state.jaw, f.jaw_start + f.jaw_rate * (step * h), f.jaw_rate,
                         anchors, h))
