@@ -28,12 +28,15 @@ stderr (about 20-40 s a sentence on the 2-core machine).
 ``--preset FILE.json``: another physical preset (a preset file, e.g. the anatomical preset with
 a ``step`` block; docs/formats.md).
 
+``--held-out-2``: Harvard lists 5 and 6 (a second held-out set, first spoken after the
+planner's gains of 2026-12-07 were set).
+
 ``--held-out``: Harvard lists 3 and 4 instead (20 sentences never used to set the planner's
 targets, gains or bounds), the check of issue 29's "sentences that are not in the repository".
 
 ``python benchmarks/sentences.py [--voice en-gb] [--face default] [--rate 175]
-[--sentences N] [--held-out] [--no-carrier] [--phones] [--no-plan] [--plan-iterations N]
-[--preset anatomical]``
+[--sentences N] [--held-out | --held-out-2] [--no-carrier] [--phones] [--no-plan]
+[--plan-iterations N] [--preset anatomical]``
 """
 
 from __future__ import annotations
@@ -100,6 +103,32 @@ HELD_OUT = (
     "The meal was cooked before the bell rang.",
     "What joy there is in living.",
 )
+#: Harvard sentences (IEEE 1969), lists 5 and 6: a second held-out set (``--held-out-2``), first
+#: spoken on 2026-12-07 after the planner's gains of that day were set, never tuned on
+HELD_OUT_2 = (
+    # list 5
+    "A king ruled the state in the early days.",
+    "The ship was torn apart on the sharp reef.",
+    "Sickness kept him home the third week.",
+    "The wide road shimmered in the hot sun.",
+    "The lazy cow lay in the cool grass.",
+    "Lift the square stone over the fence.",
+    "The rope will bind the seven books at once.",
+    "Hop over the fence and plunge in.",
+    "The friendly gang left the drug store.",
+    "Mesh wire keeps chicks inside.",
+    # list 6
+    "The frosty air passed through the coat.",
+    "The crooked maze failed to fool the mouse.",
+    "Adding fast leaves the sum unclear.",
+    "The show was a flop from the very start.",
+    "A saw is a tool used for making boards.",
+    "The wagon moved on well oiled wheels.",
+    "March the soldiers past the next hill.",
+    "A cup of sugar makes sweet fudge.",
+    "Place a rosebush near the porch steps.",
+    "Both lost their lives in the raging storm.",
+)
 #: words with an open vowel between two bilabials, none of which the Harvard lists above has,
 #: each said in the carrier phrase "Say ___ again." (in en-us "o" is [ɑ])
 BETWEEN_BILABIALS = ("bob", "pop", "mom", "bomb", "mop", "palm", "map", "pam")
@@ -149,6 +178,8 @@ def main(argv=None) -> int:
     ap.add_argument("--sentences", type=int, default=len(HARVARD))
     ap.add_argument("--held-out", action="store_true",
                     help="Harvard lists 3 and 4 instead of 1 and 2 (never tuned on)")
+    ap.add_argument("--held-out-2", action="store_true",
+                    help="Harvard lists 5 and 6 instead (a second set never tuned on)")
     ap.add_argument("--no-carrier", action="store_true",
                     help="leave out the words with an open vowel between two bilabials")
     ap.add_argument("--phones", action="store_true", help="every phone's row")
@@ -167,7 +198,10 @@ def main(argv=None) -> int:
     )
 
     rows, phones, speeds, jaws = [], [], [], []
-    texts = (HELD_OUT if args.held_out else HARVARD)[: args.sentences]
+    if args.held_out and args.held_out_2:
+        ap.error("--held-out and --held-out-2 name different sets: give one")
+    texts = (HELD_OUT if args.held_out else HELD_OUT_2 if args.held_out_2 else
+             HARVARD)[: args.sentences]
     for k, text in enumerate(texts, 1):
         t0 = time.perf_counter()
         ph, peak, dur, planned, jaw = spoken_phones(text, voice=args.voice, rate_wpm=args.rate,
@@ -187,7 +221,7 @@ def main(argv=None) -> int:
               f"incisor {1e3 * jaw:5.1f} mm/s  {text}", file=sys.stderr, flush=True)
     out = {"voice": args.voice, "rate_wpm": args.rate, "face": args.face, "plan": plan,
            "sentences_set": "Harvard lists 3-4 (held out)" if args.held_out else
-           "Harvard lists 1-2",
+           "Harvard lists 5-6 (held out)" if args.held_out_2 else "Harvard lists 1-2",
            "preset": args.preset,
            "criteria": CRITERIA, "summary": summarize(phones, speeds),
            "classes": class_table(phones), "sentences": rows}
