@@ -421,7 +421,7 @@ def _summary(misses: list[_Miss]) -> dict:
     :data:`PASS_WEIGHT` times the misses past the issue's pass lines (:data:`PASS_LINES`),
     what the planner minimises."""
     out: dict = {}
-    cost = weighted = 0.0
+    cost = past = 0.0
     for group, tol in ((g, TARGETS[g]["tolerance"]) for g in TARGETS):
         sel = [m for m in misses if m.group == group]
         if group == "open":
@@ -433,15 +433,14 @@ def _summary(misses: list[_Miss]) -> dict:
             beyond = [max(m.error - tol, 0.0) for m in sel]
         v = 1e3 * np.asarray(beyond)
         cost += float(v.sum())
-        past = [max(abs(m.error) if group == "labiodental" else m.error, 0.0)
-                - PASS_LINES[group] for m in sel]
-        weighted += float(v.sum()) + PASS_WEIGHT * 1e3 * sum(max(x, 0.0) for x in past)
+        past += 1e3 * sum(max((abs(m.error) if group == "labiodental" else m.error)
+                              - PASS_LINES[group], 0.0) for m in sel)
         out[group] = {"n": len(sel),
                       "within": round(float(np.mean(v == 0.0)), 3) if v.size else None,
                       "median_miss_mm": round(float(np.median(v)), 2) if v.size else None,
                       "max_miss_mm": round(float(v.max()), 2) if v.size else None}
     out["cost_mm"] = round(cost, 3)
-    out["cost"] = round(weighted, 3)
+    out["cost"] = round(cost + PASS_WEIGHT * past, 3)
     return out
 
 
