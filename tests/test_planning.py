@@ -22,10 +22,15 @@ from facemech.speech.coarticulation import (
 )
 from facemech.speech.phoneclass import phone_classes
 from facemech.speech.planning import (
+    BOUNDS,
     GAIN,
     JAW_SPEED_MAX,
     PASS_LINES,
     PASS_WEIGHT,
+    SPEED_COST,
+    SPEED_LINE,
+    SPEED_TARGET,
+    SPEED_TOLERANCE,
     _Miss,
     _summary,
     _timing,
@@ -97,6 +102,81 @@ def test_a_gestures_dominance_jaw_and_rate_move_the_blend():
     assert controls_from_gestures(wide, MAP.duration)[2][mid - 2] > jaw[mid - 2]
     sharp = [replace(g, rate=3.0) if g.cls == "bilabial" else g for g in items]
     assert controls_from_gestures(sharp, MAP.duration)[2][mid - 2] > jaw[mid - 2]
+
+
+def test_a_jaw_rate_sharpens_the_jaw_and_leaves_the_lips():
+    """``Gesture.jaw_rate`` multiplies the rates of the jaw's dominance only: the activity is
+    the same to the bit, and each phone's jaw comes nearer its own target (a less
+    coarticulated jaw: the /a/ of "map" opens more, the bilabials close more)."""
+    items = gestures(MAP)
+    t, act, jaw = controls_from_gestures(items, MAP.duration)
+    crisp = [replace(g, jaw_rate=3.0) for g in items]
+    t2, act2, jaw2 = controls_from_gestures(crisp, MAP.duration)
+    np.testing.assert_array_equal(act, act2)
+    assert jaw2.max() > jaw.max() + np.radians(0.5)
+    # the jaw's rates are the table's times rate times jaw_rate: the jaw of jaw_rate 3 is
+    # the jaw of rate 3, whose activity differs
+    from facemech.speech.coarticulation import blend
+
+    tt = np.linspace(0.0, MAP.duration, 50)
+    pad = [Gesture("pause", -np.inf, 0.0)], [Gesture("pause", MAP.duration, np.inf)]
+    act_r, by_rate = blend(tt, pad[0] + [replace(g, rate=3.0) for g in items] + pad[1])
+    act_j, by_jaw_rate = blend(tt, pad[0] + crisp + pad[1])
+    np.testing.assert_allclose(by_jaw_rate, by_rate, rtol=1e-12, atol=0)
+    assert np.abs(act_r - act_j).max() > 0.05
+
+
+def test_a_slow_utterance_gets_a_crisper_jaw():
+    """An utterance whose peak lower-lip speed falls short of the slowest real lower lip
+    (115 mm/s) beyond its tolerance (5 mm/s) costs SPEED_COST per mm/s short, and PASS_WEIGHT
+    times more below the issue's pass line (100 mm/s); the update raises every gesture's jaw
+    rates (not the pauses') by GAIN["speed_jaw_rate"] per mm/s short, bounded at 4; nothing
+    else moves."""
+    assert (SPEED_TARGET, SPEED_TOLERANCE, SPEED_LINE) == pytest.approx((0.115, 0.005, 0.100))
+    miss = [_Miss("bilabial", 0.3e-3, (0,), ("bilabial",))]  # 0.1 mm beyond its tolerance
+    assert _summary(miss, 0.070)["speed_short_mm_s"] == pytest.approx(40.0)
+    assert _summary(miss, 0.070)["cost"] == pytest.approx(
+        0.1 + SPEED_COST * (40.0 + PASS_WEIGHT * 30.0))
+    assert _summary(miss, 0.105)["cost"] == pytest.approx(0.1 + SPEED_COST * 5.0)
+    assert _summary(miss, 0.112)["cost"] == pytest.approx(0.1)  # within its tolerance
+    assert _summary(miss)["cost"] == pytest.approx(0.1)  # speed not weighed
+    items = [Gesture("pause", -np.inf, 0.3), Gesture("alveolar", 0.3, 0.36),
+             Gesture("mid", 0.36, 0.46), Gesture("mid", 0.46, 0.52),
+             Gesture("pause", 0.52, np.inf)]
+    out = _update(items, [], {}, 1.0, speed_short=30.0, vowels=(2,))
+    crisper = 1.0 + 30 * GAIN["speed_jaw_rate"]
+    assert [g.jaw_rate for g in out] == pytest.approx([1.0, crisper, crisper, crisper, 1.0])
+    # the stressed vowel (index 2) opens GAIN["speed_jaw_deg"] per mm/s short; the others not
+    assert np.degrees(out[2].jaw) == pytest.approx(30 * GAIN["speed_jaw_deg"])
+    assert [replace(g, jaw_rate=1.0, jaw=0.0) for g in out] == items
+    assert out[3].jaw == 0.0 and out[1].jaw == 0.0
+    half = _update(items, [], {}, 0.5, speed_short=30.0, vowels=(2,))
+    assert half[1].jaw_rate == pytest.approx(1.0 + 15 * GAIN["speed_jaw_rate"])
+    assert np.degrees(half[2].jaw) == pytest.approx(15 * GAIN["speed_jaw_deg"])
+    for _ in range(40):
+        out = _update(out, [], {}, 1.0, speed_short=60.0, vowels=(2,))
+    lo, hi = BOUNDS["jaw_rate"]
+    assert out[1].jaw_rate == hi and np.degrees(out[2].jaw) == pytest.approx(
+        BOUNDS["jaw_deg"][1])
+    assert _update(items, [], {}, 1.0, vowels=(2,)) == items
+
+
+def test_the_stressed_vowels_open_for_speed():
+    """The gestures a slow utterance opens further: the vowel gestures of phones with eSpeak's
+    stress marks (both parts of a stressed diphthong), not the unstressed ones, not the
+    consonants; in IPA, where no stress is read, every vowel's."""
+    from facemech.speech.planning import _stressed_vowels
+
+    al = _alignment(["D", "'eI", "z", "a#", "tS", "'I", "k", "I", "n"],
+                    [0.05, 0.12, 0.06, 0.05, 0.08, 0.07, 0.06, 0.05, 0.06])
+    items = gestures(al)
+    got = _stressed_vowels(al)
+    assert [items[k].cls for k in got] == ["mid", "close_front_lax", "close_front_lax"]
+    assert [round(items[k].start, 3) for k in got] == [0.35, 0.41, 0.66]
+    ipa = Alignment(words=(), phones=(Segment("d", 0.0, 0.1), Segment("e", 0.1, 0.2),
+                                      Segment("ə", 0.2, 0.3)), notation="ipa", duration=0.3,
+                    meta={}, source="test")
+    assert [gestures(ipa)[k].cls for k in _stressed_vowels(ipa)] == ["mid", "schwa"]
 
 
 def test_a_gestures_shift_moves_its_dominance_and_nothing_else():
@@ -256,6 +336,8 @@ def test_speak_plans_by_default_records_it_and_no_plan_keeps_the_blend(monkeypat
     assert code == 0, err
     man = json.loads((tmp_path / "p" / "manifest.json").read_text())
     assert man["plan"]["planned"] and man["plan"]["iterations"] == 1
+    assert man["plan"]["speed_target_mm_s"] == 115.0
+    assert "speed_short_mm_s" in man["plan"]["final"]
     assert set(man["plan"]["final"]) >= {"bilabial", "open", "rounded", "labiodental",
                                          "cost_mm"}
     code, _, err = run_cli(monkeypatch, capsys, "speak", "Bob", "-o", tmp_path / "n",

@@ -217,11 +217,6 @@ def test_sentences_cover_every_group(spoken_summary):
         assert spoken_summary[group]["n"] >= 2, group
 
 
-def not_met(group: str, measured: str):
-    return pytest.param(group, marks=pytest.mark.xfail(
-        strict=True, raises=AssertionError, reason=f"issue 29, not met: {measured}"))
-
-
 @pytest.mark.parametrize("group", [
     "bilabial",  # planned: 5 of 5 at <= 0.5 mm, the widest 0.03 mm (coarse face, unplanned:
     # 0.97 mm median)
@@ -232,8 +227,9 @@ def not_met(group: str, measured: str):
     "between_bilabials",
     "rounded",
     "labiodental",  # planned: 5 of 5 within 1 mm of the incisors' edge, the farthest 0.49 mm
-    not_met("speed", "planned, peak lower-lip speed 66 mm/s in 'Four hours of steady work "
-            "faced us.' (161 and 192 mm/s in the others)"),
+    "speed",  # planned (2026-12-07, later): 'Four hours of steady work faced us.' 142 mm/s
+    # since a slow utterance gets a crisper jaw and its stressed vowels open further
+    # (planning.SPEED_TARGET; 66 mm/s before), 161 and 192 mm/s in the others
     "their_bilabials",  # planned: 4 of 4 within 0.45 mm (the /m/ of 'map'; 0.56 mm on the
     # coarse face before the bilabials' shift in time, Gesture.shift)
 ])

@@ -65,6 +65,10 @@ class Gesture:
     jaw_dominance: float = 1.0
     #: factor on its dominance's rates, before and after its centre (a plan's; 1: the table's)
     rate: float = 1.0
+    #: factor on its jaw's dominance rates only, on top of ``rate`` (a plan's,
+    #: :mod:`.planning`: a sentence whose lower lip stays slower than real lips gets a jaw
+    #: less coarticulated, nearer each phone's own jaw target; 1: the table's)
+    jaw_rate: float = 1.0
     #: activity added to its target's marginal orbicularis oris, both lips (``OOSM``,
     #: ``OOIM``: the lips pressed together; a plan's, for a bilabial that stayed apart; 0: none)
     press: float = 0.0
@@ -140,20 +144,25 @@ def blend(t: np.ndarray, items: list[Gesture], *, exponent: float = DOMINANCE_EX
     act_targets[:, [MUSCLE_GROUPS.index(g) for g in MARGINAL_GROUPS]] += \
         np.array([g.press for g in items])[:, None]
     jaw_targets = np.array([v.jaw for v in vis]) * scale + np.array([g.jaw for g in items])
-    decay = np.stack([log_dominance(t, g, 1.0, v.anticipatory_rate * g.rate,
-                                    v.carryover_rate * g.rate, exponent)
-                      for g, v in zip(items, vis, strict=True)], axis=1)  # (T, S)
 
-    def weights(alpha):
-        logd = decay + np.log(alpha)[None]
+    def decay(jaw_rate):  # (T, S) log dominance without the magnitudes
+        return np.stack([log_dominance(t, g, 1.0, v.anticipatory_rate * g.rate * jaw_rate(g),
+                                       v.carryover_rate * g.rate * jaw_rate(g), exponent)
+                         for g, v in zip(items, vis, strict=True)], axis=1)
+
+    def weights(logd, alpha):
+        logd = logd + np.log(alpha)[None]
         logd -= logd.max(axis=1, keepdims=True)
         w = np.exp(logd)
         return w / w.sum(axis=1, keepdims=True)
 
-    activity = weights(np.array([v.lips_dominance * g.lips_dominance
-                                 for g, v in zip(items, vis, strict=True)])) @ act_targets
-    jaw = weights(np.array([v.jaw_dominance * g.jaw_dominance
-                            for g, v in zip(items, vis, strict=True)])) @ jaw_targets
+    lips = decay(lambda g: 1.0)
+    # the jaw's own rates (a plan's) where any differs from the lips'
+    jaws = decay(lambda g: g.jaw_rate) if any(g.jaw_rate != 1.0 for g in items) else lips
+    activity = weights(lips, np.array([v.lips_dominance * g.lips_dominance
+                                       for g, v in zip(items, vis, strict=True)])) @ act_targets
+    jaw = weights(jaws, np.array([v.jaw_dominance * g.jaw_dominance
+                                  for g, v in zip(items, vis, strict=True)])) @ jaw_targets
     return activity, jaw
 
 

@@ -53,6 +53,24 @@ kept opens the vowel past 8 mm and closes the bilabial within 0.5 mm rather than
 vowel to 12 mm with the bilabial a millimetre apart. Only the model is used: the simulation of
 the utterance itself, so nothing is tuned to a text.
 
+The utterance as a whole has one target more: its lower lip's peak speed, at least
+:data:`SPEED_TARGET` (115 mm/s, the slowest real lower lip of issue 27's recordings, within
+:data:`SPEED_TOLERANCE`, 5 mm/s; issue 29's pass line :data:`SPEED_LINE`, 100 mm/s, weighed as
+the phones' are). In a sentence with few labials the lower lip rides the jaw, and the
+dominance blend smoothed each syllable's opening away: "These days a chicken leg is a rare
+dish." moved its jaw at 42 mm/s at the incisor (the slowest real jaw: 58) and its lower lip at
+38, its jaw between 1.6 and 4.8 degrees. While the lip is slower than the target, two things
+grow in proportion to the shortfall, as a real jaw opens and closes with each syllable and
+opens further in stressed ones: every gesture's jaw rates
+(:attr:`~.coarticulation.Gesture.jaw_rate`, ``GAIN["speed_jaw_rate"]`` per mm/s, up to 2.5
+times the table's: a jaw less coarticulated, nearer each phone's own target, its 10-90 %
+transitions between two phones 50 ms at the bound against 125 ms in the table, where real
+jaws take 44-205 ms), and the jaw targets of the stressed vowels (``GAIN["speed_jaw_deg"]``
+degrees per mm/s, within :data:`BOUNDS`); the lips' blend is left as it is, and the jaw stays
+within :data:`JAW_SPEED_MAX`. The cost adds :data:`SPEED_COST` per mm/s short (and
+:data:`PASS_WEIGHT` times more below the pass line), so an iteration that parts a bilabial for
+a faster lip is kept only when it gains that much speed.
+
 Cost: one forward simulation per iteration (``iterations + 1`` in all; fewer when every phone
 is within its tolerance); the controls returned are those of the iteration with the smallest
 cost (above), with their simulation.
@@ -72,8 +90,9 @@ from .coarticulation import Gesture, controls_from_gestures, gestures
 from .phoneclass import PAUSE, phone_classes
 
 __all__ = ["BOUNDS", "GAIN", "JAW_MAX_DEG", "JAW_SPEED_MAX", "MAX_ITERATIONS", "PASS_LINES",
-           "PASS_WEIGHT", "PLAN_ITERATIONS", "TARGETS", "Plan", "check_iterations",
-           "jaw_rate_limit", "plan_controls", "slew_limited"]
+           "PASS_WEIGHT", "PLAN_ITERATIONS", "SPEED_COST", "SPEED_LINE", "SPEED_TARGET",
+           "SPEED_TOLERANCE", "TARGETS", "Plan", "check_iterations", "jaw_rate_limit",
+           "plan_controls", "slew_limited"]
 
 #: iterations of the planner by default (each one forward simulation after the first)
 PLAN_ITERATIONS = 8
@@ -92,7 +111,7 @@ TARGETS = {
 #: shift in time (s, :attr:`~.coarticulation.Gesture.shift`; later only, module doc)
 BOUNDS = {"scale": (0.5, 1.6), "dominance": (1.0, 30.0), "jaw_deg": (-4.0, 14.0),
           "rate": (1.0, 3.0), "labiodental_scale": (0.0, 1.6), "press": (0.0, 0.8),
-          "shift_s": (0.0, 0.04)}
+          "shift_s": (0.0, 0.04), "jaw_rate": (1.0, 2.5)}
 #: deg, the largest jaw target a plan may ask for (the jaw's range is -5 to 35 deg)
 JAW_MAX_DEG = 24.0
 #: gains: per mm of miss, the jaw offset (deg), the dominance's relative growth, the scale's;
@@ -101,7 +120,7 @@ GAIN = {"open_jaw_deg": 0.8, "open_dominance": 0.1, "bilabial_dominance": 1.0,
         "bilabial_scale": 0.15, "bilabial_press": 0.15, "neighbour_rate": 0.1,
         "rounded_scale": 0.2, "rounded_dominance": 0.5, "labiodental_jaw_deg": 0.5,
         "labiodental_dominance": 0.5, "labiodental_scale": 0.2, "bilabial_timing": 0.7,
-        "rounded_jaw_deg": 0.5}
+        "rounded_jaw_deg": 0.5, "speed_jaw_rate": 0.025, "speed_jaw_deg": 0.025}
 #: what a mm of a miss past the issue's pass line weighs in the plan's cost on top of its mm
 #: past the tolerance (:func:`_summary`: the iteration kept): a bilabial's gap beyond 0.5 mm,
 #: an open vowel's aperture under 8 mm, a rounded phone's lips under 2 mm forward, a
@@ -115,6 +134,22 @@ PASS_WEIGHT = 4.0
 #: 3 mm (2 mm forward), a labiodental's distance (1 mm,
 #: :data:`facemech.analysis.visible_speech.CONTACT_MM`)
 PASS_LINES = {"bilabial": 0.5e-3, "open": 4.0e-3, "rounded": 1.0e-3, "labiodental": 1.0e-3}
+#: m/s, the peak lower-lip speed an utterance is planned for: the slowest of the real lower
+#: lips of issue 27's recordings (115-233 mm/s); an utterance whose lower lip stays slower gets
+#: a jaw less coarticulated (module doc)
+SPEED_TARGET = 0.115
+#: m/s, within this of :data:`SPEED_TARGET` the utterance is left as it is (a phone's
+#: tolerance, :data:`TARGETS`): its shortfall is counted from 110 mm/s
+SPEED_TOLERANCE = 0.005
+#: m/s, issue 29's pass line for an utterance's peak lower-lip speed (100-250 mm/s in each
+#: sentence): a shortfall below it weighs :data:`PASS_WEIGHT` times more, as the phones' do
+SPEED_LINE = 0.100
+#: mm of the plan's cost per mm/s that the peak lower-lip speed falls short of
+#: :data:`SPEED_TARGET` beyond its tolerance (and, :data:`PASS_WEIGHT` times, of
+#: :data:`SPEED_LINE`): 50 mm/s short weigh as a phone 1 mm past its tolerance, so that a
+#: phone's pass line is not traded for a little speed (a bilabial 1 mm apart costs
+#: 0.8 + 4 x 0.5 = 2.8 mm)
+SPEED_COST = 0.02
 #: s, how far beyond a bilabial's interval its closure is looked for (its timing, :func:`_timing`)
 TIMING_WINDOW_S = 0.06
 #: m/s, the fastest a plan moves the lower incisor's tip: the jaw is a kinematic drive, and the
@@ -209,6 +244,7 @@ def plan_controls(alignment: Alignment, model, *, params=None,
     controls_from_alignment(alignment, frame_rate=params.frame_rate, strength=articulation)
     items = gestures(alignment, articulation)
     phones = _phone_gestures(alignment)
+    vowels = _stressed_vowels(alignment)
     jaw_limit = None if jaw_speed is None else jaw_rate_limit(model, params, jaw_speed)
     t0 = _time.perf_counter()
     history, best, turns, step = [], None, {}, 1.0
@@ -220,9 +256,9 @@ def plan_controls(alignment: Alignment, model, *, params=None,
             jaw = np.maximum(slew_limited(jaw, jaw_limit / params.frame_rate), 0.0)
         sim = simulate(model, act, jaw, params=params)
         misses = _measure(alignment, sim, phones)
-        summary = _summary(misses)
-        summary["peak_lower_lip_speed_mm_s"] = round(1e3 * peak_lower_lip_speed(
-            sim.time, sim.positions, sim.model), 1)  # recorded, not planned for
+        speed = peak_lower_lip_speed(sim.time, sim.positions, sim.model)
+        summary = _summary(misses, speed)
+        summary["peak_lower_lip_speed_mm_s"] = round(1e3 * speed, 1)
         summary["peak_incisor_speed_mm_s"] = round(1e3 * float(incisor_speed(
             sim.time, sim.jaw_pose, sim.model).max()), 1)  # the jaw's; recorded too
         history.append(summary)
@@ -237,7 +273,8 @@ def plan_controls(alignment: Alignment, model, *, params=None,
             if not better:  # overshot: back to the best controls, half the step
                 step *= 0.5
                 misses = best[7]
-            items = _update(best[6], misses, turns, step)
+            items = _update(best[6], misses, turns, step,
+                            speed_short=best[0]["speed_short_mm_s"], vowels=vowels)
     if progress is not None and len(history) < iterations + 1:
         progress(iterations + 1, iterations + 1)  # stopped early: done
     summary, kept, t, act, jaw, sim, items, _ = best
@@ -246,6 +283,8 @@ def plan_controls(alignment: Alignment, model, *, params=None,
               "targets_mm": {g: {k: round(1e3 * v, 2) for k, v in d.items()}
                              for g, d in TARGETS.items()},
               "jaw_speed_limit_mm_s": None if jaw_speed is None else round(1e3 * jaw_speed, 1),
+              "speed_target_mm_s": round(1e3 * SPEED_TARGET, 1),
+              "speed_tolerance_mm_s": round(1e3 * SPEED_TOLERANCE, 1),
               "misses": history, "final": summary,
               "adjusted_gestures": sum(1 for g in items if _adjusted(g)),
               "wall_s": round(_time.perf_counter() - t0, 2)}
@@ -318,7 +357,25 @@ def _slew_window(x: np.ndarray, step: float) -> np.ndarray:
 
 def _adjusted(g: Gesture) -> bool:
     return (g.jaw != 0.0 or g.lips_dominance != 1.0 or g.jaw_dominance != 1.0
-            or g.rate != 1.0 or g.scale != 1.0 or g.press != 0.0 or g.shift != 0.0)
+            or g.rate != 1.0 or g.scale != 1.0 or g.press != 0.0 or g.shift != 0.0
+            or g.jaw_rate != 1.0)
+
+
+def _stressed_vowels(alignment: Alignment) -> tuple[int, ...]:
+    """The indices in :func:`gestures` of the vowel gestures of stressed phones (eSpeak's
+    ``'`` and ``,`` marks; in other notations, where no stress is read, every vowel's): where a
+    slow utterance's jaw opens further (:func:`_update`)."""
+    from .phoneclass import VOWEL_CLASSES
+
+    out, k = [], 0
+    voice = alignment.meta.get("voice")
+    for seg in alignment.phones:
+        parts = phone_classes(seg.label, alignment.notation, source=alignment.source,
+                              voice=voice)
+        stressed = alignment.notation != "espeak" or seg.label.strip()[:1] in ("'", ",")
+        out += [k + j for j, cls in enumerate(parts) if stressed and cls in VOWEL_CLASSES]
+        k += len(parts)
+    return tuple(out)
 
 
 def _phone_gestures(alignment: Alignment) -> list[list[int]]:
@@ -415,11 +472,14 @@ def _timing(time: np.ndarray, gap: np.ndarray, start: float, end: float) -> floa
     return float(0.5 * (time[k[a]] + time[k[b]]) - 0.5 * (start + end))
 
 
-def _summary(misses: list[_Miss]) -> dict:
+def _summary(misses: list[_Miss], speed: float | None = None) -> dict:
     """Per group: n, the median and largest miss beyond the tolerance (mm), the share within
     it; ``cost_mm``: the sum of the misses beyond the tolerances; ``cost``: that sum plus
     :data:`PASS_WEIGHT` times the misses past the issue's pass lines (:data:`PASS_LINES`),
-    what the planner minimises."""
+    plus :data:`SPEED_COST` times the mm/s by which ``speed`` (the utterance's peak lower-lip
+    speed, m/s; None: not weighed) falls short of :data:`SPEED_TARGET` beyond
+    :data:`SPEED_TOLERANCE` (``speed_short_mm_s``) and :data:`PASS_WEIGHT` times that of
+    :data:`SPEED_LINE`, what the planner minimises."""
     out: dict = {}
     cost = past = 0.0
     for group, tol in ((g, TARGETS[g]["tolerance"]) for g in TARGETS):
@@ -439,8 +499,12 @@ def _summary(misses: list[_Miss]) -> dict:
                       "within": round(float(np.mean(v == 0.0)), 3) if v.size else None,
                       "median_miss_mm": round(float(np.median(v)), 2) if v.size else None,
                       "max_miss_mm": round(float(v.max()), 2) if v.size else None}
+    short = 0.0 if speed is None else max(1e3 * (SPEED_TARGET - SPEED_TOLERANCE - speed), 0.0)
+    below = 0.0 if speed is None else max(1e3 * (SPEED_LINE - speed), 0.0)
+    out["speed_short_mm_s"] = round(short, 1)
     out["cost_mm"] = round(cost, 3)
-    out["cost"] = round(cost + PASS_WEIGHT * past, 3)
+    out["cost"] = round(cost + PASS_WEIGHT * past + SPEED_COST * (short + PASS_WEIGHT * below),
+                        3)
     return out
 
 
@@ -470,13 +534,25 @@ def _sharpen(items: list[Gesture], k: int, own: tuple[int, ...], mm: float,
 
 
 def _update(items: list[Gesture], misses: list[_Miss], turns: dict,
-            step: float = 1.0) -> list[Gesture]:
+            step: float = 1.0, speed_short: float = 0.0,
+            vowels: tuple[int, ...] = ()) -> list[Gesture]:
     """The gestures after one step of learning from the misses (module doc), the gains times
     ``step`` (halved after an iteration that did worse than the best). A labiodental's jaw
     and own gesture move in the direction its error's sign says (the lip's top above the
     incisors' edge: open, larger), at half the step each time the sign differs from its last
-    update's (``turns``: phone -> (sign, step factor), updated in place)."""
+    update's (``turns``: phone -> (sign, step factor), updated in place). ``speed_short``
+    (mm/s by which the peak lower-lip speed fell short of :data:`SPEED_TARGET` beyond its
+    tolerance) makes every
+    gesture's jaw less coarticulated: its jaw's dominance rates grow by
+    ``GAIN["speed_jaw_rate"]`` per mm/s (:attr:`~.coarticulation.Gesture.jaw_rate`)."""
     out = list(items)
+    if speed_short > 0.0:
+        factor = 1.0 + step * GAIN["speed_jaw_rate"] * speed_short
+        out = [g if g.cls == PAUSE else
+               replace(g, jaw_rate=_bounded(g.jaw_rate * factor, "jaw_rate")) for g in out]
+        for k in vowels:
+            out[k] = replace(out[k], jaw=_jaw_offset(out[k], step * GAIN["speed_jaw_deg"]
+                                                     * speed_short))
     for m in misses:
         tol = TARGETS[m.group]["tolerance"]
         if abs(m.error) <= tol:
