@@ -542,9 +542,10 @@ def _update(items: list[Gesture], misses: list[_Miss], turns: dict,
     incisors' edge: open, larger), at half the step each time the sign differs from its last
     update's (``turns``: phone -> (sign, step factor), updated in place). ``speed_short``
     (mm/s by which the peak lower-lip speed fell short of :data:`SPEED_TARGET` beyond its
-    tolerance) makes every
-    gesture's jaw less coarticulated: its jaw's dominance rates grow by
-    ``GAIN["speed_jaw_rate"]`` per mm/s (:attr:`~.coarticulation.Gesture.jaw_rate`)."""
+    tolerance) makes every gesture's jaw less coarticulated, its jaw's dominance rates growing
+    by ``GAIN["speed_jaw_rate"]`` per mm/s (:attr:`~.coarticulation.Gesture.jaw_rate`), and
+    opens the jaw targets of the gestures ``vowels`` (the stressed vowels',
+    :func:`_stressed_vowels`) by ``GAIN["speed_jaw_deg"]`` degrees per mm/s."""
     out = list(items)
     if speed_short > 0.0:
         factor = 1.0 + step * GAIN["speed_jaw_rate"] * speed_short
