@@ -361,37 +361,34 @@ def _adjusted(g: Gesture) -> bool:
             or g.jaw_rate != 1.0)
 
 
+def _phone_parts(alignment: Alignment):
+    """Per phone of the alignment: (its segment, the index in :func:`gestures` of its first
+    gesture, its classes), in order."""
+    k, voice = 0, alignment.meta.get("voice")
+    for seg in alignment.phones:
+        parts = phone_classes(seg.label, alignment.notation, source=alignment.source,
+                              voice=voice)
+        yield seg, k, parts
+        k += len(parts)
+
+
 def _stressed_vowels(alignment: Alignment) -> tuple[int, ...]:
     """The indices in :func:`gestures` of the vowel gestures of stressed phones (eSpeak's
     ``'`` and ``,`` marks; in other notations, where no stress is read, every vowel's): where a
     slow utterance's jaw opens further (:func:`_update`)."""
+    from ..analysis.visible_speech import _stress
     from .phoneclass import VOWEL_CLASSES
 
-    out, k = [], 0
-    voice = alignment.meta.get("voice")
-    for seg in alignment.phones:
-        parts = phone_classes(seg.label, alignment.notation, source=alignment.source,
-                              voice=voice)
-        stressed = alignment.notation != "espeak" or seg.label.strip()[:1] in ("'", ",")
-        out += [k + j for j, cls in enumerate(parts) if stressed and cls in VOWEL_CLASSES]
-        k += len(parts)
-    return tuple(out)
+    return tuple(k + j for seg, k, parts in _phone_parts(alignment)
+                 if alignment.notation != "espeak" or _stress(seg.label) is not None
+                 for j, cls in enumerate(parts) if cls in VOWEL_CLASSES)
 
 
 def _phone_gestures(alignment: Alignment) -> list[list[int]]:
     """Per phone that :func:`facemech.analysis.visible_speech.measure_phones` measures (those
     with classes other than a pause), the indices of its gestures in :func:`gestures`."""
-    out, k = [], 0
-    voice = alignment.meta.get("voice")
-    for seg in alignment.phones:
-        parts = phone_classes(seg.label, alignment.notation, source=alignment.source,
-                              voice=voice)
-        if not parts:
-            continue
-        if parts != (PAUSE,):
-            out.append(list(range(k, k + len(parts))))
-        k += len(parts)
-    return out
+    return [list(range(k, k + len(parts))) for _, k, parts in _phone_parts(alignment)
+            if parts and parts != (PAUSE,)]
 
 
 @dataclass(frozen=True)
