@@ -3,7 +3,7 @@ speed laws of issue 27 (an intrinsic-speed force-velocity law, the lips' measure
 dynamics, more implicit steps): 10-90 % rise time, peak speed and creep after 300 ms.
 
 Prints JSON. ``python benchmarks/speed.py [--face default] [--seconds 1.5] [--variants a,b]
-[--overshoot]``. Each variant runs
+[--overshoot] [--open-jaw]``. Each variant runs
 the six perioral gestures of docs/model.md's dynamics table; the creep is how far the landmark
 still moves between 300 ms after the step's 90 % point and the end, as a share of the amplitude
 (the issue's limit: 5 %).
@@ -89,6 +89,17 @@ VARIANTS = {
                            ("kv_krylov2_floor_stiff4_drag200_2_steps", {
                                "volume_floor": 0.5, "volume_floor_modulus": 1e6,
                                "stiffening": 4.0, "mass_drag": 200.0, "substeps": 2}))},
+    # the fast-lips step with its correction confined to the moving nodes within 35, 45 and
+    # 60 mm of the mouth (solvers/krylov_region.py), at 4 and at 3 steps per frame, and with
+    # 2 iterations
+    **{f"kv_krylov{it}_floor_stiff4_drag200_region{r}{tail}": {
+        "predictor": True, "implicit_stiffness_share": 0.75, "implicit_volume_scale": 3.0,
+        "dashpot_isotropy": 0.0, "volume_floor": 0.5, "volume_floor_modulus": 1e6,
+        "stiffening": 4.0, "mass_drag": 200.0, "krylov_iterations": it,
+        "krylov_region": r * 1e-3, **extra}
+       for it, r, tail, extra in ((4, 35, "", {}), (4, 45, "", {}), (4, 60, "", {}),
+                                  (4, 60, "_3_steps", {"substeps": 3}),
+                                  (2, 60, "", {}), (3, 60, "", {}))},
     # no force-velocity term at 4 and at 32 steps per frame: what is left is the step's drag
     # and the tissue's own slowness
     "no_force_velocity_32_steps": {"f4": 0.0, "substeps": 32},
@@ -141,6 +152,36 @@ def measure(face, params, groups, landmark, axis, seconds):
             "creep_after_300ms": round(float((y[-1] - settled) / y[-1]), 3)}
 
 
+def measure_open_jaw(face, params, groups, landmark, axis, seconds, jaw_deg=10.0):
+    """:func:`measure` of a step of full activity held from 0.6 s, the jaw opened ``jaw_deg``
+    degrees over the first 0.2 s (raised cosine) and held: the upper lip lowering as before a
+    bilabial in speech, the lips apart (from rest they touch, and the upper lip presses on the
+    lower one). Rise and speed are of the motion after the step."""
+    from facemech.params import MUSCLE_GROUPS
+    from facemech.solvers.forward import simulate
+    from facemech.waveforms import cosine_ramp
+
+    lead = 0.6
+    frames = int(round((lead + seconds) * params.frame_rate)) + 1
+    t = np.arange(frames) / params.frame_rate
+    jaw = np.deg2rad(jaw_deg) * cosine_ramp(np.clip(t / 0.2, 0.0, 1.0))
+    act = np.zeros((frames, len(MUSCLE_GROUPS)))
+    for g in groups:
+        act[t >= lead - 1e-9, MUSCLE_GROUPS.index(g)] = 1.0
+    sim = simulate(face, act, jaw, params=params)
+    k0 = int(round(lead * params.frame_rate))
+    x = sim.positions[k0:, face.landmarks[landmark], axis]
+    y = np.abs(x - x[0])
+    tt = t[k0:] - t[k0]
+    mono = np.maximum.accumulate(y)
+    t10 = np.interp(0.1 * y[-1], mono, tt)
+    t90 = np.interp(0.9 * y[-1], mono, tt)
+    return {"rise_ms": round(1e3 * (t90 - t10), 1),
+            "peak_speed_mm_s": round(1e3 * float(np.max(np.abs(np.diff(x)))) * params.frame_rate,
+                                     1),
+            "amplitude_mm": round(1e3 * float(y[-1]), 2)}
+
+
 def overshoot(face, params, groups, landmark, axis, seconds):
     """How far the landmark passes its rest after a 100-ms full pulse, as a share of its peak
     (tests/test_realism.py's ringing measure; its limit is 0.1)."""
@@ -164,6 +205,8 @@ def main(argv=None) -> int:
     ap.add_argument("--variants", default=",".join(VARIANTS))
     ap.add_argument("--overshoot", action="store_true",
                     help="also the overshoot past rest after a 100-ms full pulse (twice the time)")
+    ap.add_argument("--open-jaw", action="store_true",
+                    help="also OOSM lowering the upper lip with the jaw open 10 degrees")
     args = ap.parse_args(argv)
     from threadpoolctl import threadpool_limits
 
@@ -188,6 +231,14 @@ def main(argv=None) -> int:
                 except SimulationBlowUp as exc:  # a variant that blows up is a result too
                     rows["+".join(groups)] = {"blew_up": str(exc)}
                 print(f"{name} {'+'.join(groups)} {rows['+'.join(groups)]}", file=sys.stderr,
+                      flush=True)
+            if args.open_jaw:
+                try:
+                    rows["OOSM, jaw open 10 deg"] = measure_open_jaw(
+                        face, p, ("OOSM",), "upper_lip_center", 1, args.seconds)
+                except SimulationBlowUp as exc:
+                    rows["OOSM, jaw open 10 deg"] = {"blew_up": str(exc)}
+                print(f"{name} OOSM, jaw open {rows['OOSM, jaw open 10 deg']}", file=sys.stderr,
                       flush=True)
             out["variants"][name] = {"changes": {k: float(v) for k, v in VARIANTS[name].items()},
                                      "wall_s": round(time.perf_counter() - t0, 1),

@@ -152,6 +152,10 @@ class Parameters:
     #: preconditioner; 0: the constant matrix's solve alone (its excess over the true stiffness
     #: acts as inertia)
     krylov_iterations: int = 0
+    #: m: with the Krylov correction, the radius about the mouth within which it is sought
+    #: (solvers/krylov_region.py: a node outside keeps the constant matrix's step, and each
+    #: iteration costs the region's share of the face); 0: the whole face
+    krylov_region: float = 0.0
     #: s^-1, a drag on every moving node proportional to its mass and its velocity against the
     #: skull (Rayleigh's mass-proportional damping), taken exactly into the implicit matrix;
     #: the linearly implicit step only; 0: none
@@ -276,6 +280,13 @@ def check_predictor(params: Parameters) -> None:
     if params.mass_drag and params.integrator != "implicit":
         raise InputError(f"mass_drag is taken into the linearly implicit step's matrix: it needs "
                          f"integrator 'implicit' (got {params.integrator!r})", field="mass_drag")
+    region = params.krylov_region
+    if not (isinstance(region, (int, float)) and np.isfinite(region) and 0.0 <= region <= 0.5):
+        raise InputError(f"krylov_region is a radius about the mouth in metres, 0 (the whole "
+                         f"face) to 0.5 (got {region!r})", field="krylov_region")
+    if region and not params.krylov_iterations:
+        raise InputError("krylov_region confines the Krylov correction: it needs "
+                         "krylov_iterations > 0", field="krylov_region")
     if not params.predictor:
         if params.krylov_iterations:
             raise InputError("krylov_iterations solves the step about its predictor: it needs "
@@ -483,6 +494,7 @@ STEP_KEYS = MappingProxyType({
     "substeps": ("substeps", int, 1),
     "predictor": ("predictor", bool, 1),
     "krylov_iterations": ("krylov_iterations", int, 1),
+    "krylov_region_mm": ("krylov_region", float, 1e-3),
     "mass_drag_per_s": ("mass_drag", float, 1.0),
     "implicit_stiffness_share": ("implicit_stiffness_share", float, 1.0),
     "implicit_volume_scale": ("implicit_volume_scale", float, 1.0),

@@ -52,12 +52,14 @@ from ..params import Parameters
 from ..physics.assembly import Physics, accumulate_forces, rest_anchors
 from .cholesky import factorise
 from .contacts import resolve_contacts
+from .krylov_region import KrylovRegion, displace, krylov_region, restore, tangent_product
 from .mandible import moved_anchors
 from .muscle_implicit import MuscleJacobian
 from .solver_state import (
     SolverState,
     filter_exact,
     finish_frame,
+    implicit_forces,
     place_jaw_into,
     solver_state,
     start_frame,
@@ -109,6 +111,9 @@ class ImplicitSystem:
     tether_k: np.ndarray | None = None
     #: (t,) int64 -- the tied nodes' rows among the moving nodes
     tether_rows: np.ndarray | None = None
+    #: the region about the mouth to which the Krylov correction is confined
+    #: (``Parameters.krylov_region``, :mod:`.krylov_region`); None: the whole face
+    region: KrylovRegion | None = None
 
     def linearise(self, pos, vel, m_force, m_steady):
         """The muscles' Jacobian at a state (None: no muscle in the solve)."""
@@ -201,12 +206,16 @@ def implicit_system(physics: Physics, h: float) -> ImplicitSystem:
     a_mat = (sp.diags(mass * (1.0 + h * p.mass_drag)) + h * damp + h * h * stiff).tocsc()
     # the matrix is symmetric positive definite: its Cholesky factor
     lu = factorise(a_mat)
+    muscles = MuscleJacobian(physics, lu) if p.is_continuum else None
+    region = None
+    if p.krylov_region > 0.0 and p.krylov_iterations:
+        region = krylov_region(physics, implicit_forces(physics)[0], a_mat,
+                               None if muscles is None else muscles.W, p.krylov_region)
     return ImplicitSystem(stiffness=stiff.tocsr(), damping=damp.tocsr(), mass=mass, lu=lu,
-                          factor_step=h,
-                          muscles=MuscleJacobian(physics, lu) if p.is_continuum else None,
+                          factor_step=h, muscles=muscles,
                           predictor=bool(p.predictor), krylov=int(p.krylov_iterations),
                           drag=float(p.mass_drag), boundary=boundary, tether_k=tether_k,
-                          tether_rows=tether_rows)
+                          tether_rows=tether_rows, region=region)
 
 
 def _boundary_matrix(si, sj, springs, share, ra, rb, cb, gram, nd, n_nodes):
@@ -322,6 +331,7 @@ class LinearImplicitEuler:
         jac = system.linearise(pos, vel,
                                _frame_force_bound(solver_state, m_force, m_rate, m_steady),
                                m_steady)
+        region = system.region.linearise(jac, h) if system.region is not None else None
         for step in range(solver_state.n_steps):
             anchors = place_jaw_into(solver_state.jaw, f.jaw_start + f.jaw_rate * (step * h),
                                      f.jaw_rate, pos, vel)
@@ -340,6 +350,9 @@ class LinearImplicitEuler:
                         anchors, h))
                 rhs = h * (out[dyn] - h * kv)
                 dv = system.solve(rhs, jac, h)
+            elif system.region is not None:
+                dv = _region_krylov_step(solver_state, system, region, at, vel, m_force,
+                                         anchors, out, h * out[dyn], jac, h)
             elif system.krylov:
                 dv = _krylov_step(solver_state, system, at, vel, m_force, anchors, out,
                                   h * out[dyn], jac, h)
@@ -438,11 +451,64 @@ def _krylov_step(solver_state, system, x_p, vel, m_force, anchors, f_p, rhs, jac
         return system.solve(r, jac, h)
 
     x0 = precond(rhs)
-    r0 = rhs - apply(x0)
+    correction = _gmres(rhs - apply(x0), apply, precond, system.krylov)
+    if correction is None:
+        return x0
+    return _growth_guard(x0, x0 + correction)
+
+
+def _region_krylov_step(solver_state, system, region_system, x_p, vel, m_force, anchors, f_p,
+                        rhs, jac, h):
+    """The predictor's step solved by the constant matrix over the whole face, then
+    corrected by GMRES on the true linearisation over the region about the mouth only
+    (:mod:`.krylov_region`): ``system.krylov`` iterations, each one solve of the region's
+    constant block (with the muscles' Woodbury terms, ``region_system``) and one evaluation of
+    the forces that touch the region."""
+    region = system.region
+    dyn = solver_state.dynamic
+    rows, nodes = region.rows, region.nodes
+    mass = system.mass[rows]
+    inertia = (1.0 + h * system.drag) * mass
+    forces = region.forces
+    anc = region.anchors(anchors)
+    x0 = system.solve(rhs, jac, h)
+    # every force on a node of the region comes from what touches it: the whole face's forces
+    # there are the region's own
+    base = f_p[nodes] + system.drag * mass[:, None] * vel[nodes]
+    xp = x_p.copy()
+    vp = vel.copy()
+    work = np.zeros_like(f_p)
+
+    def product(u, moved, values):
+        """The step's matrix on ``u`` (r, 3), the nodes ``moved`` moved by ``values``."""
+        scale = float(np.abs(values).max())
+        if scale == 0.0:
+            return inertia[:, None] * u
+        eps = 1e-7 / (h * scale)  # moves a node by 1e-7 m at most
+        displace(xp, vp, x_p, vel, moved, values, eps * h, eps)
+        accumulate_forces(forces, xp, vp, m_force, anc, work)
+        restore(xp, vp, x_p, vel, moved)
+        return tangent_product(inertia, u, work, nodes, base, h / eps)
+
+    # the residual of the whole face's step on the region: every node moved by x0, since the
+    # nodes beside the region pull on it too
+    residual = rhs[rows] - product(x0[rows], dyn, x0)
+    correction = _gmres(residual, lambda u: product(u, nodes, u),
+                        lambda r: region.solve(r, region_system), system.krylov)
+    if correction is None:
+        return x0
+    dv = x0.copy()
+    dv[rows] += correction
+    return _growth_guard(x0, dv)
+
+
+def _gmres(r0, apply, precond, iterations):
+    """The right-preconditioned GMRES correction (``iterations`` at most) of a step whose
+    residual is ``r0``; None when the residual is zero."""
     beta = float(np.sqrt((r0 * r0).sum()))
     if beta == 0.0:
-        return x0
-    m = system.krylov
+        return None
+    m = iterations
     basis = [r0 / beta]
     z = []
     hess = np.zeros((m + 1, m))
@@ -460,9 +526,13 @@ def _krylov_step(solver_state, system, x_p, vel, m_force, anchors, f_p, rhs, jac
     e1 = np.zeros(m + 1)
     e1[0] = beta
     y, *_ = np.linalg.lstsq(hess[: m + 1, :m], e1, rcond=None)
-    dv = x0 + sum(y[k] * z[k] for k in range(m))
-    # where the true linearisation is not positive (tissue giving way: a prism turning inside
-    # out) its solve can run away; the constant matrix's step is kept there (it is stable)
+    return sum(y[k] * z[k] for k in range(m))
+
+
+def _growth_guard(x0, dv):
+    """``dv``, or the constant matrix's step ``x0`` where the correction ran away: where the
+    true linearisation is not positive (tissue giving way: a prism turning inside out) its
+    solve can grow without bound; the constant matrix's step is stable."""
     if not np.all(np.isfinite(dv)) or np.abs(dv).max() > KRYLOV_GROWTH * np.abs(x0).max():
         return x0
     return dv

@@ -86,10 +86,9 @@ def solver_state(physics: Physics, n_steps: int,
     (:mod:`.contacts`)."""
     p = physics.params
     frame = 1.0 / p.frame_rate
-    forces = physics.forces
-    contacts = ImplicitContacts.empty()
-    if system is not None and p.is_continuum and p.implicit_contacts:
-        forces, contacts = split_contacts(forces)
+    forces, contacts = physics.forces, ImplicitContacts.empty()
+    if system is not None:
+        forces, contacts = implicit_forces(physics)
     floor = VolumeFloor.empty()
     if system is not None and p.is_continuum and p.volume_floor > 0.0:
         prisms = physics.forces.prisms
@@ -102,6 +101,16 @@ def solver_state(physics: Physics, n_steps: int,
         max_force=max_force(p.k_force, physics.muscle_area), tau=p.tau_activation,
         frame_duration=frame, n_steps=int(n_steps), step=frame / n_steps, system=system,
         zeta=float(p.activation_damping))
+
+
+def implicit_forces(physics: Physics) -> tuple[ForceBundles, ImplicitContacts]:
+    """The force kernel's bundles of an implicit method and the contacts it steps apart: with
+    the continuum's tissue and ``params.implicit_contacts`` the bone and lip contacts leave the
+    kernel (:func:`.contacts.split_contacts`); otherwise the model's own bundles and none."""
+    p = physics.params
+    if p.is_continuum and p.implicit_contacts:
+        return split_contacts(physics.forces)
+    return physics.forces, ImplicitContacts.empty()
 
 
 @dataclass(frozen=True, eq=False)

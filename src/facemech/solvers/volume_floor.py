@@ -98,15 +98,30 @@ def resolve_volume_floor(pos, vel, inv_mass, nodes, floor, kappa, h):
     lam = np.zeros(nodes.shape[0])
     p = np.empty((6, 3))
     g = np.empty((6, 3))
+    # a prism found above its floor needs no new look until one of its nodes moves: ``seen``
+    # is the count of moves when it was last found so (-1: not yet), ``moved`` each node's
+    # count at its last move. Skipping it changes nothing (its volume is the same to the bit),
+    # and after the first sweep only the prisms near the floor's work are looked at again
+    seen = np.full(nodes.shape[0], -1, np.int64)
+    moved = np.full(pos.shape[0], -1, np.int64)
+    moves = 0
     for _ in range(SWEEPS):
         largest = 0.0
         for e in range(nodes.shape[0]):
+            if seen[e] >= 0:
+                last = -1
+                for k in range(6):
+                    last = max(last, moved[nodes[e, k]])
+                if last <= seen[e]:
+                    continue
             for k in range(6):
                 for a in range(3):
                     p[k, a] = pos[nodes[e, k], a]
             deficit = _bilinear_volume_gradient(p, g) / 12.0 - floor[e]
             if deficit >= 0.0 and lam[e] == 0.0:
+                seen[e] = moves
                 continue
+            seen[e] = -1
             w = 0.0
             for k in range(6):
                 im = inv_mass[nodes[e, k]]
@@ -120,8 +135,10 @@ def resolve_volume_floor(pos, vel, inv_mass, nodes, floor, kappa, h):
             if lam[e] + d < 0.0:
                 d = -lam[e]
             lam[e] += d
+            moves += 1
             for k in range(6):
                 i = nodes[e, k]
+                moved[i] = moves
                 im = inv_mass[i]
                 for a in range(3):
                     dx = d * g[k, a] * im
