@@ -3,11 +3,12 @@
 The step about the predictor solved on the forces' true linearisation
 (:func:`facemech.solvers.implicit._krylov_step`, ``Parameters.krylov_iterations``) gives the
 tissue the speed of the converged step, but each GMRES iteration costs one solve of the whole
-face's matrix and one evaluation of the whole face's forces: 0.24-0.48 x real time
-(docs/model.md). The constant matrix's added inertia matters where the tissue turns fast, in
-the lips, the cheeks beside them and the chin. Here the step is first solved with the constant
-matrix over the whole face, as without the correction, and the GMRES correction is then sought
-over the moving nodes within ``Parameters.krylov_region`` metres of the mouth only:
+face's matrix and one evaluation of the whole face's forces: 0.32-0.43 x real time on one core
+with 4 iterations (docs/model.md). The constant matrix's added inertia matters where the tissue
+turns fast, in the lips, the cheeks beside them and the chin. Here the step is first solved
+with the constant matrix over the whole face, as without the correction, and the GMRES
+correction is then sought over the moving nodes within ``Parameters.krylov_region`` metres of
+the mouth only:
 
     A_t,RR d = r_R,    r = h f(x + h v, v) - A_t dv0,
 
@@ -23,7 +24,7 @@ EPYC, one core, three muscle groups active).
 
 What the region leaves out, the tissue farther out, keeps the constant matrix's added inertia
 and rings more after a pulse; the wider the region, the closer the step comes to the whole
-face's correction (docs/model.md, "The correction on a region").
+face's correction (docs/model.md, "The correction on a region about the mouth").
 """
 
 from __future__ import annotations
