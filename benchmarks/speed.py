@@ -91,7 +91,7 @@ VARIANTS = {
                                "stiffening": 4.0, "mass_drag": 200.0, "substeps": 2}))},
     # the fast-lips step with its correction confined to the moving nodes within 35, 45 and
     # 60 mm of the mouth (solvers/krylov_region.py), at 4 and at 3 steps per frame, and with
-    # 2 iterations
+    # 2 and 3 iterations
     **{f"kv_krylov{it}_floor_stiff4_drag200_region{r}{tail}": {
         "predictor": True, "implicit_stiffness_share": 0.75, "implicit_volume_scale": 3.0,
         "dashpot_isotropy": 0.0, "volume_floor": 0.5, "volume_floor_modulus": 1e6,
