@@ -137,7 +137,7 @@ class KrylovRegion:
                 self._subspaces.clear()
             self._subspaces[key] = hit
         wat, yat, g3 = hit
-        s = h * jac.damp + h * h * jac.stiff
+        s, _ = jac.system(h)  # the whole face's S, made (and kept) for its own solve
         return wat, yat, s, lu_factor(np.eye(len(s)) + s @ g3)
 
     def solve(self, rhs: np.ndarray, system) -> np.ndarray:
