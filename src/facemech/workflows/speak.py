@@ -94,6 +94,7 @@ def speak(
     plan: bool | int = True,
     video=True,
     alive=None,
+    phone_labels: str = "ipa",
     progress: Callable[[str, int, int], None] | None = None,
 ) -> Spoken:
     """Make the face say ``text`` (eSpeak NG), or speak in sync with a ``recording`` (a WAV
@@ -120,6 +121,10 @@ def speak(
     alive : :class:`facemech.speech.alive.Liveliness` (None: blinks, gaze and head motion on,
         seed 0): shown in the movie, recorded in the manifest (``alive``); the simulation and
         the stimulus parameters stay in the head's frame, unchanged by them
+    phone_labels : the notation of the phones in the TextGrid, the CSV and the manifest:
+        ``"ipa"`` (default), ``"arpabet"`` or ``"espeak"``
+        (:func:`facemech.speech.phone_labels.relabel`); synthesised speech keeps eSpeak NG's
+        codes in a tier ``espeak`` beside IPA or ARPABET
     progress : callable(stage, done, total)
 
     Returns
@@ -133,10 +138,16 @@ def speak(
     from ..params import MUSCLE_GROUPS
     from ..params import preset as load_preset
     from ..solvers.forward import simulate
-    from ..speech.alignment_io import read_textgrid, write_alignment_csv, write_textgrid
+    from ..speech.alignment_io import (
+        ESPEAK_TIER,
+        read_textgrid,
+        write_alignment_csv,
+        write_textgrid,
+    )
     from ..speech.alive import Liveliness, liveliness
     from ..speech.articulation import as_articulation
     from ..speech.coarticulation import controls_from_alignment
+    from ..speech.phone_labels import LABEL_NOTATIONS, relabel
     from ..speech.tongue import tongue_tip
     from ..speech.wav import read_wav, write_wav
 
@@ -153,6 +164,9 @@ def speak(
                          field="textgrid")
     if text is not None and not text.strip():
         raise InputError("nothing to say: the text is empty", field="text")
+    if phone_labels not in LABEL_NOTATIONS:
+        raise InputError(f"unknown phone labels {phone_labels!r} (expected "
+                         f"{', '.join(LABEL_NOTATIONS)})", field="phone_labels")
     articulation = as_articulation(strength)
     check_value("strength", articulation.strength)  # the command line's interval (checks.py)
     iterations = _plan_iterations(plan)
@@ -188,11 +202,14 @@ def speak(
                              source=str(textgrid), field="time")
         inputs["audio"] = file_hash(audio)
         inputs["textgrid"] = file_hash(textgrid)
+    written = relabel(alignment, phone_labels)
+    kept = {ESPEAK_TIER: alignment.phones} if written is not alignment and \
+        alignment.notation == "espeak" else {}
     model = load_face(face, tissue=params.tissue)  # after the inputs are checked: it takes a while
     out.mkdir(parents=True, exist_ok=True)
     write_wav(files["audio"], samples, rate)
-    write_textgrid(files["textgrid"], alignment)
-    write_alignment_csv(files["alignment"], alignment)
+    write_textgrid(files["textgrid"], written, tiers=kept)
+    write_alignment_csv(files["alignment"], written, tiers=kept)
     if iterations is None:
         t, act, jaw = controls_from_alignment(alignment, frame_rate=params.frame_rate,
                                               strength=articulation)
@@ -236,9 +253,12 @@ def speak(
         "strength": articulation.strength, "scale": [str(r) for r in articulation.rules],
         "plan": planned,
         "inputs": inputs,
-        "alignment": {"notation": alignment.notation, "duration_s": alignment.duration,
+        "alignment": {"notation": written.notation, "duration_s": alignment.duration,
                       "words": [w.label for w in alignment.words],
-                      "phones": len(alignment.phones), "source": alignment.source,
+                      "phones": len(written.phones),
+                      "phone_labels": [p.label for p in written.phones],
+                      **({ESPEAK_TIER: [p.label for p in alignment.phones]} if kept else {}),
+                      "source": alignment.source,
                       **{k: v for k, v in alignment.meta.items()
                          if isinstance(v, (str, int, float))}},
         "frames": int(len(t)), "frame_rate_hz": float(params.frame_rate),
