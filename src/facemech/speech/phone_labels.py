@@ -10,7 +10,7 @@ lists them). Stress: eSpeak's ``'`` and ``,`` become IPA's ``ˈ ˌ`` before the 
 ARPABET's digit 1 or 2 on a vowel (0 on an unstressed one). eSpeak's lone ``;`` (it palatalises
 the phone before) has no segment of its own in IPA or ARPABET: it is left out; ``l;`` is
 ``lʲ``. ARPABET has fewer vowels than IPA: :data:`IPA_ARPABET` maps each IPA vowel to its nearest
-(``ɒ`` and ``o`` to ``AO`` and ``OW`` ...), so a few eSpeak codes read back into other classes in
+(``ɒ`` to ``AA``, ``o`` to ``OW`` ...), so a few eSpeak codes read back into other classes in
 ARPABET (:data:`ARPABET_APPROXIMATE`). A label not in a table raises
 :class:`~facemech.errors.InputError` naming it: nothing is passed through unconverted.
 """
