@@ -152,7 +152,7 @@ def test_the_commands_keep_their_options():
     assert got["speak"] == {
         "text", "output", "audio", "textgrid", "voice", "rate_wpm", "word_tier", "phone_tier",
         "strength", "face", "preset", "video", "view", "size", "background", "aa", "blinks",
-        "gaze", "head_motion", "seed", "scale", "plan", "plan_iterations"}
+        "gaze", "head_motion", "seed", "scale", "plan", "plan_iterations", "phone_labels"}
     assert got["analyse"] == {
         "subject", "recording", "output", "units", "max_gap", "lowpass", "method", "controls",
         "noise", "window", "smooth", "preset", "video"}

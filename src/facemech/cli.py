@@ -227,7 +227,8 @@ def view(result: Path, output: Path = ..., units: str | None = None,
          groups=("recording", "articulation", "alive"))
 def speak(text: str | None = None, output: Path = Path("speak-output"), voice: str = "en-us",
           rate_wpm: int = 160, face: str = "default", preset: str = "anatomical",
-          video: bool = True, render=None, recording=None, articulation=None, alive=None):
+          video: bool = True, render=None, recording=None, articulation=None, alive=None,
+          phone_labels: str = "ipa"):
     """Make the face say TEXT (eSpeak NG) or speak with a recorded voice (docs/stimuli.md)."""
     _say(workflows.speech.speak_report(_staged(workflows.speech.speak, **locals()), output))
 

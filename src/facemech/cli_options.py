@@ -75,6 +75,7 @@ origin: origin marker (default: --front)
 out_units: unit of the output (default: the input's)
 output: the output (file or folder)
 peak: frame of a peak: a muscle group (e.g. OOS), jaw or motion
+phone_labels: phone labels written: ipa, arpabet or espeak (eSpeak's codes)
 phone_tier: the same, phones
 positive: keep activity >= 0
 preset: anatomical, lucero1999, pitermann2001, calibrated or a preset .json

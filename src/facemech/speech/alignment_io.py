@@ -9,6 +9,9 @@ for several speakers). Intervals labelled ``""``, ``sil``, ``sp``, ``<eps>``, ``
 
 The CSV has the columns ``tier,label,start_s,end_s`` (tier ``words`` or ``phones``), preceded by
 comment lines ``# notation: ...``, ``# duration_s: ...`` that say how to read it back.
+Both writers take further tiers (``tiers``): :func:`facemech.speech.phone_labels.relabel`'s
+IPA or ARPABET phones keep eSpeak NG's own codes in a tier :data:`ESPEAK_TIER`, which the
+readers leave aside (a TextGrid's can be read with ``phone_tier="espeak"``).
 """
 
 from __future__ import annotations
@@ -27,7 +30,7 @@ from ..errors import InputError
 from .alignment import NOTATIONS, Alignment, Segment
 
 __all__ = ["read_textgrid", "write_textgrid", "read_alignment_csv", "write_alignment_csv",
-           "detect_notation", "is_pause", "PAUSE_LABELS"]
+           "detect_notation", "is_pause", "ESPEAK_TIER", "PAUSE_LABELS"]
 
 PAUSE_LABELS = frozenset({"", "sil", "sp", "<eps>", "pau", "_", "<sil>"})
 """Labels (compared in lower case, stripped) that mark a pause, not a segment."""
@@ -35,9 +38,14 @@ PAUSE_LABELS = frozenset({"", "sil", "sp", "<eps>", "pau", "_", "<sil>"})
 WORD_TIER_NAMES = ("words", "word")
 PHONE_TIER_NAMES = ("phones", "phone", "phonemes", "phoneme", "segments")
 
+#: the tier of eSpeak NG's own codes beside IPA or ARPABET phones
+ESPEAK_TIER = "espeak"
+
+#: CMUdict's 39 phones and TIMIT's additions (DX, Q, WH, IX, AX, AXR, EL, EM, EN, ...)
 ARPABET = frozenset("AA AE AH AO AW AY B CH D DH EH ER EY F G HH IH IY JH K L M N NG OW OY P "
-                    "R S SH T TH UH UW V W Y Z ZH".split())
-_ARPABET_LABEL = re.compile(r"^([A-Z]{1,2})([012])?$")
+                    "R S SH T TH UH UW V W Y Z ZH DX Q WH IX UX AX AXR EL EM EN ENG NX "
+                    "HV".split())
+_ARPABET_LABEL = re.compile(r"^([A-Z]{1,3})([012])?$")
 _ESPEAK_MARKS = re.compile(r"[@:',#0-9]|[a-z][A-Z]|[A-Z][a-z]|^[A-Z]")
 
 
@@ -207,7 +215,8 @@ def read_textgrid(path: str | os.PathLike, *, word_tier: str | None = None,
 
 
 def write_textgrid(path: str | os.PathLike, alignment: Alignment, *, short: bool = False,
-                   word_tier: str = "words", phone_tier: str = "phones") -> Path:
+                   word_tier: str = "words", phone_tier: str = "phones",
+                   tiers: dict | None = None) -> Path:
     """Write an alignment as a Praat TextGrid with a word and a phone interval tier, atomically.
 
     Gaps between segments become empty intervals (Praat's tiers cover the whole time span);
@@ -219,6 +228,8 @@ def write_textgrid(path: str | os.PathLike, alignment: Alignment, *, short: bool
     alignment : words and phones (times in s)
     short : Praat's short text form instead of the long one
     word_tier, phone_tier : tier names (defaults as the Montreal Forced Aligner names them)
+    tiers : further interval tiers after the phones, name -> segments (e.g. ``{"espeak":
+        ...}``: eSpeak NG's codes beside IPA phones)
     """
     try:
         from praatio import textgrid
@@ -226,9 +237,12 @@ def write_textgrid(path: str | os.PathLike, alignment: Alignment, *, short: bool
         raise InputError("writing TextGrids needs praatio (pip install 'facemech[speech]')",
                          source=str(path)) from None
     path = Path(path)
-    end = max([alignment.duration] + [s.end for s in alignment.words + alignment.phones])
+    extra = dict(tiers or {})
+    end = max([alignment.duration] + [s.end for s in alignment.words + alignment.phones]
+              + [s.end for segs in extra.values() for s in segs])
     tg = textgrid.Textgrid(minTimestamp=0.0, maxTimestamp=end)
-    for name, segs in ((word_tier, alignment.words), (phone_tier, alignment.phones)):
+    for name, segs in ((word_tier, alignment.words), (phone_tier, alignment.phones),
+                       *extra.items()):
         entries = [(s.start, s.end, s.label) for s in segs if s.end > s.start]
         tg.addTier(textgrid.IntervalTier(name, entries, 0.0, end))
     with atomic_path(path, suffix=".TextGrid") as tmp:
@@ -239,8 +253,10 @@ def write_textgrid(path: str | os.PathLike, alignment: Alignment, *, short: bool
 
 # --- CSV --------------------------------------------------------------------------------------
 
-def write_alignment_csv(path: str | os.PathLike, alignment: Alignment) -> Path:
-    """Write ``tier,label,start_s,end_s`` rows (words, then phones), atomically.
+def write_alignment_csv(path: str | os.PathLike, alignment: Alignment, *,
+                        tiers: dict | None = None) -> Path:
+    """Write ``tier,label,start_s,end_s`` rows (words, then phones, then ``tiers``: name ->
+    segments, e.g. :data:`ESPEAK_TIER`), atomically.
 
     Comment lines before the header keep the notation, the duration (s) and the source.
     """
@@ -252,7 +268,8 @@ def write_alignment_csv(path: str | os.PathLike, alignment: Alignment) -> Path:
         buf.write(f"# source: {alignment.source}\n")
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(["tier", "label", "start_s", "end_s"])
-    for tier, segs in (("words", alignment.words), ("phones", alignment.phones)):
+    for tier, segs in (("words", alignment.words), ("phones", alignment.phones),
+                       *(tiers or {}).items()):
         for s in segs:
             w.writerow([tier, s.label, repr(float(s.start)), repr(float(s.end))])
     with atomic_path(path, suffix=".csv") as tmp:
@@ -265,7 +282,8 @@ def read_alignment_csv(path: str | os.PathLike, *, notation: str | None = None) 
 
     Columns ``tier`` (``words``/``phones``), ``label``, ``start_s``, ``end_s``; lines starting
     with ``#`` are comments, ``# notation: ...`` and ``# duration_s: ...`` are used (else the
-    notation is detected and the duration is the last end). Pause labels are left out.
+    notation is detected and the duration is the last end). Pause labels are left out, and
+    so are the rows of the tier :data:`ESPEAK_TIER`.
     """
     path = Path(path)
     src = str(path)
@@ -300,6 +318,8 @@ def read_alignment_csv(path: str | os.PathLike, *, notation: str | None = None) 
             raise InputError(f"line {lineno} has {len(row)} cells, the header "
                              f"{len(header)}", source=src, field="label")
         tier = row[col["tier"]].strip().lower()
+        if tier == ESPEAK_TIER:
+            continue  # eSpeak NG's own codes beside the phones (write_alignment_csv)
         if tier not in rows:
             raise InputError(f"line {lineno}: tier {tier!r} is neither 'words' nor "
                              "'phones'", source=src, field="tier")

@@ -26,7 +26,8 @@ Gaze (:func:`gaze_schedule`, :func:`gaze_series`)
     ``21 ms + 2.2 ms/deg`` of its amplitude (the main sequence, Carpenter 1988, Movements of
     the Eyes, 2nd ed.; Baloh et al. 1975, Neurology 25:1065), with a minimum-jerk profile.
 Head (:func:`head_motion`)
-    Nodding (pitch) follows the voice's F0: Yehia, Kuratate & Vatikiotis-Bateson (2002, J
+    Nodding (pitch) follows the voice's F0 (Praat's autocorrelation pitch,
+    :func:`facemech.speech.pitch.track_f0`): Yehia, Kuratate & Vatikiotis-Bateson (2002, J
     Phonetics 30:555) found F0 and head motion correlated (r about 0.73 from head motion to
     F0), and Munhall et al. (2004, Psychol Sci 15:133) that the head motion correlated with F0
     and amplitude and helped listeners understand speech in noise. The pitch is
@@ -53,7 +54,7 @@ import numpy as np
 
 from ..checks import check_fields
 from ..errors import InputError
-from .pitch import intensity_db, track_f0
+from .pitch import PRAAT_AC, intensity_db, track_f0
 
 __all__ = ["Alive", "Liveliness", "blink_closure", "blink_schedule", "gaze_schedule",
            "gaze_series", "head_motion", "laws", "liveliness"]
@@ -137,12 +138,14 @@ def laws(alive: Liveliness) -> dict:
                      "max_rad": float(HEAD_MAX_RAD), "lead_s": HEAD_LEAD_S,
                      "smooth_s": HEAD_SMOOTH_S, "yaw_sd_rad": float(HEAD_YAW_RAD),
                      "roll_sd_rad": float(HEAD_ROLL_RAD), "wander_s": HEAD_WANDER_SD_S,
-                     "level_range_db": HEAD_LEVEL_RANGE_DB},
+                     "level_range_db": HEAD_LEVEL_RANGE_DB,
+                     "f0_praat_ac": dict(PRAAT_AC)},
             "sources": ["Bentivoglio et al. 1997 Mov Disord 12:1028",
                         "VanderWerf et al. 2003 J Neurophysiol 89:2784",
                         "Carpenter 1988 Movements of the Eyes",
                         "Yehia, Kuratate & Vatikiotis-Bateson 2002 J Phonetics 30:555",
-                        "Munhall et al. 2004 Psychol Sci 15:133"]}
+                        "Munhall et al. 2004 Psychol Sci 15:133",
+                        "Boersma 1993 Proc Inst Phonetic Sci Amsterdam 17:97"]}
 
 
 def _intervals(rng, duration: float, mean: float, minimum: float, shape: float,
@@ -243,7 +246,8 @@ def head_motion(time, samples, sample_rate: float, rng) -> tuple[np.ndarray, dic
 
     Returns
     -------
-    (T, 3) rad, and a dict: the F0 track's median (Hz) and voiced fraction, each angle's peak
+    (T, 3) rad, and a dict: the F0 tracker (``f0_method``), the track's median (Hz) and
+    voiced fraction, each angle's peak
     and SD (rad), the correlation of the pitch with F0 (semitones, voiced frames) at the lead,
     and the lead (s)
     """
@@ -252,7 +256,8 @@ def head_motion(time, samples, sample_rate: float, rng) -> tuple[np.ndarray, dic
     track = track_f0(samples, sample_rate, t)
     level = intensity_db(samples, sample_rate, t)
     pose = np.zeros((len(t), 3))
-    summary = {"f0_median_hz": None, "voiced_fraction": float(track.voiced.mean()),
+    summary = {"f0_method": track.method, "f0_median_hz": None,
+               "voiced_fraction": float(track.voiced.mean()),
                "lead_s": HEAD_LEAD_S}
     if track.voiced.sum() >= 2:
         f0_med = float(np.median(track.f0[track.voiced]))

@@ -12,7 +12,7 @@ What is read as neutral rather than rejected (documented in docs/stimuli.md):
 
 - stress, tone and syllable marks around a label (eSpeak ``' , % =``, IPA ``ˈ ˌ .``), length
   marks (IPA ``ː ˑ``), combining diacritics (IPA nasalisation, syllabicity, ...), tie bars, and
-  ARPABET's stress digit;
+  ARPABET's stress digit (but ``AH0`` is the schwa and ``ER0`` the r-coloured schwa);
 - eSpeak variant suffixes after ``/`` (``l/2``) and its appended palatal ``;`` (a ``;`` on its
   own, which eSpeak sometimes emits as a phone, has no classes and makes no gesture).
 
@@ -129,13 +129,14 @@ _IPA: dict[str, tuple[str, ...]] = {
     **dict.fromkeys(("r", "ɹ", "ɻ", "ʁ"), ("r",)),
     **dict.fromkeys(("l", "ɫ"), ("l",)),
     **dict.fromkeys(("j", "c", "ɟ", "ʝ"), ("j",)),  # palatals (ç decomposes to c)
-    **dict.fromkeys(("i", "y", "ʏ", "ɨ"), (_I,)), "ɪ": (_IL,),
+    **dict.fromkeys(("i", "y", "ʏ", "ɨ"), (_I,)), **dict.fromkeys(("ɪ", "ᵻ"), (_IL,)),
     **dict.fromkeys(("u", "ʊ", "ʉ", "ɯ"), (_U,)),
     **dict.fromkeys(("a", "æ", "ɑ", "ɶ"), (_O,)),
     **dict.fromkeys(("e", "ɛ", "ʌ", "ɜ", "ø", "œ"), (_M,)),
     **dict.fromkeys(("ɝ", "ɜ˞"), (_M, "r")), **dict.fromkeys(("ɚ", "ə˞"), (_S, "r")),
     **dict.fromkeys(("o", "ɒ"), (_MR,)), "ɔ": (_OR,),
     **dict.fromkeys(("ə", "ɐ", "ɘ", "ɵ"), (_S,)),
+    "ɔɪ": (_MR, _IL),  # CHOICE starts mid rounded, as eSpeak's OI and ARPABET's OY
 }
 _IPA_STRIP = frozenset("ˈˌ.ːˑ‿͜͡ʰʲʷˠˤ˞'ˀ")
 _IPA_LONGEST = max(len(k) for k in _IPA)
@@ -216,6 +217,8 @@ def _arpabet(text: str) -> tuple[str, ...] | None:
         base, stress = t, None
     if base == "AH" and stress == "0":
         return (_S,)  # unstressed AH is schwa
+    if base == "ER" and stress == "0":
+        return (_S, "r")  # unstressed ER is the r-coloured schwa (AXR)
     return _ARPABET.get(base)
 
 

@@ -1,13 +1,15 @@
-"""The voice's fundamental frequency and intensity per frame: a YIN tracker on numpy.
+"""The voice's fundamental frequency and intensity per frame: Praat's pitch, YIN as a fallback.
 
-:func:`track_f0` is the YIN estimator of de Cheveigné & Kawahara (2002, J Acoust Soc Am
-111:1917): per analysis frame, the difference function of the signal with itself shifted by
-each lag, normalised by its cumulative mean, its first dip under a threshold (0.15, the paper's
-0.1-0.15) refined by a parabola through its neighbours. A frame is voiced where that dip is
-under the threshold and its RMS is within :data:`VOICING_DB` of the loudest frame's.
-:func:`intensity_db` is the RMS level per frame in dB (re full scale).
-
-Everything is SI: times in s, frequencies in Hz; the samples are floats (full scale 1).
+:func:`track_f0` asks Praat (praat-parselmouth, the ``speech`` extra) for its autocorrelation
+pitch, "To Pitch (ac)" (Boersma 1993, Proc Inst Phonetic Sci Amsterdam 17:97): per 10-ms frame,
+the autocorrelation of the Hanning-windowed signal divided by the window's own, its peaks as
+candidates, and a Viterbi path through them with Praat's standard costs
+(:data:`PRAAT_AC`). The pitch range is the manual's standard 75-500 Hz for adult speech (Praat
+manual, Intro 4.2: 75-300 Hz suits most low voices, 100-500 Hz most high ones).
+Without parselmouth it falls back to YIN (de Cheveigné & Kawahara 2002, J Acoust Soc Am
+111:1917; :data:`YIN_RANGE_HZ`, threshold :data:`THRESHOLD`), which finds fewer voiced frames
+than Praat on running speech (it agrees in F0 where both find voice). :func:`intensity_db` is
+the RMS level per frame in dB (re full scale). Everything is SI: s, Hz; samples full scale 1.
 """
 
 from __future__ import annotations
@@ -18,15 +20,27 @@ import numpy as np
 
 from ..errors import InputError
 
-__all__ = ["F0_RANGE_HZ", "F0Track", "WINDOW_S", "intensity_db", "track_f0"]
+__all__ = ["F0_RANGE_HZ", "F0Track", "METHODS", "PRAAT_AC", "WINDOW_S", "f0_method",
+           "intensity_db", "track_f0"]
 
-#: Hz, the lowest and highest F0 looked for (an adult's speaking range, with margin)
-F0_RANGE_HZ = (60.0, 400.0)
-#: s, the integration window of the difference function (two periods of 80 Hz)
+#: Hz, Praat's pitch floor and ceiling (the manual's standard range for speech)
+F0_RANGE_HZ = (75.0, 500.0)
+#: Praat's "To Pitch (ac)" settings: its standard values, the range above; time step
+#: 0.75 / floor (10 ms), window three periods of the floor (40 ms)
+PRAAT_AC = {"time_step": 0.75 / F0_RANGE_HZ[0], "pitch_floor": F0_RANGE_HZ[0],
+            "max_number_of_candidates": 15, "very_accurate": False, "silence_threshold": 0.03,
+            "voicing_threshold": 0.45, "octave_cost": 0.01, "octave_jump_cost": 0.35,
+            "voiced_unvoiced_cost": 0.14, "pitch_ceiling": F0_RANGE_HZ[1]}
+#: the trackers: Praat's autocorrelation (default where parselmouth imports) and YIN
+METHODS = ("praat", "yin")
+#: Hz, the lowest and highest F0 YIN looks for (an adult's speaking range, with margin)
+YIN_RANGE_HZ = (60.0, 400.0)
+#: s, the integration window of YIN's difference function and of the level (two periods of
+#: 80 Hz)
 WINDOW_S = 0.025
 #: the cumulative-mean-normalised difference under which a dip is a period (YIN's threshold)
 THRESHOLD = 0.15
-#: dB, frames quieter than the loudest by more than this are unvoiced (silence, breath)
+#: dB, YIN: frames quieter than the loudest by more than this are unvoiced (silence, breath)
 VOICING_DB = 35.0
 
 
@@ -40,12 +54,23 @@ class F0Track:
     f0 : (T,) Hz, NaN where unvoiced
     voiced : (T,) bool
     level_db : (T,) dB re full scale, the frame's RMS level (-inf for silence clipped at -120)
+    method : the tracker that made it (one of :data:`METHODS`)
     """
 
     time: np.ndarray
     f0: np.ndarray
     voiced: np.ndarray
     level_db: np.ndarray
+    method: str = "praat"
+
+
+def f0_method() -> str:
+    """The default tracker: ``"praat"`` where praat-parselmouth imports, else ``"yin"``."""
+    try:
+        import parselmouth  # noqa: F401
+    except ImportError:
+        return "yin"
+    return "praat"
 
 
 def _check(samples, rate) -> np.ndarray:
@@ -55,7 +80,7 @@ def _check(samples, rate) -> np.ndarray:
                          field="audio")
     if not np.all(np.isfinite(x)):
         raise InputError("audio samples are not finite", field="audio")
-    if not (np.isfinite(rate) and rate >= 2 * F0_RANGE_HZ[1] * 4):
+    if not (np.isfinite(rate) and rate >= 8 * F0_RANGE_HZ[1]):
         raise InputError(f"audio sample rate {rate} Hz is too low for F0 tracking "
                          f"(at least {8 * F0_RANGE_HZ[1]:.0f} Hz)", field="sample_rate")
     return x
@@ -90,24 +115,69 @@ def intensity_db(samples, rate: float, time) -> np.ndarray:
     return 20.0 * np.log10(np.maximum(rms, 1e-6))
 
 
-def track_f0(samples, rate: float, time) -> F0Track:
-    """YIN F0 at each time (de Cheveigné & Kawahara 2002).
+def track_f0(samples, rate: float, time, *, method: str | None = None) -> F0Track:
+    """F0 and voicing at each time: Praat's autocorrelation pitch (or YIN; module doc).
 
     Parameters
     ----------
     samples : (n,) float, full scale 1
-    rate : Hz, the sampling rate (at least 3.2 kHz)
+    rate : Hz, the sampling rate (at least 4 kHz)
     time : (T,) s, where to estimate (e.g. the video frames)
+    method : ``"praat"``, ``"yin"``, or None: :func:`f0_method` (Praat where it imports)
 
     Returns
     -------
     F0Track
+        Praat's frames sampled at ``time``: voiced where the nearest frame is, F0 linear
+        between two voiced frames (else the nearest's); unvoiced outside the frames.
     """
     x = _check(samples, rate)
     time = np.asarray(time, float)
+    method = f0_method() if method is None else method
+    if method not in METHODS:
+        raise InputError(f"unknown F0 tracker {method!r} (expected {', '.join(METHODS)})",
+                         field="f0_method")
+    level = intensity_db(x, rate, time)
+    f0 = _praat(x, rate, time) if method == "praat" else _yin(x, rate, time, level)
+    return F0Track(time=time, f0=f0, voiced=np.isfinite(f0), level_db=level, method=method)
+
+
+def _praat(x: np.ndarray, rate: float, time: np.ndarray) -> np.ndarray:
+    """(T,) Hz or NaN: Praat's "To Pitch (ac)" (:data:`PRAAT_AC`) sampled at ``time``."""
+    try:
+        import parselmouth
+    except ImportError:
+        raise InputError("Praat's pitch needs praat-parselmouth (pip install "
+                         "'facemech[speech]'), or choose the F0 tracker yin",
+                         field="f0_method") from None
+    f0 = np.full(len(time), np.nan)
+    if len(x) / rate <= 3.0 / PRAAT_AC["pitch_floor"]:  # shorter than one analysis window
+        return f0
+    pitch = parselmouth.Sound(x, sampling_frequency=float(rate)).to_pitch_ac(**PRAAT_AC)
+    frames = np.asarray(pitch.xs(), float)
+    hz = np.asarray(pitch.selected_array["frequency"], float)
+    hz[hz <= 0] = np.nan
+    if len(frames) == 0:
+        return f0
+    step = PRAAT_AC["time_step"]
+    pos = (time - frames[0]) / step
+    inside = (pos >= -0.5) & (pos <= len(frames) - 0.5)
+    near = np.clip(np.round(pos).astype(int), 0, len(frames) - 1)
+    lo = np.clip(np.floor(pos).astype(int), 0, len(frames) - 1)
+    hi = np.minimum(lo + 1, len(frames) - 1)
+    frac = np.clip(pos - lo, 0.0, 1.0)
+    between = hz[lo] + frac * (hz[hi] - hz[lo])
+    value = np.where(np.isfinite(between), between, hz[near])
+    voiced = inside & np.isfinite(hz[near])
+    f0[voiced] = value[voiced]
+    return f0
+
+
+def _yin(x: np.ndarray, rate: float, time: np.ndarray, level_db: np.ndarray) -> np.ndarray:
+    """(T,) Hz or NaN: YIN F0 at each time (de Cheveigné & Kawahara 2002)."""
     w = int(round(WINDOW_S * rate))
-    tau_min = int(np.floor(rate / F0_RANGE_HZ[1]))
-    tau_max = int(np.ceil(rate / F0_RANGE_HZ[0]))
+    tau_min = int(np.floor(rate / YIN_RANGE_HZ[1]))
+    tau_max = int(np.ceil(rate / YIN_RANGE_HZ[0]))
     seg = _windows(x, rate, time, w + tau_max + 1)
     # d(tau) = sum_j (x_j - x_{j+tau})^2 over the window: e(0) + e(tau) - 2 r(tau)
     n = 1 << int(np.ceil(np.log2(2 * (w + tau_max + 1))))
@@ -123,8 +193,7 @@ def track_f0(samples, rate: float, time) -> F0Track:
     cmnd = np.ones_like(d)
     np.divide(d[:, 1:], cum, out=cmnd[:, 1:], where=cum > 0)
     f0 = np.full(len(time), np.nan)
-    level = 20.0 * np.log10(np.maximum(np.sqrt(energy[:, 0] / w), 1e-6))
-    loud = level > level.max() - VOICING_DB
+    loud = level_db > level_db.max() - VOICING_DB
     for k in np.flatnonzero(loud):
         row = cmnd[k]
         under = np.flatnonzero(row[tau_min:tau_max] < THRESHOLD)
@@ -137,5 +206,4 @@ def track_f0(samples, rate: float, time) -> F0Track:
         den = a - 2 * b + cc
         shift = 0.5 * (a - cc) / den if den > 0 else 0.0
         f0[k] = rate / (t + float(np.clip(shift, -1, 1)))
-    voiced = np.isfinite(f0)
-    return F0Track(time=time, f0=f0, voiced=voiced, level_db=level)
+    return f0

@@ -16,7 +16,9 @@
 4. Blinks, gaze shifts and head motion driven by the voice (:mod:`facemech.speech.alive`; on by
    default, each off with :class:`~facemech.speech.alive.Liveliness`): the renderer turns the
    whole head, the simulation stays in the head's frame.
-5. The movie with the audio muxed in, and a manifest with the settings, the input hashes, the
+5. The alignment as a TextGrid and a CSV with IPA phone labels (eSpeak NG's own codes in a
+   tier of their own; :func:`relabel_folder` for ARPABET or eSpeak's codes instead).
+6. The movie with the audio muxed in, and a manifest with the settings, the input hashes, the
    stimulus parameters (:func:`facemech.analysis.describe.describe`, relative to the head) and
    the blinks', gaze shifts' and head motion's times and laws.
 
@@ -35,7 +37,8 @@ import numpy as np
 from ..checks import check_value
 from ..errors import InputError
 
-__all__ = ["FILES", "LEAD_IN_S", "TAIL_S", "Recording", "Spoken", "speak", "text_items"]
+__all__ = ["FILES", "LEAD_IN_S", "TAIL_S", "Recording", "Spoken", "relabel_folder", "speak",
+           "text_items", "write_alignment"]
 
 #: s of silence put before and after synthesised speech, so that the face starts at rest and
 #: has the time to anticipate the first phone (muscle activity leads the sound by 100 ms and
@@ -133,10 +136,11 @@ def speak(
     from ..params import MUSCLE_GROUPS
     from ..params import preset as load_preset
     from ..solvers.forward import simulate
-    from ..speech.alignment_io import read_textgrid, write_alignment_csv, write_textgrid
+    from ..speech.alignment_io import read_textgrid
     from ..speech.alive import Liveliness, liveliness
     from ..speech.articulation import as_articulation
     from ..speech.coarticulation import controls_from_alignment
+    from ..speech.phone_labels import relabel
     from ..speech.tongue import tongue_tip
     from ..speech.wav import read_wav, write_wav
 
@@ -188,11 +192,11 @@ def speak(
                              source=str(textgrid), field="time")
         inputs["audio"] = file_hash(audio)
         inputs["textgrid"] = file_hash(textgrid)
+    written = relabel(alignment, "ipa")  # before anything is written: a label without IPA
     model = load_face(face, tissue=params.tissue)  # after the inputs are checked: it takes a while
     out.mkdir(parents=True, exist_ok=True)
     write_wav(files["audio"], samples, rate)
-    write_textgrid(files["textgrid"], alignment)
-    write_alignment_csv(files["alignment"], alignment)
+    record = write_alignment(files, alignment, written)
     if iterations is None:
         t, act, jaw = controls_from_alignment(alignment, frame_rate=params.frame_rate,
                                               strength=articulation)
@@ -236,11 +240,7 @@ def speak(
         "strength": articulation.strength, "scale": [str(r) for r in articulation.rules],
         "plan": planned,
         "inputs": inputs,
-        "alignment": {"notation": alignment.notation, "duration_s": alignment.duration,
-                      "words": [w.label for w in alignment.words],
-                      "phones": len(alignment.phones), "source": alignment.source,
-                      **{k: v for k, v in alignment.meta.items()
-                         if isinstance(v, (str, int, float))}},
+        "alignment": record,
         "frames": int(len(t)), "frame_rate_hz": float(params.frame_rate),
         "audio_sample_rate_hz": int(rate),
         "files": {k: p.name for k, p in files.items()},
@@ -253,6 +253,42 @@ def speak(
         tmp.write_text(json.dumps(manifest, indent=2, default=_json_default))
     return Spoken(files=files, alignment=alignment, simulation=sim, description=desc,
                   manifest=manifest, dataset=ds, alive=lively)
+
+
+def write_alignment(files: dict, alignment, written) -> dict:
+    """Write ``written`` (``alignment`` relabelled) as the folder's TextGrid and CSV, eSpeak
+    NG's codes in a tier of their own when they were relabelled; return the manifest's
+    ``alignment`` record (the notation, words, phone labels, eSpeak's codes, the source)."""
+    from ..speech.alignment_io import ESPEAK_TIER, write_alignment_csv, write_textgrid
+
+    kept = {ESPEAK_TIER: alignment.phones} if written is not alignment and \
+        alignment.notation == "espeak" else {}
+    write_textgrid(files["textgrid"], written, tiers=kept)
+    write_alignment_csv(files["alignment"], written, tiers=kept)
+    return {"notation": written.notation, "duration_s": alignment.duration,
+            "words": [w.label for w in alignment.words], "phones": len(written.phones),
+            "phone_labels": [p.label for p in written.phones],
+            **({ESPEAK_TIER: [p.label for p in alignment.phones]} if kept else {}),
+            "source": alignment.source,
+            **{k: v for k, v in alignment.meta.items() if isinstance(v, (str, int, float))}}
+
+
+def relabel_folder(spoken: Spoken, phone_labels: str) -> Spoken:
+    """A :func:`speak` folder with its phones in ``phone_labels`` (``"ipa"``, as written,
+    ``"arpabet"`` or ``"espeak"``: :func:`facemech.speech.phone_labels.relabel`): its TextGrid,
+    CSV and manifest rewritten, each atomically. Returns the :class:`Spoken` with the new
+    manifest (its ``alignment`` stays the one the face spoke)."""
+    from dataclasses import replace
+
+    from ..atomic import atomic_path
+    from ..speech.phone_labels import relabel
+
+    written = relabel(spoken.alignment, phone_labels)
+    record = write_alignment(spoken.files, spoken.alignment, written)
+    manifest = {**spoken.manifest, "alignment": record}
+    with atomic_path(spoken.files["manifest"]) as tmp:
+        tmp.write_text(json.dumps(manifest, indent=2, default=_json_default))
+    return replace(spoken, manifest=manifest)
 
 
 def _plan_iterations(plan) -> int | None:

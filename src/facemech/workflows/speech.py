@@ -26,12 +26,21 @@ def speak(output: str | Path, text: str | None = None, *, video: bool = True, re
     ``phone_tier``), or the keywords ``audio``, ``textgrid`` and ``tiers`` (word, phone).
     ``alive``: a :class:`facemech.speech.alive.Liveliness`, or a dict of ``blinks``, ``gaze``,
     ``head_motion`` and ``seed`` (None: all on, seed 0). ``articulation``: a dict of
-    ``strength``, ``scale``, ``plan`` and ``plan_iterations`` (the command line's). Returns its
+    ``strength``, ``scale``, ``plan`` and ``plan_iterations`` (the command line's).
+    ``phone_labels``: the phones of the TextGrid, CSV and manifest in ``ipa`` (default),
+    ``arpabet`` or ``espeak`` (:func:`facemech.workflows.speak.relabel_folder`). Returns its
     :class:`~facemech.workflows.speak.Spoken`."""
     from ..atomic import check_output
+    from ..errors import InputError
     from ..speech.alive import Liveliness
-    from .speak import Recording
+    from ..speech.phone_labels import LABEL_NOTATIONS
+    from .speak import Recording, relabel_folder
     from .speak import speak as run
+
+    labels = options.pop("phone_labels", None) or "ipa"
+    if labels not in LABEL_NOTATIONS:
+        raise InputError(f"unknown phone labels {labels!r} (expected "
+                         f"{', '.join(LABEL_NOTATIONS)})", field="phone_labels")
 
     for k, v in (articulation or {}).items():  # the CLI's group: strength, scale, plan
         if k == "scale":
@@ -57,9 +66,18 @@ def speak(output: str | Path, text: str | None = None, *, video: bool = True, re
         from ..speech.articulation import Articulation
 
         options["strength"] = Articulation.parse(scale, strength=options.get("strength", 1.0))
+    if labels == "espeak" and rec.get("textgrid") is not None:  # before the run, not after
+        from ..speech.alignment_io import read_textgrid
+
+        if read_textgrid(rec["textgrid"], word_tier=rec.get("word_tier"),
+                         phone_tier=rec.get("phone_tier")).notation != "espeak":
+            raise InputError("the recording's phones cannot be written as eSpeak NG codes "
+                             "(only synthesised speech has them)", source=str(rec["textgrid"]),
+                             field="phone_labels")
     look = render or render_options()
-    return run(output, text, recording=Recording(**rec) if "audio" in rec else None,
+    made = run(output, text, recording=Recording(**rec) if "audio" in rec else None,
                video=look if video else False, alive=alive, **options)
+    return made if labels == "ipa" else relabel_folder(made, labels)
 
 
 def speak_report(res, output: str | Path) -> list[str]:
