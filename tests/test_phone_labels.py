@@ -5,6 +5,7 @@ tier of their own, and alignments read in any of the three into the same phone c
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 
 import pytest
 
@@ -237,3 +238,22 @@ def test_speak_writes_ipa_phones_and_keeps_espeaks_codes(tmp_path, monkeypatch, 
                                "--no-video")
         assert code == 2 and "phone_labels" in err and "Traceback" not in err
         assert not (tmp_path / "bad").exists()
+
+
+@pytest.mark.parametrize("notation", ["ipa", "arpabet"])
+def test_stress_reads_the_same_in_every_notation(spoken, notation):
+    """The planner's stressed vowels (where a slow utterance opens its jaw further) and the
+    phone measures' stress come out the same from eSpeak's marks, IPA's and ARPABET's digits;
+    an alignment with no mark at all is read as unmarked (every vowel a candidate)."""
+    from facemech.analysis.visible_speech import _stress, reads_stress
+    from facemech.speech.planning import _stressed_vowels
+
+    written = L.relabel(spoken, notation)
+    assert reads_stress(written)
+    assert _stressed_vowels(written) == _stressed_vowels(spoken)
+    bare = replace(written, phones=tuple(
+        replace(p, label=p.label.strip().lstrip("ˈˌ").rstrip("012")) for p in written.phones))
+    assert not reads_stress(bare)
+    assert 0 < len(_stressed_vowels(spoken)) < len(_stressed_vowels(bare))
+    assert [_stress(a.label, notation) for a in written.phones] == \
+        [_stress(b.label) for b in spoken.phones]

@@ -116,9 +116,23 @@ def _base(label: str) -> str:
     return label.strip().lstrip("',%=")
 
 
-def _stress(label: str) -> str | None:
+def _stress(label: str, notation: str = "espeak") -> str | None:
+    """The stress a label marks: eSpeak's ``'``/``,`` before it, IPA's ``ˈ``/``ˌ`` before
+    it, ARPABET's digit ``1``/``2`` after it; None where it marks none."""
     t = label.strip()
-    return "primary" if t.startswith("'") else "secondary" if t.startswith(",") else None
+    if notation == "arpabet":
+        return {"1": "primary", "2": "secondary"}.get(t[-1:])
+    first, second = ("ˈ", "ˌ") if notation == "ipa" else ("'", ",")
+    return "primary" if t.startswith(first) else "secondary" if t.startswith(second) else None
+
+
+def reads_stress(alignment) -> bool:
+    """Whether an alignment's labels carry stress: always in eSpeak's notation, in IPA and
+    ARPABET where any label marks it (an alignment with no mark at all is read as unmarked,
+    not as wholly unstressed)."""
+    if alignment.notation == "espeak":
+        return True
+    return any(_stress(s.label, alignment.notation) is not None for s in alignment.phones)
 
 
 def _group(label: str, classes: tuple[str, ...]) -> str | None:
@@ -235,7 +249,8 @@ def measure_phones(alignment, model, time: np.ndarray, positions: np.ndarray, *,
     alignment : Alignment
         Phones with times (s) in eSpeak mnemonics (the stress marks kept), or IPA or ARPABET
         (then the groups that name eSpeak labels, :data:`ROUNDED_LABELS` and
-        :data:`OPEN_EXTRA_LABELS`, are found by class only and no stress is read).
+        :data:`OPEN_EXTRA_LABELS`, are found by class only, and stress is read from IPA's
+        ``ˈ ˌ`` or ARPABET's digits where the alignment marks any: :func:`reads_stress`).
     model : FaceModel
         The face that said it (``sim.model``).
     time : (frames,) s
@@ -259,6 +274,7 @@ def measure_phones(alignment, model, time: np.ndarray, positions: np.ndarray, *,
     incisor_dist = incisor_distance(model, p)
     phones = [(s, phone_classes(s.label, alignment.notation, source=alignment.source,
                                 voice=voice)) for s in alignment.phones]
+    marked = reads_stress(alignment)
     phones = [(s, c) for s, c in phones if c and c != ("pause",)]
     groups = [_group(s.label, c) for s, c in phones]
     out = []
@@ -280,7 +296,7 @@ def measure_phones(alignment, model, time: np.ndarray, positions: np.ndarray, *,
                    and phones[k + 1][0].start <= seg.end + 1e-9)
         out.append(PhoneMeasure(
             label=seg.label, start=float(seg.start), end=float(seg.end), classes=classes,
-            stress=_stress(seg.label) if alignment.notation == "espeak" else None,
+            stress=_stress(seg.label, alignment.notation) if marked else None,
             group=group, between_bilabials=bool(between),
             lip_gap_mid=float(np.interp(seg.mid, time, gap)),
             lips_forward_mid=float(np.interp(seg.mid, time, m["lips_forward"])), **extra))

@@ -374,13 +374,14 @@ def _phone_parts(alignment: Alignment):
 
 def _stressed_vowels(alignment: Alignment) -> tuple[int, ...]:
     """The indices in :func:`gestures` of the vowel gestures of stressed phones (eSpeak's
-    ``'`` and ``,`` marks; in other notations, where no stress is read, every vowel's): where a
-    slow utterance's jaw opens further (:func:`_update`)."""
-    from ..analysis.visible_speech import _stress
+    ``'`` and ``,``, IPA's ``ˈ ˌ``, ARPABET's ``1 2``; every vowel's in an alignment that marks
+    no stress): where a slow utterance's jaw opens further (:func:`_update`)."""
+    from ..analysis.visible_speech import _stress, reads_stress
     from .phoneclass import VOWEL_CLASSES
 
+    marked = reads_stress(alignment)
     return tuple(k + j for seg, k, parts in _phone_parts(alignment)
-                 if alignment.notation != "espeak" or _stress(seg.label) is not None
+                 if not marked or _stress(seg.label, alignment.notation) is not None
                  for j, cls in enumerate(parts) if cls in VOWEL_CLASSES)
 
 
