@@ -3,9 +3,12 @@ does not have, a design row refused before any manifest, a lip coil given as a b
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
+from conftest import run_cli
 from facemech.errors import InputError
 from test_bad_input_31 import refused
 
@@ -50,3 +53,75 @@ def test_speak_refuses_an_unknown_variant_and_writes_nothing(monkeypatch, capsys
                    words=("--voice", "'en-us+nonexistent'", "field 'voice'", "f3"))
     assert "nonexistent'; it has" in line
     assert not (tmp_path / "out").exists()
+
+
+# ---- a design row that cannot be made: refused before any manifest -----------------------------
+@pytest.fixture(scope="module")
+def item(face, tmp_path_factory):
+    """A 24-frame lips-and-jaw movement (results) and its sound, outside the tests' folders."""
+    from conftest import activity
+    from facemech import simulate
+    from facemech.io.results import to_dataset, write_dataset
+    from facemech.speech.wav import write_wav
+
+    folder = tmp_path_factory.mktemp("item")
+    a = activity(24)
+    bump = np.sin(np.linspace(0, np.pi, 24))
+    a[:, 2] = 0.5 * bump
+    write_dataset(folder / "a.nc", to_dataset(simulate(face, a, np.radians(5.0) * bump)))
+    write_wav(folder / "a.wav", np.sin(np.arange(6400) / 5.0), 16000)
+    return folder
+
+
+def _table(path, rows):
+    cols = list(dict.fromkeys(c for r in rows for c in r))
+    path.write_text("\n".join([",".join(cols)] + [
+        ",".join(str(r.get(c, "")) for c in cols) for r in rows]) + "\n")
+    return path
+
+
+@pytest.mark.parametrize("cells, words", [
+    ({"freeze_region": "lips", "freeze_at": "9999"}, ("column 'freeze_at'", "frame 9999",
+                                                      "0 to 23")),
+    ({"freeze_region": "lips", "freeze_at": "-1"}, ("column 'freeze_at'", "frame -1")),
+    ({"freeze_region": "lips", "freeze_at": "99s"}, ("column 'freeze_at'", "99 s is outside")),
+    ({"freeze_region": "lips", "freeze_at": "50", "time_scale": "2"},
+     ("column 'freeze_at'", "frame 50", "0 to 47")),
+    ({"freeze_at": "3"}, ("column 'freeze_at'", "without a freeze_region")),
+    ({"freeze_region": "face"}, ("column 'freeze_region'", "leaves no motion")),
+    ({"results": "{t}/garbage.nc"}, ("column 'results'", "not a readable NetCDF")),
+])
+def test_a_design_row_that_cannot_be_made_is_refused_before_any_manifest(
+        monkeypatch, capsys, tmp_path, item, cells, words):
+    """The second row fails; the first would be made: the whole table is refused, and neither
+    out/manifest.csv nor out/manifest.json (nor out/) is written."""
+    (tmp_path / "garbage.nc").write_bytes(b"not a results file")
+    good = {"id": "one", "results": item / "a.nc", "audio": item / "a.wav"}
+    bad = {**good, "id": "two", **{k: v.format(t=tmp_path) for k, v in cells.items()}}
+    _table(tmp_path / "d.csv", [good, bad])
+    refused(monkeypatch, capsys, tmp_path, "stimuli", "{t}/d.csv", "-o", "{t}/out",
+            "--no-video", words=("{t}/d.csv", "row 2", *words), seconds=60)
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_freeze_inside_the_stimulus_is_made(monkeypatch, capsys, tmp_path, item):
+    from facemech.io.results import read_results
+
+    _table(tmp_path / "d.csv", [{"id": "one", "results": item / "a.nc", "audio": item / "a.wav",
+                                 "freeze_region": "lips", "freeze_at": "47",
+                                 "time_scale": "2"}])
+    code, _, err = run_cli(monkeypatch, capsys, "stimuli", tmp_path / "d.csv", "-o",
+                           tmp_path / "out", "--no-video")
+    assert code == 0, err
+    made = read_results(tmp_path / "out" / "one.nc")
+    assert made.sizes["time"] == 48
+    man = json.loads((tmp_path / "out" / "manifest.json").read_text())
+    assert [e["status"] for e in man["stimuli"]] == ["made"]
+
+
+def test_a_text_row_with_an_unknown_voice_variant_is_refused_first(monkeypatch, capsys,
+                                                                   tmp_path):
+    (tmp_path / "d.toml").write_text('[[stimulus]]\nid = "a"\ntext = "ba"\n'
+                                     'voice = "en-us+nonexistent"\n')
+    refused(monkeypatch, capsys, tmp_path, "stimuli", "{t}/d.toml", "-o", "{t}/out",
+            words=("{t}/d.toml", "row 1, column 'voice'", "nonexistent", "f3"))

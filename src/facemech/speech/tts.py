@@ -45,7 +45,7 @@ from ..errors import FacemechError, InputError
 from .alignment import Alignment, Segment
 from .wav import read_wav, write_wav
 
-__all__ = ["Speech", "synthesize", "variants", "voices", "write_wav", "read_wav",
+__all__ = ["Speech", "check_variant", "synthesize", "variants", "voices", "write_wav", "read_wav",
            "RATE_RANGE_WPM"]
 
 RATE_RANGE_WPM = (80, 450)
@@ -119,10 +119,11 @@ def variants() -> list[str]:
         raise FacemechError(f"eSpeak NG's voice variants are missing ({folder})") from None
 
 
-def _check_variant(voice: str) -> None:
-    """Refuse a ``+variant`` that eSpeak NG does not have: it would speak with the plain voice
-    and say nothing. A numeric variant is eSpeak's shorthand (see :func:`variants`)."""
-    base, plus, variant = voice.partition("+")
+def check_variant(voice: str) -> None:
+    """Refuse (InputError, field ``voice``) a ``+variant`` that eSpeak NG does not have: it
+    would speak with the plain voice and say nothing. A numeric variant is eSpeak's shorthand
+    (see :func:`variants`). The voice itself is checked when it speaks."""
+    base, plus, variant = str(voice).strip().partition("+")
     if not plus:
         return
     if not base.strip():
@@ -229,7 +230,7 @@ def synthesize(text: str, *, voice: str = "en-us", rate_wpm: int = 160,
     if not isinstance(voice, str) or not voice.strip():
         raise InputError("no voice given", field="voice")
     voice, rate_wpm = voice.strip(), int(round(rate_wpm))
-    _check_variant(voice)
+    check_variant(voice)
     pitch = None if pitch is None else int(round(pitch))
     run = _run_worker if isolated else _run_here
     pcm, events, rate, version = run(text, voice, rate_wpm, pitch)
