@@ -125,3 +125,37 @@ def test_a_text_row_with_an_unknown_voice_variant_is_refused_first(monkeypatch, 
                                      'voice = "en-us+nonexistent"\n')
     refused(monkeypatch, capsys, tmp_path, "stimuli", "{t}/d.toml", "-o", "{t}/out",
             words=("{t}/d.toml", "row 1, column 'voice'", "nonexistent", "f3"))
+
+
+# ---- a lip coil given as a bone point ----------------------------------------------------------
+MOCHA = "/work/shared/data/mocha/fsew0_001.ema"
+
+
+@pytest.fixture
+def ema(tmp_path):
+    import shutil
+    from pathlib import Path
+
+    if not Path(MOCHA).is_file():
+        pytest.skip("the MOCHA-TIMIT sample is not here")
+    (tmp_path / "act.csv").write_text("time,OOS\n0,0\n0.1,0\n")
+    return shutil.copy(MOCHA, tmp_path / "s.ema")
+
+
+@pytest.mark.parametrize("command, options, option, role", [
+    ("invert", ("--jaw-incisor", "ul"), "--jaw-incisor", "upper_lip"),
+    ("invert", ("--jaw-incisor", "li", "--jaw-molar", "ll"), "--jaw-molar", "lower_lip"),
+    ("invert", ("--jaw-incisor", "tt"), "--jaw-incisor", "tongue"),
+    ("simulate", ("--jaw-incisor", "ul"), "--jaw-incisor", "upper_lip"),
+    ("simulate", ("--jaw-incisor", "li", "--jaw-molar", "v"), "--jaw-molar", "velum"),
+])
+def test_a_bone_point_option_refuses_a_sensor_of_another_role(monkeypatch, capsys, tmp_path,
+                                                              ema, command, options, option,
+                                                              role):
+    """MOCHA-TIMIT's upper-lip coil ``ul`` is not the lower incisor: refused naming the option
+    and the coil's role, before the face is built, nothing written."""
+    where = ("--markers", "{t}/s.ema") if command == "invert" else (
+        "--activity", "{t}/act.csv", "--jaw-chin", "{t}/s.ema")
+    line = refused(monkeypatch, capsys, tmp_path, command, *where, *options, "-o",
+                   "{t}/r.nc", words=("{t}/s.ema", option, f"role is {role}"), seconds=30)
+    assert "not a point on the jaw bone" in line
