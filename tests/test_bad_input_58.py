@@ -159,3 +159,26 @@ def test_a_bone_point_option_refuses_a_sensor_of_another_role(monkeypatch, capsy
     line = refused(monkeypatch, capsys, tmp_path, command, *where, *options, "-o",
                    "{t}/r.nc", words=("{t}/s.ema", option, f"role is {role}"), seconds=30)
     assert "not a point on the jaw bone" in line
+
+
+def test_a_batch_items_bone_point_of_another_role_fails_that_item(tmp_path, ema):
+    """The manifest keys ``jaw-incisor`` and ``jaw-molar`` reach the same check: the item
+    fails with the one line, nothing of it is written, the batch goes on."""
+    pytest.importorskip("distributed")
+    from facemech.workflows.batch import run_batch
+
+    (tmp_path / "m.csv").write_text("id,job,markers,jaw-incisor\ninv,invert,s.ema,ul\n")
+    rep = run_batch(tmp_path / "m.csv", tmp_path / "out", workers=1, processes=False)
+    (outcome,) = rep.outcomes
+    assert outcome.status == "failed" and rep.exit_code == 1
+    assert "jaw-incisor" in outcome.error and "role is upper_lip" in outcome.error
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["summary.csv"]
+
+
+def test_the_speak_api_refuses_an_unknown_variant_before_writing(tmp_path):
+    from facemech.workflows.speak import speak
+
+    with pytest.raises(InputError) as err:
+        speak(tmp_path / "out", "ba", voice="en-us+nonexistent", video=False)
+    assert err.value.field == "voice" and "f3" in str(err.value)
+    assert not (tmp_path / "out").exists()
