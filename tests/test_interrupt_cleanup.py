@@ -76,7 +76,7 @@ def test_an_interrupted_batch_leaves_no_partial_folder_worker_or_warning(tmp_pat
             worker.start()
             Path("worker.pid").write_text(str(worker.pid))
             (new_partial(out, "s1") / "half.nc").write_text("half")
-            interrupts.on_interrupt(lambda: _stop_workers(out))
+            interrupts.on_interrupt(lambda: _stop_workers(out, [], False))
             os.kill(os.getpid(), signal.SIGTERM)
             time.sleep(30)
     """

@@ -137,7 +137,16 @@ def test_roles_choose_the_bone_points_and_are_checked(face):
     assert marker_roles(ms) == roles
     assert bone_points(ms) == ("LI", "MM", True)
     assert bone_points(ms, skin_jaw="UL") == (None, None, False)  # a skin marker asked for
-    assert bone_points(ms, incisor="LL") == ("LL", None, False)
+    assert bone_points(ms, incisor="LI", molar="MM") == ("LI", "MM", False)
+    for given, option, role in (({"incisor": "LL"}, "jaw-incisor", "lower_lip"),
+                                ({"incisor": "MM"}, "jaw-incisor", "molar"),
+                                ({"incisor": "LI", "molar": "TT"}, "jaw-molar", "tongue")):
+        with pytest.raises(InputError) as exc:  # a sensor whose role is not that bone point
+            bone_points(ms, **given)
+        assert exc.value.field == option and f"role is {role}" in exc.value.message
+    some = {"UL": "upper_lip", "LL": "other"}  # the others have none: taken as named
+    unroled = MarkerSet(pos, tuple(roles), 60.0, meta={"roles": some})
+    assert bone_points(unroled, incisor="LL", molar="TT") == ("LL", "TT", False)
     with pytest.raises(InputError) as exc:
         bone_points(ms, molar="MM")
     assert exc.value.field == "jaw-molar"

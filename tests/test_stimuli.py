@@ -10,6 +10,7 @@ import pytest
 from conftest import activity, run_cli
 from facemech import simulate
 from facemech.analysis.describe import describe, marker_nodes
+from facemech.errors import InputError
 from facemech.io.results import read_results, to_dataset, write_dataset
 from facemech.speech import stimuli as st
 from facemech.speech.audio import Audio, onset, read_wav, shift, write_wav
@@ -200,29 +201,47 @@ def _design(path, rows):
     return path
 
 
+def _failing_hook(row):
+    from facemech.errors import FacemechError
+
+    raise FacemechError("no face here")
+
+
+_failing_hook.version = "fails"
+
+
 def test_design_bad_row_rerun_and_manifest(item, tmp_path):
     from facemech.viz.render import RenderOptions
 
     table = _design(tmp_path / "design.csv", [
         {"id": "half", "results": item / "a.nc", "audio": item / "a.wav", "amplitude": 0.5,
          "amplitude_region": "lips"},
-        {"id": "bad", "results": tmp_path / "bad.nc", "audio": item / "a.wav"},  # fails late
+        {"id": "bad", "results": tmp_path / "bad.nc", "audio": item / "a.wav"},
+        {"id": "spoken", "text": "hello"},  # fails late: its hook cannot make it
         {"id": "mcgurk", "results": item / "a.nc", "audio": item / "a.wav",
          "dub_audio": item / "b.wav", "dub_align": "onset", "av_offset_ms": 40},
     ])
     (tmp_path / "bad.nc").write_bytes(b"not a results file")
     out = tmp_path / "out"
     opts = RenderOptions(view="frontal", size=(120, 160), supersample=1)
-    rep = run_design(table, out, options=opts)
+    # a row that cannot be made refuses the table before anything is written
+    with pytest.raises(InputError, match=r"row 2, column 'results'"):
+        run_design(table, out, options=opts, make_item=_failing_hook)
+    assert not out.exists()
+    (tmp_path / "bad.nc").unlink()
+    table.write_text("\n".join(ln for ln in table.read_text().splitlines()
+                               if not ln.startswith("bad,")) + "\n")
+    # a row that fails while the table runs (here its hook) is recorded; the others are made
+    rep = run_design(table, out, options=opts, make_item=_failing_hook)
     assert rep.made == ["half", "mcgurk"] and rep.skipped == []
-    assert [(e.row, e.column) for e in rep.failed] == [(2, "results")]
-    assert "row 2, column 'results'" in rep.failed[0].one_line()
+    assert [(e.row, e.column) for e in rep.failed] == [(2, "text")]
+    assert "row 2, column 'text'" in rep.failed[0].one_line()
     for sid in ("half", "mcgurk"):
         assert (out / f"{sid}.mp4").stat().st_size > 1000
-    assert not (out / "bad.nc").exists()
+    assert not (out / "spoken.nc").exists()
     man = json.loads((out / "manifest.json").read_text())
     by = {e["id"]: e for e in man["stimuli"]}
-    assert by["bad"]["status"] == "failed"
+    assert by["spoken"]["status"] == "failed"
     assert by["half"]["settings"]["amplitude"] == 0.5
     assert by["half"]["inputs"]["source"]["results"]
     lips = by["half"]["description"]["landmarks"]["upper_lip_center"]["peak_displacement"]
@@ -237,12 +256,12 @@ def test_design_bad_row_rerun_and_manifest(item, tmp_path):
     assert len(csv_text) == 4 and "upper_lip_center_peak_displacement_mm" in csv_text[0]
     # a rerun makes nothing new; a changed setting remakes that stimulus only
     stamp = (out / "half.mp4").stat().st_mtime_ns
-    rep = run_design(table, out, options=opts)
+    rep = run_design(table, out, options=opts, make_item=_failing_hook)
     assert rep.made == [] and sorted(rep.skipped) == ["half", "mcgurk"]
     assert (out / "half.mp4").stat().st_mtime_ns == stamp
     text = table.read_text().replace("0.5,", "0.25,")
     table.write_text(text)
-    rep = run_design(table, out, options=opts)
+    rep = run_design(table, out, options=opts, make_item=_failing_hook)
     assert rep.made == ["half"] and rep.skipped == ["mcgurk"]
 
 

@@ -44,19 +44,42 @@ def _quietly(fn) -> None:
         fn()
 
 
+def _mute_stderr() -> int:
+    """Point file descriptor 2 at the null device, for this process's other threads and the
+    processes it starts from now on (multiprocessing's resource tracker, a worker a pool
+    restarts); return a descriptor of the real stderr (2 where that fails)."""
+    try:
+        sys.stderr.flush()
+    except (OSError, ValueError, AttributeError):
+        pass
+    try:
+        real = os.dup(2)
+    except OSError:
+        return 2
+    try:
+        null = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(null, 2)
+        os.close(null)
+    except OSError:
+        pass
+    return real
+
+
 def handle(signum: int, frame=None) -> None:
     """Clean up and exit: run the registered clean-ups (:func:`on_interrupt`), remove pending
-    temporary files and folders, say so, exit 128 + ``signum``."""
+    temporary files and folders, say so, exit 128 + ``signum``. Anything else written to
+    stderr meanwhile (by other threads or the processes being ended) goes to the null
+    device: the command's last line on stderr is ``facemech: interrupted``."""
     from .atomic import remove_pending
 
     for sig in EXIT_STATUS:  # a second signal during the clean-up does not cut it short
         signal.signal(sig, signal.SIG_IGN)
-    for cleanup in reversed(_CLEANUPS):
-        _quietly(cleanup)
-    _quietly(remove_pending)
+    say = _mute_stderr()
     try:
-        sys.stderr.write("facemech: interrupted\n")
-        sys.stderr.flush()
+        for cleanup in reversed(_CLEANUPS):
+            _quietly(cleanup)
+        _quietly(remove_pending)
+        os.write(say, b"facemech: interrupted\n")
     finally:
         os._exit(EXIT_STATUS.get(signum, 128 + int(signum)))
 

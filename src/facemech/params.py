@@ -466,9 +466,11 @@ def read_preset(path) -> Parameters:
     if not path.is_file():
         raise InputError("file not found", source=str(path))
     try:
-        data = json.loads(path.read_text())
+        data = json.loads(path.read_text(encoding="utf-8"))
     except (ValueError, UnicodeDecodeError):
         raise InputError("not a JSON preset file", source=str(path)) from None
+    except RecursionError:
+        raise InputError("not a JSON preset file (nested too deeply)", source=str(path)) from None
     if not isinstance(data, dict) or data.get("format") != "facemech-preset":
         raise InputError("not a facemech preset file", source=str(path), field="format")
     if data.get("base") != "anatomical":
@@ -477,15 +479,30 @@ def read_preset(path) -> Parameters:
     scales = data.get("scales")
     if not isinstance(scales, dict):
         raise InputError("missing scales", source=str(path), field="scales")
+    for key, v in scales.items():
+        if _file_number(v) is None:
+            raise InputError(f"scale {key} must be a positive number (got {v!r})",
+                             source=str(path), field=key)
     try:
-        p = anatomical({k: float(v) for k, v in scales.items()})
-    except (InputError, TypeError, ValueError) as exc:
-        msg = exc.message if isinstance(exc, InputError) else "scales must be numbers"
-        raise InputError(msg, source=str(path), field=getattr(exc, "field", "scales")) from None
+        p = anatomical({k: _file_number(v) for k, v in scales.items()})
+    except InputError as exc:
+        raise InputError(exc.message, source=str(path), field=exc.field) from None
     return p.with_(name=str(data.get("name", path.stem)),
                    **_read_jaw(data.get("jaw"), p, str(path)),
                    **_read_muscle(data.get("muscle"), p, str(path)),
                    **_read_step(data.get("step"), p, str(path)))
+
+
+def _file_number(v) -> float | None:
+    """A preset file's number as a finite float; None for anything else (a boolean, text, an
+    integer beyond a float's range, NaN, an infinity)."""
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        return None
+    try:
+        x = float(v)
+    except OverflowError:
+        return None
+    return x if np.isfinite(x) else None
 
 
 #: a preset file's ``step`` block: the file's key -> (the Parameters field, its kind and the
@@ -521,13 +538,13 @@ def _read_step(block, base: Parameters, source: str) -> dict:
     out = {}
     for key, v in block.items():
         name, kind, scale = STEP_KEYS[key]
-        number = isinstance(v, (int, float)) and not isinstance(v, bool)
-        if (kind is bool and not isinstance(v, bool)) or (kind is not bool and not number) or (
-                kind is int and v != int(v)):
+        number = _file_number(v)
+        if (kind is bool and not isinstance(v, bool)) or (kind is not bool and number is None) or (
+                kind is int and not float(number).is_integer()):
             raise InputError(f"{key} must be {'true or false' if kind is bool else 'a number'}"
                              f"{' of steps' if kind is int else ''} (got {v!r})", source=source,
                              field="step." + key)
-        out[name] = v if kind is bool else kind(v) * scale
+        out[name] = v if kind is bool else kind(number) * scale
     try:
         base.with_(**out)
     except InputError as exc:
@@ -552,11 +569,11 @@ def _read_muscle(block, base: Parameters, source: str) -> dict:
                          field="muscle." + sorted(unknown)[0])
     out = {}
     for key, v in block.items():
-        if isinstance(v, bool) or not isinstance(v, (int, float)):
+        if _file_number(v) is None:
             raise InputError(f"{key} must be a number (got {v!r})", source=source,
                              field="muscle." + key)
         name, scale = MUSCLE_DYNAMICS_KEYS[key]
-        out[name] = float(v) * scale
+        out[name] = _file_number(v) * scale
     values = {"fv_vmax": base.fv_vmax, "fv_curvature": base.fv_curvature,
               "tau_activation": base.tau_activation,
               "activation_damping": base.activation_damping, **out}
@@ -586,10 +603,10 @@ def _read_jaw(jaw, base: Parameters, source: str) -> dict:
                                    ("glide_slope_deg", "glide_slope", np.pi / 180)):
         if key in jaw:
             v = jaw[key]
-            if isinstance(v, bool) or not isinstance(v, (int, float)):
+            if _file_number(v) is None:
                 raise InputError(f"{key} must be a number (got {v!r})", source=source,
                                  field="jaw." + key)
-            out[field_name] = float(v) * scale
+            out[field_name] = _file_number(v) * scale
     try:
         check_jaw_kinematics(out["jaw_kinematics"], out["glide_rate"], out["glide_slope"])
     except InputError as exc:

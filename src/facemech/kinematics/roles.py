@@ -69,9 +69,11 @@ def bone_points(ms: MarkerSet, *, incisor: str | None = None, molar: str | None 
                 skin_jaw: str | None = None) -> tuple[str | None, str | None, bool]:
     """The jaw's bone points of a marker set: (incisor, molar, found by role).
 
-    Named points are checked against the set; without names, and without a skin jaw marker
-    (``skin_jaw``, e.g. ``--chin-marker``), the sensor of role ``lower_incisor`` is the
-    incisor and the one of role ``molar`` the second point. A molar needs an incisor.
+    Named points are checked against the set and against the sensors' roles (a named incisor
+    whose role is, e.g., ``upper_lip`` is refused, naming the role); without names, and without
+    a skin jaw marker (``skin_jaw``, e.g. ``--chin-marker``), the sensor of role
+    ``lower_incisor`` is the incisor and the one of role ``molar`` the second point. A molar
+    needs an incisor.
     """
     src = ms.meta.get("source")
     if molar is not None and incisor is None:
@@ -83,9 +85,14 @@ def bone_points(ms: MarkerSet, *, incisor: str | None = None, molar: str | None 
     for name in (incisor, molar):
         if name is not None and name not in ms.names:
             raise InputError("jaw bone point not in the marker data", source=src, field=name)
+    if incisor is not None and incisor == molar:
+        raise InputError(f"{incisor!r} is given as both the incisor and the molar point",
+                         source=src, field="jaw-molar")
+    roles = marker_roles(ms)
+    for name, role in ((incisor, "lower_incisor"), (molar, "molar")):
+        _check_bone_role(ms, roles, name, role)
     if incisor is not None or skin_jaw is not None:
         return incisor, molar, False
-    roles = marker_roles(ms)
     found = {}
     for role in BONE_ROLES:
         names = _with_role(ms, roles, role)
@@ -96,6 +103,20 @@ def bone_points(ms: MarkerSet, *, incisor: str | None = None, molar: str | None 
     if found["lower_incisor"] is None:
         return None, None, False
     return found["lower_incisor"], found["molar"], True
+
+
+def _check_bone_role(ms: MarkerSet, roles: dict[str, str], name: str | None,
+                     role: str) -> None:
+    """Refuse a sensor named as the bone point of ``role`` (``lower_incisor`` for
+    ``--jaw-incisor``, ``molar`` for ``--jaw-molar``) whose own role is another one; a sensor
+    without a role, or of role ``other``, is taken as named."""
+    has = roles.get(name or "")
+    if name is None or has in (None, "other", role):
+        return
+    option = "jaw-incisor" if role == "lower_incisor" else "jaw-molar"
+    what = "another point on the jaw bone" if has in BONE_ROLES else "not a point on the jaw bone"
+    raise InputError(f"--{option} {name}: the sensor's role is {has}, {what} (--{option} takes "
+                     f"the sensor of role {role})", source=ms.meta.get("source"), field=option)
 
 
 def lip_markers(ms: MarkerSet, model) -> dict[str, int]:

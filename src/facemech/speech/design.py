@@ -238,6 +238,9 @@ def parse_row(row: dict, *, base: Path, ids: set[str], has_hook: bool) -> Stimul
     if "freeze_region" in row:
         s["freeze_region"] = _regions(row, "freeze_region", None, parse_regions)
         s["freeze_at"] = _freeze_at(row)
+    elif "freeze_at" in row:
+        raise RowError("freeze_at without a freeze_region holds nothing still", row=k,
+                       column="freeze_at")
     s["av_offset_ms"] = _number(row, "av_offset_ms", 0.0)
     for c in ALIVE_COLUMNS[:3]:
         s[c] = _switch(row, c, False)
@@ -350,7 +353,14 @@ def make_stimulus_and_voice(ds, audio: Audio, settings: dict, *,
         ds = st.scale_amplitude(ds, settings["amplitude"], settings.get("amplitude_region",
                                                                         "face"))
     if settings.get("freeze_region"):
-        ds = st.freeze(ds, settings["freeze_region"], settings.get("freeze_at", "rest"))
+        at = settings.get("freeze_at", "rest")
+        times = np.asarray(ds["time"].values, float)
+        half = 0.5 / float(ds.attrs.get("frame_rate_hz", 60.0))
+        if isinstance(at, float) and len(times) and not \
+                times[0] - half <= at <= times[-1] + half:
+            raise InputError(f"{at:g} s is outside the stimulus ({times[0]:g} to "
+                             f"{times[-1]:.3f} s)", field="freeze_at")
+        ds = st.freeze(ds, settings["freeze_region"], at)
     if settings.get("av_offset_ms", 0.0) != 0.0:
         ds, audio = st.offset_audio(ds, audio, settings["av_offset_ms"])
     return ds, audio, voice

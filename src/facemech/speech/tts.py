@@ -45,7 +45,8 @@ from ..errors import FacemechError, InputError
 from .alignment import Alignment, Segment
 from .wav import read_wav, write_wav
 
-__all__ = ["Speech", "synthesize", "voices", "write_wav", "read_wav", "RATE_RANGE_WPM"]
+__all__ = ["Speech", "check_variant", "synthesize", "variants", "voices", "write_wav", "read_wav",
+           "RATE_RANGE_WPM"]
 
 RATE_RANGE_WPM = (80, 450)
 """eSpeak NG's speaking rates (words per minute), ``espeakRATE_MINIMUM`` to ``_MAXIMUM``."""
@@ -106,6 +107,37 @@ def voices() -> list[tuple[str, str]]:
     """The installed eSpeak NG voices as (language, name) pairs, e.g. ``("en-us", ...)``."""
     with _LOCK:
         return [tuple(v) for v in _engine().voices()]
+
+
+def variants() -> list[str]:
+    """The voice variants eSpeak NG has: the names that may follow ``+`` in a voice (``f3``,
+    ``m1``, ``klatt``; a number N is ``mN`` below 10 and ``f(N-10)`` from 10 on)."""
+    folder = Path(_paths()[1]) / "voices" / "!v"
+    try:
+        return sorted(p.name for p in folder.iterdir() if p.is_file())
+    except OSError:
+        raise FacemechError(f"eSpeak NG's voice variants are missing ({folder})") from None
+
+
+def check_variant(voice: str) -> None:
+    """Refuse (InputError, field ``voice``) a ``+variant`` that eSpeak NG does not have: it
+    would speak with the plain voice and say nothing. A numeric variant is eSpeak's shorthand
+    (see :func:`variants`). The voice itself is checked when it speaks."""
+    base, plus, variant = str(voice).strip().partition("+")
+    if not plus:
+        return
+    if not base.strip():
+        raise InputError(f"--voice {voice!r}: no voice before the '+{variant}'", field="voice")
+    have = variants()
+    name = variant
+    if variant[:1].isdigit():
+        digits = variant[:len(variant) - len(variant.lstrip("0123456789"))]
+        number = int(digits)
+        name = "" if variant != digits or number == 0 else \
+            f"m{number}" if number < 10 else f"f{number - 10}"
+    if name not in have:
+        raise InputError(f"--voice {voice!r}: eSpeak NG has no voice variant {variant!r}; "
+                         f"it has {', '.join(have)}", field="voice")
 
 
 def _voice_error(voice: str, table) -> InputError:
@@ -180,8 +212,8 @@ def synthesize(text: str, *, voice: str = "en-us", rate_wpm: int = 160,
     Raises
     ------
     InputError
-        Empty text (field ``text``), an unknown voice (``voice``), a rate outside 80-450 wpm
-        (``rate_wpm``), a pitch outside 0-100 (``pitch``).
+        Empty text (field ``text``), an unknown voice or voice variant (``voice``), a rate
+        outside 80-450 wpm (``rate_wpm``), a pitch outside 0-100 (``pitch``).
     """
     if not isinstance(text, str) or not text.strip():
         raise InputError("nothing to say: the text is empty", field="text")
@@ -198,6 +230,7 @@ def synthesize(text: str, *, voice: str = "en-us", rate_wpm: int = 160,
     if not isinstance(voice, str) or not voice.strip():
         raise InputError("no voice given", field="voice")
     voice, rate_wpm = voice.strip(), int(round(rate_wpm))
+    check_variant(voice)
     pitch = None if pitch is None else int(round(pitch))
     run = _run_worker if isolated else _run_here
     pcm, events, rate, version = run(text, voice, rate_wpm, pitch)

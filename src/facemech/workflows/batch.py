@@ -79,20 +79,40 @@ def _input_bytes(item: Item) -> int:
     return total
 
 
-def _stop_workers(out: Path) -> None:
-    """On an interrupt: end this command's worker processes at once (SIGKILL, so that none
-    logs or starts another item), then remove the items' half-made folders."""
+def _stop_workers(out: Path, clusters: list, created: bool) -> None:
+    """On an interrupt: tell the local cluster's nannies not to restart their workers, end
+    this command's child processes at once (SIGKILL, so that none logs or starts another
+    item; multiprocessing's resource tracker is left to release their semaphores when this
+    process ends), then remove the items' half-made folders, and ``out`` itself when this
+    command made it and it is empty."""
+    logging.disable(logging.CRITICAL)  # dask's threads go on a moment: nothing more from them
+    for cluster in clusters:
+        with contextlib.suppress(Exception):
+            from distributed.core import Status
+
+            for nanny in list(getattr(cluster, "workers", {}).values()):
+                nanny.status = Status.closing  # a nanny restarts a worker that dies, else
     try:
         import psutil  # a dependency of dask.distributed
     except ImportError:
         psutil = None
     if psutil is not None:
-        children = psutil.Process().children(recursive=True)
-        for child in children:
-            with contextlib.suppress(psutil.Error):
-                child.kill()
-        psutil.wait_procs(children, timeout=5)
+        from multiprocessing import resource_tracker
+
+        tracker = getattr(resource_tracker._resource_tracker, "_pid", None)
+        for _ in range(3):  # again, for a process started while the first ones were ended
+            children = [c for c in psutil.Process().children(recursive=True)
+                        if c.pid != tracker]
+            if not children:
+                break
+            for child in children:
+                with contextlib.suppress(psutil.Error):
+                    child.kill()
+            psutil.wait_procs(children, timeout=5)
     remove_partial(out)
+    if created:
+        with contextlib.suppress(OSError):
+            out.rmdir()  # only when empty: finished items stay
 
 
 def _quiet_resource_tracker() -> None:
@@ -212,6 +232,7 @@ def run_batch(manifest: str | Path, output: str | Path, *, workers: int | None =
     items = read_manifest(manifest)
     out = check_output(output, [manifest, *_all_inputs(items)], folder=True, field="-o")
     out = out.resolve()
+    created = not out.exists()
     out.mkdir(parents=True, exist_ok=True)
     remove_partial(out)
     total = len(items)
@@ -236,11 +257,13 @@ def run_batch(manifest: str | Path, output: str | Path, *, workers: int | None =
             todo.append(item)
     from ..interrupts import on_interrupt
 
-    forget = on_interrupt(lambda: _stop_workers(out))  # SIGINT/SIGTERM: no .partial-* left
+    clusters: list = []  # the local cluster, once started
+    forget = on_interrupt(lambda: _stop_workers(out, clusters, created))  # SIGINT/SIGTERM
     try:
         if todo:
             rep.cluster = _run_on_dask(todo, out, finished, workers=workers,
-                                       scheduler=scheduler, client=client, processes=processes)
+                                       scheduler=scheduler, client=client, processes=processes,
+                                       clusters=clusters)
     finally:
         forget()
         remove_partial(out)
@@ -250,15 +273,16 @@ def run_batch(manifest: str | Path, output: str | Path, *, workers: int | None =
 
 
 def _run_on_dask(todo: list[Item], out: Path, finished: Callable[[Outcome], None], *,
-                 workers, scheduler, client, processes) -> str:
-    """Send ``todo`` to dask; call ``finished`` with each outcome as it comes. Returns where
-    they ran."""
+                 workers, scheduler, client, processes, clusters: list) -> str:
+    """Send ``todo`` to dask; call ``finished`` with each outcome as it comes (``clusters``
+    gets the local cluster started for them). Returns where they ran."""
     from distributed import as_completed
 
     own = None
     if client is None:
         client, cluster, where = _connect(workers, scheduler, processes, len(todo))
         own = (client, cluster)
+        clusters.append(cluster)
     else:
         where = f"the client's cluster ({client.scheduler.address})"
     try:

@@ -393,9 +393,11 @@ def text_items(work_dir: str | Path, *, preset: str = "anatomical"):
                 raise InputError(f"{text!r} must be a positive number", field=column)
             values.append(kind(v))
         _plan_cell(row.get("plan") or "yes")
+        check_variant(str(row.get("voice", "en-us")))
         return values[0], Articulation.parse(row.get("scale") or None, strength=values[1])
 
     from ..speech.articulation import Articulation
+    from ..speech.tts import check_variant
 
     def make_item(row: dict):
         from ..speech.alive import Liveliness

@@ -50,8 +50,10 @@ class DesignReport:
     manifest_csv: Path | None = None
 
     def summary(self) -> str:
+        where = "no manifest written" if self.manifest_json is None else \
+            f"manifest -> {self.manifest_json}"
         return (f"{len(self.made)} made, {len(self.skipped)} unchanged, {len(self.failed)} "
-                f"failed; manifest -> {self.manifest_json}")
+                f"failed; {where}")
 
 
 def _hash_json(obj) -> str:
@@ -100,8 +102,11 @@ def run_design(table_path: str | Path, out_dir: str | Path, make_item: MakeItem 
     and head motion the row's ``blinks``, ``gaze``, ``head_motion`` and ``seed`` turn on: off by
     default; the manifest's ``alive`` records them and their times), each atomically; then the
     manifest (``manifest.json`` and ``manifest.csv``) is rewritten, so an interrupted run keeps
-    what it made. A row that cannot be made is reported (a :class:`RowError` in the report and
-    the manifest) and the others are still made. A stimulus whose key (a hash of its settings,
+    what it made. The whole table is checked first (:func:`~facemech.speech.design.check_design`:
+    its cells, files, sounds, results and frames); nothing is written when it is refused. A row
+    that still cannot be made is reported (a :class:`RowError` in the report, and in the
+    manifest once a row has been made) and the others are still made; a run that makes no row
+    writes no manifest. A stimulus whose key (a hash of its settings,
     its inputs' hashes, the render settings and facemech's version) matches the manifest's, and
     whose files are all there, is skipped.
 
@@ -119,61 +124,31 @@ def run_design(table_path: str | Path, out_dir: str | Path, make_item: MakeItem 
     -------
     DesignReport
     """
-    from .._version import __version__
     from ..analysis.describe import describe
-    from ..io.results import file_hash, write_dataset
+    from ..io.results import write_dataset
 
     table_path, out_dir = Path(table_path), Path(out_dir)
     parsed = check_design(table_path, make_item)  # the whole table, before anything is written
     specs = {spec.id: spec for spec in parsed}  # every row parsed: a RowError refused it
     render = _render_settings(options, video)
     old = _old_entries(out_dir / "manifest.json")
+    cache: dict[str, tuple] = {}
+    _rehearse(parsed, specs, make_item, table_path, render, video, old, out_dir, cache)
     report = DesignReport()
     entries: list[dict] = []
-    cache: dict[str, tuple] = {}
     total = len(parsed)
     for done, spec in enumerate(parsed):
         if progress is not None:
             progress("stimuli", done, total)
         try:
-            inputs = {"source": _source_hash(spec.source, make_item)}
-            if "dub_audio" in spec.settings:
-                inputs["dub_audio"] = file_hash(spec.settings["dub_audio"])
-            if "dub_from" in spec.settings:
-                ref = specs.get(spec.settings["dub_from"])
-                if ref is None:
-                    raise RowError(f"row {spec.settings['dub_from']!r} could not be read",
-                                   row=spec.row, column="dub_from")
-                inputs["dub_from"] = _source_hash(ref.source, make_item)
-            key = _hash_json({"settings": spec.settings, "inputs": inputs, "render": render,
-                              "extra": spec.extra, "version": __version__})
-            outputs = {"results": f"{spec.id}.nc", "audio": f"{spec.id}.wav"}
-            if video:
-                outputs["movie"] = f"{spec.id}.mp4"
-            prev = old.get(spec.id)
-            if (prev is not None and prev.get("key") == key and prev.get("status") in (
-                    "made", "unchanged")
-                    and all((out_dir / f).is_file() for f in outputs.values())):
-                entries.append({**prev, "row": spec.row, "status": "unchanged"})
+            key, inputs, outputs = _row_key(spec, specs, make_item, render, video)
+            if _unchanged(old.get(spec.id), key, outputs, out_dir):
+                entries.append({**old[spec.id], "row": spec.row, "status": "unchanged"})
                 report.skipped.append(spec.id)
                 _write_manifest(out_dir, table_path, render, entries, report)
                 continue
-            ds, audio = _item(spec.id, spec.source, make_item, spec.row, cache)
-            dub_audio = None
-            if "dub_audio" in spec.settings:
-                try:
-                    dub_audio = read_wav(spec.settings["dub_audio"])
-                except InputError as exc:
-                    raise RowError(exc.message, row=spec.row, column="dub_audio") from None
-            elif "dub_from" in spec.settings:
-                ref = specs[spec.settings["dub_from"]]
-                dub_audio = _item(ref.id, ref.source, make_item, spec.row, cache)[1]
-            try:
-                ds, audio, voice = make_stimulus_and_voice(ds, audio, spec.settings,
-                                                           dub_audio=dub_audio)
-                lively = stimulus_liveliness(ds, voice, spec.settings)
-            except InputError as exc:
-                raise RowError(exc.message, row=spec.row, column=exc.field) from None
+            ds, audio, voice = _stimulus(spec, specs, make_item, cache)
+            lively = _row_call(spec, stimulus_liveliness, ds, voice, spec.settings)
             ds.attrs["stimulus_id"] = spec.id
             ds.attrs["stimulus_key"] = key
             out_dir.mkdir(parents=True, exist_ok=True)
@@ -201,11 +176,81 @@ def run_design(table_path: str | Path, out_dir: str | Path, make_item: MakeItem 
             err = with_source(RowError(exc.one_line(), row=spec.row), table_path)
             report.failed.append(err)
             entries.append(_failed_entry(err, spec))
-        _write_manifest(out_dir, table_path, render, entries, report)
+        if report.made or report.skipped:  # a run that makes nothing writes nothing
+            _write_manifest(out_dir, table_path, render, entries, report)
     if progress is not None:
         progress("stimuli", total, total)
-    _write_manifest(out_dir, table_path, render, entries, report)
+    if report.made or report.skipped:
+        _write_manifest(out_dir, table_path, render, entries, report)
     return report
+
+
+def _row_key(spec: Stimulus, specs: dict, make_item, render: dict, video: bool):
+    """A row's key (its settings, its inputs' hashes, the render settings and facemech's
+    version, hashed), its inputs' hashes and its outputs' names."""
+    from .._version import __version__
+    from ..io.results import file_hash
+
+    inputs = {"source": _source_hash(spec.source, make_item)}
+    if "dub_audio" in spec.settings:
+        inputs["dub_audio"] = file_hash(spec.settings["dub_audio"])
+    if "dub_from" in spec.settings:
+        inputs["dub_from"] = _source_hash(specs[spec.settings["dub_from"]].source, make_item)
+    key = _hash_json({"settings": spec.settings, "inputs": inputs, "render": render,
+                      "extra": spec.extra, "version": __version__})
+    outputs = {"results": f"{spec.id}.nc", "audio": f"{spec.id}.wav"}
+    if video:
+        outputs["movie"] = f"{spec.id}.mp4"
+    return key, inputs, outputs
+
+
+def _unchanged(prev: dict | None, key: str, outputs: dict, out_dir: Path) -> bool:
+    return (prev is not None and prev.get("key") == key
+            and prev.get("status") in ("made", "unchanged")
+            and all((out_dir / f).is_file() for f in outputs.values()))
+
+
+def _row_call(spec: Stimulus, fn, *args, **kw):
+    try:
+        return fn(*args, **kw)
+    except InputError as exc:
+        raise RowError(exc.message, row=spec.row, column=exc.field) from None
+
+
+def _stimulus(spec: Stimulus, specs: dict, make_item, cache: dict):
+    """A row's face and sound loaded (``cache``: id -> (dataset, Audio)) and manipulated:
+    :func:`~facemech.speech.design.make_stimulus_and_voice`'s (dataset, Audio, voice)."""
+    ds, audio = _item(spec.id, spec.source, make_item, spec.row, cache)
+    dub_audio = None
+    if "dub_audio" in spec.settings:
+        try:
+            dub_audio = read_wav(spec.settings["dub_audio"])
+        except InputError as exc:
+            raise RowError(exc.message, row=spec.row, column="dub_audio") from None
+    elif "dub_from" in spec.settings:
+        ref = specs[spec.settings["dub_from"]]
+        dub_audio = _item(ref.id, ref.source, make_item, spec.row, cache)[1]
+    return _row_call(spec, make_stimulus_and_voice, ds, audio, spec.settings,
+                     dub_audio=dub_audio)
+
+
+def _rehearse(parsed, specs, make_item, table, render, video, old, out_dir, cache) -> None:
+    """Make, in memory, every row whose face and sounds are files (no ``make_item``) and that
+    is not unchanged, before anything is written: a row that cannot be made refuses the whole
+    table (InputError naming the table, the row and the column)."""
+    for spec in parsed:
+        sources = [spec.source] + ([specs[spec.settings["dub_from"]].source]
+                                   if "dub_from" in spec.settings else [])
+        if any("results" not in src for src in sources):
+            continue
+        key, _, outputs = _row_key(spec, specs, make_item, render, video)
+        if _unchanged(old.get(spec.id), key, outputs, out_dir):
+            continue
+        try:
+            _stimulus(spec, specs, make_item, cache)
+        except RowError as exc:
+            err = with_source(exc, table)
+            raise InputError(err.message, source=err.source) from None
 
 
 def _item(sid, source, make_item, row, cache):
