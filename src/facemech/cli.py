@@ -282,7 +282,8 @@ def compare(a: Path, b: Path, markers: str | None = None, as_json: bool = False,
             units: str | None = None):
     """3-D statistics, per-axis correlations and per-frame errors (RMS, mm) of A against B."""
     res = workflows.compare.compare_files(a, b, markers=markers, units=units)
-    _say([f"warning: {w}" for w in res.warnings], True, markup=False, highlight=False)
+    _say([f"note: {n}" for n in res.notes] + [f"warning: {w}" for w in res.warnings], True,
+         markup=False, highlight=False)
     (print if as_json else out.print)("\n".join(workflows.compare.report(res, as_json=as_json)))
 
 @command(experiment_app, "pitermann2001-synthetic")

@@ -63,9 +63,33 @@ def read_marker_csv(path: str | Path, *, units: str | None = None) -> MarkerSet:
                 raise InputError("filled samples of an unknown marker", source=str(path),
                                  field=name)
             filled[np.asarray(frames.split(), int), names.index(name)] = True
+    extra = _roles_from(meta, names, str(path))
     return MarkerSet(pos, tuple(names), uniform_rate(t, source=str(path)), time=t,
                      source_units=unit, filled=filled,
-                     meta={"source": str(path), "format": "csv"})
+                     meta={"source": str(path), "format": "csv", **extra})
+
+
+def _roles_from(meta: dict, names: list[str], src: str) -> dict:
+    """``roles`` and ``midsagittal`` of a CSV's ``# roles:`` and ``# midsagittal:`` comments."""
+    from ..markerset import SENSOR_ROLES
+
+    out: dict = {}
+    if "roles" in meta:
+        roles = {}
+        for part in meta["roles"].split(";"):
+            name, _, role = (x.strip() for x in part.partition("="))
+            if not name:
+                continue
+            if name not in names:
+                raise InputError("a role for an unknown marker", source=src, field=name)
+            if role not in SENSOR_ROLES:
+                raise InputError(f"unknown role {role!r} (expected one of "
+                                 f"{', '.join(SENSOR_ROLES)})", source=src, field="roles")
+            roles[name] = role
+        out["roles"] = roles
+    if "midsagittal" in meta:
+        out["midsagittal"] = meta["midsagittal"].strip().lower() in ("yes", "true", "1")
+    return out
 
 
 def write_marker_csv(path: str | Path, ms: MarkerSet, *, units: str | None = None) -> None:
@@ -78,6 +102,10 @@ def write_marker_csv(path: str | Path, ms: MarkerSet, *, units: str | None = Non
             parts = [f"{n}=" + " ".join(map(str, np.nonzero(ms.filled[:, k])[0]))
                      for k, n in enumerate(ms.names) if ms.filled[:, k].any()]
             fh.write(f"# filled: {'; '.join(parts)}\n")
+        roles = {n: r for n, r in (ms.meta.get("roles") or {}).items() if n in ms.names}
+        if roles:  # articulography keeps its roles, and planar data says so
+            fh.write(f"# roles: {'; '.join(f'{n}={r}' for n, r in roles.items())}\n")
+            fh.write(f"# midsagittal: {'yes' if ms.meta.get('midsagittal') else 'no'}\n")
         fh.write("time," + ",".join(f"{n}_{a}" for n in ms.names for a in "xyz") + "\n")
         for k, t in enumerate(ms.time):
             vals = ms.positions[k].reshape(-1) / scale
