@@ -145,6 +145,11 @@ markers_frame.output: the output marker file (.c3d, .trc or .csv)
 markers_frame.reference: frame the axes are taken from
 markers_head_correct.output: the output marker file (.c3d, .trc or .csv)
 markers_resample.output: the output marker file (.c3d, .trc or .csv)
+markers_trim.output: the output marker file (.c3d, .trc or .csv; a CSV keeps the roles)
+markers_trim.start: keep from this time, s (the file's times)
+markers_trim.stop: keep up to this time, s
+markers_trim.first: keep from this frame (from 0, as markers info shows)
+markers_trim.last: keep up to this frame
 plot.markers: comma-separated marker names
 plot.output: PNG
 regions.method: qrcp or strong

@@ -168,9 +168,11 @@ def check_marker_set(ms, markers: str | Path, *, scale_pair: str | None = None):
     empty = ~ms.valid.any(axis=1)
     if empty.any():
         k = int(np.argmax(empty))
+        from .markers import gap_hint
+
         raise InputError(f"frame {k + 1} (t = {ms.time[k]:.3f} s) has no marker at all "
-                         f"({int(empty.sum())} such frames): cut them or fill the gaps "
-                         "(facemech markers fill-gaps)", source=str(markers), field="frames")
+                         f"({int(empty.sum())} such frames): {gap_hint(ms, k)}",
+                         source=str(markers), field="frames")
     if scale_pair is not None:
         pair = [p.strip() for p in str(scale_pair).split(",")]
         if len(pair) != 2 or not all(pair) or pair[0] == pair[1]:

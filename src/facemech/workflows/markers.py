@@ -1,5 +1,5 @@
-"""Marker-file workflows: describe, convert, head-correct, resample, re-frame and fill gaps, and
-read named trajectories from a marker or results file onto a time grid."""
+"""Marker-file workflows: describe, convert, head-correct, resample, re-frame, fill gaps and
+trim, and read named trajectories from a marker or results file onto a time grid."""
 
 from __future__ import annotations
 
@@ -264,4 +264,48 @@ def fill_gaps_file(source: str | Path, output: str | Path, *, max_gap: float = 0
     line = (f"filled {len(done)} gaps ({sum(g.length for g in done)} samples); {len(left)} left "
             f"-> {output}")
     notes = "".join(f"  not filled: {gap_text(g)}\n" for g in left[:20])
+    if any(not g.interior for g in left):
+        notes += ("  gaps at an end are never filled (nothing to interpolate from): cut them "
+                  "(facemech markers trim)\n")
     return Written(Path(output), (res, done, left), line, notes)
+
+
+def gap_hint(ms, frame: int, marker: int | None = None) -> str:
+    """What to do about a missing sample at ``frame`` (of ``marker``; None: of every marker):
+    fill it where fill-gaps can (a gap with samples before and after), else cut the ends."""
+    valid = ms.valid.any(axis=1) if marker is None else ms.valid[:, marker]
+    if valid[:frame].any() and valid[frame:].any():
+        return "fill the gap (facemech markers fill-gaps) or cut it off (facemech markers trim)"
+    return ("cut the recording to where the data are (facemech markers trim; fill-gaps fills "
+            "only gaps with data on both sides)")
+
+
+def trim_file(source: str | Path, output: str | Path, *, start: float | None = None,
+              stop: float | None = None, first: int | None = None, last: int | None = None,
+              units: str | None = None):
+    """Keep the frames of a marker file between two times (s, the file's own) or two frame
+    numbers (from 0, as ``markers info`` shows them), and write them (``.csv``, ``.trc`` or
+    ``.c3d``; a CSV keeps articulography's roles). Without bounds, the leading and trailing
+    frames where no marker is present are dropped. The input is never overwritten; the output
+    is written atomically.
+
+    Returns
+    -------
+    Written : ``data`` the MarkerSet written
+    """
+    from ..io.markers import read_markers, write_markers
+    from ..kinematics.trim import drop_empty_ends, trim
+
+    check_output(output, [source], field="-o")
+    ms = read_markers(source, units=units)
+    n, t0, t1 = ms.n_frames, ms.time[0], ms.time[-1]
+    if all(v is None for v in (start, stop, first, last)):
+        res, note = drop_empty_ends(ms)
+        how = note or "no frame without markers at either end: all kept"
+    else:
+        res = trim(ms, start=start, stop=stop, first=first, last=last)
+        a, b = res.meta["trimmed"]
+        how = (f"kept frames {a}-{b} (t = {res.time[0]:.3f}-{res.time[-1]:.3f} s) of {n} "
+               f"({t0:.3f}-{t1:.3f} s)")
+    write_markers(output, res)
+    return Written(Path(output), res, f"{how}; {res.n_frames} frames -> {output}")
