@@ -90,7 +90,7 @@ def test_an_articulography_reader_survives_fuzzing(tmp_path, name):
     run()
 
 
-# ---- issue 58's rows ------------------------------------------------------------------------------
+# ---- issue 58's rows ------------------------------------------------------------------------
 def _real_like(folder, order="01"):
     """A MOCHA EST binary file of 200 frames of speech-like motion (0.01 mm)."""
     vals = _mocha_values(n=200)
