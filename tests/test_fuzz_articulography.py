@@ -1,7 +1,8 @@
 """The articulography readers under fuzzing, and the two bad inputs of issue 58 they met.
 
 Arbitrary bytes, truncations and mutations of valid EST (binary both byte orders, ascii,
-mngu0's 3-D layout), MOCHA plain-text and X-ray microbeam ``.txy`` files give a valid
+mngu0's 3-D layout), MOCHA plain-text, X-ray microbeam ``.txy``, Carstens ``.pos`` (AG501 with
+its header, AG500 without) and NDI Wave files give a valid
 MarkerSet or facemech's InputError: never another exception, and never a warning (numpy's
 RuntimeWarning is turned into an error here). Profiles as in ``test_fuzz_readers.py``.
 """
@@ -68,10 +69,29 @@ def _txy(folder):
     return write_txy(folder / "seed.txy", n=N, lost=[(2, "T2")])
 
 
+def _ag501(folder):
+    from test_ema_formats import _model_mm, write_ag501
+
+    return write_ag501(folder / "seed.pos", _model_mm(n=N))
+
+
+def _ag500(folder):
+    from test_ema_formats import _model_mm, write_ag500
+
+    return write_ag500(folder / "seed5.pos", _model_mm(n=N))
+
+
+def _ndi(folder):
+    from test_ema_formats import _model_mm, write_ndi
+
+    return write_ndi(folder / "seed.tsv", _model_mm(n=N), lost=[(3, 1)])
+
+
 SEEDS = {"est-binary-01": lambda f: _mocha_binary(f, "01"),
          "est-binary-10": lambda f: _mocha_binary(f, "10"),
          "est-ascii": _mocha_ascii, "est-mngu0": _mngu0, "mocha-text": _mocha_text,
-         "xrmb-txy": _txy}
+         "xrmb-txy": _txy, "carstens-ag501": _ag501, "carstens-ag500": _ag500,
+         "ndi-wave": _ndi}
 
 
 @pytest.mark.parametrize("name", list(SEEDS))

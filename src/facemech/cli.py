@@ -144,16 +144,19 @@ def emg_process(emg: Path, output: Path = ..., rate: float | None = None,
     return workflows.emg.process_emg_file(**locals())
 
 @command(markers_app, "info")
-def markers_info(source: Path, units: str | None = None, as_json: bool = False):
-    """Rate, units, markers and gaps of a marker file (.c3d .trc .csv .tsv .ema .est .txy)."""
-    out.print(workflows.markers.marker_info(source, units=units).text(as_json), markup=False)
+def markers_info(source: Path, units: str | None = None, as_json: bool = False,
+                 rate: float | None = None, sensors: str | None = None):
+    """Rate, units, markers and gaps of a marker file (.c3d .trc .csv .tsv .ema .est .txy .pos)."""
+    out.print(workflows.markers.marker_info(source, units=units, rate=rate, sensors=sensors)
+              .text(as_json), markup=False)
 
 @command(markers_app, "convert", args=("target",))
 def markers_convert(source: Path, target: Path | None = None, output: Path | None = None,
-                    units: str | None = None, out_units: str | None = None):
-    """Convert between C3D, TRC and CSV (read Qualisys TSV and a results file's markers)."""
+                    units: str | None = None, out_units: str | None = None,
+                    rate: float | None = None, sensors: str | None = None):
+    """Convert to C3D, TRC or CSV (from any marker file, articulography or results)."""
     return (workflows.markers.convert_markers(source, output or target, units=units,
-                                         out_units=out_units))
+                                         out_units=out_units, rate=rate, sensors=sensors))
 
 @command(markers_app, "head-correct")
 def markers_head_correct(source: Path, output: Path = ..., units: str | None = None,

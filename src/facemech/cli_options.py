@@ -140,6 +140,10 @@ invert.markers: marker file in the model's frame and frame rate
 invert.output: results file (.nc)
 markers_convert.output: the output marker file (or TARGET)
 markers_convert.target: or -o
+markers_convert.rate: Hz, for files without times (AG500 .pos: 200; MOCHA 20-column text: 500)
+markers_convert.sensors: sensor names in channel order, e.g. ul,ll,li (.pos, NDI Wave)
+markers_info.rate: Hz, for files without times (AG500 .pos: 200; MOCHA 20-column text: 500)
+markers_info.sensors: sensor names in channel order, e.g. ul,ll,li (.pos, NDI Wave)
 markers_fill_gaps.output: the output marker file (.c3d, .trc or .csv)
 markers_frame.output: the output marker file (.c3d, .trc or .csv)
 markers_frame.reference: frame the axes are taken from

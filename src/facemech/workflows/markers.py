@@ -148,26 +148,31 @@ def gap_text(g) -> str:
             + ("" if g.interior else " at an end"))
 
 
-def marker_info(path: str | Path, *, units: str | None = None) -> MarkerInfo:
-    """Read a marker file and find its gaps (``units``: length unit if the file has none)."""
+def marker_info(path: str | Path, *, units: str | None = None, rate: float | None = None,
+                sensors: str | None = None) -> MarkerInfo:
+    """Read a marker file and find its gaps (``units``: length unit if the file has none;
+    ``rate``, ``sensors``: :func:`facemech.io.markers.read_markers`)."""
     from ..io.markers import read_markers
     from ..kinematics.gaps import find_gaps
 
-    ms = read_markers(path, units=units)
+    ms = read_markers(path, units=units, rate=rate, sensors=sensors)
     return MarkerInfo(Path(path), ms, find_gaps(ms))
 
 
 def convert_markers(source: str | Path, target: str | Path | None, *, units: str | None = None,
-                    out_units: str | None = None):
+                    out_units: str | None = None, rate: float | None = None,
+                    sensors: str | None = None):
     """Copy a marker file (or a results file's model markers) to ``target`` (``.c3d``, ``.trc``
-    or ``.csv``) in ``out_units`` (default: the input's). Returns :class:`Written` with the
-    MarkerSet read."""
+    or ``.csv``; a CSV keeps articulography's roles) in ``out_units`` (default: the input's);
+    ``rate`` and ``sensors`` for formats without times or names
+    (:func:`facemech.io.markers.read_markers`). Returns :class:`Written` with the MarkerSet
+    read."""
     from ..io.markers import read_markers, write_markers
 
     if target is None:
         raise InputError("give the output file (-o)", field="output")
     check_output(target, [source], field="-o")
-    ms = read_markers(source, units=units)
+    ms = read_markers(source, units=units, rate=rate, sensors=sensors)
     write_markers(target, ms, units=out_units)
     return Written(Path(target), ms, f"{ms.n_markers} markers, {ms.n_frames} frames -> {target}")
 
