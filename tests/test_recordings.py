@@ -323,3 +323,17 @@ def test_markers_convert_keeps_roles(monkeypatch, capsys, tmp_path):
     back, src = read_markers(tmp_path / "m.csv"), read_markers(MOCHA)
     assert back.meta["roles"] == src.meta["roles"] and back.meta["midsagittal"] is True
     assert np.allclose(back.positions, src.positions, atol=1e-9)
+
+
+def test_region_maps_need_three_markers_off_one_line():
+    from facemech.workflows.regions import _plane
+
+    face = np.array([[-30.0, 0, 0], [30, 0, 0], [0, 20, 10], [0, -20, 12]])
+    xy, axes, why = _plane(face)
+    assert axes == [0, 1] and why is None
+    sagittal = np.array([[0.0, 8, 10], [0, -14, 11], [0, -10, -12], [0, -4, -30]])
+    xy, axes, why = _plane(sagittal)
+    assert axes == [2, 1] and why is None  # z across, y up
+    line = np.array([[0.0, 0, 0], [0, 1, 1], [0, 2, 2]])
+    assert "one line" in _plane(line)[2]
+    assert "2 markers" in _plane(face[:2])[2]

@@ -208,20 +208,20 @@ def write(result, path: str | Path) -> Path:
     return Path(path)
 
 
-def _plane(rest_mm: np.ndarray) -> tuple[np.ndarray, str | None]:
+def _plane(rest_mm: np.ndarray) -> tuple[np.ndarray, list[int], str | None]:
     """The markers' layout for the maps: (markers, 2) mm in the two axes where the rest
-    positions spread most (x, y for a face; z, y for midsagittal articulography), and why no
-    map can be drawn (None: one can), for fewer than 3 markers or all on one line."""
+    positions spread most (x, y for a face; z, y for midsagittal articulography), those axes,
+    and why no map can be drawn (None: one can), for fewer than 3 markers or all on one line."""
     spread = np.ptp(rest_mm, axis=0)
     axes = sorted(np.argsort(spread)[-2:].tolist(), key=lambda a: (a == 1, a))  # y last
     xy = rest_mm[:, axes]
     if len(xy) < 3:
-        return xy, f"{len(xy)} markers (a map interpolates between at least 3)"
-    centred = xy - xy.mean(axis=0)
-    sv = np.linalg.svd(centred, compute_uv=False)
+        return xy, axes, f"{len(xy)} markers (a map interpolates between at least 3)"
+    sv = np.linalg.svd(xy - xy.mean(axis=0), compute_uv=False)
     if sv[0] == 0 or sv[1] < 1e-6 * sv[0]:
-        return xy, "the markers lie on one line at rest (a map needs them spread over a plane)"
-    return xy, None
+        return xy, axes, ("the markers lie on one line at rest (a map needs them spread over a "
+                          "plane)")
+    return xy, axes, None
 
 
 def draw(result, folder: str | Path):
@@ -241,9 +241,9 @@ def draw(result, folder: str | Path):
     out.mkdir(parents=True, exist_ok=True)
     figures = {"r_values": fig.r_values_figure(out / "r_values.png", result.r_values_mm,
                                                result.eps_mm, "R values (Fig. 2)").name}
-    xy, why = _plane(result.rest_mm)
+    xy, axes, why = _plane(result.rest_mm)
     if why is None:
-        figures.update(_maps(out, xy, result))
+        figures.update(_maps(out, xy, result, f"{'xyz'[axes[0]]} (mm)"))
     notes = () if why is None else (f"no eigenregion or orthogonal-region maps: {why}",)
     if result.held_out_error is not None:
         rows = result.held_out_error
@@ -262,7 +262,7 @@ def draw(result, folder: str | Path):
     return replace(result, figures={k: str(v) for k, v in figures.items()}, notes=notes)
 
 
-def _maps(out: Path, xy: np.ndarray, result) -> dict:
+def _maps(out: Path, xy: np.ndarray, result, xlabel: str) -> dict:
     """The eigenregion and orthogonal-region maps (Figs. 4-7) at the layout ``xy`` (mm)."""
     from ..viz import regions as fig
 
@@ -278,7 +278,7 @@ def _maps(out: Path, xy: np.ndarray, result) -> dict:
         marks.append(int(model.selected_[j]))
     if maps:
         figures["eigenregions"] = fig.region_maps(out / "eigenregions.png", xy, maps, titles,
-                                                  marks).name
+                                                  marks, xlabel=xlabel).name
     r = full.R_
     omaps, otitles, omarks = [], [], []
     for j in range(min(3, r.shape[0])):
@@ -288,5 +288,5 @@ def _maps(out: Path, xy: np.ndarray, result) -> dict:
         otitles.append(f"orthogonal region {j + 1} ({names[full.order_[j]]})")
         omarks.append(int(full.order_[j]))
     figures["orthogonal_regions"] = fig.region_maps(out / "orthogonal_regions.png", xy, omaps,
-                                                    otitles, omarks).name
+                                                    otitles, omarks, xlabel=xlabel).name
     return figures
