@@ -26,21 +26,22 @@ MOCHA = next((p for p in (_ROOT / "data" / "mocha" / "fsew0_001.ema",
              _ROOT / "data" / "mocha" / "fsew0_001.ema")
 needs_mocha = pytest.mark.skipif(not MOCHA.is_file(), reason="the MOCHA recording is absent")
 LEAD, TRAIL, N = 6, 3, 60
+TIP_RISE = 0.5  #: the tongue tip (T1) rises by this share of the jaw's drop
 
 
 def write_txy_empty_ends(path, *, lead=LEAD, trail=TRAIL, n=N, hole=None):
     """An X-ray microbeam .txy whose first ``lead`` and last ``trail`` frames have every
     pellet lost (1000000), as recordings often come; ``hole``: (frame, pellet) lost inside.
-    The lower lip and incisor drop 3 mm together (micrometres)."""
+    The lower lip and incisor drop 3 mm together (micrometres), the tongue tip (T1) rises
+    1.5 mm."""
     drop = 3000 * (1 - np.cos(np.pi * np.arange(n) / (n - 1))) / 2
     rows = []
     for k in range(n):
         cells = [f"{k * XRMB_STEP_S * 1e3:.10g}"]
         for p, (x, y) in XRMB_UM.items():
             lost = k < lead or k >= n - trail or (hole is not None and hole == (k, p))
-            moves = p in ("LL", "MNI")
-            cells += (["1000000", "1000000"] if lost
-                      else [str(x), f"{y - (drop[k] if moves else 0):.0f}"])
+            dy = -drop[k] if p in ("LL", "MNI") else (TIP_RISE * drop[k] if p == "T1" else 0)
+            cells += (["1000000", "1000000"] if lost else [str(x), f"{y + dy:.0f}"])
         rows.append("\t".join(cells))
     path.write_text("\n".join(rows) + "\n")
     return path
@@ -61,6 +62,13 @@ def test_txy_with_empty_ends_reads_without_them(tmp_path):
     assert ms.meta["dropped_frames"] == [LEAD, TRAIL]
     note = [n for n in ms.meta["notes"] if n.startswith("dropped")]
     assert note and "6 leading" in note[0] and "3 trailing" in note[0], ms.meta["notes"]
+
+
+def test_markers_info_says_what_was_dropped(monkeypatch, capsys, tmp_path):
+    code, out, err = run_cli(monkeypatch, capsys, "markers", "info",
+                             write_txy_empty_ends(tmp_path / "tp.txy"))
+    assert code == 0, err
+    assert "note: dropped 6 leading" in out and "axes: model z (forward) = +file x" in out
 
 
 def test_est_break_frames_at_both_ends_are_dropped(tmp_path):
@@ -266,6 +274,9 @@ def test_compare_recording_with_its_inversion(monkeypatch, capsys, which, invert
     assert res["error"]["median_mm"] == pytest.approx(float(np.nanmedian(rms)), abs=1e-6)
     assert res["error"]["max_mm"] == pytest.approx(float(np.nanmax(rms)), abs=1e-6)
     assert any("laid on the results' marker data" in n for n in res["notes"])
+    if which == "txy":  # the empty ends, said by the inversion and by compare
+        assert "tp.txy: dropped 6 leading" in read_results(nc).attrs["notes"]
+        assert any("dropped 6 leading" in n for n in res["notes"])
 
 
 @pytest.mark.parametrize("which", ["mocha", "txy"])
@@ -337,3 +348,22 @@ def test_region_maps_need_three_markers_off_one_line():
     line = np.array([[0.0, 0, 0], [0, 1, 1], [0, 2, 2]])
     assert "one line" in _plane(line)[2]
     assert "2 markers" in _plane(face[:2])[2]
+
+
+def test_the_tongue_tip_coil_drives_the_rendered_tongue(inverted):
+    """The .txy twin's T1 rises 1.5 mm while the lower incisor drops 3 mm: in the mandible's
+    frame the tip rises 4.5 mm (from the first kept frame), and does not move forward."""
+    from facemech import read_results
+    from facemech.io.results import results_tongue
+
+    ds = read_results(inverted["txy"][1])
+    pose = results_tongue(ds)
+    t = np.arange(N) * XRMB_STEP_S
+    drop = 3.0 * (1 - np.cos(np.pi * np.arange(N) / (N - 1))) / 2
+    rise = (1 + TIP_RISE) * (drop - drop[LEAD])  # mm, from the first kept frame
+    want = np.interp(t[LEAD] + ds["time"].values, t, rise)
+    assert pose[:, 1] * 1e3 == pytest.approx(want, abs=0.15)
+    assert np.abs(pose[:, 0]).max() < 1e-6
+    assert "the rendered tongue tip follows the coil T1" in ds.attrs["notes"]
+    mocha = results_tongue(read_results(inverted["mocha"][1]))
+    assert mocha is not None and np.ptp(mocha[:, 1]) > 0.005  # MOCHA's tt moves > 5 mm

@@ -53,6 +53,8 @@ def compare_files(a: str | Path, b: str | Path, *, markers: str | list[str] | No
     names = [p for p, _ in pairs]
     ma, mb = ma.select(names), mb.select([q for _, q in pairs]).renamed(names)
     ma, mb, notes = bring_together(ma, mb, a, b)
+    notes = [f"{Path(p).name}: {n}" for p, m in ((a, ma), (b, mb))
+             for n in m.meta.get("notes", []) if n.startswith("dropped")] + notes
     try:
         res = compare(ma.positions, mb.positions, names, ma.rate)
     except InputError as exc:  # nothing in both: name the file that lacks the data

@@ -126,7 +126,8 @@ class MarkerInfo:
         return {"file": str(self.path), "format": ms.meta.get("format"), "rate_hz": ms.rate,
                 "frames": ms.n_frames, "duration_s": float(ms.time[-1] - ms.time[0]),
                 "units": ms.source_units, "markers": list(ms.names),
-                "missing_samples": int((~ms.valid).sum()),
+                "missing_samples": int((~ms.valid).sum()), "notes": list(ms.meta.get("notes", [])),
+                "roles": dict(ms.meta.get("roles") or {}), "axes": ms.meta.get("axes"),
                 "gaps": [{"marker": g.marker, "start": g.start, "frames": g.length,
                           "interior": g.interior} for g in self.gaps]}
 
@@ -138,6 +139,8 @@ class MarkerInfo:
         lines = [f"{self.path}: {d['format']}, {ms.rate:g} Hz, {ms.n_frames} frames "
                  f"({d['duration_s']:.2f} s), unit {ms.source_units}, {ms.n_markers} markers",
                  "markers: " + ", ".join(ms.names),
+                 *(f"note: {n}" for n in ms.meta.get("notes", []) if n.startswith("dropped")),
+                 *([f"axes: {ms.meta['axes']}"] if "axes" in ms.meta else []),
                  f"gaps: {len(self.gaps)} ({d['missing_samples']} missing samples)"]
         return "\n".join(lines + [f"  {gap_text(g)}" for g in self.gaps[:max_gaps]])
 
