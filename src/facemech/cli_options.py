@@ -231,6 +231,11 @@ GROUPS: dict[str, dict[str, tuple]] = {
             "effort": (float | None, None), "max_evaluations": (int | None, None)},
     "marker_file": {"map_file": (Path | None, None), "scale_pair": (str | None, None),
                     "units": (str | None, None)},
+    # facemech.io.markers.read_markers' options for formats without times or names, and the
+    # bounds of facemech.kinematics.trim.trim
+    "reader": {"rate": (float | None, None), "sensors": (str | None, None)},
+    "bounds": {"start": (float | None, None), "stop": (float | None, None),
+               "first": (int | None, None), "last": (int | None, None)},
     "model": {"preset": (str, "anatomical"), "jaw_kinematics": (str | None, None),
               "dt": (float | None, None)},
     # facemech.workflows.subject.analyse: Preparation and the lsq options

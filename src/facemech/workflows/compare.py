@@ -9,7 +9,8 @@ import numpy as np
 
 from ..errors import InputError
 
-__all__ = ["MAX_MEDIAN_ERROR_MM", "bring_together", "check_magnitude", "compare_files", "report"]
+__all__ = ["MAX_MEDIAN_ERROR_MM", "bring_together", "check_magnitude", "compare_files", "report",
+           "stderr_lines"]
 
 
 def compare_files(a: str | Path, b: str | Path, *, markers: str | list[str] | None = None,
@@ -229,6 +230,11 @@ def check_magnitude(median_mm: float, ma, mb, a: str | Path, b: str | Path, *,
                              "(--units, or the file's unit)", source=str(path), field="units")
     raise InputError(f"{head}: are both in the model's frame and the same unit? "
                      "(facemech markers frame)", source=str(path), field="units")
+
+
+def stderr_lines(res) -> list[str]:
+    """What ``facemech compare`` says on stderr: its notes, then its warnings."""
+    return [f"note: {n}" for n in res.notes] + [f"warning: {w}" for w in res.warnings]
 
 
 def report(res, *, as_json: bool = False) -> list[str]:
