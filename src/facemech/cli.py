@@ -143,17 +143,18 @@ def emg_process(emg: Path, output: Path = ..., rate: float | None = None,
     """Rectify, integrate (17-ms trapezoid), downsample and normalise EMG to activity in [0, 1]."""
     return workflows.emg.process_emg_file(**locals())
 
-@command(markers_app, "info")
-def markers_info(source: Path, units: str | None = None, as_json: bool = False):
-    """Rate, units, markers and gaps of a marker file (.c3d .trc .csv .tsv .ema .est .txy)."""
-    out.print(workflows.markers.marker_info(source, units=units).text(as_json), markup=False)
+@command(markers_app, "info", groups=("reader",))
+def markers_info(source: Path, units: str | None = None, as_json: bool = False, reader=None):
+    """Rate, units, markers and gaps of a marker file (.c3d .trc .csv .tsv .ema .txy .pos)."""
+    out.print(workflows.markers.marker_info(source, units=units, **reader).text(as_json),
+              markup=False)
 
-@command(markers_app, "convert", args=("target",))
+@command(markers_app, "convert", args=("target",), groups=("reader",))
 def markers_convert(source: Path, target: Path | None = None, output: Path | None = None,
-                    units: str | None = None, out_units: str | None = None):
-    """Convert between C3D, TRC and CSV (read Qualisys TSV and a results file's markers)."""
+                    units: str | None = None, out_units: str | None = None, reader=None):
+    """Convert to C3D, TRC or CSV (from any marker file, articulography or results)."""
     return (workflows.markers.convert_markers(source, output or target, units=units,
-                                         out_units=out_units))
+                                         out_units=out_units, **reader))
 
 @command(markers_app, "head-correct")
 def markers_head_correct(source: Path, output: Path = ..., units: str | None = None,
@@ -181,6 +182,10 @@ def markers_fill_gaps(source: Path, output: Path = ..., units: str | None = None
     """Fill interior gaps up to --max-gap with a cubic spline; filled samples are flagged."""
     return workflows.markers.fill_gaps_file(**locals())
 
+@command(markers_app, "trim", groups=("bounds",))
+def markers_trim(source: Path, output: Path = ..., units: str | None = None, bounds=None):
+    """Keep the frames between two times or frame numbers (none: drop the empty ends)."""
+    return workflows.markers.trim_file(source, output, units=units, **bounds)
 @command(look=("frontal+profile", "1280x720", "#2a2c33", 2), groups=(
     "controls", "jaw_source", "solver"))
 def simulate(output: Path = ..., face: str = "default", preset: str = "anatomical",
@@ -283,7 +288,7 @@ def compare(a: Path, b: Path, markers: str | None = None, as_json: bool = False,
             units: str | None = None):
     """3-D statistics, per-axis correlations and per-frame errors (RMS, mm) of A against B."""
     res = workflows.compare.compare_files(a, b, markers=markers, units=units)
-    _say([f"warning: {w}" for w in res.warnings], True, markup=False, highlight=False)
+    _say(workflows.compare.stderr_lines(res), True, markup=False, highlight=False)
     (print if as_json else out.print)("\n".join(workflows.compare.report(res, as_json=as_json)))
 
 @command(experiment_app, "pitermann2001-synthetic")

@@ -141,11 +141,20 @@ invert.markers: marker file in the model's frame and frame rate
 invert.output: results file (.nc)
 markers_convert.output: the output marker file (or TARGET)
 markers_convert.target: or -o
+markers_convert.rate: Hz, for files without times (AG500 .pos: 200; MOCHA 20-column text: 500)
+markers_convert.sensors: sensor names in channel order, e.g. ul,ll,li (.pos, NDI Wave)
+markers_info.rate: Hz, for files without times (AG500 .pos: 200; MOCHA 20-column text: 500)
+markers_info.sensors: sensor names in channel order, e.g. ul,ll,li (.pos, NDI Wave)
 markers_fill_gaps.output: the output marker file (.c3d, .trc or .csv)
 markers_frame.output: the output marker file (.c3d, .trc or .csv)
 markers_frame.reference: frame the axes are taken from
 markers_head_correct.output: the output marker file (.c3d, .trc or .csv)
 markers_resample.output: the output marker file (.c3d, .trc or .csv)
+markers_trim.output: the output marker file (.c3d, .trc or .csv; a CSV keeps the roles)
+markers_trim.start: keep from this time, s (the file's times)
+markers_trim.stop: keep up to this time, s
+markers_trim.first: keep from this frame (from 0, as markers info shows)
+markers_trim.last: keep up to this frame
 plot.markers: comma-separated marker names
 plot.output: PNG
 regions.method: qrcp or strong
@@ -223,6 +232,11 @@ GROUPS: dict[str, dict[str, tuple]] = {
             "effort": (float | None, None), "max_evaluations": (int | None, None)},
     "marker_file": {"map_file": (Path | None, None), "scale_pair": (str | None, None),
                     "units": (str | None, None)},
+    # facemech.io.markers.read_markers' options for formats without times or names, and the
+    # bounds of facemech.kinematics.trim.trim
+    "reader": {"rate": (float | None, None), "sensors": (str | None, None)},
+    "bounds": {"start": (float | None, None), "stop": (float | None, None),
+               "first": (int | None, None), "last": (int | None, None)},
     "model": {"preset": (str, "anatomical"), "jaw_kinematics": (str | None, None),
               "dt": (float | None, None)},
     # facemech.workflows.subject.analyse: Preparation and the lsq options

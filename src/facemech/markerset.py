@@ -22,6 +22,56 @@ SENSOR_ROLES = ("upper_lip", "lower_lip", "lower_incisor", "upper_incisor", "mol
                 "velum", "reference", "other")
 
 
+def match_name(name: str, names, *, source: str | None = None) -> str:
+    """The marker of ``names`` that the user means by ``name``.
+
+    The exact name if there is one; else the one name equal to it ignoring case (``ul`` finds
+    ``UL``). Two names that differ only in case and neither exact (``Ul`` among ``UL`` and
+    ``ul``) are a clash, refused.
+
+    Raises
+    ------
+    InputError
+        Naming ``name``: no such marker, or a clash of names that differ only in case.
+    """
+    names = tuple(names)
+    if name in names:
+        return name
+    same = [n for n in names if n.casefold() == str(name).casefold()]
+    if len(same) == 1:
+        return same[0]
+    if same:
+        raise InputError(f"{' and '.join(same)} differ only in case: give the exact name",
+                         source=source, field=str(name))
+    raise InputError(f"no such marker (have {', '.join(names[:12])}"
+                     f"{', ...' if len(names) > 12 else ''})", source=source, field=str(name))
+
+
+def shared_names(a, b, *, source: str | None = None) -> list[tuple[str, str]]:
+    """(name in ``a``, name in ``b``) of the markers both have, in ``a``'s order, matched as
+    :func:`match_name` does: exactly, else ignoring case where that is unambiguous.
+
+    Raises
+    ------
+    InputError
+        Naming the marker when its name matches two of the other side's ignoring case.
+    """
+    out = []
+    for n in a:
+        if n in b:
+            out.append((n, n))
+            continue
+        same = [m for m in b if m.casefold() == n.casefold()]
+        mine = [m for m in a if m.casefold() == n.casefold()]
+        if len(same) > 1 or (same and len(mine) > 1):
+            raise InputError(f"{', '.join(dict.fromkeys(mine + same))} differ only in case: "
+                             "rename them (facemech markers convert) or give --markers",
+                             source=source, field=n)
+        if same:
+            out.append((n, same[0]))
+    return out
+
+
 @dataclass(frozen=True, eq=False)
 class MarkerSet:
     """Marker trajectories.
@@ -102,11 +152,8 @@ class MarkerSet:
         return self.valid & ~self.filled
 
     def index(self, name: str) -> int:
-        if name not in self.names:
-            raise InputError(f"no such marker (have {', '.join(self.names[:12])}"
-                             f"{', ...' if len(self.names) > 12 else ''})",
-                             source=self.meta.get("source"), field=name)
-        return self.names.index(name)
+        """The column of the marker ``name`` means (:func:`match_name`)."""
+        return self.names.index(match_name(name, self.names, source=self.meta.get("source")))
 
     def marker(self, name: str) -> np.ndarray:
         """(frames, 3) trajectory of one marker, metres."""
@@ -115,8 +162,18 @@ class MarkerSet:
     def select(self, names) -> MarkerSet:
         """A marker set with only the named markers, in that order."""
         idx = [self.index(n) for n in names]
-        return replace(self, positions=self.positions[:, idx], names=tuple(names),
-                       filled=self.filled[:, idx])
+        return replace(self, positions=self.positions[:, idx],
+                       names=tuple(self.names[i] for i in idx), filled=self.filled[:, idx])
+
+    def renamed(self, names) -> MarkerSet:
+        """The set with its markers called ``names`` (same order), the roles following them."""
+        names = tuple(str(n) for n in names)
+        roles = self.meta.get("roles")
+        meta = dict(self.meta)
+        if isinstance(roles, dict):
+            new = dict(zip(self.names, names, strict=True))
+            meta["roles"] = {new.get(k, k): v for k, v in roles.items()}
+        return replace(self, names=names, meta=meta)
 
     def with_positions(self, positions: np.ndarray, **changes) -> MarkerSet:
         """A copy with new positions (and any other field changed)."""

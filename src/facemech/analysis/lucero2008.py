@@ -111,6 +111,7 @@ class RegionAnalysis:
     names : the markers in the data's order
     rest_mm : (markers, 3) the neutral positions, mm (the figures' layout)
     figures : figure name -> file name, filled by :func:`draw`
+    notes : what the figures leave out and why, filled by :func:`draw`
     """
 
     utterances: int
@@ -137,6 +138,7 @@ class RegionAnalysis:
     names: tuple
     rest_mm: np.ndarray
     figures: dict = field(default_factory=dict)
+    notes: tuple = ()
 
     def as_dict(self) -> dict:
         """The summary as ``summary.json`` holds it (numbers in mm)."""
@@ -156,6 +158,8 @@ class RegionAnalysis:
         if self.stability is not None:
             out["stability"] = self.stability.as_dict()
         out["figures"] = dict(self.figures)
+        if self.notes:
+            out["notes"] = list(self.notes)
         return out
 
 

@@ -65,9 +65,11 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
+from ..kinematics.trim import drop_empty_ends
 from ..markerset import SENSOR_ROLES as ROLES  # noqa: F401  (re-exported: the roles a reader gives)
 from ..markerset import MarkerSet
 from ..units import length_scale
+from .plausible_ema import check_anatomy
 
 #: MOCHA-TIMIT's 20 EMA channels, in file order (``****``: unused channels)
 MOCHA_CHANNELS = ("ui_x", "li_x", "ul_x", "ll_x", "tt_x", "ui_y", "li_y", "ul_y", "ll_y", "tt_y",
@@ -234,13 +236,35 @@ def read_est_track(path: str | Path) -> EstTrack:
             raise InputError(f"binary body {what}: {len(body)} bytes, NumFrames = {n_frames} "
                              f"frames of {width} float32 need {need}", source=src,
                              field="NumFrames")
-        table = np.frombuffer(body, dtype=f"{endian}f4").reshape(n_frames, width)
-        table = table.astype(float)
+        table = _binary_table(body, endian, n_frames, width)
+        if not _is_time(table[:, 0]):
+            other = "<" if endian == ">" else ">"
+            if _is_time(_binary_table(body, other, n_frames, width)[:, 0]):
+                said = "big" if endian == ">" else "little"
+                raise InputError(f"ByteOrder {header['ByteOrder']} ({said}-endian) makes the "
+                                 f"times no time series; the data are {_ENDIAN[other]}: the "
+                                 "header's byte order is wrong", source=src, field="ByteOrder")
     else:
         table = _ascii_rows(body, n_frames, width, n_aux, src)
     present = table[:, 1] != 0.0 if breaks else np.ones(n_frames, bool)
     return EstTrack(header, tuple(names), table[:, 0].copy(), present,
                     table[:, 1 + int(breaks):].copy(), data_type == "binary")
+
+
+_ENDIAN = {"<": "little-endian", ">": "big-endian"}
+
+
+def _binary_table(body: bytes, endian: str, n_frames: int, width: int) -> np.ndarray:
+    """(frames, width) float of a float32 body; bytes that make no number give NaN, silently."""
+    with np.errstate(all="ignore"):
+        return np.frombuffer(body, dtype=f"{endian}f4").reshape(n_frames, width).astype(float)
+
+
+def _is_time(t: np.ndarray) -> bool:
+    """Whether ``t`` is a plausible time column: finite, strictly increasing, below a day."""
+    with np.errstate(all="ignore"):
+        return bool(np.all(np.isfinite(t)) and np.all(np.abs(t) < 86400.0)
+                    and np.all(np.diff(t) > 0))
 
 
 def _ascii_rows(body: bytes, n_frames: int, width: int, n_aux: int, src: str) -> np.ndarray:
@@ -406,7 +430,10 @@ def _assemble(src: str, fmt: str, layout: _Layout, time: np.ndarray, coils: dict
             "midsagittal": not three_d, "roles": roles, "file_units": file_units,
             "notes": notes + _mapping_notes(roles)}
     meta.update(extra or {})
-    return MarkerSet(pos, tuple(names), rate, time=time, source_units=source_units, meta=meta)
+    ms = MarkerSet(pos, tuple(names), rate, time=time, source_units=source_units, meta=meta)
+    ms, _ = drop_empty_ends(ms)
+    check_anatomy(ms, source=src)
+    return ms
 
 
 def _check_time(t: np.ndarray, src: str, field: str) -> None:

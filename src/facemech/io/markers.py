@@ -1,13 +1,15 @@
 """Marker files: wide CSV (read/write), Qualisys TSV (read), and dispatch over all formats.
 
 A facemech results file (``.nc``) also reads as a marker file: its model markers (read only).
-Articulography reads too (:mod:`facemech.io.articulography`): EMA as EST track files (``.ema``,
-``.est``, or any file starting with ``EST_File``) or MOCHA-TIMIT's plain layout (``.ema``), and
-X-ray microbeam pellets (``.txy``).
+Articulography reads too (:mod:`facemech.io.articulography`, :mod:`facemech.io.ema_formats`):
+EMA as EST track files (``.ema``, ``.est``, or any file starting with ``EST_File``) or
+MOCHA-TIMIT's plain layout (``.ema``), X-ray microbeam pellets (``.txy``), Carstens AG500/AG501
+(``.pos``) and NDI Wave exports (``.tsv`` with ``Tx Ty Tz`` columns).
 
 Wide CSV: a comment line ``# units: mm`` (or m, cm), a header ``time, NAME_x, NAME_y, NAME_z,
 ...`` and one row per frame; empty cells are missing samples; an optional ``# filled:`` comment
-lists the samples a gap filler made up. The unit is never guessed: a file without one needs the
+lists the samples a gap filler made up; ``# roles:`` (``NAME=role; ...``) and ``# midsagittal:``
+keep articulography's sensor roles. The unit is never guessed: a file without one needs the
 caller's ``units``.
 """
 
@@ -24,7 +26,7 @@ from ..units import length_scale
 from .tables import read_table, uniform_rate
 
 FORMATS = {".csv": "csv", ".trc": "trc", ".c3d": "c3d", ".tsv": "tsv", ".nc": "results",
-           ".ema": "ema", ".est": "ema", ".txy": "txy"}
+           ".ema": "ema", ".est": "ema", ".txy": "txy", ".pos": "pos"}
 
 
 def read_marker_csv(path: str | Path, *, units: str | None = None) -> MarkerSet:
@@ -63,9 +65,33 @@ def read_marker_csv(path: str | Path, *, units: str | None = None) -> MarkerSet:
                 raise InputError("filled samples of an unknown marker", source=str(path),
                                  field=name)
             filled[np.asarray(frames.split(), int), names.index(name)] = True
+    extra = _roles_from(meta, names, str(path))
     return MarkerSet(pos, tuple(names), uniform_rate(t, source=str(path)), time=t,
                      source_units=unit, filled=filled,
-                     meta={"source": str(path), "format": "csv"})
+                     meta={"source": str(path), "format": "csv", **extra})
+
+
+def _roles_from(meta: dict, names: list[str], src: str) -> dict:
+    """``roles`` and ``midsagittal`` of a CSV's ``# roles:`` and ``# midsagittal:`` comments."""
+    from ..markerset import SENSOR_ROLES
+
+    out: dict = {}
+    if "roles" in meta:
+        roles = {}
+        for part in meta["roles"].split(";"):
+            name, _, role = (x.strip() for x in part.partition("="))
+            if not name:
+                continue
+            if name not in names:
+                raise InputError("a role for an unknown marker", source=src, field=name)
+            if role not in SENSOR_ROLES:
+                raise InputError(f"unknown role {role!r} (expected one of "
+                                 f"{', '.join(SENSOR_ROLES)})", source=src, field="roles")
+            roles[name] = role
+        out["roles"] = roles
+    if "midsagittal" in meta:
+        out["midsagittal"] = meta["midsagittal"].strip().lower() in ("yes", "true", "1")
+    return out
 
 
 def write_marker_csv(path: str | Path, ms: MarkerSet, *, units: str | None = None) -> None:
@@ -78,6 +104,10 @@ def write_marker_csv(path: str | Path, ms: MarkerSet, *, units: str | None = Non
             parts = [f"{n}=" + " ".join(map(str, np.nonzero(ms.filled[:, k])[0]))
                      for k, n in enumerate(ms.names) if ms.filled[:, k].any()]
             fh.write(f"# filled: {'; '.join(parts)}\n")
+        roles = {n: r for n, r in (ms.meta.get("roles") or {}).items() if n in ms.names}
+        if roles:  # articulography keeps its roles, and planar data says so
+            fh.write(f"# roles: {'; '.join(f'{n}={r}' for n, r in roles.items())}\n")
+            fh.write(f"# midsagittal: {'yes' if ms.meta.get('midsagittal') else 'no'}\n")
         fh.write("time," + ",".join(f"{n}_{a}" for n in ms.names for a in "xyz") + "\n")
         for k, t in enumerate(ms.time):
             vals = ms.positions[k].reshape(-1) / scale
@@ -128,13 +158,24 @@ def read_qualisys_tsv(path: str | Path, *, units: str | None = None) -> MarkerSe
                      source_units=unit, meta={"source": str(path), "format": "tsv"})
 
 
-def read_markers(path: str | Path, *, units: str | None = None) -> MarkerSet:
-    """Read any supported marker file (CSV, TRC, C3D, Qualisys TSV, EMA, XRMB), in metres.
+def read_markers(path: str | Path, *, units: str | None = None, rate: float | None = None,
+                 sensors=None) -> MarkerSet:
+    """Read any supported marker file (CSV, TRC, C3D, Qualisys TSV, EMA, XRMB, Carstens .pos,
+    NDI Wave), in metres.
 
     A results file (``.nc``) gives the model's markers at the results' frame rate (``units`` is
-    not needed: results are in metres). EMA and X-ray microbeam files come in the model's axes
-    with their sensors' roles in ``meta["roles"]`` (:mod:`facemech.io.articulography`); a file
-    of any other suffix that starts with ``EST_File`` reads as EMA.
+    not needed: results are in metres). Articulography (EMA, X-ray microbeam, Carstens, NDI
+    Wave) comes in the model's axes with its sensors' roles in ``meta["roles"]``
+    (:mod:`facemech.io.articulography`, :mod:`facemech.io.ema_formats`); a file of any other
+    suffix that starts with ``EST_File`` reads as EMA; a ``.tsv`` whose header has ``Tx Ty Tz``
+    columns as NDI Wave, else as Qualisys.
+
+    Parameters
+    ----------
+    path : the file
+    units : the length unit of a file that has none (or to override a layout's)
+    rate : Hz, for a format without times (MOCHA's 20-column text, a header-less AG500 .pos)
+    sensors : sensor names in channel order, for formats without names (.pos, NDI Wave)
     """
     path = Path(path)
     fmt = FORMATS.get(path.suffix.lower())
@@ -148,7 +189,7 @@ def read_markers(path: str | Path, *, units: str | None = None) -> MarkerSet:
     if not path.is_file():
         raise missing_input(path)
     try:
-        return check_span(check_frames(_read(path, fmt, units)), source=path)
+        return check_span(check_frames(_read(path, fmt, units, rate, sensors)), source=path)
     except UnicodeDecodeError:
         raise InputError(f"binary data where a text {fmt.upper()} file was expected",
                          source=str(path)) from None
@@ -207,11 +248,29 @@ def check_span(ms: MarkerSet, *, source: str | Path | None = None) -> MarkerSet:
                      source=None if source is None else str(source), field="units")
 
 
-def _read(path: Path, fmt: str, units: str | None) -> MarkerSet:
+def _read(path: Path, fmt: str, units: str | None, rate=None, sensors=None) -> MarkerSet:
+    if fmt == "tsv":
+        from .ema_formats import is_ndi_wave
+
+        fmt = "ndi" if is_ndi_wave(path) else fmt
+    takes = {"ema": ("rate",), "pos": ("rate", "sensors"), "ndi": ("sensors",)}.get(fmt, ())
+    for name, value in (("rate", rate), ("sensors", sensors)):
+        if value is not None and name not in takes:
+            what = "times" if name == "rate" else "names"
+            raise InputError(f"a {fmt.upper()} file has its own {what}: --{name} is not needed",
+                             source=str(path), field=name)
+    if fmt in ("pos", "ndi"):
+        from .ema_formats import read_carstens_pos, read_ndi_wave
+
+        if fmt == "pos":
+            return read_carstens_pos(path, units=units, rate=rate, sensors=sensors)
+        return read_ndi_wave(path, units=units, sensors=sensors)
     if fmt in ("ema", "txy"):
         from .articulography import read_ema, read_xrmb_txy
 
-        return (read_ema if fmt == "ema" else read_xrmb_txy)(path, units=units)
+        if fmt == "ema":
+            return read_ema(path, units=units, rate=rate)
+        return read_xrmb_txy(path, units=units)
     if fmt == "csv":
         return read_marker_csv(path, units=units)
     if fmt == "tsv":

@@ -28,11 +28,34 @@ def resample(ms: MarkerSet, rate: float, *, cutoff_fraction: float = 0.8) -> Mar
     if n < 2:  # a one-frame recording has no rate: no reader of facemech takes it back
         raise InputError(f"{1e3 * (t1 - t0):.4g} ms of data at {float(rate):g} Hz gives {n} "
                          "frame: a recording needs at least two (raise the rate)", field="rate")
-    grid = t0 + np.arange(n) / rate
+    return resample_onto(ms, t0 + np.arange(n) / rate, rate=rate,
+                         cutoff_fraction=cutoff_fraction)
+
+
+def resample_onto(ms: MarkerSet, times: np.ndarray, *, rate: float | None = None,
+                  cutoff_fraction: float = 0.8) -> MarkerSet:
+    """The set at the given times (s, increasing), as :func:`resample` makes them.
+
+    Parameters
+    ----------
+    ms : the marker set
+    times : (frames,) s, on the set's own time axis
+    rate : Hz, the new rate (default: from the times' span); below the set's rate each run is
+        low-passed first at ``cutoff_fraction`` of the new Nyquist frequency
+
+    Returns
+    -------
+    MarkerSet
+        NaN at times outside every valid run; ``meta["resampled_from_hz"]`` the old rate.
+    """
+    grid = np.asarray(times, float)
+    if rate is None:
+        rate = (len(grid) - 1) / float(grid[-1] - grid[0]) if len(grid) > 1 else ms.rate
+    n = len(grid)
     out = np.full((n, ms.n_markers, 3), np.nan)
     filled = np.zeros((n, ms.n_markers), bool)
     sos = None
-    if rate < ms.rate:
+    if rate < ms.rate * (1 - 1e-6):
         sos = butter(4, cutoff_fraction * 0.5 * rate, fs=ms.rate, output="sos")
     for m in range(ms.n_markers):
         for a, b in runs(ms.valid[:, m]):

@@ -297,6 +297,7 @@ class Comparison:
     samples_skipped : marker-frames without data in both, among the other frames and the
         markers compared (left out of their frame's error and their marker's statistics)
     missing_markers : markers without a single frame in both (left out of everything)
+    notes : how the inputs were brought together (resampled, laid on the model), one each
     """
 
     markers: dict
@@ -307,6 +308,7 @@ class Comparison:
     frames_skipped: int = 0
     samples_skipped: int = 0
     missing_markers: tuple = ()
+    notes: tuple = ()
 
     @property
     def warnings(self) -> list:
@@ -336,7 +338,7 @@ class Comparison:
                 "frame_error_mm": self.frame_error_mm, "error": self.error,
                 "movement_mm": self.movement_mm, "frames": self.frames,
                 "frames_skipped": self.frames_skipped, "samples_skipped": self.samples_skipped,
-                "missing_markers": list(self.missing_markers)}
+                "missing_markers": list(self.missing_markers), "notes": list(self.notes)}
 
 
 def json_safe(obj):

@@ -42,7 +42,7 @@ def stability_figure(path, counts, first_r_mm: np.ndarray):
 
 
 def region_maps(path, xy_mm: np.ndarray, maps: list[np.ndarray], titles: list[str],
-                marks: list[int] | None = None):
+                marks: list[int] | None = None, xlabel: str = "x (mm)"):
     """Signed maps (Figs. 4-7): values at markers interpolated (cubic) over the frontal plane."""
     from scipy.interpolate import griddata
 
@@ -59,7 +59,7 @@ def region_maps(path, xy_mm: np.ndarray, maps: list[np.ndarray], titles: list[st
             ax.scatter(*xy_mm[mark], marker="*", c="gold", s=120, edgecolors="k")
         ax.set_aspect("equal")
         ax.set_title(title, fontsize=9)
-        ax.set_xlabel("x (mm)")
+        ax.set_xlabel(xlabel)
         fig.colorbar(im, ax=ax, shrink=0.7)
     fig.tight_layout()
     return _save(fig, path)

@@ -147,9 +147,42 @@ def invert(markers: MarkerFile | str | Path, output: str | Path, *,
         ms, face=face, map_file=src.map_file, scale_pair=src.scale_pair, params=params,
         method=method, options=options, positive=positive, controls=controls, jaw=jaw, noise=noise,
         progress=None if progress is None else (lambda d, n: progress(label, d, n)))
-    res.write(output, inputs={"markers": file_hash(src.path)})
+    dropped = [n for n in ms.meta.get("notes", []) if n.startswith("dropped")]
+    if dropped:  # the reader's: empty leading or trailing frames left out
+        from dataclasses import replace
+
+        res = replace(res, notes=[f"{Path(src.path).name}: {n}" for n in dropped] + list(res.notes))
+    res = _write(res, ms, output, {"markers": file_hash(src.path)})
     if figure is not None:
         draw(res, figure, title=f"{Path(src.path).name}: inverted controls ({res.method.name})")
+    return res
+
+
+def _write(res, ms, output, inputs: dict):
+    """Write the results and return them; with a tongue-tip coil in the recording, its pose
+    drives the rendered tongue tip (``tongue_tip``; :mod:`facemech.kinematics.tongue_coils`),
+    noted."""
+    from dataclasses import replace
+
+    from ..io.results import with_tongue, write_dataset
+    from ..kinematics.tongue_coils import tongue_tip_pose
+    from .markers import on_times
+
+    if not (ms.meta.get("roles") or {}):
+        res.write(output, inputs=inputs)
+        return res
+    on = on_times(ms, ms.time[0] + res.time - res.time[0], label=res.time)[0]
+    found = tongue_tip_pose(on)
+    if found is None:
+        res.write(output, inputs=inputs)
+        return res
+    pose, coil = found
+    res = replace(res, notes=[*res.notes, f"the rendered tongue tip follows the coil {coil} "
+                              "(its displacement less the lower incisor's; protrusion "
+                              f"{pose[:, 0].min() * 1e3:.1f} to {pose[:, 0].max() * 1e3:.1f} mm, "
+                              f"elevation {pose[:, 1].min() * 1e3:.1f} to "
+                              f"{pose[:, 1].max() * 1e3:.1f} mm)"])
+    write_dataset(output, with_tongue(res.to_dataset(inputs), pose))
     return res
 
 
@@ -168,9 +201,11 @@ def check_marker_set(ms, markers: str | Path, *, scale_pair: str | None = None):
     empty = ~ms.valid.any(axis=1)
     if empty.any():
         k = int(np.argmax(empty))
+        from .markers import gap_hint
+
         raise InputError(f"frame {k + 1} (t = {ms.time[k]:.3f} s) has no marker at all "
-                         f"({int(empty.sum())} such frames): cut them or fill the gaps "
-                         "(facemech markers fill-gaps)", source=str(markers), field="frames")
+                         f"({int(empty.sum())} such frames): {gap_hint(ms, k)}",
+                         source=str(markers), field="frames")
     if scale_pair is not None:
         pair = [p.strip() for p in str(scale_pair).split(",")]
         if len(pair) != 2 or not all(pair) or pair[0] == pair[1]:

@@ -1,5 +1,5 @@
-"""Marker-file workflows: describe, convert, head-correct, resample, re-frame and fill gaps, and
-read named trajectories from a marker or results file onto a time grid."""
+"""Marker-file workflows: describe, convert, head-correct, resample, re-frame, fill gaps and
+trim, and read named trajectories from a marker or results file onto a time grid."""
 
 from __future__ import annotations
 
@@ -24,20 +24,27 @@ def names_of(names: str | Sequence[str]) -> list[str]:
 
 def trajectories(path: str | Path, names: str | Sequence[str], *, units: str | None = None,
                  times: np.ndarray | None = None, cover: str | None = None,
-                 missing: str = "error") -> tuple[np.ndarray, dict[str, np.ndarray]]:
+                 missing: str = "error", origin: str = "same"
+                 ) -> tuple[np.ndarray, dict[str, np.ndarray]]:
     """Named marker trajectories from a marker file or a results file (its model markers).
 
     Parameters
     ----------
-    path : ``.c3d``, ``.trc``, ``.csv``, ``.tsv``, or a results ``.nc`` file
-    names : the markers wanted (a sequence, or comma-separated text)
+    path : any marker file :func:`facemech.read_markers` reads, or a results ``.nc`` file
+    names : the markers wanted (a sequence, or comma-separated text), matched as
+        :func:`facemech.markerset.match_name` does (``ul`` finds ``UL``)
     units : length unit of a marker file that does not say
-    times : (frames,) s, a grid to interpolate onto (linearly; default: the file's frames)
+    times : (frames,) s, a grid to put them on (default: the file's frames): articulography
+        (sensors with roles) resampled as ``invert`` does (:func:`on_times`), other files
+        interpolated linearly
     cover : with ``times``, what the trajectories are, for an error when ``times`` reach
         outside the file's time span (e.g. ``"the chin trajectory"``); None: the end samples
-        are held outside it
+        are held outside it (linear) or NaN (articulography)
     missing : ``"error"`` (an :class:`~facemech.errors.InputError` naming the marker) or
         ``"skip"`` for a marker the file does not have
+    origin : ``"same"``: ``times`` are on the file's time axis; ``"first"``: ``times[0]`` is
+        the file's first frame (a results file's time starts at 0 at the first frame of the
+        recording it was made from)
 
     Returns
     -------
@@ -45,17 +52,65 @@ def trajectories(path: str | Path, names: str | Sequence[str], *, units: str | N
     trajectories : name -> (frames, 3) positions, m, in the order of ``names``
     """
     from ..io.markers import read_markers
+    from ..markerset import match_name
 
     ms = read_markers(path, units=units)
-    wanted = [n for n in names_of(names) if missing == "error" or n in ms.names]
+    src = str(path)
+    wanted = {}
+    for n in names_of(names):
+        try:
+            wanted[n] = match_name(n, ms.names, source=src)
+        except InputError:
+            if missing == "error" or any(m.casefold() == n.casefold() for m in ms.names):
+                raise
     if times is None:
-        return ms.time, {n: ms.marker(n) for n in wanted}
+        return ms.time, {n: ms.marker(m) for n, m in wanted.items()}
     times = np.asarray(times, float)
-    if cover is not None and (times[0] < ms.time[0] - 1e-6 or times[-1] > ms.time[-1] + 1e-6):
-        raise InputError(f"{cover} does not cover the activity's time span", source=str(path),
+    axis = times - times[0] + ms.time[0] if origin == "first" else times
+    if cover is not None and (axis[0] < ms.time[0] - 1e-6 or axis[-1] > ms.time[-1] + 1e-6):
+        raise InputError(f"{cover} does not cover the activity's time span", source=src,
                          field="time")
-    return times, {n: np.column_stack([np.interp(times, ms.time, ms.marker(n)[:, a])
-                                       for a in range(3)]) for n in wanted}
+    if ms.meta.get("roles") and wanted:
+        on = on_times(ms.select(list(dict.fromkeys(wanted.values()))), axis)[0]
+        return times, {n: on.marker(m) for n, m in wanted.items()}
+    return times, {n: np.column_stack([np.interp(axis, ms.time, ms.marker(m)[:, a])
+                                       for a in range(3)]) for n, m in wanted.items()}
+
+
+def on_times(ms, times: np.ndarray, *, label: np.ndarray | None = None):
+    """A marker set put on other frames as ``invert`` puts articulography on the model's.
+
+    Parameters
+    ----------
+    ms : the :class:`~facemech.markerset.MarkerSet`
+    times : (frames,) s on the set's time axis; where the new frames are coarser than the
+        set's, each run is low-passed (4th-order Butterworth at 0.8 of the new Nyquist
+        frequency), then a cubic spline through it gives the samples
+        (:func:`facemech.kinematics.resample.resample_onto`); NaN outside the recording
+    label : (frames,) s, the times the result carries (default: ``times``)
+
+    Returns
+    -------
+    (MarkerSet, note) : the set on the new frames, and what was done (None when the frames
+        were already the set's)
+    """
+    from ..kinematics.resample import resample_onto
+
+    times = np.asarray(times, float)
+    if len(times) == ms.n_frames and np.allclose(times, ms.time, atol=1e-6):
+        out = ms
+        note = None
+    else:
+        out = resample_onto(ms, times)
+        rate = out.rate
+        note = (f"{ms.rate:g} Hz ({ms.n_frames} frames) resampled onto {len(times)} frames "
+                f"at {rate:g} Hz ({'low-passed, ' if rate < ms.rate * (1 - 1e-6) else ''}"
+                "cubic spline), as invert does")
+    if label is not None:
+        from dataclasses import replace
+
+        out = replace(out, time=np.asarray(label, float))
+    return out, note
 
 
 @dataclass(frozen=True)
@@ -71,7 +126,8 @@ class MarkerInfo:
         return {"file": str(self.path), "format": ms.meta.get("format"), "rate_hz": ms.rate,
                 "frames": ms.n_frames, "duration_s": float(ms.time[-1] - ms.time[0]),
                 "units": ms.source_units, "markers": list(ms.names),
-                "missing_samples": int((~ms.valid).sum()),
+                "missing_samples": int((~ms.valid).sum()), "notes": list(ms.meta.get("notes", [])),
+                "roles": dict(ms.meta.get("roles") or {}), "axes": ms.meta.get("axes"),
                 "gaps": [{"marker": g.marker, "start": g.start, "frames": g.length,
                           "interior": g.interior} for g in self.gaps]}
 
@@ -83,6 +139,8 @@ class MarkerInfo:
         lines = [f"{self.path}: {d['format']}, {ms.rate:g} Hz, {ms.n_frames} frames "
                  f"({d['duration_s']:.2f} s), unit {ms.source_units}, {ms.n_markers} markers",
                  "markers: " + ", ".join(ms.names),
+                 *(f"note: {n}" for n in ms.meta.get("notes", []) if n.startswith("dropped")),
+                 *([f"axes: {ms.meta['axes']}"] if "axes" in ms.meta else []),
                  f"gaps: {len(self.gaps)} ({d['missing_samples']} missing samples)"]
         return "\n".join(lines + [f"  {gap_text(g)}" for g in self.gaps[:max_gaps]])
 
@@ -93,26 +151,31 @@ def gap_text(g) -> str:
             + ("" if g.interior else " at an end"))
 
 
-def marker_info(path: str | Path, *, units: str | None = None) -> MarkerInfo:
-    """Read a marker file and find its gaps (``units``: length unit if the file has none)."""
+def marker_info(path: str | Path, *, units: str | None = None, rate: float | None = None,
+                sensors: str | None = None) -> MarkerInfo:
+    """Read a marker file and find its gaps (``units``: length unit if the file has none;
+    ``rate``, ``sensors``: :func:`facemech.io.markers.read_markers`)."""
     from ..io.markers import read_markers
     from ..kinematics.gaps import find_gaps
 
-    ms = read_markers(path, units=units)
+    ms = read_markers(path, units=units, rate=rate, sensors=sensors)
     return MarkerInfo(Path(path), ms, find_gaps(ms))
 
 
 def convert_markers(source: str | Path, target: str | Path | None, *, units: str | None = None,
-                    out_units: str | None = None):
+                    out_units: str | None = None, rate: float | None = None,
+                    sensors: str | None = None):
     """Copy a marker file (or a results file's model markers) to ``target`` (``.c3d``, ``.trc``
-    or ``.csv``) in ``out_units`` (default: the input's). Returns :class:`Written` with the
-    MarkerSet read."""
+    or ``.csv``; a CSV keeps articulography's roles) in ``out_units`` (default: the input's);
+    ``rate`` and ``sensors`` for formats without times or names
+    (:func:`facemech.io.markers.read_markers`). Returns :class:`Written` with the MarkerSet
+    read."""
     from ..io.markers import read_markers, write_markers
 
     if target is None:
         raise InputError("give the output file (-o)", field="output")
     check_output(target, [source], field="-o")
-    ms = read_markers(source, units=units)
+    ms = read_markers(source, units=units, rate=rate, sensors=sensors)
     write_markers(target, ms, units=out_units)
     return Written(Path(target), ms, f"{ms.n_markers} markers, {ms.n_frames} frames -> {target}")
 
@@ -209,4 +272,48 @@ def fill_gaps_file(source: str | Path, output: str | Path, *, max_gap: float = 0
     line = (f"filled {len(done)} gaps ({sum(g.length for g in done)} samples); {len(left)} left "
             f"-> {output}")
     notes = "".join(f"  not filled: {gap_text(g)}\n" for g in left[:20])
+    if any(not g.interior for g in left):
+        notes += ("  gaps at an end are never filled (nothing to interpolate from): cut them "
+                  "(facemech markers trim)\n")
     return Written(Path(output), (res, done, left), line, notes)
+
+
+def gap_hint(ms, frame: int, marker: int | None = None) -> str:
+    """What to do about a missing sample at ``frame`` (of ``marker``; None: of every marker):
+    fill it where fill-gaps can (a gap with samples before and after), else cut the ends."""
+    valid = ms.valid.any(axis=1) if marker is None else ms.valid[:, marker]
+    if valid[:frame].any() and valid[frame:].any():
+        return "fill the gap (facemech markers fill-gaps) or cut it off (facemech markers trim)"
+    return ("cut the recording to where the data are (facemech markers trim; fill-gaps fills "
+            "only gaps with data on both sides)")
+
+
+def trim_file(source: str | Path, output: str | Path, *, start: float | None = None,
+              stop: float | None = None, first: int | None = None, last: int | None = None,
+              units: str | None = None):
+    """Keep the frames of a marker file between two times (s, the file's own) or two frame
+    numbers (from 0, as ``markers info`` shows them), and write them (``.csv``, ``.trc`` or
+    ``.c3d``; a CSV keeps articulography's roles). Without bounds, the leading and trailing
+    frames where no marker is present are dropped. The input is never overwritten; the output
+    is written atomically.
+
+    Returns
+    -------
+    Written : ``data`` the MarkerSet written
+    """
+    from ..io.markers import read_markers, write_markers
+    from ..kinematics.trim import drop_empty_ends, trim
+
+    check_output(output, [source], field="-o")
+    ms = read_markers(source, units=units)
+    n, t0, t1 = ms.n_frames, ms.time[0], ms.time[-1]
+    if all(v is None for v in (start, stop, first, last)):
+        res, note = drop_empty_ends(ms)
+        how = note or "no frame without markers at either end: all kept"
+    else:
+        res = trim(ms, start=start, stop=stop, first=first, last=last)
+        a, b = res.meta["trimmed"]
+        how = (f"kept frames {a}-{b} (t = {res.time[0]:.3f}-{res.time[-1]:.3f} s) of {n} "
+               f"({t0:.3f}-{t1:.3f} s)")
+    write_markers(output, res)
+    return Written(Path(output), res, f"{how}; {res.n_frames} frames -> {output}")

@@ -119,6 +119,11 @@ def plot_file(result: str | Path, output: str | Path, markers: str | Sequence[st
     if not names:
         raise InputError(f"no marker name in {markers!r} (e.g. R03,R05)", field="--markers")
     ms = read_markers(result)
+    low = {}  # the names as the user means them: ul finds UL where that is unambiguous
+    for n in ms.names:
+        low.setdefault(n.casefold(), []).append(n)
+    names = [n if n in ms.names or len(low.get(n.casefold(), [])) != 1 else low[n.casefold()][0]
+             for n in names]
     unknown = [n for n in names if n not in ms.names]
     if unknown:
         raise InputError(f"--markers: no marker {unknown[0]!r} in the results (have "
@@ -126,7 +131,8 @@ def plot_file(result: str | Path, output: str | Path, markers: str | Sequence[st
     traj = {n: ms.marker(n) for n in names}
     meas = None
     if measured is not None:
-        meas = trajectories(measured, names, units=units, times=ms.time, missing="skip")[1]
+        meas = trajectories(measured, names, units=units, times=ms.time, missing="skip",
+                            origin="first")[1]  # results' time 0: the recording's first frame
         for n, xyz in meas.items():
             gap = ~np.isfinite(xyz).all(axis=1)
             if gap.all():
@@ -134,8 +140,11 @@ def plot_file(result: str | Path, output: str | Path, markers: str | Sequence[st
                                  field=n)
             if gap.any():
                 k = int(np.argmax(gap))
-                raise InputError(f"the marker has a gap at t = {ms.time[k]:.3f} s (fill it: "
-                                 "facemech markers fill-gaps)", source=str(measured), field=n)
+                inside = (~gap[:k]).any() and (~gap[k:]).any()
+                raise InputError(f"the marker has a gap at t = {ms.time[k]:.3f} s ("
+                                 + ("fill it: facemech markers fill-gaps" if inside else
+                                    "cut the ends: facemech markers trim") + ")",
+                                 source=str(measured), field=n)
     path = kinematics_figure(output, ms.time, traj, rate=ms.rate, measured=meas,
                              title=str(Path(result).name))
     return Written(Path(path), traj, f"figure -> {output}")

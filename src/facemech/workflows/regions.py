@@ -80,24 +80,33 @@ def read_utterances(files: Sequence[str | Path], *, neutral: str | Path = "first
 
     sets = [read_markers(f, units=units) for f in files]
     names = sets[0].names
-    for f, ms in zip(files, sets, strict=True):
-        if ms.names != names:
-            missing = sorted(set(names) ^ set(ms.names))
-            raise InputError("markers differ from the first file's", source=str(f),
-                             field=missing[0] if missing else "order")
+    sets = [sets[0]] + [_same_markers(ms, names, f) for f, ms in zip(files[1:], sets[1:],
+                                                                     strict=True)]
     for f, ms in zip(files, sets, strict=True):
         _no_gap(ms, f, "the utterance")
     base: str | np.ndarray = "first"
     if str(neutral) != "first":
-        ref = read_markers(Path(neutral), units=units)
-        missing = [n for n in names if n not in ref.names]
-        if missing:
-            raise InputError("the neutral file lacks a marker of the utterances",
-                             source=str(neutral), field=missing[0])
-        ref = ref.select(names)
+        ref = _same_markers(read_markers(Path(neutral), units=units), names, neutral,
+                            what="the neutral file lacks a marker of the utterances",
+                            extra_ok=True)
         _no_gap(ref, neutral, "the neutral (first frame)", frames=1)
         base = ref.positions[0]
     return [ms.positions for ms in sets], names, base, sets[0].rate
+
+
+def _same_markers(ms, names, path, *, what: str = "markers differ from the first file's",
+                  extra_ok: bool = False):
+    """``ms`` with the markers ``names``, in that order, matched as
+    :func:`facemech.markerset.shared_names` matches them (``ul`` is ``UL``); an InputError
+    naming the first marker one side lacks (or, without ``extra_ok``, has in excess)."""
+    from ..markerset import shared_names
+
+    pairs = dict(shared_names(names, ms.names, source=str(path)))
+    lost = [n for n in names if n not in pairs]
+    extra = [] if extra_ok else [m for m in ms.names if m not in pairs.values()]
+    if lost or extra:
+        raise InputError(what, source=str(path), field=(lost + extra)[0])
+    return ms.select([pairs[n] for n in names]).renamed(names)
 
 
 def _no_gap(ms, path, what: str, frames: int | None = None) -> None:
@@ -108,9 +117,13 @@ def _no_gap(ms, path, what: str, frames: int | None = None) -> None:
         return
     k, m = (int(i[0]) for i in np.nonzero(~valid))
     lost = int((~valid[:, m]).sum())
+    inside = valid[:k, m].any() and valid[k:, m].any()  # fill-gaps fills interior gaps only
+    hint = ("fill it (facemech markers fill-gaps) or drop the file" if inside else
+            "cut the recording to where the marker is present (facemech markers trim) or drop "
+            "the file")
     raise InputError(f"{what} has a gap at frame {k + 1} (t = {ms.time[k]:.3f} s; {lost} of "
-                     f"{len(valid)} samples missing): fill it (facemech markers fill-gaps) or "
-                     "drop the file", source=str(path), field=ms.names[m])
+                     f"{len(valid)} samples missing): {hint}", source=str(path),
+                     field=ms.names[m])
 
 
 def regions(files: Sequence[str | Path], output: str | Path, *, k: int | None = None,
@@ -146,15 +159,42 @@ def regions(files: Sequence[str | Path], output: str | Path, *, k: int | None = 
                   eps=eps if isinstance(eps, float) else parse_length(eps, "eps"),
                   train=parse_ranges(train, len(utts), "train"),
                   test=parse_ranges(test, len(utts), "test"))
-    res = draw(res, output)
-    write(res, Path(output) / "summary.json")
+    with _folder(output) as tmp:  # nothing half-written: the figures land together
+        res = draw(res, tmp)
+        write(res, tmp / "summary.json")
     return res
+
+
+@contextlib.contextmanager
+def _folder(output: str | Path):
+    """A temporary folder beside ``output`` to fill; on success its files move into
+    ``output`` (created), on error or interruption it is removed whole."""
+    import shutil
+    import tempfile
+
+    from ..atomic import pending_folder
+
+    out = Path(output)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
+    try:
+        with pending_folder(tmp):
+            yield tmp
+            if not out.exists():
+                tmp.rename(out)
+            else:
+                for f in sorted(tmp.iterdir()):
+                    f.replace(out / f.name)
+    finally:
+        if tmp.exists():
+            shutil.rmtree(tmp, ignore_errors=True)
 
 
 def report(res, output: str | Path) -> list[str]:
     """What ``facemech regions`` prints."""
     return [f"epsilon {res.eps_mm:.3f} mm, rank {res.rank} of {res.markers}; k = {res.k}",
-            "independent markers: " + ", ".join(res.selected), f"summary and figures -> {output}/"]
+            "independent markers: " + ", ".join(res.selected),
+            *(f"note: {n}" for n in res.notes), f"summary and figures -> {output}/"]
 
 
 def write(result, path: str | Path) -> Path:
@@ -168,42 +208,43 @@ def write(result, path: str | Path) -> Path:
     return Path(path)
 
 
+def _plane(rest_mm: np.ndarray) -> tuple[np.ndarray, list[int], str | None]:
+    """The markers' layout for the maps: (markers, 2) mm in the two axes where the rest
+    positions spread most (x, y for a face; z, y for midsagittal articulography), those axes,
+    and why no map can be drawn (None: one can), for fewer than 3 markers or all on one line."""
+    spread = np.ptp(rest_mm, axis=0)
+    axes = sorted(np.argsort(spread)[-2:].tolist(), key=lambda a: (a == 1, a))  # y last
+    xy = rest_mm[:, axes]
+    if len(xy) < 3:
+        return xy, axes, f"{len(xy)} markers (a map interpolates between at least 3)"
+    sv = np.linalg.svd(xy - xy.mean(axis=0), compute_uv=False)
+    if sv[0] == 0 or sv[1] < 1e-6 * sv[0]:
+        return xy, axes, ("the markers lie on one line at rest (a map needs them spread over a "
+                          "plane)")
+    return xy, axes, None
+
+
 def draw(result, folder: str | Path):
     """Draw the analysis' PNG figures into ``folder`` (created): R values (Fig. 2), the first
     eigenregions and orthogonal regions, and with held-out utterances the errors against k and
     a predicted trajectory (Fig. 9), and the stability of the R values.
 
-    Returns the result with its ``figures`` (name -> file name).
+    The maps are drawn in the plane where the markers spread most at rest (x and y for a
+    face, z and y for midsagittal articulography); with fewer than 3 markers, or all on one
+    line, they are left out and ``notes`` says so.
+
+    Returns the result with its ``figures`` (name -> file name) and ``notes``.
     """
     from ..viz import regions as fig
 
     out = Path(folder)
     out.mkdir(parents=True, exist_ok=True)
-    model, full, names = result.model, result.full, list(result.names)
     figures = {"r_values": fig.r_values_figure(out / "r_values.png", result.r_values_mm,
                                                result.eps_mm, "R values (Fig. 2)").name}
-    xy = result.rest_mm[:, :2]
-    maps, titles, marks = [], [], []
-    for j in range(min(3, result.k)):
-        vals = np.zeros(len(names))
-        vals[model.secondary_] = model.coef_[j]
-        vals[model.selected_[j]] = 1.0
-        maps.append(vals)
-        titles.append(f"eigenregion of {names[model.selected_[j]]}")
-        marks.append(int(model.selected_[j]))
-    if maps:
-        figures["eigenregions"] = fig.region_maps(out / "eigenregions.png", xy, maps, titles,
-                                                  marks).name
-    r = full.R_
-    omaps, otitles, omarks = [], [], []
-    for j in range(min(3, r.shape[0])):
-        vals = np.zeros(len(names))
-        vals[full.order_] = r[j] / r[j, j]
-        omaps.append(vals)
-        otitles.append(f"orthogonal region {j + 1} ({names[full.order_[j]]})")
-        omarks.append(int(full.order_[j]))
-    figures["orthogonal_regions"] = fig.region_maps(out / "orthogonal_regions.png", xy, omaps,
-                                                    otitles, omarks).name
+    xy, axes, why = _plane(result.rest_mm)
+    if why is None:
+        figures.update(_maps(out, xy, result, f"{'xyz'[axes[0]]} (mm)"))
+    notes = () if why is None else (f"no eigenregion or orthogonal-region maps: {why}",)
     if result.held_out_error is not None:
         rows = result.held_out_error
         figures["errors"] = fig.error_figure(
@@ -218,4 +259,34 @@ def draw(result, folder: str | Path):
         figures["stability"] = fig.stability_figure(out / "stability.png",
                                                     list(result.stability.utterances),
                                                     result.stability.first_r_values_mm).name
-    return replace(result, figures={k: str(v) for k, v in figures.items()})
+    return replace(result, figures={k: str(v) for k, v in figures.items()}, notes=notes)
+
+
+def _maps(out: Path, xy: np.ndarray, result, xlabel: str) -> dict:
+    """The eigenregion and orthogonal-region maps (Figs. 4-7) at the layout ``xy`` (mm)."""
+    from ..viz import regions as fig
+
+    model, full, names = result.model, result.full, list(result.names)
+    figures = {}
+    maps, titles, marks = [], [], []
+    for j in range(min(3, result.k)):
+        vals = np.zeros(len(names))
+        vals[model.secondary_] = model.coef_[j]
+        vals[model.selected_[j]] = 1.0
+        maps.append(vals)
+        titles.append(f"eigenregion of {names[model.selected_[j]]}")
+        marks.append(int(model.selected_[j]))
+    if maps:
+        figures["eigenregions"] = fig.region_maps(out / "eigenregions.png", xy, maps, titles,
+                                                  marks, xlabel=xlabel).name
+    r = full.R_
+    omaps, otitles, omarks = [], [], []
+    for j in range(min(3, r.shape[0])):
+        vals = np.zeros(len(names))
+        vals[full.order_] = r[j] / r[j, j]
+        omaps.append(vals)
+        otitles.append(f"orthogonal region {j + 1} ({names[full.order_[j]]})")
+        omarks.append(int(full.order_[j]))
+    figures["orthogonal_regions"] = fig.region_maps(out / "orthogonal_regions.png", xy, omaps,
+                                                    otitles, omarks, xlabel=xlabel).name
+    return figures
