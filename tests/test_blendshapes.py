@@ -144,8 +144,8 @@ def _blender_python() -> str | None:
     return path if Path(path).is_file() else None
 
 
-@pytest.mark.skipif(_blender_python() is None, reason="no Blender (bpy) interpreter: "
-                    "make blender, or FACEMECH_BLENDER_PYTHON")
+@pytest.mark.skipif(_blender_python() is None, reason="no Blender (bpy) interpreter: bash "
+                    "tools/blender_venv.sh, or FACEMECH_BLENDER_PYTHON")
 def test_blender_imports_the_named_targets_and_their_animation(glb, basis, result):
     """Blender's glTF importer makes 52 shape keys named as ARKit's, keys their values at the
     frames' times, and its evaluated mesh at a frame is the result's skin within the error."""
