@@ -4,7 +4,8 @@ import a glTF with Blender's own importer and print, as JSON, what Blender made 
     python blender_probe.py FILE.glb K1 K2 ...
 
 prints {"shape_keys": names, "vertices": n, "fps": fps, "keyframes": {name: [[frame, value],
-...]}, "frames": {k: (n, 3) evaluated vertex positions at the k-th keyframe, in glTF's axes}}.
+...]}, "frames": {k: (n, 3) evaluated vertex positions at the k-th keyframe}, "blocks": the
+vertices of the shape keys "Basis" and "jawOpen"}, in glTF's axes (Blender's are +Z up).
 """
 
 import json
@@ -13,7 +14,7 @@ import sys
 import bpy
 
 
-def main(path: str, picks: list[int]) -> dict:
+def main(path: str, picks: list[int], match=("jawOpen",)) -> dict:
     bpy.ops.wm.read_factory_settings(use_empty=True)
     bpy.ops.import_scene.gltf(filepath=path)
     meshes = [o for o in bpy.context.scene.objects if o.type == "MESH"]
@@ -39,7 +40,9 @@ def main(path: str, picks: list[int]) -> dict:
         pts = [world @ v.co for v in mesh.vertices]
         frames[k] = [[p.x, p.z, -p.y] for p in pts]  # Blender's +Z up back to glTF's +Y up
         evaluated.to_mesh_clear()
-    return {"shape_keys": names, "vertices": len(obj.data.vertices),
+    blocks = {b.name: [[v.co.x, v.co.z, -v.co.y] for v in b.data]
+              for b in keys.key_blocks if b.name in ("Basis", *match)}
+    return {"shape_keys": names, "vertices": len(obj.data.vertices), "blocks": blocks,
             "fps": scene.render.fps / scene.render.fps_base, "keyframes": curves,
             "frames": frames, "meshes": len(meshes)}
 

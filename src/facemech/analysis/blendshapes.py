@@ -287,7 +287,7 @@ def fit_weights(basis: Basis, positions: np.ndarray) -> Fit:
     weights = np.zeros((len(positions), len(basis.names)))
     for t, b in enumerate(target):
         sol = lsq_linear(r, q.T @ b, bounds=(0.0, 1.0), method="bvls", tol=1e-12)
-        weights[t, cols] = sol.x
+        weights[t, cols] = np.clip(sol.x, 0.0, 1.0)  # bvls may step past a bound by ~1e-16
     resid = np.linalg.norm(positions - synthesise(basis, weights), axis=2) * 1e3
     lips = resid[:, basis.lips] if basis.lips.any() else np.full((len(resid), 0), np.nan)
     return Fit(weights, np.sqrt(np.mean(lips ** 2, axis=1)) if lips.size else
