@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import InputError
-from ..params import MUSCLE_GROUPS, Parameters
+from ..params import MUSCLE_GROUPS, Parameters, default_parameters
 
 #: Apple's 52 blendshape locations, in the order of Apple's documentation
 ARKIT_SHAPES: tuple[str, ...] = (
@@ -55,20 +55,20 @@ FACS: dict[str, str] = {
 @dataclass(frozen=True)
 class Recipe:
     """A gesture: ``muscles`` group -> activity (both sides), the jaw's opening ``jaw_deg``
-    (degrees) or forward shift of its condyles ``jaw_forward_mm``, and ``less``: the name of a
-    shape whose displacement is subtracted (a corrective shape, as ARKit's mouthClose)."""
+    (degrees) or forward shift of its condyles ``jaw_forward_mm``, and ``less``: a gesture whose
+    posture is the shape's start instead of rest (a corrective shape, as ARKit's mouthClose)."""
 
     muscles: dict = field(default_factory=dict)
     jaw_deg: float = 0.0
     jaw_forward_mm: float = 0.0
-    less: str | None = None
+    less: Recipe | None = None
 
 
 #: the gesture of each shape the model can make, by stem; the others are flagged
 RECIPES: dict[str, Recipe] = {
     "jawOpen": Recipe(jaw_deg=20.0),
     "jawForward": Recipe(jaw_forward_mm=3.0),
-    "mouthClose": Recipe({"OOSM": 1.0, "OOIM": 1.0}, jaw_deg=20.0, less="jawOpen"),
+    "mouthClose": Recipe({"OOSM": 1.0, "OOIM": 1.0}, jaw_deg=10.0, less=Recipe(jaw_deg=10.0)),
     "mouthFunnel": Recipe({"OOS": 0.6, "OOI": 0.6, "LLS": 0.5, "DLI": 0.5}),
     "mouthPucker": Recipe({"OOS": 1.0, "OOI": 1.0}),
     "mouthSmile": Recipe({"ZYG": 1.0, "LAO": 1.0}),
@@ -164,18 +164,20 @@ def describe_recipe(r: Recipe) -> str:
         parts.append(f"jaw {r.jaw_deg:g} deg")
     if r.jaw_forward_mm:
         parts.append(f"jaw forward {r.jaw_forward_mm:g} mm")
-    return " + ".join(parts) + (f", minus {r.less}" if r.less else "")
+    return " + ".join(parts) + (f", minus {describe_recipe(r.less)}" if r.less else "")
 
 
-def _gesture_controls(r: Recipe, frames: int, ramp_frames: int):
-    """Activity (frames, groups) and jaw poses (frames, 3) of a recipe, ramped then held."""
+def _gesture_controls(r: Recipe, frames: int, ramp_frames: int, params: Parameters):
+    """Activity (frames, groups) and jaw poses (frames, 3) of a recipe, ramped then held; the
+    jaw opens with the preset's condylar glide, and ``jaw_forward_mm`` shifts it further."""
+    from ..solvers.jaw import jaw_poses
+
     shape = np.clip(np.arange(frames) / max(ramp_frames, 1), 0.0, 1.0)
     act = np.zeros((frames, len(MUSCLE_GROUPS)))
     for g, a in r.muscles.items():
         act[:, MUSCLE_GROUPS.index(g)] = a * shape
-    pose = np.zeros((frames, 3))
-    pose[:, 0] = np.radians(r.jaw_deg) * shape
-    pose[:, 2] = r.jaw_forward_mm * 1e-3 * shape
+    pose = jaw_poses(np.radians(r.jaw_deg) * shape, params)
+    pose[:, 2] += r.jaw_forward_mm * 1e-3 * shape
     return act, pose
 
 
@@ -199,41 +201,60 @@ def arkit_basis(face, params: Parameters | None = None, *, ramp: float = 0.2,
     ramp, hold : s, the gesture's ramp to its level and the hold before it is taken
     progress : callable(done, total), optional, once per gesture simulated
     """
-    from ..solvers.forward import simulate
-
-    rate = (params or Parameters()).frame_rate
+    params = params or default_parameters()
+    rate = params.frame_rate
     frames = int(round((ramp + hold) * rate)) + 1
-    stems = [None, *dict.fromkeys(stem(n)[0] for n in ARKIT_SHAPES if stem(n)[0] in RECIPES)]
+    recipes = [Recipe(), *(RECIPES[s] for s in dict.fromkeys(
+        stem(n)[0] for n in ARKIT_SHAPES if stem(n)[0] in RECIPES))]
+    recipes += [r.less for r in recipes if r.less is not None]
     posture, model = {}, face
-    for k, s in enumerate(stems):
-        r = RECIPES[s] if s else Recipe()
-        if not set(r.muscles) <= set(MUSCLE_GROUPS):
-            raise InputError(f"unknown muscle group in {r.muscles}", field=s)
-        act, pose = _gesture_controls(r, frames, int(round(ramp * rate)))
-        sim = simulate(face, act, pose, params=params)
-        posture[s], model = sim.positions[-1], sim.model
+    for k, r in enumerate(recipes):
+        posture[describe_recipe(r)], model = _posture(face, r, params, frames,
+                                                      int(round(ramp * rate)), model)
         if progress is not None:
-            progress(k + 1, len(stems))
-    rest = posture[None]
+            progress(k + 1, len(recipes))
+    rest = posture[""]
+    if isinstance(rest, str):
+        raise InputError(f"the face does not rest: {rest}", field="face")
     skin_x = model.rest_positions[: model.n_surface, 0]
     x = skin_x - np.median(skin_x)
     disp = np.zeros((len(ARKIT_SHAPES), model.n_surface, 3))
     notes = []
     for i, name in enumerate(ARKIT_SHAPES):
         s, side = stem(name)
-        if s not in RECIPES:
+        r = RECIPES.get(s)
+        if r is None:
             notes.append(why_missing(name))
             continue
-        r = RECIPES[s]
-        d = posture[s] - (posture[r.less] if r.less else rest)
-        disp[i] = d * _side_weight(x, side)[:, None]
+        end, start = posture[describe_recipe(r)], posture[describe_recipe(r.less or Recipe())]
+        if isinstance(end, str) or isinstance(start, str):  # the gesture ran away
+            notes.append(f"{describe_recipe(r)}: {end if isinstance(end, str) else start}")
+            continue
+        disp[i] = (end - start) * _side_weight(x, side)[:, None]
         notes.append(describe_recipe(r))
     made = np.linalg.norm(disp, axis=2).max(axis=1) > MADE_FLOOR
-    notes = [n if m or not RECIPES.get(stem(nm)[0]) else f"{n} (no such muscle on this face)"
-             for nm, n, m in zip(ARKIT_SHAPES, notes, made, strict=True)]
+    notes = [f"{n} (no such muscle on this face)" if RECIPES.get(stem(nm)[0]) and not m
+             and "ran away" not in n else n for nm, n, m in zip(ARKIT_SHAPES, notes, made,
+                                                                strict=True)]
     lips = (np.asarray(model.lip_region, bool) if model.lip_region is not None
             else np.zeros(model.n_surface, bool))
     return Basis(ARKIT_SHAPES, disp, made, rest, np.asarray(model.faces), lips, tuple(notes))
+
+
+def _posture(face, r: Recipe, params: Parameters, frames: int, ramp_frames: int, model):
+    """(the epidermal nodes' positions (n_surface, 3) m at the end of the gesture ``r``, or
+    the reason it ran away; the face simulated)."""
+    from ..errors import SimulationBlowUp
+    from ..solvers.forward import simulate
+
+    if not set(r.muscles) <= set(MUSCLE_GROUPS):
+        raise InputError(f"unknown muscle group in {r.muscles}", field="muscles")
+    act, pose = _gesture_controls(r, frames, ramp_frames, params)
+    try:
+        sim = simulate(face, act, pose, params=params)
+    except SimulationBlowUp as exc:
+        return f"the gesture ran away ({exc})", model
+    return sim.positions[-1], sim.model
 
 
 @dataclass(frozen=True)
