@@ -5,7 +5,7 @@
 # Usage: bash tools/blender_venv.sh [PYTHON3.11]   (does nothing when the venv is there)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-PY=${1:-python3.11}
+PY=${1:-$(command -v python3.11 || command -v python3)}
 BPY_VERSION=5.0.1
 if [ -x .venv-blender/bin/python ] && .venv-blender/bin/python -c "import bpy" 2>/dev/null; then
   exit 0
