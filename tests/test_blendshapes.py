@@ -63,7 +63,9 @@ def test_the_52_names_their_flags_and_sides(basis):
     assert "eyeBlinkLeft" not in made and "tongueOut" not in made and "jawOpen" in made
     assert facs_of("mouthSmileRight") == "AU12" and facs_of("jawOpen") == "AU26"
     rows = {r["name"]: r for r in basis.table()}
-    assert rows["cheekPuff"]["gesture"] and not rows["cheekPuff"]["made"]
+    assert all(r["gesture"] for r in rows.values())  # each made shape's gesture, or why not
+    assert not rows["jawLeft"]["made"] and rows["jawLeft"]["facs"] == "AU30"
+    assert "hinge" in rows["jawLeft"]["gesture"] and not rows["cheekPuff"]["made"]
     # a one-sided shape moves its side: +x is the subject's left, as ARKit's Left
     x = basis.rest[:, 0] - np.median(basis.rest[:, 0])
     left = basis.displacement[ARKIT_SHAPES.index("mouthSmileLeft")]

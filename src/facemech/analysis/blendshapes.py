@@ -107,7 +107,10 @@ MADE_FLOOR = 1e-5
 
 
 def stem(name: str) -> tuple[str, str | None]:
-    """(stem, side) of a shape name: ``("mouthSmile", "Left")``, ``("jawOpen", None)``."""
+    """(stem, side) of a shape name: ``("mouthSmile", "Left")``, ``("jawOpen", None)``; a
+    shape that moves to a side (``jawLeft``, ``mouthRight``) is its own stem."""
+    if name in FACS:
+        return name, None
     for side in ("Left", "Right"):
         if name.endswith(side):
             return name[: -len(side)], side
