@@ -201,6 +201,9 @@ def test_cli_blendshapes(basis, result, tmp_path, monkeypatch, capsys):
     doc = json.loads((tmp_path / "face.json").read_text())
     assert doc["names"] == list(ARKIT_SHAPES) and len(doc["shapes"]) == 52
     assert 0 < doc["fit_error"]["rms_lips_mm"] < LIPS_RMS_MM
+    per_frame = np.array(doc["frame_error"]["rms_lips_mm"])
+    assert per_frame.shape == (FRAMES,) and per_frame.max() == pytest.approx(
+        doc["fit_error"]["max_frame_rms_lips_mm"], abs=1e-3)
     np.testing.assert_allclose(doc["weights"], weights, atol=1e-6)
     assert f"lips {doc['fit_error']['rms_lips_mm']:.3f} mm" in text
     assert pygltflib.GLTF2().load(str(out)).meshes[0].extras["targetNames"][17] == "jawOpen"

@@ -256,10 +256,13 @@ def export_blendshapes(result: str | Path, output: str | Path, *, face: str | No
     info = {"format": "facemech-blendshapes", "set": "arkit", "units": "1 (weights in [0, 1])",
             "source": Path(result).name, "face": model.name, "preset": params.name,
             "fit_error": error, "lips_nodes": int(basis.lips.sum()),
+            "frame_error": {"rms_lips_mm": np.round(fit.rms_lips_mm, 4).tolist(),
+                            "rms_face_mm": np.round(fit.rms_face_mm, 4).tolist()},
             "shapes": basis.table()}
     out.write_blendshape_gltf(paths[0], basis.rest, basis.triangles, ARKIT_SHAPES,
                               basis.displacement, times, fit.weights,
-                              {**{k: v for k, v in info.items() if k != "shapes"},
+                              {**{k: v for k, v in info.items()
+                                  if k not in ("shapes", "frame_error")},
                                "flagged": [r["name"] for r in info["shapes"] if not r["made"]]})
     out.write_weights_csv(paths[1], ARKIT_SHAPES, times, fit.weights)
     out.write_weights_json(paths[2], ARKIT_SHAPES, times, fit.weights, info)
