@@ -195,6 +195,29 @@ def test_mesh_sequence_rereads_every_frame(ds, tmp_path, fmt, units, scale, atol
     assert sorted(p.name for p in tmp_path.iterdir()) == ["seq"]  # no temporary left
 
 
+def test_mesh_files_carry_the_frame_note_and_the_ply_layout(ds, tmp_path):
+    """trimesh writes the frames; each keeps facemech's note (the OBJ's header, the PLY's only
+    comment) and the PLY keeps its layout: float32 x y z, uchar-int faces, little-endian."""
+    for fmt in ("obj", "ply"):
+        write_mesh_sequence(ds.isel(time=slice(0, 2)), tmp_path / fmt, fmt, units="mm")
+    obj = (tmp_path / "obj" / "frame_00001.obj").read_text().splitlines()
+    assert obj[0].startswith("# facemech frame 1, t = 0.016667 s, units mm")
+    raw = (tmp_path / "ply" / "frame_00001.ply").read_bytes()
+    head = raw[: raw.index(b"end_header\n")].decode("ascii").splitlines()
+    assert head[:3] == ["ply", "format binary_little_endian 1.0",
+                        "comment facemech frame 1, t = 0.016667 s, units mm, +x subject's left, "
+                        "+y up, +z forward"]
+    assert [h for h in head if h.startswith("comment")] == head[2:3]
+    assert head[3:] == [f"element vertex {ds.sizes['node']}", "property float x",
+                        "property float y", "property float z",
+                        f"element face {ds.sizes['triangle']}",
+                        "property list uchar int vertex_indices"]
+    n = ds.sizes["node"]
+    body = raw[raw.index(b"end_header\n") + 11:]
+    xyz = np.frombuffer(body, "<f4", 3 * n).reshape(n, 3)
+    np.testing.assert_array_equal(xyz, (ds["positions"].values[1] * 1e3).astype("<f4"))
+
+
 def test_mesh_sequence_folder_rules(ds, result, tmp_path):
     seq = tmp_path / "seq"
     write_mesh_sequence(ds, seq)

@@ -211,10 +211,13 @@ def still(result: Path, output: Path = ..., time: float | None = None, peak: str
     return workflows.pictures.still_file(**locals())
 
 @command()
-def export(result: Path, output: Path = ..., units: str | None = None, fmt: str | None = None):
+def export(result: Path, output: Path = ..., units: str | None = None, fmt: str | None = None,
+           blendshapes: str | None = None, face: str | None = None):
     """Export a result: animated skin as glTF (.glb), a mesh per frame (OBJ/PLY, -o a folder),
-    or markers (.trc, .c3d, .csv). --units: meshes m (default) or mm, markers mm (default)."""
-    return workflows.pictures.export_file(result, output, fmt=fmt, units=units)
+    or markers (.trc, .c3d, .csv). --units: meshes m (default) or mm, markers mm (default).
+    --blendshapes arkit: ARKit's 52 shapes and their fitted weights (.glb, .csv, .json)."""
+    return _staged(workflows.pictures.export_file, result=result, output=output, fmt=fmt,
+                   units=units, blendshapes=blendshapes, face=face)
 
 @command()
 def plot(result: Path, output: Path = ..., units: str | None = None,

@@ -125,6 +125,8 @@ experiment_lucero2008.output: output folder
 experiment_pitermann_crosstalker.output: JSON file of the table
 experiment_pitermann_synthetic.method: lsq, powell or both
 experiment_pitermann_synthetic.output: folder: summary.json, PNGs
+export.blendshapes: arkit: ARKit's 52 blendshapes from the model's gestures, fitted weights
+export.face: with --blendshapes: the result's face (default: the one it names)
 export.output: file, or a folder with --format
 export.units: unit of the output
 face_build.output: the face model (.npz)

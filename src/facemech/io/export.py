@@ -11,8 +11,9 @@ replaces the input results file.
   one animation on the results' own time line whose ``weights`` switch the targets (linear
   interpolation between frames reproduces linear interpolation of the positions); the markers
   are nodes named by marker with an animated translation.
-- :func:`write_mesh_sequence`: ``frame_00000.obj`` (or ``.ply``) ... and ``index.json`` (frame
-  times, units) in a folder.
+- :func:`write_mesh_sequence`: ``frame_00000.obj`` (or ``.ply``, each by trimesh's exporter)
+  ... and ``index.json`` (frame times, units) in a folder; the folder's atomic replacement, the
+  frame's note in each file and the index are facemech's own.
 - :func:`write_markers`: the model's markers as TRC, C3D or CSV through the marker writers.
 
 The exports carry the skin (and the markers), not the render-only parts (eyes, teeth, tongue).
@@ -318,22 +319,33 @@ def write_gltf(results, path: str | Path) -> Exported:
 
 
 # ---- mesh sequence --------------------------------------------------------------------------
-def _obj_text(vertices: np.ndarray, faces_text: str, header: str) -> str:
-    lines = [f"v {x:.9g} {y:.9g} {z:.9g}" for x, y, z in vertices.tolist()]
-    return header + "\n".join(lines) + "\n" + faces_text
+def _trimesh(vertices: np.ndarray, triangles: np.ndarray):
+    import trimesh
+
+    return trimesh.Trimesh(vertices, triangles, process=False)  # order kept, nothing merged
+
+
+def _obj_text(vertices: np.ndarray, triangles: np.ndarray, note: str, scale: float) -> str:
+    """An OBJ by trimesh: the note as its header, vertices to 0.1 nm in the file's unit."""
+    from trimesh.exchange.obj import export_obj
+
+    digits = max(0, int(round(10 + np.log10(scale))))
+    return export_obj(_trimesh(vertices, triangles), include_normals=False,
+                      include_color=False, include_texture=False, digits=digits, header=note)
 
 
 def _ply_bytes(vertices: np.ndarray, triangles: np.ndarray, comment: str) -> bytes:
-    head = ("ply\nformat binary_little_endian 1.0\n"
-            f"comment {comment}\n"
-            f"element vertex {len(vertices)}\n"
-            "property float x\nproperty float y\nproperty float z\n"
-            f"element face {len(triangles)}\n"
-            "property list uchar int vertex_indices\nend_header\n").encode("ascii")
-    faces = np.empty(len(triangles), dtype=[("n", "u1"), ("i", "<i4", (3,))])
-    faces["n"] = 3
-    faces["i"] = triangles
-    return head + vertices.astype("<f4").tobytes() + faces.tobytes()
+    """A binary little-endian PLY (float32 vertices) by trimesh, its fixed comment line
+    replaced by ``comment``."""
+    from trimesh.exchange.ply import export_ply
+
+    data = export_ply(_trimesh(vertices, triangles), encoding="binary",
+                      include_attributes=False)
+    end = data.index(b"end_header\n")
+    head = [line for line in data[:end].decode("ascii").split("\n")
+            if not line.startswith("comment")]
+    head.insert(2, f"comment {comment}")
+    return "\n".join(head).encode("ascii") + data[end:]
 
 
 def _index_text(index: dict) -> str:
@@ -372,7 +384,8 @@ def write_mesh_sequence(results, folder: str | Path, fmt: str = "obj", *,
     results : xarray.Dataset or path
         A results dataset or file.
     folder : the output folder
-    fmt : ``"obj"`` (text, 9 significant digits) or ``"ply"`` (binary little-endian, float32)
+    fmt : ``"obj"`` (text, vertices to 0.1 nm) or ``"ply"`` (binary little-endian, float32),
+        each written by trimesh's exporters
     units : length unit of the vertices: ``m`` (default), ``mm``, ``cm`` or ``um``
 
     Notes
@@ -398,13 +411,12 @@ def write_mesh_sequence(results, folder: str | Path, fmt: str = "obj", *,
     with pending_folder(tmp):  # removed whole if the command is interrupted
         try:
             entries = []
-            faces_text = "".join(f"f {a} {b} {c}\n" for a, b, c in (tris + 1).tolist())
             for k in range(len(pos)):
                 name = f"frame_{k:05d}.{fmt}"
                 note = (f"facemech frame {k}, t = {times[k]:.6f} s, units {units}, "
                         "+x subject's left, +y up, +z forward")
                 if fmt == "obj":
-                    (tmp / name).write_text(_obj_text(pos[k] / scale, faces_text, f"# {note}\n"))
+                    (tmp / name).write_text(_obj_text(pos[k] / scale, tris, note, scale))
                 else:
                     (tmp / name).write_bytes(_ply_bytes(pos[k] / scale, tris, note))
                 entries.append({"file": name, "time_s": float(times[k])})

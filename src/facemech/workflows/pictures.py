@@ -162,13 +162,124 @@ def view_file(result: str | Path, output: str | Path, *, markers: str | Path | N
 
 
 def export_file(result: str | Path, output: str | Path, *, fmt: str | None = None,
-                units: str | None = None) -> Written:
+                units: str | None = None, blendshapes: str | None = None,
+                face: str | None = None, progress: StagedProgress | None = None) -> Written:
     """Export a results file (:func:`facemech.io.export.export_results`): animated skin as glTF
     (``.glb``), one mesh per frame (``fmt`` ``obj`` or ``ply``, ``output`` a folder), or
-    markers (``.trc``, ``.c3d``, ``.csv``)."""
+    markers (``.trc``, ``.c3d``, ``.csv``); with ``blendshapes="arkit"``, the blendshape export
+    of :func:`export_blendshapes` (``face`` its face)."""
+    from ..errors import InputError
     from ..io.export import export_results
 
+    if blendshapes is not None:
+        if str(blendshapes).lower() != "arkit":
+            raise InputError(f"unknown blendshape set {blendshapes!r} (expected arkit)",
+                             field="--blendshapes")
+        if fmt is not None or units is not None:
+            raise InputError("a blendshape export is a .glb in metres: no --format or --units",
+                             field="--blendshapes")
+        return export_blendshapes(result, output, face=face, progress=progress)
+    if face is not None:
+        raise InputError("--face goes with --blendshapes", field="--face")
     folder = fmt is not None or Path(output).suffix == "" or Path(output).is_dir()
     check_output(output, [result], folder=folder, field="-o")
     res = export_results(result, output, fmt=fmt, units=units)
     return Written(Path(output), res, res.summary())
+
+
+def blendshape_outputs(output: str | Path) -> tuple[Path, Path, Path]:
+    """The files of a blendshape export to ``output`` (``.glb``): it, and the weights' ``.csv``
+    and ``.json`` beside it with the same stem."""
+    output = Path(output)
+    return output, output.with_suffix(".csv"), output.with_suffix(".json")
+
+
+def _result_face(ds, face: str | None, source: str):
+    """The face and preset a result was made with (``face`` overrides the result's own name),
+    checked against the result's rest positions."""
+    from ..errors import FacemechError, InputError
+    from ..geometry.builder import load_face
+    from ..params import preset
+
+    name = face or str(ds.attrs.get("face", ""))
+    if name.startswith("generic-adult"):  # a built-in face's own name (geometry.builder)
+        name = "default" + name[len("generic-adult"):]
+    try:
+        params = preset(str(ds.attrs.get("preset", "anatomical")))
+    except FacemechError as exc:
+        raise InputError(f"the result's preset cannot be loaded ({exc})", source=source,
+                         field="preset") from None
+    try:
+        model = load_face(name, tissue=params.tissue)
+    except FacemechError as exc:
+        raise InputError(f"the result's face {name!r} cannot be loaded ({exc}); give it with "
+                         "--face", source=source, field="--face") from None
+    rest = np.asarray(ds["rest_positions"].values, float)
+    skin = model.rest_positions[: model.n_surface]
+    if skin.shape != rest.shape or np.abs(skin - rest).max() > 1e-6:
+        raise InputError(f"the result was not made on the face {name!r} ({len(rest)} nodes, "
+                         f"the face {len(skin)}); give its face with --face", source=source,
+                         field="--face")
+    return model, params
+
+
+def export_blendshapes(result: str | Path, output: str | Path, *, face: str | None = None,
+                       progress: StagedProgress | None = None) -> Written:
+    """ARKit's 52 blendshapes made from the result's own face
+    (:func:`facemech.analysis.blendshapes.arkit_basis`), weights fitted to every frame
+    (:func:`~facemech.analysis.blendshapes.fit_weights`), written as a glTF with the named
+    morph targets and their weight animation (``output``, ``.glb``) and the weights as CSV and
+    JSON beside it (:func:`blendshape_outputs`).
+
+    Parameters
+    ----------
+    result : results file (``.nc``)
+    output : the ``.glb``
+    face : the face the result was made on (a name or ``.npz``; default: the result's own)
+    progress : staged progress; stages ``gestures`` and ``fit``
+
+    Returns
+    -------
+    Written : ``data`` a dict with the fit's error (mm), the shapes' table and the files
+    """
+    from ..analysis.blendshapes import ARKIT_SHAPES, arkit_basis, fit_weights
+    from ..errors import InputError
+    from ..io import blendshapes as out
+    from ..io.results import read_results
+
+    paths = blendshape_outputs(output)
+    if paths[0].suffix.lower() != ".glb":
+        raise InputError("a blendshape export is a binary glTF: -o must end in .glb",
+                         source=str(output), field="-o")
+    for p in paths:
+        check_output(p, [result], field="-o")
+    ds = read_results(result)
+    model, params = _result_face(ds, face, str(result))
+    basis = arkit_basis(model, params, progress=stage(progress, "gestures"))
+    positions = ds["positions"].transpose("time", "node", "axis").values.astype(float)
+    fit = fit_weights(basis, positions)
+    if progress is not None:
+        progress("fit", 1, 1)
+    times = np.asarray(ds["time"].values, float)
+    error = {k: round(v, 4) for k, v in fit.summary().items()}
+    info = {"format": "facemech-blendshapes", "set": "arkit", "units": "1 (weights in [0, 1])",
+            "source": Path(result).name, "face": model.name, "preset": params.name,
+            "fit_error": error, "lips_nodes": int(basis.lips.sum()),
+            "frame_error": {"rms_lips_mm": np.round(fit.rms_lips_mm, 4).tolist(),
+                            "rms_face_mm": np.round(fit.rms_face_mm, 4).tolist()},
+            "shapes": basis.table()}
+    out.write_blendshape_gltf(paths[0], basis.rest, basis.triangles, ARKIT_SHAPES,
+                              basis.displacement, times, fit.weights,
+                              {**{k: v for k, v in info.items()
+                                  if k not in ("shapes", "frame_error")},
+                               "flagged": [r["name"] for r in info["shapes"] if not r["made"]]})
+    out.write_weights_csv(paths[1], ARKIT_SHAPES, times, fit.weights)
+    out.write_weights_json(paths[2], ARKIT_SHAPES, times, fit.weights, info)
+    made = int(basis.made.sum())
+    return Written(paths[0], {**info, "files": paths},
+                   f"blendshapes (ARKit, {made} of 52 made, {52 - made} flagged): "
+                   f"{len(times)} frames -> {paths[0]}, {paths[1].name}, {paths[2].name}\n"
+                   f"fit error (RMS): lips {error['rms_lips_mm']:.3f} mm, face "
+                   f"{error['rms_face_mm']:.3f} mm (worst frame: lips "
+                   f"{error['max_frame_rms_lips_mm']:.3f} mm, face "
+                   f"{error['max_frame_rms_face_mm']:.3f} mm)")
