@@ -85,9 +85,11 @@ def _staged(run, **options):
     """Call ``run(**options, progress=report)``: bars on a terminal, else the command's log
     lines with their heartbeat; one bar per stage."""
     if err.is_terminal:
-        from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+        from rich.progress import (BarColumn, Progress, TextColumn, TimeElapsedColumn,
+                                   TimeRemainingColumn)
         shown = Progress(TextColumn("{task.description}"), BarColumn(), TextColumn(
-            "{task.completed}/{task.total}"), TimeElapsedColumn(), console=err, transient=True)
+            "{task.completed}/{task.total}"), TimeElapsedColumn(), TextColumn("left"),
+            TimeRemainingColumn(), console=err, transient=True)
     else:
         shown = _log[-1] if _log else progress.LogProgress()
     with shown as prog:
