@@ -81,19 +81,30 @@ def _root(ctx: typer.Context, version: bool = typer.Option(
         _log[:] = [ctx.with_resource(progress.LogProgress(ctx.invoked_subcommand or "facemech"))]
         ctx.call_on_close(_log.clear)
 
-def _staged(run, **options):
+def _staged(run, _warm: bool = True, **options):
     """Call ``run(**options, progress=report)``: bars on a terminal, else the command's log
-    lines with their heartbeat; one bar per stage."""
+    lines with their heartbeat; one bar per stage. The kernels compiled first when no warm-up
+    has cached them (``_warm``)."""
     if err.is_terminal:
-        from rich.progress import (BarColumn, Progress, TextColumn, TimeElapsedColumn,
-                                   TimeRemainingColumn)
-        shown = Progress(TextColumn("{task.description}"), BarColumn(), TextColumn(
-            "{task.completed}/{task.total}"), TimeElapsedColumn(), TextColumn("left"),
-            TimeRemainingColumn(), console=err, transient=True)
+        import rich.progress as bars
+        shown = bars.Progress(bars.TextColumn("{task.description}"), bars.BarColumn(),
+                              bars.TextColumn("{task.completed}/{task.total}"),
+                              bars.TimeElapsedColumn(), bars.TextColumn("left"),
+                              bars.TimeRemainingColumn(), console=err, transient=True)
     else:
         shown = _log[-1] if _log else progress.LogProgress()
     with shown as prog:
+        if _warm:
+            _first_use(progress.staged(prog))
         return run(**options, progress=progress.staged(prog))
+
+def _first_use(report) -> None:
+    """Compile numba's kernels, saying so, when no warm-up has cached them (facemech.warmup)."""
+    from . import warmup as kernels
+    if kernels.needed():
+        _say([f"compiling the physics kernels once (about {kernels.TYPICAL_S} s)..."], True)
+        seconds = kernels.warm_up(report)
+        _say([f"physics kernels compiled in {seconds:.0f} s; later runs load them"], True)
 
 def _say(lines, note: bool = False, **kw) -> None:  # note: on stderr, "facemech: " first
     for line in lines:
@@ -109,6 +120,13 @@ def demo(output: Path = Path("demo-output"), integrator: str | None = None, vide
          preset: str = "anatomical", render=None):
     """Simulate a synthetic utterance on the built-in face; write results, plots and a movie."""
     return _staged(workflows.demo.run, **locals())
+
+@command()
+def warmup():
+    """Compile and cache the physics and rendering kernels now (make's install step does it)."""
+    from . import warmup as kernels
+    seconds = _staged(kernels.warm_up, _warm=False)
+    return f"physics kernels compiled and cached in {seconds:.0f} s ({kernels.cache_dir()})"
 
 @command(face_app, "build")
 def face_build(surface: Path, landmarks: Path, output: Path = ..., units: str = "mm",
