@@ -188,6 +188,7 @@ class LogProgress:
             task = None if self._current is None else self.tasks[self._current]
             if task is not None and not task.finished and task.done > 0:
                 self._print(task.line(now))
+                task.last = now
                 return True
             if task is None or task.finished:
                 name, since = self.label, self.start
