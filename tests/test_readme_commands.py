@@ -141,3 +141,12 @@ def test_the_warm_up_module_the_readme_names_exists():
         if line.startswith("python -m facemech."):
             module = importlib.import_module(line.split()[2])
             assert callable(module.main), line
+
+
+def test_invert_help_says_articulography_is_resampled_and_laid_on_the_face():
+    """The help of ``invert --markers`` no longer asks every file to come in the model's frame
+    and rate: articulography is resampled and its lips laid on the face."""
+    from facemech.cli_options import help_for
+
+    text = help_for("invert", "markers")
+    assert "articulography" in text and "resampled" in text and ".ema" in text

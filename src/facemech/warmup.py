@@ -3,8 +3,8 @@
 numba compiles each kernel on its first call and caches the machine code (beside the sources,
 or in ``NUMBA_CACHE_DIR``); later processes load it in a fraction of a second.
 :func:`warm_up` calls every kernel that ``facemech demo``, ``simulate``, ``render`` and
-``invert`` use: the built-in face built, a few frames simulated with the implicit and the
-explicit step, written, drawn and inverted. It then writes a stamp (:func:`stamp_path`) that
+``invert`` use: the built-in face built, a few frames simulated, written, drawn and
+inverted (its explicit steps). It then writes a stamp (:func:`stamp_path`) that
 names numba's version and the kernels' source files (size, modification time).
 :func:`needed` is true while the stamp is missing or stale; the command line then runs the
 warm-up first, with a line saying so and how long it took (``FACEMECH_WARMUP=0``: not).
@@ -107,7 +107,6 @@ def warm_up(progress: StagedProgress | None = None) -> float:
     _, act, jaw = utterance()
     frames = slice(40, 44)  # a closure: muscles, lips in contact, the jaw moving
     sim = simulate(face, act[frames], jaw[frames])
-    simulate(face, act[frames], jaw[frames], integrator="euler")
     say(2)
     with tempfile.TemporaryDirectory(prefix="facemech-warmup-") as tmp:
         write_results(Path(tmp) / "r.nc", sim)
