@@ -149,4 +149,4 @@ def test_invert_help_says_articulography_is_resampled_and_laid_on_the_face():
     from facemech.cli_options import help_for
 
     text = help_for("invert", "markers")
-    assert "articulography" in text and "resampled" in text and ".ema" in text
+    assert "articulography" in text and "resampled" in text and ".ema" in text, text
