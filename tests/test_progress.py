@@ -114,3 +114,4 @@ def test_demo_under_a_pipe_keeps_printing_lines(tmp_path):
     assert all(ln.startswith("facemech: ") for ln in lines), lines
     assert any(ln.startswith("facemech: simulate: frame 155/155, ") for ln in lines), lines
     assert (tmp_path / "d" / "result.nc").is_file()
+    assert (tmp_path / "d" / "view.html").is_file()  # the demo writes its viewer page too
