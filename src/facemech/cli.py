@@ -12,7 +12,7 @@ import typer
 from rich.console import Console
 
 from . import cli_options as opts
-from . import progress, workflows
+from . import progress, warmup, workflows
 from ._version import __version__
 from .errors import FacemechError
 
@@ -81,30 +81,18 @@ def _root(ctx: typer.Context, version: bool = typer.Option(
         _log[:] = [ctx.with_resource(progress.LogProgress(ctx.invoked_subcommand or "facemech"))]
         ctx.call_on_close(_log.clear)
 
-def _staged(run, _warm: bool = True, **options):
+def _staged(run, **options):
     """Call ``run(**options, progress=report)``: bars on a terminal, else the command's log
-    lines with their heartbeat; one bar per stage. The kernels compiled first when no warm-up
-    has cached them (``_warm``)."""
+    lines with their heartbeat; one bar per stage; first the kernels' warm-up if needed."""
     if err.is_terminal:
-        import rich.progress as bars
-        shown = bars.Progress(bars.TextColumn("{task.description}"), bars.BarColumn(),
-                              bars.TextColumn("{task.completed}/{task.total}"),
-                              bars.TimeElapsedColumn(), bars.TextColumn("left"),
-                              bars.TimeRemainingColumn(), console=err, transient=True)
+        import rich.progress as r
+        shown = r.Progress(r.TextColumn("{task.description}"), r.BarColumn(), r.MofNCompleteColumn(
+            ), r.TimeElapsedColumn(), r.TimeRemainingColumn(), console=err, transient=True)
     else:
         shown = _log[-1] if _log else progress.LogProgress()
     with shown as prog:
-        if _warm:
-            _first_use(progress.staged(prog))
+        warmup.warm_up_if_needed(progress.staged(prog), skip=run is warmup.warm_up)
         return run(**options, progress=progress.staged(prog))
-
-def _first_use(report) -> None:
-    """Compile numba's kernels, saying so, when no warm-up has cached them (facemech.warmup)."""
-    from . import warmup as kernels
-    if kernels.needed():
-        _say([f"compiling the physics kernels once (about {kernels.TYPICAL_S} s)..."], True)
-        seconds = kernels.warm_up(report)
-        _say([f"physics kernels compiled in {seconds:.0f} s; later runs load them"], True)
 
 def _say(lines, note: bool = False, **kw) -> None:  # note: on stderr, "facemech: " first
     for line in lines:
@@ -121,12 +109,10 @@ def demo(output: Path = Path("demo-output"), integrator: str | None = None, vide
     """Simulate a synthetic utterance on the built-in face; write results, plots and a movie."""
     return _staged(workflows.demo.run, **locals())
 
-@command()
-def warmup():
+@command(app, "warmup")
+def warm_up_kernels():
     """Compile and cache the physics and rendering kernels now (make's install step does it)."""
-    from . import warmup as kernels
-    seconds = _staged(kernels.warm_up, _warm=False)
-    return f"physics kernels compiled and cached in {seconds:.0f} s ({kernels.cache_dir()})"
+    return f"kernels compiled and cached in {_staged(warmup.warm_up):.0f} s"
 
 @command(face_app, "build")
 def face_build(surface: Path, landmarks: Path, output: Path = ..., units: str = "mm",
@@ -177,8 +163,7 @@ def markers_convert(source: Path, target: Path | None = None, output: Path | Non
 
 @command(markers_app, "head-correct")
 def markers_head_correct(source: Path, output: Path = ..., units: str | None = None,
-                         head: str = ..., reference: int | None = None,
-                         report: Path | None = None):
+                         head: str = ..., reference: int | None = None, report: Path | None = None):
     """Remove head motion by a per-frame rigid fit of head markers to a reference frame."""
     return workflows.markers.head_correct_file(**locals())
 

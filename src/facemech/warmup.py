@@ -17,8 +17,11 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import re
+import sys
 import tempfile
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 from .progress import StagedProgress
@@ -27,6 +30,7 @@ from .progress import StagedProgress
 TYPICAL_S = 90
 
 _PACKAGE = Path(__file__).resolve().parent
+_IMPORTS_NUMBA = re.compile(rb"^\s*(from numba|import numba)", re.MULTILINE)
 
 
 def cache_dir(environ=os.environ) -> Path:
@@ -47,12 +51,12 @@ def stamp_path(environ=os.environ) -> Path:
 
 def fingerprint(package: Path = _PACKAGE) -> str:
     """numba's version and the size and modification time (ns) of every source file of
-    ``package`` that uses numba: what the compiled kernels depend on."""
+    ``package`` that imports numba (the files numba's cache keys its kernels on)."""
     import numba
 
     rows = [f"numba {numba.__version__}"]
     for path in sorted(package.rglob("*.py")):
-        if b"numba" in path.read_bytes() and path.name != "warmup.py":
+        if _IMPORTS_NUMBA.search(path.read_bytes()) and path.name != "warmup.py":
             st = path.stat()
             rows.append(f"{path.relative_to(package)} {st.st_size} {st.st_mtime_ns}")
     return hashlib.sha256("\n".join(rows).encode()).hexdigest()
@@ -118,6 +122,23 @@ def warm_up(progress: StagedProgress | None = None) -> float:
         say(4)
     seconds = time.perf_counter() - t0
     _write_stamp(seconds)
+    return seconds
+
+
+def _note(line: str) -> None:
+    print(f"facemech: {line}", file=sys.stderr, flush=True)
+
+
+def warm_up_if_needed(progress: StagedProgress | None = None, *, skip: bool = False,
+                      say: Callable[[str], None] = _note) -> float | None:
+    """:func:`warm_up` when :func:`needed` (and not ``skip``), with a line to ``say`` (default:
+    stderr) before it (what, about how long) and after it (how long it took). Returns its wall
+    time (s), None when not run."""
+    if skip or not needed():
+        return None
+    say(f"compiling the physics kernels once (about {TYPICAL_S} s)...")
+    seconds = warm_up(progress)
+    say(f"physics kernels compiled in {seconds:.0f} s; later runs load them")
     return seconds
 
 
