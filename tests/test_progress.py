@@ -67,6 +67,8 @@ def test_count_line_and_duration():
     assert count_line("render", 1, 4, 0.5, 1.5) == (
         "render: frame 1/4, 0.5 s elapsed, about 2 s left")
     assert count_line("fit", 3, None, 2.0, 1.0) == "fit: 3, 2.0 s elapsed"  # no total
+    assert count_line("plan", 2, 9, 10.0, 35.0) == (
+        "plan: iteration 2/9, 10.0 s elapsed, about 35 s left")
     assert count_line("fit", 3, 3, 2.0, 0.0) == "fit: 3/3, 2.0 s elapsed"  # complete
     assert count_line("build", 1, 10, 100.0, 900.0) == (
         "build: 1/10, 100.0 s elapsed, about 15 min 00 s left")

@@ -34,8 +34,9 @@ StagedProgress = Callable[[str, int, "int | None"], None]
 #: seconds of silence after which the heartbeat prints a line
 HEARTBEAT_S = 6.0
 
-#: stages whose items are frames: their counts read "frame 40/116"
-FRAME_STAGES = ("simulate", "render", "invert", "plan", "render and read")
+#: what the items of a stage are, where it is known: its counts read "frame 40/116"
+NOUNS = {"simulate": "frame", "render": "frame", "invert": "frame", "render and read": "frame",
+         "plan": "iteration"}
 
 
 def duration(seconds: float) -> str:
@@ -53,9 +54,9 @@ def count_line(stage: str, done: int, total: int | None, elapsed: float,
     """A stage's progress line: ``"invert (lsq): frame 40/116, 4.1 s elapsed, about 7 s
     left"``; ``elapsed`` and ``left`` in s (``left`` None, or the stage complete: no
     estimate)."""
-    noun = "frame " if stage.split(" (")[0] in FRAME_STAGES else ""
+    noun = NOUNS.get(stage.split(" (")[0])
     of = f"/{total}" if total is not None else ""
-    text = f"{stage}: {noun}{done}{of}, {elapsed:.1f} s elapsed"
+    text = f"{stage}: {noun + ' ' if noun else ''}{done}{of}, {elapsed:.1f} s elapsed"
     if left is not None and total is not None and done < total:
         text += f", about {duration(left)} left"
     return text
