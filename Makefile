@@ -14,12 +14,14 @@ SUDO   := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 .PHONY: demo test test-lowest test-portable lint bench clean chromium docs docs-check
 
 # every package pinned, then the lip-reader's face-mesh model, kept from the mediapipe 0.10.21
-# wheel (pip download; facemech.io.face_mesh): that wheel pins numpy < 2 and is not installed
+# wheel (pip download; facemech.io.face_mesh): that wheel pins numpy < 2 and is not installed;
+# then numba's kernels compiled and cached once (facemech.warmup), so that no command waits
 $(STAMP): pyproject.toml $(CONSTRAINTS)
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip
 	$(BIN)/python -m pip install -q -c $(CONSTRAINTS) -e ".[dev]"
 	$(BIN)/python -m facemech.io.face_mesh
+	$(BIN)/python -m facemech.warmup
 	touch $(STAMP)
 
 $(LOW_STAMP): pyproject.toml constraints-lowest.txt
@@ -27,6 +29,7 @@ $(LOW_STAMP): pyproject.toml constraints-lowest.txt
 	$(LOW_BIN)/python -m pip install -q --upgrade pip
 	$(LOW_BIN)/python -m pip install -q -c constraints-lowest.txt -e ".[dev]"
 	$(LOW_BIN)/python -m facemech.io.face_mesh
+	NUMBA_CACHE_DIR=$(LOW_VENV)/numba-cache $(LOW_BIN)/python -m facemech.warmup
 	touch $(LOW_STAMP)
 
 # a headless browser for the viewer's test (tests/test_viewer.py): installed with apt-get only
@@ -39,7 +42,6 @@ chromium:
 
 demo: $(STAMP)
 	$(BIN)/facemech demo -o demo-output
-	$(BIN)/facemech view demo-output/result.nc -o demo-output/view.html
 
 lint: $(STAMP)
 	$(BIN)/ruff check src tests benchmarks tools

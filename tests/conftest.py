@@ -98,7 +98,9 @@ def activity(frames: int, **levels: float) -> np.ndarray:
 #: a progress line of :class:`facemech.progress.LogProgress` (a stage's count or the heartbeat):
 #: how many of them come depends on the clock (a slow machine prints "still working" where a fast
 #: one prints nothing), so checks of stderr's other lines leave them out (issue 32)
-PROGRESS_LINE = re.compile(r"^facemech: [^:]+: (still working \(\d+ s\)|\d+(/\d+)? \(\d+ s\))$")
+PROGRESS_LINE = re.compile(r"^facemech: ([^:]+: (still working \(\d+ s\)|(frame )?\d+(/\d+)?, "
+                           r"[\d.]+ s elapsed(, about .+ left)?)|compiling the physics kernels "
+                           r"once .*|physics kernels compiled .*)$")
 
 
 def without_progress(err: str) -> str:

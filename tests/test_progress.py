@@ -5,7 +5,7 @@ import subprocess
 import sys
 import time
 
-from facemech.progress import HEARTBEAT_S, LogProgress, staged
+from facemech.progress import HEARTBEAT_S, LogProgress, count_line, duration, staged
 
 
 class FakeClock:
@@ -26,10 +26,13 @@ def test_log_lines_and_heartbeat_with_a_fake_clock():
         (106, lambda: log.beat(), "demo: still working (6 s)"),
         (107, lambda: report("simulate", 0, 10), None),  # a stage's first report
         (110, lambda: report("simulate", 3, 10), None),  # 3 s into the stage: too soon
-        (112, lambda: report("simulate", 6, 10), "simulate: 6/10 (5 s)"),
+        # 3 frames more in 2 s since the first items: the 4 left take 2.7 s at that rate
+        (112, lambda: report("simulate", 6, 10), "simulate: frame 6/10, 5.0 s elapsed, "
+                                                  "about 3 s left"),
         (117, lambda: log.beat(), None),  # 5 s since the last line
-        (118, lambda: log.beat(), "simulate: still working (11 s)"),
-        (119, lambda: report("simulate", 10, 10), "simulate: 10/10 (12 s)"),  # completion
+        # the heartbeat repeats the count, the rate from the time since: 8 s / 3 frames * 4
+        (118, lambda: log.beat(), "simulate: frame 6/10, 11.0 s elapsed, about 11 s left"),
+        (119, lambda: report("simulate", 10, 10), "simulate: frame 10/10, 12.0 s elapsed"),
         (125, lambda: log.beat(), "demo: still working (25 s)"),  # no stage under way
     ]:
         clock.t = t
@@ -37,6 +40,39 @@ def test_log_lines_and_heartbeat_with_a_fake_clock():
         if printed:
             expected.append(f"facemech: {printed}")
         assert s.getvalue().splitlines() == expected, t
+
+
+def test_invert_counts_frames_with_the_time_left_when_piped():
+    """invert's per-frame calls (done, total) under its stage "invert (lsq)": a count and an
+    estimate on every line once frames come, the heartbeat's too; the estimate leaves out the
+    time before the first frame (numba compiling); before it, the elapsed time only."""
+    clock, s = FakeClock(0.0), io.StringIO()
+    log = LogProgress("invert", every=5.0, heartbeat=6.0, stream=s, clock=clock)
+    report = staged(log)
+    for t, action in [(1.0, lambda: report("invert (lsq)", 0, 116)), (7.0, log.beat),
+                      (7.5, lambda: report("invert (lsq)", 1, 116)),
+                      (11.4, lambda: report("invert (lsq)", 40, 116)),
+                      (12.5, lambda: report("invert (lsq)", 45, 116)),  # 44 frames in 5 s
+                      (18.5, log.beat)]:  # 6 s silent: 44 frames in 11 s, 71 left
+        clock.t = t
+        action()
+    assert s.getvalue().splitlines() == [
+        "facemech: invert (lsq): still working (6 s)",
+        "facemech: invert (lsq): frame 1/116, 6.5 s elapsed",
+        "facemech: invert (lsq): frame 45/116, 11.5 s elapsed, about 8 s left",
+        "facemech: invert (lsq): frame 45/116, 17.5 s elapsed, about 18 s left"]
+
+
+def test_count_line_and_duration():
+    assert count_line("render", 1, 4, 0.5, 1.5) == (
+        "render: frame 1/4, 0.5 s elapsed, about 2 s left")
+    assert count_line("fit", 3, None, 2.0, 1.0) == "fit: 3, 2.0 s elapsed"  # no total
+    assert count_line("plan", 2, 9, 10.0, 35.0) == (
+        "plan: iteration 2/9, 10.0 s elapsed, about 35 s left")
+    assert count_line("fit", 3, 3, 2.0, 0.0) == "fit: 3/3, 2.0 s elapsed"  # complete
+    assert count_line("build", 1, 10, 100.0, 900.0) == (
+        "build: 1/10, 100.0 s elapsed, about 15 min 00 s left")
+    assert [duration(x) for x in (0.4, 7.4, 59.4, 125.0)] == ["<1 s", "7 s", "59 s", "2 min 05 s"]
 
 
 def test_heartbeat_thread_prints_while_silent_and_stops_cleanly():
@@ -78,5 +114,6 @@ def test_demo_under_a_pipe_keeps_printing_lines(tmp_path):
     gaps = [b - a for a, b in zip(stamps, stamps[1:], strict=False)]
     assert max(gaps) <= 3 * HEARTBEAT_S, list(zip(gaps, lines, strict=False))
     assert all(ln.startswith("facemech: ") for ln in lines), lines
-    assert any(ln.startswith("facemech: simulate: 155/155 (") for ln in lines), lines
+    assert any(ln.startswith("facemech: simulate: frame 155/155, ") for ln in lines), lines
     assert (tmp_path / "d" / "result.nc").is_file()
+    assert (tmp_path / "d" / "view.html").is_file()  # the demo writes its viewer page too

@@ -12,7 +12,7 @@ import typer
 from rich.console import Console
 
 from . import cli_options as opts
-from . import progress, workflows
+from . import progress, warmup, workflows
 from ._version import __version__
 from .errors import FacemechError
 
@@ -83,14 +83,15 @@ def _root(ctx: typer.Context, version: bool = typer.Option(
 
 def _staged(run, **options):
     """Call ``run(**options, progress=report)``: bars on a terminal, else the command's log
-    lines with their heartbeat; one bar per stage."""
+    lines with their heartbeat; one bar per stage; first the kernels' warm-up if needed."""
     if err.is_terminal:
-        from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
-        shown = Progress(TextColumn("{task.description}"), BarColumn(), TextColumn(
-            "{task.completed}/{task.total}"), TimeElapsedColumn(), console=err, transient=True)
+        import rich.progress as r
+        shown = r.Progress(r.TextColumn("{task.description}"), r.BarColumn(), r.MofNCompleteColumn(
+            ), r.TimeElapsedColumn(), r.TimeRemainingColumn(), console=err, transient=True)
     else:
         shown = _log[-1] if _log else progress.LogProgress()
     with shown as prog:
+        warmup.warm_up_if_needed(progress.staged(prog), skip=run is warmup.warm_up)
         return run(**options, progress=progress.staged(prog))
 
 def _say(lines, note: bool = False, **kw) -> None:  # note: on stderr, "facemech: " first
@@ -107,6 +108,11 @@ def demo(output: Path = Path("demo-output"), integrator: str | None = None, vide
          preset: str = "anatomical", render=None):
     """Simulate a synthetic utterance on the built-in face; write results, plots and a movie."""
     return _staged(workflows.demo.run, **locals())
+
+@command(app, "warmup")
+def warm_up_kernels():
+    """Compile and cache the physics and rendering kernels now (make's install step does it)."""
+    return f"kernels compiled and cached in {_staged(warmup.warm_up):.0f} s"
 
 @command(face_app, "build")
 def face_build(surface: Path, landmarks: Path, output: Path = ..., units: str = "mm",
@@ -158,8 +164,7 @@ def markers_convert(source: Path, target: Path | None = None, output: Path | Non
 
 @command(markers_app, "head-correct")
 def markers_head_correct(source: Path, output: Path = ..., units: str | None = None,
-                         head: str = ..., reference: int | None = None,
-                         report: Path | None = None):
+                         head: str = ..., reference: int | None = None, report: Path | None = None):
     """Remove head motion by a per-frame rigid fit of head markers to a reference frame."""
     return workflows.markers.head_correct_file(**locals())
 

@@ -139,7 +139,7 @@ face_from_photo.profile: profile photo on a plain background: depth of nose, lip
 face_from_photo.ipd: interpupillary distance, mm (default: adult norm 63.4, Dodgson 2004)
 face_from_photo.distance: camera to face, m
 face_info.face: face file or built-in face
-invert.markers: marker file in the model's frame and frame rate
+invert.markers: mocap in the model's frame and rate, or articulography (.ema .est .txy), resampled
 invert.output: results file (.nc)
 markers_convert.output: the output marker file (or TARGET)
 markers_convert.target: or -o

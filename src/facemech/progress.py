@@ -3,17 +3,18 @@
 Library workflows report progress through a *staged* callback, ``report(stage, done, total)``
 (:data:`StagedProgress`): ``stage`` names the part of the work (``"simulate"``, ``"render"``),
 ``done`` counts its items, ``total`` is their number (None when unknown). :class:`LogProgress`
-turns such calls into lines on stderr::
+turns such calls into lines on stderr, with the time left estimated from the rate since the
+stage's first item::
 
-    facemech: simulate: 120/155 (7 s)
+    facemech: simulate: frame 120/155, 7.1 s elapsed, about 2 s left
 
 at most every ``every`` seconds per stage and when a stage completes, and runs a *heartbeat*: a
-daemon thread that prints ::
+daemon thread that prints the stage's count again (or, before its first item, ::
 
     facemech: simulate: still working (23 s)
 
-whenever nothing has been printed for ``heartbeat`` seconds, so that a log (``make``, a pipe, a
-batch job) never stays silent longer than that, even while no callback comes (numba compiling
+) whenever nothing has been printed for ``heartbeat`` seconds, so that a log (``make``, a pipe,
+a batch job) never stays silent longer than that, even while no callback comes (numba compiling
 the kernels, a face being built, files being written). The thread stops when the context ends.
 
 The command line shows bars instead when stderr is a terminal (:mod:`facemech.cli`).
@@ -32,6 +33,33 @@ StagedProgress = Callable[[str, int, "int | None"], None]
 
 #: seconds of silence after which the heartbeat prints a line
 HEARTBEAT_S = 6.0
+
+#: what the items of a stage are, where it is known: its counts read "frame 40/116"
+NOUNS = {"simulate": "frame", "render": "frame", "invert": "frame", "render and read": "frame",
+         "plan": "iteration"}
+
+
+def duration(seconds: float) -> str:
+    """``seconds`` as a short text: "<1 s", "7 s", "2 min 05 s"."""
+    if seconds < 1:
+        return "<1 s"
+    if seconds < 60:
+        return f"{seconds:.0f} s"
+    m, s = divmod(round(seconds), 60)
+    return f"{m} min {s:02d} s"
+
+
+def count_line(stage: str, done: int, total: int | None, elapsed: float,
+               left: float | None = None) -> str:
+    """A stage's progress line: ``"invert (lsq): frame 40/116, 4.1 s elapsed, about 7 s
+    left"``; ``elapsed`` and ``left`` in s (``left`` None, or the stage complete: no
+    estimate)."""
+    noun = NOUNS.get(stage.split(" (")[0])
+    of = f"/{total}" if total is not None else ""
+    text = f"{stage}: {noun + ' ' if noun else ''}{done}{of}, {elapsed:.1f} s elapsed"
+    if left is not None and total is not None and done < total:
+        text += f", about {duration(left)} left"
+    return text
 
 
 def stage(progress: StagedProgress | None, name: str) -> Callable[[int, int], None] | None:
@@ -63,10 +91,20 @@ class _Task:
     start: float
     last: float
     done: int = -1
+    first: tuple[float, int] | None = None  # (time, count) of the first report of an item
 
     @property
     def finished(self) -> bool:
         return self.total is not None and self.done >= self.total
+
+    def line(self, now: float) -> str:
+        """The count line at time ``now``: the time left at the rate since the first item
+        (the time before it, numba compiling or a face being built, not counted)."""
+        left = None
+        if self.first is not None and self.total is not None and self.done > self.first[1]:
+            rate = (now - self.first[0]) / (self.done - self.first[1])
+            left = rate * (self.total - self.done)
+        return count_line(self.description, self.done, self.total, now - self.start, left)
 
 
 class LogProgress:
@@ -142,12 +180,17 @@ class LogProgress:
 
     def beat(self) -> bool:
         """Print the heartbeat line if nothing was printed for ``heartbeat`` seconds: the stage
-        under way (or the label) and its elapsed time. Returns whether it printed."""
+        under way with its count and time left (:func:`count_line`), or before its first item
+        (or with none under way: the label) its elapsed time. Returns whether it printed."""
         with self._lock:
             now = self._clock()
             if not self.heartbeat or now - self._last_line < self.heartbeat:
                 return False
             task = None if self._current is None else self.tasks[self._current]
+            if task is not None and not task.finished and task.done > 0:
+                self._print(task.line(now))
+                task.last = now
+                return True
             if task is None or task.finished:
                 name, since = self.label, self.start
             else:
@@ -172,8 +215,9 @@ class LogProgress:
             now = self._clock()
             was_finished = t.finished
             t.done = completed
+            if t.first is None and completed > 0:
+                t.first = (now, completed)
             self._current = task
             if (t.finished and not was_finished) or now - t.last >= self.every:
-                of = f"/{t.total}" if t.total is not None else ""
-                self._print(f"{t.description}: {completed}{of} ({now - t.start:.0f} s)")
+                self._print(t.line(now))
                 t.last = now

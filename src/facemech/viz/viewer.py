@@ -167,7 +167,7 @@ def _image_uri(pixels: np.ndarray, mode: str, fmt: str) -> str:
     if fmt == "JPEG":
         im.save(buf, "JPEG", quality=92)
     else:
-        im.save(buf, "PNG", optimize=True)
+        im.save(buf, "PNG")  # zlib's default level: optimize=True searches long for little
     return f"data:image/{fmt.lower()};base64," + base64.b64encode(buf.getvalue()).decode("ascii")
 
 

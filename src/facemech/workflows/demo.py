@@ -23,7 +23,8 @@ def run_demo(out_dir: str | Path, *, integrator: str | None = None, video: bool 
     """Build the generic face, simulate the synthetic utterance and write results and pictures.
 
     Writes ``result.nc``, ``activity.csv``, ``kinematics.png``, ``activity.png``,
-    ``snapshot.png``, ``summary.json`` and (with ``video``) ``movie.mp4`` into ``out_dir``.
+    ``snapshot.png``, the viewer page ``view.html``, ``summary.json`` and (with ``video``)
+    ``movie.mp4`` into ``out_dir``.
     ``preset`` names the parameter preset (:func:`facemech.params.preset`); ``integrator``
     defaults to the preset's. ``render`` is a :class:`facemech.viz.video.RenderOptions`
     (default: frontal and profile, 1280x720).
@@ -37,6 +38,7 @@ def run_demo(out_dir: str | Path, *, integrator: str | None = None, video: bool 
     from ..viz.plots import activity_figure, kinematics_figure
     from ..viz.render import RenderOptions
     from ..viz.scene import build_scene, look_from_model
+    from ..viz.viewer import view_file
 
     t0 = time.perf_counter()
 
@@ -58,20 +60,20 @@ def run_demo(out_dir: str | Path, *, integrator: str | None = None, video: bool 
     sim = simulate(face, act, jaw, params=params, integrator=integrator,
                    progress=step("simulate"))
     files = {}
-    report("write results and figures", 0, 4)
+    report("write results and figures", 0, 5)
     write_activity(out / "activity.csv", t, act)
     files["activity"] = "activity.csv"
     write_results(out / "result.nc", sim, inputs={"activity": array_hash(act),
                                                   "jaw_angle": array_hash(jaw)})
     files["results"] = "result.nc"
-    report("write results and figures", 1, 4)
+    report("write results and figures", 1, 5)
     names = ["R03", "R05", "R07", "R01"]
     kinematics_figure(out / "kinematics.png", sim.time, {n: sim.marker(n) for n in names},
                       title="Synthetic utterance /ba pi ma wu pa/: model markers")
     files["kinematics"] = "kinematics.png"
     activity_figure(out / "activity.png", t, act, MUSCLE_GROUPS, jaw)
     files["activity_plot"] = "activity.png"
-    report("write results and figures", 3, 4)
+    report("write results and figures", 3, 5)
     peak = int(np.argmax(jaw))
     scene = build_scene(look_from_model(face))
     opt = render or RenderOptions()
@@ -80,7 +82,11 @@ def run_demo(out_dir: str | Path, *, integrator: str | None = None, video: bool 
     write_snapshot(out / "snapshot.png", scene, sim.positions[peak], sim.jaw_pose[peak],
                    options=still)
     files["snapshot"] = "snapshot.png"
-    report("write results and figures", 4, 4)
+    report("write results and figures", 4, 5)
+    view_file(out / "result.nc", out / "view.html",
+              title="facemech demo: /ba pi ma wu pa/ on the built-in face")
+    files["viewer"] = "view.html"
+    report("write results and figures", 5, 5)
     if video:
         write_movie(out / "movie.mp4", scene, sim.positions, sim.jaw_pose,
                     fps=sim.params.frame_rate, options=opt, progress=step("render"))

@@ -26,7 +26,8 @@ class MarkerFile:
 
     Attributes
     ----------
-    path : marker file in the model's frame and frame rate
+    path : marker file: motion capture in the model's frame and at its frame rate, or
+        articulography (resampled, its lips laid on the face's vermilion points)
     units : length unit of a file that carries none
     map_file : marker,node CSV (default: the closest nodes)
     scale_pair : "A,B": adapt the markers by per-axis scaling from two markers far apart
