@@ -11,7 +11,7 @@ LOW_BIN  := $(LOW_VENV)/bin
 LOW_STAMP := $(LOW_VENV)/.installed
 SUDO   := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
-.PHONY: demo test test-lowest test-portable lint bench clean chromium docs docs-check
+.PHONY: demo test test-lowest test-portable lint bench clean chromium blender docs docs-check
 
 # every package pinned, then the lip-reader's face-mesh model, kept from the mediapipe 0.10.21
 # wheel (pip download; facemech.io.face_mesh): that wheel pins numpy < 2 and is not installed;
@@ -40,6 +40,12 @@ chromium:
 	  $(SUDO) apt-get update -q && \
 	  $(SUDO) env DEBIAN_FRONTEND=noninteractive apt-get install -y -q chromium; }
 
+# Blender as a Python module (bpy, about 375 MB) in a venv of its own, .venv-blender: the
+# blendshape export's test opens the glTF in Blender's own importer (tests/test_blendshapes.py);
+# bpy wants numpy < 2, so it cannot share .venv. Made once; running it again costs nothing.
+blender:
+	bash tools/blender_venv.sh $(PYTHON)
+
 demo: $(STAMP)
 	$(BIN)/facemech demo -o demo-output
 
@@ -53,7 +59,7 @@ lint: $(STAMP)
 JOBS   ?= 2
 XDIST  := -n $(JOBS) --dist loadgroup
 
-test: $(STAMP) chromium lint
+test: $(STAMP) chromium blender lint
 	MPLBACKEND=Agg $(BIN)/python -m pytest -q $(XDIST)
 
 # the suite on the oldest versions that pyproject's ranges allow (constraints-lowest.txt), in
