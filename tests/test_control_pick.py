@@ -59,7 +59,8 @@ def test_the_sign_step_covers_each_two_way_coordinate_with_the_fewest_controls(f
     assert pick.one_way == (("UL z-", "OOI", 0.5),)
     note = pick.note(2, midsagittal=True)
     assert "OOSM (UL y- 1.2, LL y+ 1.2)" in note and "UL z- (OOI 0.5)" in note
-    assert "kept the 5 they determine best" in note
+    assert "kept 5: the 4 that move them in the most independent ways" in note
+    assert "the markers determine 4 combinations of the kept" in note
     # without G: E and F, each covering one; the larger motion first (E 2.0, F 1.5)
     pick = _pick(face, NAMES[:6], S[:, :6])
     assert [c for c, _, _ in pick.for_sign] == ["DAO", "MEN"]

@@ -129,10 +129,12 @@ class ControlPick:
                    "unit): " + ", ".join(f"{d} ({c} {m:.1f})" for d, c, m in self.one_way))
         return (f"controls: {n_markers} markers give {self.coordinates} coordinates{axes} for "
                 f"the {k + len(self.held)} candidate controls (the default set, and "
-                f"orbicularis oris's marginal part where the face has it); kept the {k} they "
-                f"determine best "
-                f"(QR with column pivoting of their 100-ms step responses; new marker motion, "
-                f"mm per unit): {kept}{sign}{one}; held at rest: {held} ({why})")
+                f"orbicularis oris's marginal part where the face has it); kept {k}: the "
+                f"{len(rank)} that move them in the most independent ways, each adding at least "
+                f"{MIN_NEW_MOTION_MM:.0f} mm per unit to those before it, so that the markers "
+                f"determine {len(rank)} combinations of the kept (QR with column pivoting of "
+                f"their 100-ms step responses; new marker motion, mm per unit): "
+                f"{kept}{sign}{one}; held at rest: {held} ({why})")
 
 
 def step_response_matrix(face, params, nodes, gmat, *, estimate_jaw: bool,
