@@ -148,11 +148,13 @@ class FrameProblem:
             r0 += n
         return jm
 
-    def regularisation(self, c_prev, method, prior, jaw_prior):
+    def regularisation(self, c_prev, method, prior, jaw_prior, c_before=None):
         """Rows (A, b) of the regularisation residual A x + b (mm) over the window.
 
         ``bend`` and ``smooth`` act on every control, ``effort`` and ``prior`` on the muscles,
-        ``jaw_prior`` (frames,) rad on the estimated jaw.
+        ``jaw_prior`` (frames,) rad on the estimated jaw. With ``c_before``, the controls of
+        the frame before ``c_prev``, the second differences run on across frames: those of
+        ``(c_before, c_prev, x_0)`` and ``(c_prev, x_0, x_1)`` too.
         """
         w, nc, nm = self.horizon, self.nc, self.n_muscle
         blocks, offsets = [], []
@@ -171,6 +173,10 @@ class FrameProblem:
         if method.bend > 0:  # second differences within the window (x_0 itself stays free)
             for a in range(1, w - 1):
                 row([(a - 1, 1.0), (a, -2.0), (a + 1, 1.0)], np.zeros(nc), method.bend, every)
+            if c_before is not None:  # and across frames, from the accepted controls
+                row([(0, 1.0)], c_before - 2.0 * c_prev, method.bend, every)
+                if w > 1:
+                    row([(0, -2.0), (1, 1.0)], c_prev, method.bend, every)
         if method.smooth > 0:  # first differences, x_{-1} = c_prev
             for a in range(w):
                 row([(a, 1.0)] + ([(a - 1, -1.0)] if a > 0 else []),
@@ -191,7 +197,7 @@ class FrameProblem:
         return np.vstack(blocks), np.concatenate(offsets)
 
     def lsq(self, c_prev, x_prev, method, *, prior=None, jaw_prior=None, lags_prev=None,
-            known=(), expected_rms=None):
+            known=(), expected_rms=None, c_before=None):
         """Bounded Gauss-Newton over the window with a chord Jacobian.
 
         The lag responses are the previous frame's (``lags_prev``) or are taken at the warm
@@ -214,7 +220,7 @@ class FrameProblem:
         else:
             x = np.tile(np.asarray(c_prev, float), (w, 1))
         x = np.clip(x, lo, hi)
-        a_reg, b_reg = self.regularisation(c_prev, method, prior, jaw_prior)
+        a_reg, b_reg = self.regularisation(c_prev, method, prior, jaw_prior, c_before)
 
         def total(xv, r):
             q = a_reg @ xv.reshape(-1) + b_reg

@@ -29,6 +29,7 @@ import numpy as np
 from ..checks import check_value
 from ..errors import InputError
 from ..geometry.builder import for_tissue
+from ..geometry.sites import marker_aliases, shared_points
 from ..markerset import MarkerSet
 from ..params import EMG_CHANNELS, MUSCLE_GROUPS, Parameters, default_parameters
 from ..physics.assembly import Physics
@@ -239,7 +240,8 @@ def invert(
                 fit = frame.lsq(c_prev, x_prev, method, prior=prior,
                                 jaw_prior=jaw if estimate_jaw else None,
                                 lags_prev=None if fit_prev is None else fit_prev.lags,
-                                known=states_prev[1:], expected_rms=run.rms[k] * 1e3)
+                                known=states_prev[1:], expected_rms=run.rms[k] * 1e3,
+                                c_before=run.controls[k - 2] if k >= 2 else None)
                 c, state, x_prev, states_prev = fit.x[0].copy(), fit.state, fit.x, fit.states
                 fit_prev = fit
                 run.record_fit(k, fit.jm, fit.a_reg, nc, fit.rss,
@@ -371,6 +373,10 @@ def _finish(run, p: _Problem, responses, wall, muscles) -> Inversion:
     if frames > 1:
         run.se_unit[-1] = run.se_unit[-2]
     notes = [p.jaw_note]
+    same = shared_points(p.names, p.nodes, marker_aliases(p.face.landmarks, p.face.markers))
+    if same:
+        notes.append(f"one point of the model under two names: {'; '.join(same)}; each name "
+                     "is fitted, so the point counts once per name")
     if p.noise_mm is None:
         sigma = U.noise_from_residuals(run.rss, run.dof)
         noise_how = "estimated from the residuals"
