@@ -9,6 +9,7 @@ import pytest
 from conftest import run_cli as cli
 from facemech import MUSCLE_GROUPS
 from facemech.geometry.teeth import lower_incisor_point
+from facemech.inverse.combinations import from_json
 from facemech.inverse.control_pick import (
     MIN_NEW_MOTION_MM,
     cover_signs,
@@ -147,6 +148,15 @@ def test_lips_closing_and_opening_on_the_jaw_are_reanimated_from_a_txy(face, lip
     assert "MEN (LL y+ " in text  # the sign step's addition, in the note
     ds = read_results(out)
     assert set(ds.attrs["controls"].split(",")) == set(pick.muscles)
+    # the pick and the identifiability agree: the combinations determined at the noise floor
+    # are led by the controls the pick kept by rank, in its order; the rest is regularised
+    rank = [c for c in pick.order if c not in {s for s, _, _ in pick.for_sign}]
+    combos = from_json(ds.attrs["combinations"])
+    assert [c.lead for c in combos if c.motion_mm >= MIN_NEW_MOTION_MM] == rank
+    assert len(rank) == 4 and "not determined by these markers" not in text
+    assert "determined by these markers: 4 combinations of the 5 controls" in text
+    assert set(ds.attrs["regularised"].split(",")) == set(pick.muscles)  # none alone
+    assert ds["combination_activity"].shape == (len(lips), 4)
     np.testing.assert_allclose(np.column_stack([ds["jaw_angle"].values,
                                                 ds["jaw_shift"].values]), poses, atol=1e-7)
     rms = ds["rms_error"].values

@@ -117,3 +117,13 @@ def test_a_control_at_full_activity_in_more_than_a_tenth_of_the_frames_gets_a_no
     notes = full_activity_notes(c, ("MEN", "DLI", "OOS"))
     assert len(notes) == 1 and notes[0].startswith("MEN at full activity (>= 0.99) in 43 % of")
     assert "not a measurement" in notes[0]
+
+
+def test_fewer_coordinates_than_controls_leave_no_control_identifiable_alone():
+    # two coordinates, three controls: a null direction touches every control
+    np.testing.assert_allclose(U.identifiability(np.array([[1.0, 0.0, 1.0],
+                                                           [0.0, 1.0, 1.0]])), 0.0)
+    np.testing.assert_allclose(U.identifiability(np.array([[3.0, 0.0], [0.0, 0.0]])), [3.0, 0.0])
+    # but the markers still measure two combinations, each with its SE
+    combos = determined_combinations(np.array([[1.0, 0.0, 1.0], [0.0, 1.0, 1.0]]), "ABC")
+    assert len(combos) == 2

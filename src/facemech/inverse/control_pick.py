@@ -3,8 +3,9 @@
 Two lip sensors of midsagittal articulography give 4 coordinates per frame; three markers give
 9; the default controls are 9 muscle groups, and the jaw when it is estimated. A frame's fit
 cannot determine more controls than it has coordinates, so the default set is cut down to the
-controls these markers determine best, and the rest are held at rest (a muscle at 0, the jaw at
-its first pose).
+controls that move these markers in the most independent ways, and the rest are held at rest (a
+muscle at 0, the jaw at its first pose). What the markers then determine are combinations of
+the kept controls (:mod:`facemech.inverse.combinations`, the same QR's rows).
 
 The markers' step responses S (coordinates, controls), each control held at 0.2 for 100 ms
 from rest (:func:`facemech.inverse.uncertainty.step_responses`, mm per unit; the responses that

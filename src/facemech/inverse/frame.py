@@ -148,13 +148,11 @@ class FrameProblem:
             r0 += n
         return jm
 
-    def regularisation(self, c_prev, method, prior, jaw_prior, c_before=None):
+    def regularisation(self, c_prev, method, prior, jaw_prior):
         """Rows (A, b) of the regularisation residual A x + b (mm) over the window.
 
         ``bend`` and ``smooth`` act on every control, ``effort`` and ``prior`` on the muscles,
-        ``jaw_prior`` (frames,) rad on the estimated jaw. With ``c_before``, the controls of
-        the frame before ``c_prev``, the second differences run on across frames: those of
-        ``(c_before, c_prev, x_0)`` and ``(c_prev, x_0, x_1)`` too.
+        ``jaw_prior`` (frames,) rad on the estimated jaw.
         """
         w, nc, nm = self.horizon, self.nc, self.n_muscle
         blocks, offsets = [], []
@@ -173,10 +171,6 @@ class FrameProblem:
         if method.bend > 0:  # second differences within the window (x_0 itself stays free)
             for a in range(1, w - 1):
                 row([(a - 1, 1.0), (a, -2.0), (a + 1, 1.0)], np.zeros(nc), method.bend, every)
-            if c_before is not None:  # and across frames, from the accepted controls
-                row([(0, 1.0)], c_before - 2.0 * c_prev, method.bend, every)
-                if w > 1:
-                    row([(0, -2.0), (1, 1.0)], c_prev, method.bend, every)
         if method.smooth > 0:  # first differences, x_{-1} = c_prev
             for a in range(w):
                 row([(a, 1.0)] + ([(a - 1, -1.0)] if a > 0 else []),
@@ -196,8 +190,21 @@ class FrameProblem:
             return np.zeros((0, w * nc)), np.zeros(0)
         return np.vstack(blocks), np.concatenate(offsets)
 
+    def window_bounds(self, c_prev, method) -> tuple[np.ndarray, np.ndarray]:
+        """(w, c) lower and upper bounds of the window's controls: the controls' own, and for
+        the muscles within ``max_rate / frame rate`` per frame of ``c_prev`` (a rate bound)."""
+        w, nm = self.horizon, self.n_muscle
+        lo, hi = np.tile(self.lo, (w, 1)), np.tile(self.hi, (w, 1))
+        step = getattr(method, "max_rate", 0.0) / self.stepper.physics.params.frame_rate
+        if step > 0:
+            reach = step * np.arange(1, w + 1)[:, None]
+            c = np.asarray(c_prev, float)[:nm]
+            lo[:, :nm] = np.maximum(lo[:, :nm], c - reach)
+            hi[:, :nm] = np.minimum(hi[:, :nm], c + reach)
+        return lo, hi
+
     def lsq(self, c_prev, x_prev, method, *, prior=None, jaw_prior=None, lags_prev=None,
-            known=(), expected_rms=None, c_before=None):
+            known=(), expected_rms=None):
         """Bounded Gauss-Newton over the window with a chord Jacobian.
 
         The lag responses are the previous frame's (``lags_prev``) or are taken at the warm
@@ -213,14 +220,14 @@ class FrameProblem:
         Returns a :class:`FrameFit`.
         """
         w, nc = self.horizon, self.nc
-        lo, hi = self.lo, self.hi
+        lo, hi = self.window_bounds(c_prev, method)
         if x_prev is not None and len(x_prev):
             x = np.vstack([x_prev[1:], x_prev[-1:]])
             x = np.vstack([x, np.repeat(x[-1:], max(0, w - len(x)), axis=0)])[:w]
         else:
             x = np.tile(np.asarray(c_prev, float), (w, 1))
         x = np.clip(x, lo, hi)
-        a_reg, b_reg = self.regularisation(c_prev, method, prior, jaw_prior, c_before)
+        a_reg, b_reg = self.regularisation(c_prev, method, prior, jaw_prior)
 
         def total(xv, r):
             q = a_reg @ xv.reshape(-1) + b_reg
@@ -236,7 +243,7 @@ class FrameProblem:
             lags, fresh = self.lag_responses(x, pos), True
         jm = self.jacobian(lags)
         cost = total(x, r)
-        lo_f, hi_f = np.tile(lo, w), np.tile(hi, w)
+        lo_f, hi_f = lo.reshape(-1), hi.reshape(-1)
         scale = 1.0  # of the Gauss-Newton step: halved when even fresh responses overshoot
         for _ in range(12):
             if self.counter[0] >= method.max_evaluations:

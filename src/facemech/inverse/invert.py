@@ -240,8 +240,7 @@ def invert(
                 fit = frame.lsq(c_prev, x_prev, method, prior=prior,
                                 jaw_prior=jaw if estimate_jaw else None,
                                 lags_prev=None if fit_prev is None else fit_prev.lags,
-                                known=states_prev[1:], expected_rms=run.rms[k] * 1e3,
-                                c_before=run.controls[k - 2] if k >= 2 else None)
+                                known=states_prev[1:], expected_rms=run.rms[k] * 1e3)
                 c, state, x_prev, states_prev = fit.x[0].copy(), fit.state, fit.x, fit.states
                 fit_prev = fit
                 run.record_fit(k, fit.jm, fit.a_reg, nc, fit.rss,

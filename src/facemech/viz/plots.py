@@ -65,6 +65,8 @@ def kinematics_figure(path: str | Path, time: np.ndarray, trajectories: dict[str
                 ax.set_ylabel(label, fontsize=8)
             if r == 0:
                 ax.set_title(name if meas is None else f"{name}  {ax.get_title()}", fontsize=9)
+                if meas is not None:
+                    ax.legend(fontsize=7, loc="best", frameon=False)
             ax.tick_params(labelsize=7)
         axes[-1, c].set_xlabel("time (s)", fontsize=8)
     return save_figure(fig, path, title)

@@ -215,7 +215,8 @@ def report(res, output: str | Path, figure: str | Path | None = None) -> list[st
              f"  determined by the markers (noise {res.noise_mm:.3f} mm, {res.noise_how}): "
              f"{', '.join(seen) or 'no single control'}"
              + ("" if len(seen) == len(res.control_names) else
-                f"; combinations of controls: {'; '.join(combos) or 'none'} (see the note)")]
+                f"; combinations of controls within 0.1: {'; '.join(combos) or 'none'} (see "
+                "the note)")]
     return lines + ([] if figure is None else [f"figure -> {figure}"])
 
 
