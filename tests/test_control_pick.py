@@ -10,6 +10,7 @@ from conftest import run_cli as cli
 from facemech import MUSCLE_GROUPS
 from facemech.geometry.teeth import lower_incisor_point
 from facemech.inverse.combinations import from_json
+from facemech.inverse.sensor_fit import fit_from_json
 from facemech.inverse.control_pick import (
     MIN_NEW_MOTION_MM,
     cover_signs,
@@ -157,6 +158,16 @@ def test_lips_closing_and_opening_on_the_jaw_are_reanimated_from_a_txy(face, lip
     assert "determined by these markers: 4 combinations of the 5 controls" in text
     assert set(ds.attrs["regularised"].split(",")) == set(pick.muscles)  # none alone
     assert ds["combination_activity"].shape == (len(lips), 4)
+    # the fit per sensor and axis: in the results, printed by describe, drawn by plot
+    fit = {(f.sensor, f.axis): f for f in fit_from_json(ds.attrs["sensor_fit"])}
+    assert set(fit) == {("UL", "y"), ("UL", "z"), ("LL", "y"), ("LL", "z")}
+    assert all(f.rms_mm < 0.2 and f.corr > 0.9 for f in fit.values()), fit
+    code, described, err = cli(monkeypatch, capsys, "describe", out)
+    assert code == 0, err
+    assert "fit per sensor and axis" in described and "LL: y RMS" in described
+    assert "regularised (not determined by the markers alone)" in described
+    code, _, err = cli(monkeypatch, capsys, "plot", out, "-o", tmp_path / "p.png")
+    assert code == 0 and (tmp_path / "p.png").stat().st_size > 10_000, err
     np.testing.assert_allclose(np.column_stack([ds["jaw_angle"].values,
                                                 ds["jaw_shift"].values]), poses, atol=1e-7)
     rms = ds["rms_error"].values
