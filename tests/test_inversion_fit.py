@@ -127,3 +127,16 @@ def test_fewer_coordinates_than_controls_leave_no_control_identifiable_alone():
     # but the markers still measure two combinations, each with its SE
     combos = determined_combinations(np.array([[1.0, 0.0, 1.0], [0.0, 1.0, 1.0]]), "ABC")
     assert len(combos) == 2
+
+
+def test_the_viewer_warns_of_regularised_muscles():
+    import xarray as xr
+
+    from facemech.viz.viewer import undetermined_muscles
+
+    assert undetermined_muscles(xr.Dataset(attrs={"regularised": ""})) == ([], None)
+    names, warning = undetermined_muscles(xr.Dataset(attrs={
+        "regularised": "MEN,DLI,jaw", "combinations_determined": "DLI + 0.30 MEN"}))
+    assert names == ["MEN", "DLI"]
+    assert warning.startswith("not determined by the markers alone") and "MEN, DLI, jaw" in warning
+    assert warning.endswith("the markers measure DLI + 0.30 MEN")

@@ -168,11 +168,15 @@ def view_file(result: str | Path, output: str | Path, *, markers: str | Path | N
               units: str | None = None, title: str | None = None) -> Written:
     """An interactive viewer of a results file (and measured markers in the model's frame):
     one self-contained HTML page (:func:`facemech.viz.viewer.view_file`)."""
+    from ..io.results import read_results
+    from ..viz.viewer import undetermined_muscles
     from ..viz.viewer import view_file as write_page
 
     check_output(output, [result, markers], field="-o")
     path = write_page(result, output, markers=markers, units=units, title=title)
-    return Written(path, None, f"viewer -> {path} ({path.stat().st_size / 1e6:.1f} MB)")
+    warning = undetermined_muscles(read_results(result))[1]
+    return Written(path, None, f"viewer -> {path} ({path.stat().st_size / 1e6:.1f} MB)",
+                   "" if warning is None else f"facemech: warning: {warning}\n")
 
 
 def export_file(result: str | Path, output: str | Path, *, fmt: str | None = None,
