@@ -10,13 +10,13 @@ from conftest import run_cli as cli
 from facemech import MUSCLE_GROUPS
 from facemech.geometry.teeth import lower_incisor_point
 from facemech.inverse.combinations import from_json
-from facemech.inverse.sensor_fit import fit_from_json
 from facemech.inverse.control_pick import (
     MIN_NEW_MOTION_MM,
     cover_signs,
     pick_controls,
     signed_motion,
 )
+from facemech.inverse.sensor_fit import fit_from_json
 from facemech.inverse.workflow import pick_candidates
 from facemech.io.results import read_results
 from facemech.params import preset
