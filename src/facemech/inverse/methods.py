@@ -69,7 +69,7 @@ class LeastSquares:
             raise InputError(f"max_evaluations must be >= 1 (got {self.max_evaluations!r})",
                              field="max_evaluations")
         # the command line's intervals (facemech.checks)
-        for name in ("window", "tol", "bend", "smooth", "effort", "max_evaluations"):
+        for name in ("window", "tol", "bend", "smooth", "effort", "max_evaluations", "max_rate"):
             check_value(name, getattr(self, name))
 
 
