@@ -182,7 +182,7 @@ class Description:
             lines += [f"  {line}" for line in fit_lines(self.sensor_fit)]
         if self.combinations:
             lines.append("combinations of controls the markers measure (mean, range, SE):")
-            lines += [f"  {c['name']}: {_f(c['mean'])} ({c['min']:.2f} to {c['max']:.2f}), SE "
+            lines += [f"  {c['name']}: mean {c['mean']:.2f} ({c['min']:.2f} to {c['max']:.2f}), SE "
                       f"{c['se']:.2f}{'' if c['determined'] else ' (not within 0.1)'}"
                       for c in self.combinations]
         if self.regularised:

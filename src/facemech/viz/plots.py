@@ -128,7 +128,7 @@ def inversion_figure(path: str | Path, time: np.ndarray, controls: np.ndarray,
                       truth=None if truth is None else truth[:, r],
                       seen=identifiable is None or bool(identifiable[r]))
     if truth is not None or se is not None:
-        axes[0, 0].legend(fontsize=7, loc="upper left", frameon=False, ncol=3)
+        axes[0, 0].legend(fontsize=7, loc="upper right", frameon=False, ncol=3)
     r = len(names)
     for k, c in enumerate(combos):
         combination_panel(axes[r + k, 0], time, c, controls, names, noise_mm)
