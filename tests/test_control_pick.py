@@ -171,20 +171,23 @@ def test_lips_closing_and_opening_on_the_jaw_are_reanimated_from_a_txy(face, lip
     np.testing.assert_allclose(np.column_stack([ds["jaw_angle"].values,
                                                 ds["jaw_shift"].values]), poses, atol=1e-7)
     rms = ds["rms_error"].values
-    assert np.median(rms) < 0.1e-3 and rms.max() < 0.2e-3, rms
+    # the picked fit is paced (smooth 1, inverse.workflow.PICK_PACE): measured median 0.12 mm,
+    # max 0.18 mm (0.07 and 0.17 unpaced)
+    assert np.median(rms) < 0.15e-3 and rms.max() < 0.25e-3, rms
     # the closing muscles act in the first half, the opening ones in the second
     got = ds["activity"].values
     assert "effort 0.1 mm per unit" in text
-    # the activities: OOSM and LLS come back within 0.15 (measured 0.11 and 0.10), each in its
-    # half; MEN and DLI, an opposing pair on the lower lip (5 controls for 4 coordinates),
-    # co-contract in the opening (measured: MEN up to 0.32 where it is 0, DLI 0.47 for 0.15;
-    # without the sign step's effort weight 0.66 and 0.59)
+    # the activities: OOSM and LLS come back each in its half; MEN and DLI, an opposing pair
+    # on the lower lip (5 controls for 4 coordinates), co-contract in the opening (measured,
+    # paced: MEN up to 0.37 where it is 0, DLI 0.36 for 0.15; unpaced 0.32 and 0.47; without
+    # the sign step's effort weight 0.66 and 0.59)
     half = len(act) // 2
     cols = [MUSCLE_GROUPS.index(g) for g in ("OOSM", "MEN", "DLI", "LLS")]
     err = np.abs(got[:, cols] - act[:, cols]).max(axis=0)
     early, late = got[:half, cols].max(axis=0), got[half:, cols].max(axis=0)
     seen = (np.round(err, 3).tolist(), np.round(early, 2).tolist(), np.round(late, 2).tolist())
-    assert err[0] < 0.15 and err[3] < 0.15, seen
+    # paced (smooth 1): OOSM within 0.17, LLS 0.11; the pace lags the twin's 0.2-s bumps
+    assert err[0] < 0.2 and err[3] < 0.15, seen
     assert early[0] > 0.15 > late[0] and early[1] > 0.15, seen  # closing: OOSM, MEN
     assert late[2] > 0.1 > early[2] and late[3] > 0.1 > early[3], seen  # opening: DLI, LLS
     assert late[1] < 0.5 and late[2] < 0.6, seen  # the co-contraction, drawn back

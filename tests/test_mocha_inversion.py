@@ -39,7 +39,7 @@ def _facemech(*args):
     """Run the command line in a child process: (exit status, stdout, stderr as one line)."""
     p = subprocess.run([sys.executable, "-m", "facemech", *map(str, args)], capture_output=True,
                        text=True, timeout=900)
-    return p.returncode, p.stdout, " ".join(p.stderr.split())
+    return p.returncode, " ".join(p.stdout.split()), " ".join(p.stderr.split())
 
 
 @pytest.fixture(scope="module")
@@ -70,7 +70,7 @@ def test_the_fit_per_lip_and_axis_is_in_the_results_notes_and_describe(mocha):
         assert fit[key].rms_mm <= rms + MARGIN_MM, (key, fit[key])
         assert 0 < fit[key].range_share < 2 and fit[key].largest_mm >= fit[key].rms_mm
     assert fit["ll", "y"].corr > 0.8 and fit["ll", "z"].corr > 0.7
-    assert "ul: y RMS" in stdout and "ll: z RMS" in stdout
+    assert "ul: y RMS" in stdout and "ll: y RMS" in stdout and "; z RMS" in stdout
     code, described, err = _facemech("describe", out)
     assert code == 0, err
     f = fit["ll", "y"]

@@ -117,7 +117,7 @@ def invert(markers: MarkerFile | str | Path, output: str | Path, *,
         default preset)
     method, options : "lsq" or "powell" and its options (``window``, ``tol``, ``bend``,
         ``smooth``, ``effort``, ``max_evaluations``; None: its default; tol in mm, weights in mm
-        per unit; :func:`~facemech.inverse.methods.method_from_options`)
+        per unit; ``max_rate`` 1/s; :func:`~facemech.inverse.methods.method_from_options`)
     positive, controls : activity >= 0; "speech", "emg7", "all" or comma-separated groups
         (None: "speech", or the part of it the markers determine)
     jaw : the jaw's markers, on the skin or on the bone
