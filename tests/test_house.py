@@ -166,7 +166,7 @@ def test_the_commands_keep_their_options():
         "markers", "output", "face", "method", "map_file", "preset", "figure", "positive",
         "controls", "chin_marker", "jaw_second_marker", "jaw_incisor", "jaw_molar", "jaw_fixed",
         "jaw_lead", "noise", "window", "tol", "bend", "smooth", "effort", "max_evaluations",
-        "scale_pair", "jaw_kinematics", "dt", "units"}
+        "max_rate", "scale_pair", "jaw_kinematics", "dt", "units"}
     assert got["speak"] == {
         "text", "output", "audio", "textgrid", "voice", "rate_wpm", "word_tier", "phone_tier",
         "strength", "face", "preset", "video", "view", "size", "background", "aa", "blinks",

@@ -32,6 +32,7 @@ tol: float [0, 100]
 bend: float [0, 1e6]
 smooth: float [0, 1e6]
 effort: float [0, 1e6]
+max_rate: float [0, 1e6]
 window: int [1, 1000]
 substeps: int [1, 1e5]
 reference: int [0, inf)

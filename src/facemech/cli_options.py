@@ -64,6 +64,7 @@ axes: the file's axes for facemech's x,y,z, e.g. --axes=x,z,-y (a z-up scan), --
 left: marker on the left
 map_file: marker,node CSV (default: closest nodes)
 max_evaluations: model steps per frame (400)
+max_rate: lsq: largest change of a muscle per second, 1/s (0: none)
 max_gap: longest gap to fill, s
 measured: measured markers (same names)
 method: lsq (fast) or powell (the seeds')
@@ -231,7 +232,8 @@ GROUPS: dict[str, dict[str, tuple]] = {
     "jaw_markers": {**_JAW, "jaw_fixed": (bool, False), "jaw_lead": (int | None, None)},
     "fit": {"window": (int | None, None), "tol": (float | None, None),
             "bend": (float | None, None), "smooth": (float | None, None),
-            "effort": (float | None, None), "max_evaluations": (int | None, None)},
+            "effort": (float | None, None), "max_evaluations": (int | None, None),
+            "max_rate": (float | None, None)},
     "marker_file": {"map_file": (Path | None, None), "scale_pair": (str | None, None),
                     "units": (str | None, None)},
     # facemech.io.markers.read_markers' options for formats without times or names, and the

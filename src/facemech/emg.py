@@ -34,6 +34,7 @@ class EMGActivity:
     activity : (frames, channels) in [0, 1]
     channels : channel (muscle group) names
     baseline, maximum : (channels,) integrated EMG levels (the raw unit) mapped to 0 and 1
+    notes : what the user should know of the scaling (e.g. that no calibration was given)
     """
 
     time: np.ndarray
@@ -41,6 +42,7 @@ class EMGActivity:
     channels: tuple[str, ...]
     baseline: np.ndarray
     maximum: np.ndarray
+    notes: tuple[str, ...] = ()
 
 
 def trapezoid_kernel(rate: float, width: float = WINDOW_S) -> np.ndarray:
@@ -142,4 +144,8 @@ def process_emg(
         raise InputError("channel has no activity above its baseline", source=source,
                          field=channels[int(np.nonzero(flat)[0][0])])
     act = np.clip((env - b) / span, 0.0, 1.0)
-    return EMGActivity(t, act, channels, b, top)
+    notes = () if calibration is not None else (
+        "EMG scaled without a calibration recording: each channel's activity 1 is its own "
+        "maximum in this recording, so a channel that barely moves reaches full activity; "
+        "give a recording of maximal gestures (--calibration) to scale to maximal effort",)
+    return EMGActivity(t, act, channels, b, top, notes)

@@ -85,6 +85,11 @@ class Description:
     stimulus : the manipulations a stimulus was made with (empty for a plain simulation)
     series : per-frame ``time`` (s), ``lip_aperture_mm`` and ``mouth_width_mm`` (not in
         :meth:`to_dict` unless asked)
+    sensor_fit : of an inversion, the fit per sensor and axis
+        (:class:`~facemech.inverse.sensor_fit.AxisFit`; empty otherwise)
+    combinations : of an inversion, the combinations of controls the markers measure: name,
+        mean, min, max, se, determined (at the inversion's noise)
+    regularised : of an inversion, the controls the markers do not determine alone
     """
 
     duration_s: float
@@ -100,6 +105,9 @@ class Description:
     inputs: dict = field(default_factory=dict)
     stimulus: list = field(default_factory=list)
     series: dict = field(default_factory=dict, repr=False)
+    sensor_fit: list = field(default_factory=list)
+    combinations: list = field(default_factory=list)
+    regularised: list = field(default_factory=list)
 
     def part(self, name: str) -> dict[str, Motion]:
         """The landmarks of one part of :data:`PARTS` (``lips``, ``jaw``, ``mouth_corners``)."""
@@ -129,6 +137,9 @@ class Description:
         for name, r in (("lip_aperture", self.lip_aperture), ("mouth_width", self.mouth_width)):
             for k in ("min", "max", "mean", "rest"):
                 row[f"{name}_{k}_mm"] = getattr(r, k)
+        for f in self.sensor_fit:
+            for k in ("rms_mm", "largest_mm", "corr", "range_share"):
+                row[f"fit_{f.sensor}_{f.axis}_{k}"] = getattr(f, k)
         row["audio_offset_ms"] = self.audio_offset_ms
         row["duration_s"] = self.duration_s
         return {k: (None if v is None or not np.isfinite(v) else round(float(v), 6))
@@ -159,7 +170,25 @@ class Description:
             lines.append("inputs: " + ", ".join(f"{k} {v}" for k, v in self.inputs.items()))
         for step in self.stimulus:
             lines.append(f"manipulation: {json.dumps(step, sort_keys=True)}")
-        return "\n".join(lines)
+        return "\n".join(lines + self._inversion_lines())
+
+    def _inversion_lines(self) -> list[str]:
+        from ..inverse.sensor_fit import fit_lines
+
+        lines = []
+        if self.sensor_fit:
+            lines.append("fit per sensor and axis (model against measured: RMS, largest error, "
+                         "correlation, the model's share of the recorded range):")
+            lines += [f"  {line}" for line in fit_lines(self.sensor_fit)]
+        if self.combinations:
+            lines.append("combinations of controls the markers measure (mean, range, SE):")
+            lines += [f"  {c['name']}: mean {c['mean']:.2f} ({c['min']:.2f} to {c['max']:.2f}), SE "
+                      f"{c['se']:.2f}{'' if c['determined'] else ' (not within 0.1)'}"
+                      for c in self.combinations]
+        if self.regularised:
+            lines.append("regularised (not determined by the markers alone): "
+                         + ", ".join(self.regularised))
+        return lines
 
 
 def _f(v: float) -> str:
@@ -290,7 +319,30 @@ def describe(ds, *, audio_offset_s: float | None = None,
         aperture_points=(int(up), int(lo)), audio_offset_ms=offset_ms, settings=settings,
         inputs=_json_attr(ds, "inputs", {}), stimulus=_json_attr(ds, "stimulus", []),
         series={"time": t.astype(float), "lip_aperture_mm": aperture,
-                "mouth_width_mm": width})
+                "mouth_width_mm": width}, **_inversion(ds))
+
+
+def _inversion(ds) -> dict:
+    """An inversion's fit per sensor and axis, combinations and regularised controls."""
+    from ..inverse.sensor_fit import sensor_fit
+
+    if "data_markers" not in ds or "markers" not in ds:
+        return {}
+    names = [str(n) for n in ds["marker"].values]
+    fit = sensor_fit(ds["markers"].transpose("time", "marker", "axis").values,
+                     ds["data_markers"].transpose("time", "marker", "axis").values, names)
+    combos = []
+    if "combination_activity" in ds:
+        det = set(filter(None, str(ds.attrs.get("combinations_determined", "")).split(",")))
+        act = ds["combination_activity"].values[:-1]
+        for k, name in enumerate(str(n) for n in ds["combination"].values):
+            v = act[:, k] if len(act) else ds["combination_activity"].values[:, k]
+            combos.append({"name": name, "mean": float(np.mean(v)), "min": float(np.min(v)),
+                           "max": float(np.max(v)),
+                           "se": float(ds["combination_se"].values[k]),
+                           "determined": name in det})
+    reg = [n for n in str(ds.attrs.get("regularised", "")).split(",") if n]
+    return {"sensor_fit": fit, "combinations": combos, "regularised": reg}
 
 
 def _range(x: np.ndarray, rest: float) -> Range:

@@ -86,3 +86,27 @@ def marker_nodes(sites: SurfaceSites) -> dict[str, int]:
                 else (UPPER_LIP if xy[1] >= generic.Y_STOMION else LOWER_LIP))
         out[name] = sites.snap(sites.place(xy), side)
     return out
+
+
+def marker_aliases(landmarks: dict[str, int], markers: dict[str, int]) -> dict[str, str]:
+    """Virtual markers on a landmark's node, as ``marker -> landmark``: one point of the face
+    with two names (on the default face R07 and L06 are the mouth corners, the cut's corners).
+    Both names stay (results and scripts use either); the landmark's is the point's name."""
+    by_node = {int(v): k for k, v in landmarks.items()}
+    return {m: by_node[int(v)] for m, v in markers.items() if int(v) in by_node}
+
+
+def shared_points(names, nodes, aliases: dict[str, str] | None = None) -> list[str]:
+    """Lines naming the markers of ``names`` that sit on one node (``nodes``, same order),
+    e.g. ``R07 = mouth_corner_right (node 1187)``; ``aliases`` (marker -> landmark) say which
+    name is the point's own."""
+    aliases = aliases or {}
+    groups: dict[int, list[str]] = {}
+    for n, v in zip(names, nodes, strict=True):
+        groups.setdefault(int(v), []).append(str(n))
+    out = []
+    for node, group in groups.items():
+        if len(group) > 1:
+            group.sort(key=lambda g: (g in aliases, g))
+            out.append(f"{' = '.join(group[1:])} = {group[0]} (node {node})")
+    return out

@@ -3,8 +3,9 @@
 Two lip sensors of midsagittal articulography give 4 coordinates per frame; three markers give
 9; the default controls are 9 muscle groups, and the jaw when it is estimated. A frame's fit
 cannot determine more controls than it has coordinates, so the default set is cut down to the
-controls these markers determine best, and the rest are held at rest (a muscle at 0, the jaw at
-its first pose).
+controls that move these markers in the most independent ways, and the rest are held at rest (a
+muscle at 0, the jaw at its first pose). What the markers then determine are combinations of
+the kept controls (:mod:`facemech.inverse.combinations`, the same QR's rows).
 
 The markers' step responses S (coordinates, controls), each control held at 0.2 for 100 ms
 from rest (:func:`facemech.inverse.uncertainty.step_responses`, mm per unit; the responses that
@@ -129,10 +130,12 @@ class ControlPick:
                    "unit): " + ", ".join(f"{d} ({c} {m:.1f})" for d, c, m in self.one_way))
         return (f"controls: {n_markers} markers give {self.coordinates} coordinates{axes} for "
                 f"the {k + len(self.held)} candidate controls (the default set, and "
-                f"orbicularis oris's marginal part where the face has it); kept the {k} they "
-                f"determine best "
-                f"(QR with column pivoting of their 100-ms step responses; new marker motion, "
-                f"mm per unit): {kept}{sign}{one}; held at rest: {held} ({why})")
+                f"orbicularis oris's marginal part where the face has it); kept {k}: the "
+                f"{len(rank)} that move them in the most independent ways, each adding at least "
+                f"{MIN_NEW_MOTION_MM:.0f} mm per unit to those before it, so that the markers "
+                f"determine {len(rank)} combinations of the kept (QR with column pivoting of "
+                f"their 100-ms step responses; new marker motion, mm per unit): "
+                f"{kept}{sign}{one}; held at rest: {held} ({why})")
 
 
 def step_response_matrix(face, params, nodes, gmat, *, estimate_jaw: bool,

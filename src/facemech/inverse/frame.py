@@ -190,6 +190,19 @@ class FrameProblem:
             return np.zeros((0, w * nc)), np.zeros(0)
         return np.vstack(blocks), np.concatenate(offsets)
 
+    def window_bounds(self, c_prev, method) -> tuple[np.ndarray, np.ndarray]:
+        """(w, c) lower and upper bounds of the window's controls: the controls' own, and for
+        the muscles within ``max_rate / frame rate`` per frame of ``c_prev`` (a rate bound)."""
+        w, nm = self.horizon, self.n_muscle
+        lo, hi = np.tile(self.lo, (w, 1)), np.tile(self.hi, (w, 1))
+        step = getattr(method, "max_rate", 0.0) / self.stepper.physics.params.frame_rate
+        if step > 0:
+            reach = step * np.arange(1, w + 1)[:, None]
+            c = np.asarray(c_prev, float)[:nm]
+            lo[:, :nm] = np.maximum(lo[:, :nm], c - reach)
+            hi[:, :nm] = np.minimum(hi[:, :nm], c + reach)
+        return lo, hi
+
     def lsq(self, c_prev, x_prev, method, *, prior=None, jaw_prior=None, lags_prev=None,
             known=(), expected_rms=None):
         """Bounded Gauss-Newton over the window with a chord Jacobian.
@@ -207,7 +220,7 @@ class FrameProblem:
         Returns a :class:`FrameFit`.
         """
         w, nc = self.horizon, self.nc
-        lo, hi = self.lo, self.hi
+        lo, hi = self.window_bounds(c_prev, method)
         if x_prev is not None and len(x_prev):
             x = np.vstack([x_prev[1:], x_prev[-1:]])
             x = np.vstack([x, np.repeat(x[-1:], max(0, w - len(x)), axis=0)])[:w]
@@ -230,7 +243,7 @@ class FrameProblem:
             lags, fresh = self.lag_responses(x, pos), True
         jm = self.jacobian(lags)
         cost = total(x, r)
-        lo_f, hi_f = np.tile(lo, w), np.tile(hi, w)
+        lo_f, hi_f = lo.reshape(-1), hi.reshape(-1)
         scale = 1.0  # of the Gauss-Newton step: halved when even fresh responses overshoot
         for _ in range(12):
             if self.counter[0] >= method.max_evaluations:

@@ -29,6 +29,7 @@ import numpy as np
 from ..checks import check_value
 from ..errors import InputError
 from ..geometry.builder import for_tissue
+from ..geometry.sites import marker_aliases, shared_points
 from ..markerset import MarkerSet
 from ..params import EMG_CHANNELS, MUSCLE_GROUPS, Parameters, default_parameters
 from ..physics.assembly import Physics
@@ -38,6 +39,8 @@ from ..solvers.jaw import MAX_JAW_ANGLE, jaw_poses
 from ..solvers.state import State
 from ..solvers.step import Stepper
 from . import uncertainty as U
+from .combinations import determined_combinations
+from .determined import full_activity_notes, identifiability_notes
 from .frame import JAW_UNIT, FrameProblem
 from .methods import LeastSquares, Powell, method_from_options
 from .result import Inversion
@@ -191,8 +194,10 @@ def invert(
              if jaw is None or jaw.ndim == 1 else jaw[0])
     state = State.at_rest(face.rest_positions, physics.n_muscles, float(pose0[0]),
                           jaw_shift=pose0[1:])
-    distance = U.identifiability(U.step_responses(
-        _control_stepper(stepper, gmat, estimate_jaw, float(pose0[0]), jaw), state, nodes, nc))
+    steps = _fitted_rows(U.step_responses(
+        _control_stepper(stepper, gmat, estimate_jaw, float(pose0[0]), jaw), state, nodes, nc),
+        data)
+    distance = U.identifiability(steps)
     run = _Run(frames, nc, face.n_surface)
     muscles = MuscleRecorder(physics, frames)
     muscles.record(0, state)
@@ -254,7 +259,15 @@ def invert(
         run.controls[-1] = run.controls[-2]
     problem = _Problem(face, params, stepper, tuple(names), nodes, data, cnames, gmat, jaw,
                        estimate_jaw, jaw_note, method, positive, noise_mm, src)
-    return _finish(run, problem, distance, wall, muscles.series())
+    return _finish(run, problem, (distance, steps), wall, muscles.series())
+
+
+def _fitted_rows(s, data):
+    """The step responses' rows (3 markers, c) of the axes the data vary along (midsagittal
+    data: y and z; their x is pinned to the model's)."""
+    spread = np.nanmax(data, axis=(0, 1)) - np.nanmin(data, axis=(0, 1))
+    axes = [a for a in range(3) if spread[a] > 1e-9] or [0, 1, 2]
+    return s.reshape(data.shape[1], 3, -1)[:, axes].reshape(-1, s.shape[1])
 
 
 def _control_stepper(stepper, gmat, estimate_jaw, jaw_rest, jaw):
@@ -352,12 +365,17 @@ class _Problem:
     src: str | None
 
 
-def _finish(run, p: _Problem, distance, wall, muscles) -> Inversion:
+def _finish(run, p: _Problem, responses, wall, muscles) -> Inversion:
     frames, nc = run.controls.shape
+    distance, steps = responses
     nm = len(p.cnames)
     if frames > 1:
         run.se_unit[-1] = run.se_unit[-2]
     notes = [p.jaw_note]
+    same = shared_points(p.names, p.nodes, marker_aliases(p.face.landmarks, p.face.markers))
+    if same:
+        notes.append(f"one point of the model under two names: {'; '.join(same)}; each name "
+                     "is fitted, so the point counts once per name")
     if p.noise_mm is None:
         sigma = U.noise_from_residuals(run.rss, run.dof)
         noise_how = "estimated from the residuals"
@@ -377,11 +395,11 @@ def _finish(run, p: _Problem, distance, wall, muscles) -> Inversion:
         control_names = tuple(p.cnames)
     if run.gaps:
         notes.append(f"{run.gaps} missing marker samples were left out of their frames' costs")
-    hidden = [control_names[j] for j in range(nc) if not seen[j]]
-    if hidden:
-        notes.append(f"not determined by these markers: {', '.join(hidden)} (the markers see "
-                     "their effect only together with other controls; their values follow the "
-                     "regularisation, not the data)")
+    combos = determined_combinations(steps, control_names,
+                                     first=("jaw",) if p.estimate_jaw else ())
+    notes += identifiability_notes(combos, seen, run.controls, control_names, sigma)
+    notes += full_activity_notes(run.controls[:-1, :nm] if frames > 1 else run.controls[:, :nm],
+                                 p.cnames)
     bad = np.nonzero(run.condition > ILL_POSED_CONDITION)[0]
     if len(bad):
         msg = (f"ill-posed: the Jacobian condition number exceeds {ILL_POSED_CONDITION:.0e} in "
@@ -395,7 +413,8 @@ def _finish(run, p: _Problem, distance, wall, muscles) -> Inversion:
         data_markers=p.data, activity=run.controls[:, :nm] @ p.gmat.T, jaw_angle=jaw_series,
         jaw_pose=jaw_pose,
         control_names=control_names, controls=run.controls, control_se=se,
-        identifiability=distance, identifiable=seen, noise_mm=sigma, noise_how=noise_how,
+        identifiability=distance, identifiable=seen, combinations=tuple(combos),
+        noise_mm=sigma, noise_how=noise_how,
         rms_error=run.rms, markers_used=run.used, on_bound=run.on_bound,
         condition=run.condition, evaluations=run.evaluations, method=p.method,
         positive=p.positive, integrator=f"{p.stepper.integrator} (inversion, {p.method.name})",

@@ -43,6 +43,8 @@ class LeastSquares:
     jaw_prior_weight : mm per 0.1 rad, weight of ``jaw - recorded jaw`` when a jaw recording
         is the starting point of an estimated jaw
     max_evaluations : frame steps of the model per frame, at most
+    max_rate : 1/s, the largest change of a muscle control per second, as a bound on each
+        frame's change from the frame before (0: none)
     """
 
     window: int = 2
@@ -53,6 +55,7 @@ class LeastSquares:
     prior_weight: float = 0.0
     jaw_prior_weight: float = 0.05
     max_evaluations: int = 400
+    max_rate: float = 0.0
 
     name = "lsq"
 
@@ -61,12 +64,12 @@ class LeastSquares:
             raise InputError(f"window must be a whole number of frames >= 1 (got "
                              f"{self.window!r})", field="window")
         _non_negative(self, "tol", "bend", "smooth", "effort", "prior_weight",
-                      "jaw_prior_weight")
+                      "jaw_prior_weight", "max_rate")
         if not (isinstance(self.max_evaluations, int) and self.max_evaluations >= 1):
             raise InputError(f"max_evaluations must be >= 1 (got {self.max_evaluations!r})",
                              field="max_evaluations")
         # the command line's intervals (facemech.checks)
-        for name in ("window", "tol", "bend", "smooth", "effort", "max_evaluations"):
+        for name in ("window", "tol", "bend", "smooth", "effort", "max_evaluations", "max_rate"):
             check_value(name, getattr(self, name))
 
 

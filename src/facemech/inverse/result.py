@@ -32,6 +32,8 @@ class Inversion:
     control_se : (frames, c) standard errors of the controls (same units)
     identifiability : (c,) mm per unit (see :mod:`facemech.inverse.uncertainty`)
     identifiable : (c,) bool: the markers determine the control (at the noise level)
+    combinations : the combinations of controls the markers measure
+        (:mod:`facemech.inverse.combinations`), in pivot order
     noise_mm : marker noise used for the standard errors (mm); ``noise_how`` says where from
     rms_error : (frames,) m, the per-frame error: RMS over the markers used of the distance
         between model and data (frame 0: the model at rest against the first frame)
@@ -71,6 +73,14 @@ class Inversion:
     notes: list = field(default_factory=list)
     source: str | None = None
     muscles: object = None  # MuscleSeries: force, length, velocity, activation per instance
+    combinations: tuple = ()
+
+    @property
+    def sensor_fit(self) -> list:
+        """The fit per sensor and axis (:func:`facemech.inverse.sensor_fit.sensor_fit`)."""
+        from .sensor_fit import sensor_fit
+
+        return sensor_fit(self.markers, self.data_markers, self.marker_names)
 
     @property
     def markers(self) -> np.ndarray:
@@ -99,6 +109,10 @@ class Inversion:
 
     @property
     def attrs(self) -> dict:
+        from .combinations import to_json
+        from .determined import regularised
+        from .sensor_fit import fit_to_json
+
         s = self.error_summary()
         m = self.method
         opts = {k: getattr(m, k) for k in m.__dataclass_fields__}
@@ -117,6 +131,12 @@ class Inversion:
             "condition_median": float(np.nanmedian(self.condition))
             if np.isfinite(self.condition).any() else -1.0,
             "notes": " | ".join(self.notes + s["warnings"]),
+            "sensor_fit": fit_to_json(self.sensor_fit),
+            "combinations": to_json(self.combinations),
+            "combinations_determined": ",".join(
+                c.name for c in self.combinations if c.determined(self.noise_mm)),
+            "regularised": ",".join(regularised(self.combinations, self.identifiable,
+                                                self.control_names)),
         }
 
     def variables(self) -> dict:
@@ -137,6 +157,17 @@ class Inversion:
             "identifiable": (("control",), self.identifiable.astype(np.int8), {"units": "1"}),
             "on_bound": (("time", "control"), self.on_bound.astype(np.int8), {"units": "1"}),
         }
+        if self.combinations:
+            sigma = max(float(self.noise_mm), 0.1) if np.isfinite(self.noise_mm) else 0.1
+            out["combination_activity"] = (
+                ("time", "combination"),
+                np.column_stack([c.of(self.controls, self.control_names)
+                                 for c in self.combinations]),
+                {"units": "1 (jaw: 0.1 rad)", "long_name": "the combinations of controls the "
+                 "markers measure (attribute combinations: their weights)"})
+            out["combination_se"] = (("combination",), np.array([c.se(sigma) for c in
+                                                                 self.combinations]),
+                                     {"units": "1", "long_name": "standard error at the noise"})
         return out
 
     def to_dataset(self, inputs: dict | None = None):
@@ -144,7 +175,10 @@ class Inversion:
         from ..io.results import to_dataset
 
         ds = to_dataset(self, inputs, self.variables())
-        return ds.assign_coords(control=list(self.control_names))
+        ds = ds.assign_coords(control=list(self.control_names))
+        if self.combinations:
+            ds = ds.assign_coords(combination=[c.name for c in self.combinations])
+        return ds
 
     def write(self, path: str | Path, inputs: dict | None = None) -> Path:
         """Write the results file (NetCDF) atomically."""

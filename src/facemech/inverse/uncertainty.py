@@ -69,7 +69,9 @@ def identifiability(j0: np.ndarray) -> np.ndarray:
     columns cannot reproduce (0 for a control the markers do not see at all)."""
     if j0.size == 0:
         return np.zeros(j0.shape[1])
-    u, s, vt = np.linalg.svd(j0, full_matrices=False)
+    _, sv, vt = np.linalg.svd(j0, full_matrices=True)  # vt: every direction of the controls
+    s = np.zeros(j0.shape[1])
+    s[: len(sv)] = sv  # fewer residuals than controls: the rest is a null space
     keep = s > s.max(initial=0.0) * 1e-9
     diag = np.sum((vt[keep] / s[keep, None]) ** 2, axis=0)  # diag of (J^T J)^+
     lost = np.sum(vt[~keep] ** 2, axis=0) > 1e-6  # a component in the null space

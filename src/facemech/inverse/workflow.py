@@ -156,6 +156,9 @@ def invert_marker_set(
     if signed:
         solver, effort_note = _effort_for_sign(solver, options)
         pick_note += effort_note
+    if pick_note:
+        solver, pace_note = _pace_for_pick(solver, options)
+        pick_note += pace_note
     res = invert(model, skin, mapping, method=solver, positive=positive, controls=ctrl,
                  jaw_angle=JawRecording(drive, estimate, jaw_source), params=params,
                  noise_mm=noise, progress=progress)
@@ -309,6 +312,32 @@ def _effort_for_sign(solver, options):
     return (replace(solver, effort=SIGN_EFFORT),
             f"; effort {SIGN_EFFORT} mm per unit, so that an opposing pair does not co-contract "
             "unseen (set --effort to change it)")
+
+
+#: (mm per unit, 1/s): ``smooth`` and ``max_rate`` of a fit whose controls were picked (the
+#: markers determine combinations of them, not each): the change the markers do not fix is held
+#: to what the activation can follow. Eq. (4)'s critically damped filter (tau 16.5 ms under the
+#: anatomical preset, after Ito et al. 2004) changes its activation at most 1 / (e tau) = 22 per
+#: second, for a step of full activity; the drive is bounded to that rate. Measured on MOCHA
+#: fsew0_001 in docs/articulography.md (smooth 0.3 and no bound before).
+PICK_PACE = (1.0, 22.0)
+
+
+def _pace_for_pick(solver, options):
+    """(the method with :data:`PICK_PACE`'s ``smooth`` and ``max_rate`` where not given, the
+    note's clause)."""
+    from .methods import LeastSquares
+
+    given = {k for k, v in (options or {}).items() if v is not None}
+    if not isinstance(solver, LeastSquares) or {"smooth", "max_rate"} <= given:
+        return solver, ""
+    smooth, rate = PICK_PACE
+    solver = replace(solver, **{k: v for k, v in (("smooth", smooth), ("max_rate", rate))
+                                if k not in given})
+    return solver, (f"; as the markers determine combinations of these, not each, the change "
+                    f"they leave free is paced: smooth {solver.smooth:g} mm per unit, and each "
+                    f"muscle changes by at most {solver.max_rate:g} per second (what its "
+                    "activation can follow; set --smooth and --max-rate to change it)")
 
 
 def pick_candidates(model) -> tuple[str, ...]:

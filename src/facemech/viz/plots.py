@@ -65,6 +65,8 @@ def kinematics_figure(path: str | Path, time: np.ndarray, trajectories: dict[str
                 ax.set_ylabel(label, fontsize=8)
             if r == 0:
                 ax.set_title(name if meas is None else f"{name}  {ax.get_title()}", fontsize=9)
+                if meas is not None:
+                    ax.legend(fontsize=7, loc="best", frameon=False)
             ax.tick_params(labelsize=7)
         axes[-1, c].set_xlabel("time (s)", fontsize=8)
     return save_figure(fig, path, title)
@@ -92,8 +94,9 @@ def activity_figure(path: str | Path, time: np.ndarray, activity: np.ndarray,
 def inversion_figure(path: str | Path, time: np.ndarray, controls: np.ndarray,
                      names: tuple[str, ...], *, truth: np.ndarray | None = None,
                      rms_error: np.ndarray | None = None, se: np.ndarray | None = None,
-                     identifiable: np.ndarray | None = None, title: str = "") -> Path:
-    """Write a PNG of inverted controls, one panel per control, and the fit's error.
+                     identifiable: np.ndarray | None = None, title: str = "",
+                     fit: tuple | None = None, combinations=(), noise_mm: float = 0.1) -> Path:
+    """Write a PNG of inverted controls, one panel per control, and the fit.
 
     Parameters
     ----------
@@ -105,40 +108,33 @@ def inversion_figure(path: str | Path, time: np.ndarray, controls: np.ndarray,
     rms_error : (frames,) per-frame RMS marker error in metres (bottom panel)
     se : (frames, c) standard errors: a band of +-2 SE (about 95 %)
     identifiable : (c,) bool: controls the markers do not determine are drawn grey and
-        labelled so
+        labelled "regularised"
+    fit : (sensor names, model (frames, sensors, 3) m, measured (frames, sensors, 3) m): a
+        panel per sensor and axis the data vary along, model against measured
+    combinations : :class:`~facemech.inverse.combinations.Combination` the markers measure, a
+        panel each with +-2 SE at ``noise_mm`` (drawn when some control is not determined)
     """
-    n = len(names) + (rms_error is not None)
+    from .plots_fit import combination_panel, control_panel, sensor_panels
+
+    seen_all = identifiable is None or bool(np.all(identifiable))
+    combos = [] if seen_all else list(combinations)
+    fits = sensor_panels(None, time, *fit) if fit is not None else 0
+    n = len(names) + len(combos) + fits + (rms_error is not None)
     fig, axes = subplots(n, 1, figsize=(7, 0.85 * n + 1.0), sharex=True, squeeze=False)
     lo = min(0.0, float(np.min(controls)))
-    t = time[:-1]
     for r, name in enumerate(names):
-        ax = axes[r, 0]
-        scale = np.degrees(0.1) if name == "jaw" else 1.0
-        seen = identifiable is None or bool(identifiable[r])
-        colour = "k" if seen else "0.6"
-        y = controls[:-1, r] * scale
-        if se is not None:
-            band = 2.0 * np.nan_to_num(se[:-1, r], nan=0.0, posinf=10.0) * scale
-            ax.fill_between(t, y - band, y + band, color="tab:blue" if seen else "0.85",
-                            alpha=0.35, lw=0, label="+-2 SE")
-        ax.plot(t, y, "-", color=colour, lw=1.3, label="inverted")
-        if truth is not None:
-            ax.plot(t, truth[:-1, r] * scale, "k--", lw=1.0, label="true")
-            ax.set_title(f"r = {cross_correlation(controls[:-1, r], truth[:-1, r]):.2f}",
-                         fontsize=7, loc="right", pad=1)
-        if not seen:
-            ax.text(0.01, 0.85, "not determined by the markers", transform=ax.transAxes,
-                    fontsize=7, color="0.4", va="top")
-        if name == "jaw":
-            top = float(np.max(controls[:-1, r] * scale)) if len(t) else 1.0
-            ax.set_ylim(min(-1.0, float(np.min(y))) - 0.5, max(top, 2.0) * 1.15)
-            ax.set_ylabel("jaw\n(deg)", rotation=0, ha="right", fontsize=8)
-        else:
-            ax.set_ylim(lo - 0.05, 1.05)
-            ax.set_ylabel(name, rotation=0, ha="right", fontsize=8)
-        ax.tick_params(labelsize=7)
+        control_panel(axes[r, 0], time, controls[:, r], name, lo=lo,
+                      se=None if se is None else se[:, r],
+                      truth=None if truth is None else truth[:, r],
+                      seen=identifiable is None or bool(identifiable[r]))
     if truth is not None or se is not None:
-        axes[0, 0].legend(fontsize=7, loc="upper left", frameon=False, ncol=3)
+        axes[0, 0].legend(fontsize=7, loc="upper right", frameon=False, ncol=3)
+    r = len(names)
+    for k, c in enumerate(combos):
+        combination_panel(axes[r + k, 0], time, c, controls, names, noise_mm)
+    r += len(combos)
+    if fit is not None:
+        sensor_panels(axes[r:r + fits, 0], time, *fit)
     if rms_error is not None:
         ax = axes[-1, 0]
         ax.plot(time, rms_error * 1e3, "k.-", lw=0.8, ms=3)

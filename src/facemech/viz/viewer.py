@@ -18,7 +18,10 @@ positions       ``{"dtype": "int16", "scale": q, "data": base64}``: (frames, nod
 markers         ``{"names": [...], "data": base64 float32}``, (frames, markers, 3) m
 measured        null, or the same plus ``source``, ``coverage`` ([t0, t1] s on the results'
                 timeline) and ``note``; NaN where no measured sample covers a frame
-activity        ``{"names": [...], "data": base64 float32}``, (frames, muscles) in [0, 1]
+activity        ``{"names": [...], "data": base64 float32, "undetermined": [...]}``, (frames,
+                muscles) in [0, 1]; ``undetermined``: of an inversion, the muscles the markers
+                do not determine alone (their legend entries say "reg.")
+warning         null, or (an inversion with such muscles) the line the page shows about them
 jawDeg          base64 float32, (frames,) degrees
 jawShift        base64 float32, (frames, 2) m: the hinge's shift along y and z (zeros for a hinge)
 tongueTip       base64 float32, (frames, 2) m: the tongue tip's pose (protrusion, elevation) from
@@ -365,6 +368,7 @@ def viewer_data(results, measured=None, title: str | None = None) -> dict:
         raise InputError("the scene's skin does not match the positions", source=src,
                          field="positions")
 
+    undetermined, warning = undetermined_muscles(results)
     if title is None:
         parts = [str(results.attrs.get(k)) for k in ("face", "preset") if results.attrs.get(k)]
         title = "facemech: " + (", ".join(parts) if parts else "results")
@@ -380,12 +384,26 @@ def viewer_data(results, measured=None, title: str | None = None) -> dict:
         "positions": {"dtype": "int16", "scale": scale, "data": _b64(steps, "i2")},
         "markers": {"names": mk_names, "data": _b64(mk, "f4")},
         "measured": meas_block,
-        "activity": {"names": muscles, "data": _b64(act, "f4")},
+        "activity": {"names": muscles, "data": _b64(act, "f4"), "undetermined": undetermined},
+        "warning": warning,
         "jawDeg": _b64(jaw, "f4"),
         "jawShift": _b64(jaw_shift, "f4"),
         "tongueTip": _b64(tongue, "f4"),
         "scene": scene_block(scene),
     }
+
+
+def undetermined_muscles(results) -> tuple[list[str], str | None]:
+    """(the muscles an inversion's markers do not determine alone, the page's warning or
+    None), from the results' ``regularised`` and ``combinations_determined`` attributes."""
+    names = [n for n in str(results.attrs.get("regularised", "")).split(",") if n]
+    if not names:
+        return [], None
+    det = [n for n in str(results.attrs.get("combinations_determined", "")).split(",") if n]
+    return [n for n in names if n != "jaw"], (
+        f"not determined by the markers alone, their activity follows the inversion's "
+        f"regularisation: {', '.join(names)}; the markers measure "
+        f"{'; '.join(det) if det else 'none of their combinations within 0.1'}")
 
 
 def template() -> str:

@@ -104,4 +104,5 @@ def process_emg_file(emg: str | Path, output: str | Path, *, rate: float | None 
                        calibration_baseline=calibration_baseline)
     write_activity(output, res.time, res.activity, res.channels)
     return Written(Path(output), res, f"{len(res.time)} frames at {rate:g} Hz, channels "
-                   f"{', '.join(res.channels)} -> {output}")
+                   f"{', '.join(res.channels)} -> {output}",
+                   "".join(f"facemech: note: {n}\n" for n in res.notes))

@@ -118,7 +118,7 @@ def invert(markers: MarkerFile | str | Path, output: str | Path, *,
         default preset)
     method, options : "lsq" or "powell" and its options (``window``, ``tol``, ``bend``,
         ``smooth``, ``effort``, ``max_evaluations``; None: its default; tol in mm, weights in mm
-        per unit; :func:`~facemech.inverse.methods.method_from_options`)
+        per unit; ``max_rate`` 1/s; :func:`~facemech.inverse.methods.method_from_options`)
     positive, controls : activity >= 0; "speech", "emg7", "all" or comma-separated groups
         (None: "speech", or the part of it the markers determine)
     jaw : the jaw's markers, on the skin or on the bone
@@ -229,19 +229,30 @@ def draw(res, path: str | Path, *, title: str = "") -> Path:
 
     return inversion_figure(path, res.time, res.controls, res.control_names,
                             rms_error=res.rms_error, se=res.control_se,
-                            identifiable=res.identifiable, title=title)
+                            identifiable=res.identifiable, title=title,
+                            fit=(res.marker_names, res.markers, res.data_markers),
+                            combinations=res.combinations, noise_mm=res.noise_mm)
 
 
 def report(res, output: str | Path, figure: str | Path | None = None) -> list[str]:
-    """What ``facemech invert`` prints: the per-frame error, the controls the markers
-    determine, and the figure."""
+    """What ``facemech invert`` prints: the per-frame error, the fit per sensor and axis, the
+    controls (or combinations of controls) the markers determine, and the figure."""
+    from ..inverse.sensor_fit import fit_lines
+
     s = res.error_summary()
     seen = [n for n, ok in zip(res.control_names, res.identifiable, strict=True) if ok]
+    combos = [c.name for c in res.combinations if c.determined(res.noise_mm)]
     lines = [f"{len(res.time)} frames inverted ({res.method.name}) in {res.wall_seconds:.1f} s;"
              f" per-frame error (RMS over {len(res.marker_names)} markers): median "
              f"{s['median_mm']:.3f} mm, max {s['max_mm']:.3f} mm -> {output}",
+             "  fit per sensor and axis (model against measured: RMS, largest error, "
+             "correlation, the model's share of the recorded range):",
+             *(f"    {line}" for line in fit_lines(res.sensor_fit)),
              f"  determined by the markers (noise {res.noise_mm:.3f} mm, {res.noise_how}): "
-             f"{', '.join(seen) or 'none'}"]
+             f"{', '.join(seen) or 'no single control'}"
+             + ("" if len(seen) == len(res.control_names) else
+                f"; combinations of controls within 0.1: {'; '.join(combos) or 'none'} (see "
+                "the note)")]
     return lines + ([] if figure is None else [f"figure -> {figure}"])
 
 

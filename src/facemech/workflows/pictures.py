@@ -95,8 +95,25 @@ def still_file(result: str | Path, output: str | Path, *, time: float | None = N
     return Written(Path(output), r, f"frame {r['frame']} (t = {r['time']:.3f} s) -> {output}")
 
 
-def plot_file(result: str | Path, output: str | Path, markers: str | Sequence[str] = "R03,R05,R07",
-              *, measured: str | Path | None = None, units: str | None = None) -> Written:
+#: the markers ``plot`` draws unless told
+DEFAULT_PLOT_MARKERS = "R03,R05,R07"
+
+
+def inverted_markers(result) -> dict | None:
+    """An inversion's fitted data, name -> (frames, 3) m (None: the results are not an
+    inversion's)."""
+    from ..io.results import read_results
+
+    ds = read_results(result)
+    if "data_markers" not in ds:
+        return None
+    data = ds["data_markers"].transpose("time", "marker", "axis").values
+    return {str(n): data[:, k] for k, n in enumerate(ds["marker"].values)}
+
+
+def plot_file(result: str | Path, output: str | Path,
+              markers: str | Sequence[str] = DEFAULT_PLOT_MARKERS, *,
+              measured: str | Path | None = None, units: str | None = None) -> Written:
     """Displacement and acceleration (vertical, protrusion) of model markers, like Figs. 4-6 of
     Lucero & Munhall (1999), with measured markers of the same names (dashed) if given.
 
@@ -106,7 +123,8 @@ def plot_file(result: str | Path, output: str | Path, markers: str | Sequence[st
     output : the figure (``.png``)
     markers : marker names (a sequence or comma-separated text); each must be in the results
     measured : marker file with measured markers (those of the same names are drawn),
-        interpolated onto the results' times
+        interpolated onto the results' times; for an inversion's results, by default the data
+        it fitted (and, by default, its sensors rather than ``R03,R05,R07``)
     units : length unit of ``measured`` if it does not say
     """
     from ..errors import InputError
@@ -119,6 +137,9 @@ def plot_file(result: str | Path, output: str | Path, markers: str | Sequence[st
     if not names:
         raise InputError(f"no marker name in {markers!r} (e.g. R03,R05)", field="--markers")
     ms = read_markers(result)
+    inverted = inverted_markers(result) if measured is None else None
+    if inverted is not None and markers == DEFAULT_PLOT_MARKERS:
+        names = [n for n in ms.names if n in inverted]  # an inversion: its sensors
     low = {}  # the names as the user means them: ul finds UL where that is unambiguous
     for n in ms.names:
         low.setdefault(n.casefold(), []).append(n)
@@ -145,6 +166,8 @@ def plot_file(result: str | Path, output: str | Path, markers: str | Sequence[st
                                  + ("fill it: facemech markers fill-gaps" if inside else
                                     "cut the ends: facemech markers trim") + ")",
                                  source=str(measured), field=n)
+    if inverted is not None:  # an inversion: the data it fitted, as measured
+        meas = {n: inverted[n] for n in names if n in inverted}
     path = kinematics_figure(output, ms.time, traj, rate=ms.rate, measured=meas,
                              title=str(Path(result).name))
     return Written(Path(path), traj, f"figure -> {output}")
@@ -154,11 +177,15 @@ def view_file(result: str | Path, output: str | Path, *, markers: str | Path | N
               units: str | None = None, title: str | None = None) -> Written:
     """An interactive viewer of a results file (and measured markers in the model's frame):
     one self-contained HTML page (:func:`facemech.viz.viewer.view_file`)."""
+    from ..io.results import read_results
+    from ..viz.viewer import undetermined_muscles
     from ..viz.viewer import view_file as write_page
 
     check_output(output, [result, markers], field="-o")
     path = write_page(result, output, markers=markers, units=units, title=title)
-    return Written(path, None, f"viewer -> {path} ({path.stat().st_size / 1e6:.1f} MB)")
+    warning = undetermined_muscles(read_results(result))[1]
+    return Written(path, None, f"viewer -> {path} ({path.stat().st_size / 1e6:.1f} MB)",
+                   "" if warning is None else f"facemech: warning: {warning}\n")
 
 
 def export_file(result: str | Path, output: str | Path, *, fmt: str | None = None,

@@ -232,6 +232,12 @@ class SimulationRun:
     output: Path
     inputs: dict = field(default_factory=dict)
     movie: object | None = None  # outcome.Written
+    notes: tuple = ()  # what was assumed: EMG without calibration, a jaw held at rest
+
+    @property
+    def warnings(self) -> str:
+        """The notes, for stderr ("facemech: note: ..." lines)."""
+        return "".join(f"facemech: note: {n}\n" for n in self.notes)
 
     def __str__(self) -> str:
         sim = self.simulation
@@ -286,6 +292,7 @@ def simulate_files(output: str | Path, controls: Controls, jaw: JawSource = JawS
 
         movie = check_movie(movie, [*given, output], field="video")
     times, act, inputs = read_controls(controls, params.frame_rate)  # before the slow face
+    notes = input_notes(controls, jaw)
     model = load_face(face, tissue=params.tissue)
     jaw_angles, jaw_inputs = jaw_series(jaw, model, params, times)
     inputs.update(jaw_inputs)
@@ -299,7 +306,25 @@ def simulate_files(output: str | Path, controls: Controls, jaw: JawSource = JawS
         from .pictures import render_movie
 
         written = render_movie(output, movie, progress=progress)
-    return SimulationRun(run, Path(output), inputs, written)
+    return SimulationRun(run, Path(output), inputs, written, notes)
+
+
+#: the note of a simulation with no jaw drive
+JAW_AT_REST_NOTE = ("jaw: held at rest (closed) for the whole run, as no jaw drive was given "
+                    "(--jaw-angle, --jaw-chin with --chin-marker, or --jaw-incisor)")
+
+
+def input_notes(controls: Controls, jaw: JawSource) -> tuple[str, ...]:
+    """The defaults a simulation takes silently otherwise: EMG scaled without a calibration
+    recording, and the jaw held at rest when no drive is given."""
+    notes = []
+    if controls.emg is not None and controls.emg_calibration is None:
+        notes.append("EMG scaled without a calibration recording: each channel's activity 1 is "
+                     "its own maximum in this recording, so a channel that barely moves reaches "
+                     "full activity; give a recording of maximal gestures (--emg-calibration)")
+    if jaw.markers is None and jaw.angles is None:
+        notes.append(JAW_AT_REST_NOTE)
+    return tuple(notes)
 
 
 def simulate_to_file(output: str | Path, model, activity: np.ndarray,
