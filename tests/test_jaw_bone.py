@@ -304,8 +304,8 @@ def test_three_markers_invert_the_controls_they_determine(face, talking, tmp_pat
     note = err.split("note: controls:")[1].split("facemech:")[0]
     kept = read_results(tmp_path / "r.nc").attrs["controls"].split(",")
     assert ("3 markers give 9 coordinates for the 12 candidate controls (the default set, and "
-            "orbicularis oris's marginal part where the face has it); kept the "
-            f"{len(kept)}") in note
+            f"orbicularis oris's marginal part where the face has it); kept {len(kept)}: the ") \
+        in note
     assert "jaw" in kept and note.split("mm per unit): ")[1].startswith("jaw ")  # taken first
     held = note.split("held at rest: ")[1]
     assert len(kept) <= 9
@@ -360,7 +360,9 @@ def test_midsagittal_articulography_fits_the_lips_with_the_jaw_from_the_incisor(
     assert res.marker_names == ("UL", "LL")
     np.testing.assert_allclose(res.jaw_pose, poses, atol=1e-9)
     assert set(res.control_names) == set(pick.muscles)
-    assert np.median(res.rms_error) < 1e-4 and res.rms_error.max() < 2e-4  # 0.017, 0.044 mm
+    # two coils: the pick is paced (smooth 1 mm per unit, 22 per second), which costs a twin
+    # that needs none: 0.107, 0.206 mm (0.017, 0.044 unpaced)
+    assert np.median(res.rms_error) < 1.5e-4 and res.rms_error.max() < 3e-4
     # the model's midline points stay on the midline: x adds nothing to the cost
     assert np.abs(res.markers[:, :, 0] - face.rest_positions[nodes, 0]).max() < 1e-9
     text = "\n".join(res.notes)

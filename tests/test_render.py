@@ -349,7 +349,7 @@ def test_render_reports_progress_when_piped(open_mouth, tmp_path):
     assert run.returncode == 0, run.stderr
     n = len(open_mouth.time)
     lines = [ln for ln in run.stderr.splitlines() if ln.startswith("facemech: render:")]
-    assert lines and lines[-1].startswith(f"facemech: render: {n}/{n} (")
+    assert lines and lines[-1].startswith(f"facemech: render: frame {n}/{n}, ")
 
 
 def test_edge_fade_of_a_bounded_search_is_the_unbounded_distance(face):

@@ -346,7 +346,7 @@ def batch(manifest: Path, output: Path = ..., workers: int | None = None,
     """Run a manifest of simulate/invert/speak/stimuli/regions items on dask (docs/batch.md)."""
     rep = workflows.batch.run_batch(
         manifest, output, workers=workers, scheduler=scheduler, on_item=lambda o, n, t: _say(
-            [f"[{n}/{t}] {o.line()}"], True, markup=False, highlight=False))
+            [f"[{n}/{t}] {o.line()}"], True, markup=False, highlight=False, soft_wrap=True))
     _finish(*workflows.batch.report(rep), rep.exit_code)
 
 def main() -> None:

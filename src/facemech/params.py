@@ -435,7 +435,8 @@ def anatomical(scales: dict | None = None) -> Parameters:
                          f"{', '.join(ANATOMICAL_SCALES)})", field="scales")
     for k, v in s.items():
         if not (np.isfinite(v) and v > 0):
-            raise InputError(f"scale {k} must be a positive number (got {v!r})", field=k)
+            raise InputError(f"scale {k!r} must be a positive number (got {v!r})",
+                             field=k or "scales")
     return Parameters(
         name="anatomical", material="continuum", tissue="anatomical", integrator="implicit",
         substeps=4, fast_dt=1.0 / 240.0, dt=1.0 / 240.0,
@@ -481,8 +482,8 @@ def read_preset(path) -> Parameters:
         raise InputError("missing scales", source=str(path), field="scales")
     for key, v in scales.items():
         if _file_number(v) is None:
-            raise InputError(f"scale {key} must be a positive number (got {v!r})",
-                             source=str(path), field=key)
+            raise InputError(f"scale {key!r} must be a positive number (got {v!r})",
+                             source=str(path), field=key or "scales")
     try:
         p = anatomical({k: _file_number(v) for k, v in scales.items()})
     except InputError as exc:
