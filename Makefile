@@ -60,7 +60,7 @@ JOBS   ?= 2
 XDIST  := -n $(JOBS) --dist loadgroup
 
 test: $(STAMP) chromium blender lint
-	MPLBACKEND=Agg $(BIN)/python -m pytest -q $(XDIST)
+	MPLBACKEND=Agg $(BIN)/python -m pytest -q $(XDIST) --durations=20
 
 # the suite on the oldest versions that pyproject's ranges allow (constraints-lowest.txt), in
 # .venv-lowest; no lint (an old ruff knows other rules); numba's cache apart, so that the two
