@@ -61,7 +61,8 @@ def write_ag500(path, model_mm):
 
 def write_ndi(path, model_mm, *, rate=100.0, time_scale=1.0, lost=(), suffixes=False):
     """WaveFront's export: time, then per sensor ID, State, Q0 Qx Qy Qz, Tx Ty Tz (mm), with
-    NDI axes: Tx = model z (forward), Ty = -model x, Tz = model y (up)."""
+    NDI axes, right-handed: Tx = model z (forward), Ty = model x (the subject's left), Tz =
+    model y (up)."""
     n, s, _ = model_mm.shape
     head = ["Wav Time"]
     for k in range(s):
@@ -76,7 +77,7 @@ def write_ndi(path, model_mm, *, rate=100.0, time_scale=1.0, lost=(), suffixes=F
             if (f, k) in lost:
                 cells += [str(k + 1), "Missing", "", "", "", "", "", "", ""]
             else:
-                cells += [str(k + 1), "OK", "1", "0", "0", "0", f"{z:.4f}", f"{-x:.4f}",
+                cells += [str(k + 1), "OK", "1", "0", "0", "0", f"{z:.4f}", f"{x:.4f}",
                           f"{y:.4f}"]
         rows.append("\t".join(cells))
     path.write_text("\n".join(rows) + "\n")
@@ -154,6 +155,28 @@ def test_the_cli_reads_them_by_extension(monkeypatch, capsys, tmp_path, kind):
     back = read_markers(tmp_path / "o.csv")
     assert back.meta["roles"]["ll"] == "lower_lip"
     assert back.marker("ll")[:, 1] == pytest.approx(mm[:, 1, 1] * 1e-3, abs=1e-6)
+    code, out, err = run_cli(monkeypatch, capsys, "markers", "trim", path, "-o",
+                             tmp_path / "t.csv", "--first", "10", "--last", "19", *args)
+    assert code == 0, err
+    cut = read_markers(tmp_path / "t.csv")
+    rate = 100.0 if kind == "ndi" else 250.0
+    assert cut.n_frames == 10 and cut.time[0] == pytest.approx(10 / rate, abs=1e-6)
+    assert cut.meta["roles"]["ll"] == "lower_lip"
+    assert cut.marker("ll")[:, 1] == pytest.approx(mm[10:20, 1, 1] * 1e-3, abs=1e-6)
+
+
+def test_a_pos_files_angles_are_cut_with_its_frames(tmp_path):
+    from facemech.kinematics.trim import trim
+
+    mm = _model_mm()
+    ms = read_carstens_pos(write_ag501(tmp_path / "s.pos", mm), sensors=NAMES)
+    extra = ms.meta["pos_extra"].copy()
+    extra[:, 0, 0] = np.arange(N)  # a marked angle per frame
+    ms = type(ms)(ms.positions, ms.names, ms.rate, time=ms.time,
+                  source_units=ms.source_units, meta={**ms.meta, "pos_extra": extra})
+    cut = trim(ms, first=5, last=14)
+    assert cut.meta["pos_extra"].shape == (10, len(NAMES), 4)
+    assert cut.meta["pos_extra"][:, 0, 0].tolist() == list(range(5, 15))
 
 
 def _bad(tmp_path):
@@ -208,3 +231,34 @@ def test_options_a_format_does_not_take_are_refused(tmp_path):
     with pytest.raises(InputError) as err:
         read_markers(write_txy(tmp_path / "x.txy"), sensors="a")
     assert err.value.field == "sensors"
+
+
+def _file_xyz(path, kind, sensors):
+    """(frames, sensors, 3) of the file's own position columns, read without facemech."""
+    if kind == "ndi":
+        lines = path.read_text().splitlines()
+        head = lines[0].split("\t")
+        cols = [[j for j, h in enumerate(head) if h.split(".")[0] == c] for c in ("Tx", "Ty", "Tz")]
+        rows = [ln.split("\t") for ln in lines[1:]]
+        return np.array([[[float(r[cols[a][k]]) for a in range(3)] for k in range(sensors)]
+                         for r in rows])
+    data = path.read_bytes()
+    head_len = int(data.split(b"\n")[1])
+    rec = np.frombuffer(data[head_len:], "<f4").reshape(-1, sensors, 7)
+    return rec[..., :3].astype(float)
+
+
+@pytest.mark.parametrize("kind", ["ag501", "ndi"])
+def test_the_file_frame_is_turned_not_mirrored(tmp_path, kind):
+    """A right-handed file frame becomes the right-handed model frame: the map from the file's
+    own columns to the model's axes is a rotation (determinant +1), never a reflection."""
+    mm = _model_mm() + np.random.default_rng(3).normal(0.0, 0.5, (N, len(NAMES), 3))
+    path = (write_ndi(tmp_path / "w.tsv", mm) if kind == "ndi"
+            else write_ag501(tmp_path / "w.pos", mm))
+    ms = read_markers(path, sensors=",".join(NAMES))
+    got = np.stack([ms.marker(n) for n in NAMES], axis=1).reshape(-1, 3)
+    raw = _file_xyz(path, kind, len(NAMES)).reshape(-1, 3)
+    a = np.linalg.lstsq(raw - raw.mean(0), got - got.mean(0), rcond=None)[0]
+    turn = a * 1e3  # mm in the file, m in the model
+    assert np.allclose(np.abs(turn), np.abs(turn).round(), atol=1e-6)  # axes onto axes
+    assert np.linalg.det(a) > 0

@@ -21,8 +21,8 @@ from test_articulography import XRMB_STEP_S, XRMB_UM, write_mocha
 _ROOT = Path(__file__).resolve().parents[1]
 #: MOCHA-TIMIT fsew0_001 (the real recording): shipped in the repository, or beside it
 MOCHA = next((p for p in (_ROOT / "data" / "mocha" / "fsew0_001.ema",
-                          _ROOT.parent / "shared" / "data" / "mocha" / "fsew0_001.ema",
-                          Path("/work/shared/data/mocha/fsew0_001.ema")) if p.is_file()),
+                          _ROOT.parent / "shared" / "data" / "mocha" / "fsew0_001.ema")
+              if p.is_file()),
              _ROOT / "data" / "mocha" / "fsew0_001.ema")
 needs_mocha = pytest.mark.skipif(not MOCHA.is_file(), reason="the MOCHA recording is absent")
 LEAD, TRAIL, N = 6, 3, 60

@@ -187,10 +187,11 @@ def markers_fill_gaps(source: Path, output: Path = ..., units: str | None = None
     """Fill interior gaps up to --max-gap with a cubic spline; filled samples are flagged."""
     return workflows.markers.fill_gaps_file(**locals())
 
-@command(markers_app, "trim", groups=("bounds",))
-def markers_trim(source: Path, output: Path = ..., units: str | None = None, bounds=None):
+@command(markers_app, "trim", groups=("bounds", "reader"))
+def markers_trim(source: Path, output: Path = ..., units: str | None = None, bounds=None,
+                 reader=None):
     """Keep the frames between two times or frame numbers (none: drop the empty ends)."""
-    return workflows.markers.trim_file(source, output, units=units, **bounds)
+    return workflows.markers.trim_file(source, output, units=units, **bounds, **reader)
 @command(look=("frontal+profile", "1280x720", "#2a2c33", 2), groups=(
     "controls", "jaw_source", "solver"))
 def simulate(output: Path = ..., face: str = "default", preset: str = "anatomical",

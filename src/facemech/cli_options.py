@@ -156,6 +156,8 @@ markers_resample.output: the output marker file (.c3d, .trc or .csv)
 markers_trim.output: the output marker file (.c3d, .trc or .csv; a CSV keeps the roles)
 markers_trim.start: keep from this time, s (the file's times)
 markers_trim.stop: keep up to this time, s
+markers_trim.rate: Hz, for files without times (AG500 .pos: 200; MOCHA 20-column text: 500)
+markers_trim.sensors: sensor names in channel order, e.g. ul,ll,li (.pos, NDI Wave)
 markers_trim.first: keep from this frame (from 0, as markers info shows)
 markers_trim.last: keep up to this frame
 plot.markers: comma-separated marker names

@@ -228,8 +228,11 @@ def read_ndi_wave(path: str | Path, *, units: str | None = None, sensors=None):
     xyz[~np.all(np.isfinite(xyz), axis=2)] = np.nan
     names = _names(sensors, len(groups), "S", src)
     scale, source_units = _units(units, length_scale("mm"), "mm", src)
-    return _assemble(src, "ndi-wave", NDI, t * factor,  # columns: lateral, front-back, up
-                     {c: xyz[:, k][:, [1, 0, 2]] for k, c in enumerate(names)}, scale, source_units,
+    # the file's (Tx, Ty, Tz) reordered as (lateral, front-back, up): an odd permutation, so
+    # the lateral column changes sign to keep the frame right-handed (Ty = Tz x Tx)
+    return _assemble(src, "ndi-wave", NDI, t * factor,
+                     {c: xyz[:, k][:, [1, 0, 2]] * [-1.0, 1.0, 1.0] for k, c in enumerate(names)},
+                     scale, source_units,
                      units or "mm", "empty, or a State other than OK", {"time_units": unit})
 
 

@@ -30,8 +30,10 @@ def empty_ends(ms: MarkerSet) -> tuple[int, int]:
 
 
 def _keep(ms: MarkerSet, start: int, stop: int) -> MarkerSet:
-    """Frames ``start`` to ``stop - 1`` of the set (the rate kept; the times are the file's)."""
-    meta = dict(ms.meta)
+    """Frames ``start`` to ``stop - 1`` of the set (the rate kept; the times are the file's);
+    per-frame arrays in its meta (a ``.pos`` file's angles) are cut with them."""
+    meta = {k: v[start:stop] if isinstance(v, np.ndarray) and v.ndim and len(v) == ms.n_frames
+            else v for k, v in ms.meta.items()}
     return MarkerSet(ms.positions[start:stop], ms.names, ms.rate, time=ms.time[start:stop],
                      source_units=ms.source_units, filled=ms.filled[start:stop], meta=meta)
 

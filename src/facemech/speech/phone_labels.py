@@ -109,7 +109,7 @@ def espeak_to_ipa(label: str, voice: str | None = None, *,
     """
     text = label.strip()
     stress = ""
-    while text[:1] in "',%=":
+    while text and text[0] in "',%=":
         stress = _ESPEAK_STRESS.get(text[0], stress)
         text = text[1:]
     base = text.split("/", 1)[0] if "/" in text and text not in ESPEAK_IPA else text

@@ -290,12 +290,13 @@ def gap_hint(ms, frame: int, marker: int | None = None) -> str:
 
 def trim_file(source: str | Path, output: str | Path, *, start: float | None = None,
               stop: float | None = None, first: int | None = None, last: int | None = None,
-              units: str | None = None):
+              units: str | None = None, rate: float | None = None, sensors: str | None = None):
     """Keep the frames of a marker file between two times (s, the file's own) or two frame
     numbers (from 0, as ``markers info`` shows them), and write them (``.csv``, ``.trc`` or
     ``.c3d``; a CSV keeps articulography's roles). Without bounds, the leading and trailing
     frames where no marker is present are dropped. The input is never overwritten; the output
-    is written atomically.
+    is written atomically. ``rate`` (Hz) and ``sensors`` (comma-separated names) are for the
+    formats that do not say them (:func:`facemech.io.markers.read_markers`).
 
     Returns
     -------
@@ -305,7 +306,7 @@ def trim_file(source: str | Path, output: str | Path, *, start: float | None = N
     from ..kinematics.trim import drop_empty_ends, trim
 
     check_output(output, [source], field="-o")
-    ms = read_markers(source, units=units)
+    ms = read_markers(source, units=units, rate=rate, sensors=sensors)
     n, t0, t1 = ms.n_frames, ms.time[0], ms.time[-1]
     if all(v is None for v in (start, stop, first, last)):
         res, note = drop_empty_ends(ms)
