@@ -140,11 +140,7 @@ def plot_file(result: str | Path, output: str | Path,
     inverted = inverted_markers(result) if measured is None else None
     if inverted is not None and markers == DEFAULT_PLOT_MARKERS:
         names = [n for n in ms.names if n in inverted]  # an inversion: its sensors
-    low = {}  # the names as the user means them: ul finds UL where that is unambiguous
-    for n in ms.names:
-        low.setdefault(n.casefold(), []).append(n)
-    names = [n if n in ms.names or len(low.get(n.casefold(), [])) != 1 else low[n.casefold()][0]
-             for n in names]
+    names = [_as_meant(n, ms.names) for n in names]
     unknown = [n for n in names if n not in ms.names]
     if unknown:
         raise InputError(f"--markers: no marker {unknown[0]!r} in the results (have "
@@ -171,6 +167,19 @@ def plot_file(result: str | Path, output: str | Path,
     path = kinematics_figure(output, ms.time, traj, rate=ms.rate, measured=meas,
                              title=str(Path(result).name))
     return Written(Path(path), traj, f"figure -> {output}")
+
+
+def _as_meant(name: str, names) -> str:
+    """The marker the user means by ``name`` (:func:`facemech.markerset.match_name`: ``ul``
+    finds ``UL`` where that is unambiguous), else ``name`` itself, refused by the caller with
+    the results' names."""
+    from ..errors import InputError
+    from ..markerset import match_name
+
+    try:
+        return match_name(name, names)
+    except InputError:
+        return name
 
 
 def view_file(result: str | Path, output: str | Path, *, markers: str | Path | None = None,
