@@ -32,7 +32,7 @@ $(LOW_STAMP): pyproject.toml constraints-lowest.txt
 	NUMBA_CACHE_DIR=$(LOW_VENV)/numba-cache $(LOW_BIN)/python -m facemech.warmup
 	touch $(LOW_STAMP)
 
-# a headless browser for the viewer's test (tests/test_viewer.py): installed with apt-get only
+# a headless browser for the viewer's test (tests/viz/test_viewer.py): installed with apt-get only
 # when no chromium is on the PATH, so running it again costs nothing
 chromium:
 	@command -v chromium >/dev/null 2>&1 || command -v chromium-browser >/dev/null 2>&1 || { \
@@ -41,7 +41,7 @@ chromium:
 	  $(SUDO) env DEBIAN_FRONTEND=noninteractive apt-get install -y -q chromium; }
 
 # Blender as a Python module (bpy, about 375 MB) in a venv of its own, .venv-blender: the
-# blendshape export's test opens the glTF in Blender's own importer (tests/test_blendshapes.py);
+# blendshape export's test opens the glTF in Blender's own importer (tests/io/test_blendshapes.py);
 # bpy wants numpy < 2, so it cannot share .venv. Made once; running it again costs nothing.
 blender:
 	bash tools/blender_venv.sh $(PYTHON)
@@ -70,11 +70,11 @@ test-lowest: $(LOW_STAMP) chromium
 
 # the numeric tests once more under another OpenBLAS kernel (CI runs it after `make test`):
 # results must not hang on the last bit of the BLAS (docs/reproducibility.md)
-PORTABLE_TESTS := tests/test_inverse.py tests/test_inversion_rolls.py tests/test_inversion_steps.py \
-	tests/test_inversion_trust.py tests/test_subject.py tests/test_regions.py tests/test_realism.py \
-	tests/test_calibrate.py tests/test_speak.py tests/test_docs_tables.py tests/test_visemes.py \
-	tests/test_lip_reach.py tests/test_control_pick.py tests/test_jaw_bone.py tests/test_contacts.py \
-	tests/test_planning.py tests/test_visible_speech.py
+PORTABLE_TESTS := tests/inverse/test_inverse.py tests/inverse/test_inversion_rolls.py tests/inverse/test_inversion_steps.py \
+	tests/inverse/test_inversion_trust.py tests/workflows/test_subject.py tests/analysis/test_regions.py tests/analysis/test_realism.py \
+	tests/inverse/test_calibrate.py tests/speech/test_speak.py tests/docs/test_docs_tables.py tests/speech/test_visemes.py \
+	tests/physics/test_lip_reach.py tests/inverse/test_control_pick.py tests/inverse/test_jaw_bone.py tests/solvers/test_contacts.py \
+	tests/speech/test_planning.py tests/analysis/test_visible_speech.py
 CORETYPE ?= Prescott
 test-portable: $(STAMP)
 	OPENBLAS_CORETYPE=$(CORETYPE) MPLBACKEND=Agg $(BIN)/python -m pytest -q $(XDIST) $(PORTABLE_TESTS)

@@ -1,7 +1,7 @@
 """A talker from photos of other sizes: how far the fit's landmarks move with the image size and
 the camera distance, with dlib's points from one box and from the median over many.
 
-The built-in face and the variant face of tests/test_photo.py (a wider mouth, a longer lower
+The built-in face and the variant face of tests/viz/test_photo.py (a wider mouth, a longer lower
 face, a nose 6 mm longer; procedural skin, the whole head) are rendered from the front at each
 size and camera distance of :data:`GRID`; dlib finds the 68 points twice, from its detector's box
 alone and as :meth:`facemech.io.photo.DlibDetector.faces` does by default (the median over the
@@ -28,7 +28,8 @@ os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+TESTS = Path(__file__).resolve().parents[1] / "tests"
+sys.path[:0] = [str(TESTS), str(TESTS / "viz")]  # test_photo and the conftest it imports
 
 #: ((height, width) px, camera distance m) of the photos; the first is the tests'
 GRID = (((720, 540), 1.2), ((800, 600), 1.2), ((640, 480), 1.2), ((720, 540), 1.0),
@@ -37,7 +38,7 @@ GRID = (((720, 540), 1.2), ((800, 600), 1.2), ((640, 480), 1.2), ((720, 540), 1.
 
 def faces():
     """(name, model, landmarks m, iBUG points (68, 3) m) of the two test faces."""
-    import test_photo as T  # tests/test_photo.py: the variant face's shape
+    import test_photo as T  # tests/viz/test_photo.py: the variant face's shape
     from facemech.geometry import generic
     from facemech.geometry.builder import build_face, default_face, default_surface, tissue_options
     from facemech.geometry.ibug import generic_ibug68

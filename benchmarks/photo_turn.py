@@ -11,7 +11,7 @@ mean offset removed.
 
 Prints JSON: per angle the turn read (degrees), and for each fit the worst landmark (its name
 and error, mm) and the median error (mm). ``--face variant``: the variant face of
-tests/test_photo.py (a wider mouth, a longer lower face, a nose 6 mm longer) instead. Needs the
+tests/viz/test_photo.py (a wider mouth, a longer lower face, a nose 6 mm longer) instead. Needs the
 ``photo`` extra (dlib); about 20 s.
 
 ``python benchmarks/photo_turn.py [--degrees -15 -10 -5 0 5 10 15] [--face variant]``

@@ -184,7 +184,7 @@ def measure_open_jaw(face, params, groups, landmark, axis, seconds, jaw_deg=10.0
 
 def overshoot(face, params, groups, landmark, axis, seconds):
     """How far the landmark passes its rest after a 100-ms full pulse, as a share of its peak
-    (tests/test_realism.py's ringing measure; its limit is 0.1)."""
+    (tests/analysis/test_realism.py's ringing measure; its limit is 0.1)."""
     from facemech.params import MUSCLE_GROUPS
     from facemech.solvers.forward import simulate
 

@@ -3,7 +3,7 @@
 For ``facemech --help``, ``facemech markers --help`` and ``facemech invert --help``, each run as
 a program (``python -m facemech``): the CPU seconds (user + system) and the wall seconds it takes,
 the best of ``--repeat`` runs after one that writes the bytecode, and the numerical libraries it
-imported (none is expected: tests/test_house.py checks that, since a test of seconds fails on a
+imported (none is expected: tests/docs/test_house.py checks that, since a test of seconds fails on a
 slow machine). Before issue 32 a test held each help under one CPU second; this reports the
 same number, to read against the machine it ran on (``cpu_model``).
 

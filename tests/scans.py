@@ -178,7 +178,6 @@ def write_head_scan(folder, *, uv=None, texture=None):
     from pathlib import Path
 
     from facemech.geometry.ibug import generic_ibug68
-    from test_ljson import v3
 
     folder = Path(folder)
     v, f, _ = scan_head()
@@ -191,3 +190,32 @@ def write_head_scan(folder, *, uv=None, texture=None):
         Image.fromarray(texture).save(folder / "head.png")
     (folder / "head.ljson").write_text(json.dumps(v3(reshape(generic_ibug68()) * 1e3)))
     return folder / "head.obj", folder / "head.ljson"
+
+
+# menpo's LJSON (versions 2 and 3), as tests/geometry/test_ljson.py and the scan heads write it
+#: a landmarker.io-style template: the parts in another order than iBUG's, as real scans have
+SCAN_ORDER = [("chin", range(0, 17)), ("leye", range(36, 42)), ("reye", range(42, 48)),
+              ("leyebrow", range(17, 22)), ("nose", range(27, 36)), ("reyebrow", range(22, 27)),
+              ("mouth", range(48, 68))]
+
+
+def group(points, order, *, shuffle=None):
+    """A version-2/3 body: the parts' points one after another (or in a shuffled row order),
+    each label's mask listing its rows."""
+    rows, labels = [], []
+    for name, r in order:
+        labels.append({"label": name, "mask": list(range(len(rows), len(rows) + len(r)))})
+        rows.extend(np.asarray(points)[list(r)].tolist())
+    if shuffle is not None:
+        perm = np.random.default_rng(shuffle).permutation(len(rows))  # new row of each old
+        new = [None] * len(rows)
+        for old, k in enumerate(perm):
+            new[k] = rows[old]
+        rows = new
+        for lab in labels:
+            lab["mask"] = [int(perm[m]) for m in lab["mask"]]
+    return {"landmarks": {"points": rows, "connectivity": []}, "labels": labels}
+
+
+def v3(points, order=SCAN_ORDER, key="PTS", **kw):
+    return {"version": 3, "groups": {key: group(points, order, **kw)}}

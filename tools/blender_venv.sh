@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Blender as a Python module (the bpy package, 375 MB) in a venv of its own, .venv-blender, for
-# tests/test_blendshapes.py, which opens the blendshape glTF in Blender's own glTF importer.
+# tests/io/test_blendshapes.py, which opens the blendshape glTF in Blender's own glTF importer.
 # bpy 5.0 wants Python 3.11 and numpy < 2, so it cannot share the project's venv.
 # Usage: bash tools/blender_venv.sh [PYTHON3.11]   (does nothing when the venv is there)
 set -euo pipefail

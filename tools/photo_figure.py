@@ -1,6 +1,6 @@
 """Draw docs/img/photo-talker.jpg: a talker from photos of a face of known shape.
 
-The test face of tests/test_photo.py (the built-in face with a wider mouth, a longer lower face
+The test face of tests/viz/test_photo.py (the built-in face with a wider mouth, a longer lower face
 and a nose 6 mm longer), rendered from the front and in profile; the talker made from both
 photos (dlib's landmarks, the IPD given) rendered through the front photo's fitted camera and
 at three-quarters. The panels, left to right: the front photo with dlib's 68 points, the
@@ -8,7 +8,7 @@ profile, the re-rendered talker, the talker at three-quarters.
 
 Usage::
 
-    PYTHONPATH=src:tests python tools/photo_figure.py [docs/img/photo-talker.jpg]
+    PYTHONPATH=src:tests:tests/viz python tools/photo_figure.py [docs/img/photo-talker.jpg]
 """
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ import sys
 import numpy as np
 from PIL import Image, ImageDraw
 
-import test_photo as T  # tests/test_photo.py: the test faces and the re-render
+import test_photo as T  # tests/viz/test_photo.py: the test faces and the re-render
 from facemech.geometry.builder import build_face, default_surface, tissue_options
 from facemech.geometry.ibug import generic_ibug68
 from facemech.io.photo import DlibDetector, frontal_landmarks

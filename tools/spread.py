@@ -5,8 +5,8 @@ Each *job* computes published numbers: Experiment 1 of Pitermann & Munhall (2001
 as docs/inversion.md and the tests run it), the default inversion of benchmarks/inversion.py
 (``inversion-default``: 3 s of the demo utterance, the jaw estimated), the demo twin through the
 command line (``demo-twin``: ``facemech invert`` on the demo's markers, the jaw estimated, as
-tests/test_inversion_trust.py) and the subject twin (``subject-twin``: ``facemech subject`` and
-``facemech analyse`` on a lab recording of the demo, as tests/test_subject.py), the visemes
+tests/inverse/test_inversion_trust.py) and the subject twin (``subject-twin``: ``facemech subject`` and
+``facemech analyse`` on a lab recording of the demo, as tests/workflows/test_subject.py), the visemes
 (``visemes``), ``facemech speak`` (``speak``) and docs/model.md's gesture table (``gestures``).
 Each runs in a child process once per *environment*:
 
@@ -73,7 +73,7 @@ BASE_ENV = {"FACEMECH_THREADS": "1", "NUMBA_NUM_THREADS": "1", "OPENBLAS_NUM_THR
             "MPLBACKEND": "Agg"}
 JOBS = ("e1-lucero1999", "e1-anatomical", "inversion-default", "demo-twin", "subject-twin",
         "visemes", "speak", "gestures")
-#: the sentences of tests/test_speak.py's viseme targets
+#: the sentences of tests/speech/test_speak.py's viseme targets
 SENTENCES = ("Bob bought a puppy", "Pop, a blue balloon, and a large car.")
 
 
@@ -116,7 +116,7 @@ def _cli(*args) -> int:
 
 def _recovery(truth_path, inv_path, frames=None) -> dict:
     """Correlation of each recovered control with the truth, and whether it is identifiable
-    (as tests/test_inversion_trust.py and tests/test_subject.py compute them)."""
+    (as tests/inverse/test_inversion_trust.py and tests/workflows/test_subject.py compute them)."""
     import numpy as np
 
     from facemech import read_results
@@ -200,7 +200,7 @@ def job_subject_twin(folder: Path) -> dict:
 
 def job_speak(folder: Path) -> dict:
     """``facemech speak`` on :data:`SENTENCES`: at the acoustic middle of each phone, what
-    tests/test_speak.py checks (bilabials' lip gap, rounded lips' protrusion, /i/'s width, /a/'s
+    tests/speech/test_speak.py checks (bilabials' lip gap, rounded lips' protrusion, /i/'s width, /a/'s
     jaw angle)."""
     import numpy as np
 

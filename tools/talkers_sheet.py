@@ -6,7 +6,7 @@ and profile views at rest and at the sentence's widest lip opening.
 
 - **built-in head**: the built-in face (``default``);
 - **photo talker**: ``face from-photo`` on the frontal and profile renders of the test face of
-  tests/test_photo.py (the built-in face with a wider mouth, a longer lower face and a nose
+  tests/viz/test_photo.py (the built-in face with a wider mouth, a longer lower face and a nose
   6 mm longer): dlib's landmarks, the IPD given;
 - **scan talker**: the scan-like head of tests/scans.py (an irregular triangulation with a neck,
   ears and jaw angles that fold the tissue, reshaped wider and shorter) written as a scanner
@@ -19,7 +19,7 @@ synthetic; a user's own go through the same commands.
 
 Usage::
 
-    PYTHONPATH=src:tests python tools/talkers_sheet.py [docs/img/talkers-sheet.jpg]
+    PYTHONPATH=src:tests:tests/viz python tools/talkers_sheet.py [docs/img/talkers-sheet.jpg]
 """
 
 from __future__ import annotations
@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 from PIL import Image
 
-import test_photo as T  # tests/test_photo.py: the photo's test face, its renders
+import test_photo as T  # tests/viz/test_photo.py: the photo's test face, its renders
 from facemech.analysis.lipreader import model_aperture
 from facemech.geometry import generic
 from facemech.geometry.builder import build_face, default_surface, tissue_options

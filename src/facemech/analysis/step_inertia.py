@@ -26,7 +26,7 @@ The rank-one form never exceeds 3 times the Gram form (``tr(X)^2 <= 3 |X|_F^2`` 
 matrix ``X = sum_a v_a g_a^T``), which is why the shared matrix takes the Gram matrices 3 times
 over when the predictor asks for at least 3/4 of every stiffness. The ``along`` and
 ``rank_one`` parts resist no rigid motion; the shared ones resist a turn
-(tests/test_step_inertia.py).
+(tests/analysis/test_step_inertia.py).
 """
 
 from __future__ import annotations

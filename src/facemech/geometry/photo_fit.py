@@ -374,7 +374,7 @@ def estimate_yaw(points: np.ndarray, generic_points: np.ndarray | None = None,
     points (68, 2) px by a 2-D similarity (scale, rotation, translation; least squares over
     :data:`YAW_POINTS`); the angle that leaves the least residual is returned, refined by a
     parabola through its neighbours. The generic face's own points turned and seen so give
-    their angle back (tests/test_photo.py).
+    their angle back (tests/viz/test_photo.py).
     """
     pts = np.asarray(points, float)[YAW_POINTS]
     gen = _detector_points(DLIB_OFFSETS_MM) if generic_points is None else np.asarray(

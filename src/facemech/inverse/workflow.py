@@ -299,7 +299,7 @@ def _jaw_drive(ms, model, params, mapping, src, lead, chin_marker, second, incis
 #: drift at little cost; this weight draws it back to the least activity at a rate of
 #: (0.1 / 0.3)^2 = 11 % a frame against the default ``smooth`` (0.3), and shrinks a control
 #: moving a marker 3 mm per unit by (0.1 / 3)^2 = 0.1 % of its activity (measured on the lips'
-#: twin of tests/test_control_pick.py: it halves MEN's unseen activity, 0.66 -> 0.32)
+#: twin of tests/inverse/test_control_pick.py: it halves MEN's unseen activity, 0.66 -> 0.32)
 SIGN_EFFORT = 0.1
 
 

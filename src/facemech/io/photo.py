@@ -21,7 +21,7 @@ import numpy as np
 from ..errors import InputError, missing_input
 
 #: the smallest face the landmarks are taken from: the detector's box, pixels across. Measured
-#: on tests/test_photo.py's photo of the built-in face scaled down, the fit's worst landmark:
+#: on tests/viz/test_photo.py's photo of the built-in face scaled down, the fit's worst landmark:
 #: from 155 px up 1.0-3.6 mm (four sizes, 155-385 px); from 129 px down it jumps about,
 #: 2.7-8.7 mm (seven sizes, 62-129 px). Again with the points the median over the predictor's
 #: boxes (2026-11-29; x and y, 13 sizes): 1.1-2.1 mm from 155 px up (one box: 1.2-3.4 mm),

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 _spec = importlib.util.spec_from_file_location("docs_tables", ROOT / "tools" / "docs_tables.py")
 dt = importlib.util.module_from_spec(_spec)
 sys.modules["docs_tables"] = dt

@@ -19,7 +19,7 @@ from facemech.solvers.forward import simulate
 from facemech.solvers.implicit import LinearImplicitEuler
 from facemech.solvers.krylov_region import mouth_centre, restrict_forces
 
-#: the step about its predictor with dashpots on the rate of stretch (tests/test_krylov.py)
+#: the step about its predictor with dashpots on the rate of stretch (tests/solvers/test_krylov.py)
 KV = {"predictor": True, "implicit_stiffness_share": 0.75, "implicit_volume_scale": 3.0,
       "dashpot_isotropy": 0.0, "volume_floor": 0.5, "volume_floor_modulus": 1e6,
       "stiffening": 4.0, "krylov_iterations": 4}
@@ -140,7 +140,7 @@ def test_a_preset_file_sets_the_region_in_millimetres(tmp_path):
     """The fast-lips preset file confines its correction to 60 mm about the mouth; a preset
     file's ``step.krylov_region_mm`` is read in millimetres and checked, naming the file and
     the entry."""
-    p = read_preset(Path(__file__).resolve().parents[1] / "benchmarks" / "presets"
+    p = read_preset(Path(__file__).resolve().parents[2] / "benchmarks" / "presets"
                     / "fast-lips.json")
     assert p.krylov_region == pytest.approx(0.060)
     bad = tmp_path / "bad.json"
@@ -160,11 +160,11 @@ def test_the_fast_lips_step_gives_the_lips_real_speeds():
     (measured: 126 against 67 mm/s, and 58.8 against 23.4 mm/s; the issue asks 60)."""
     import sys
 
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
     import speed as S
 
     face = default_face("default")
-    fast = read_preset(Path(__file__).resolve().parents[1] / "benchmarks" / "presets"
+    fast = read_preset(Path(__file__).resolve().parents[2] / "benchmarks" / "presets"
                        / "fast-lips.json")
     lower = S.measure(face, fast, ("DLI",), "lower_lip_center", 1, 1.0)
     upper = S.measure_open_jaw(face, fast, ("OOSM",), "upper_lip_center", 1, 0.5)

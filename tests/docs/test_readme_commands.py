@@ -14,7 +14,7 @@ from typer.testing import CliRunner
 from conftest import run_cli
 from facemech.cli import app
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SHARED = ROOT.parent / "shared"
 CLICK = typer.main.get_command(app)
 #: commands the README's examples run here for real, each in a few seconds

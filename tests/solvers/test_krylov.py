@@ -75,7 +75,7 @@ def test_a_drag_on_the_mass_stops_the_released_lip_ringing():
     import sys
     from pathlib import Path
 
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
     import speed as S  # benchmarks/speed.py: the measures of the speed table
 
     face = default_face("default-coarse")
@@ -106,7 +106,7 @@ def test_the_fast_lips_preset_file_is_the_measured_step():
 
     from facemech.params import read_preset
 
-    p = read_preset(Path(__file__).resolve().parents[1] / "benchmarks" / "presets"
+    p = read_preset(Path(__file__).resolve().parents[2] / "benchmarks" / "presets"
                     / "fast-lips.json")
     want = preset("anatomical").with_(**KV, krylov_iterations=4, mass_drag=200.0,
                                       krylov_region=0.060)

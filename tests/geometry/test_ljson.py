@@ -10,11 +10,8 @@ import pytest
 from facemech.errors import InputError
 from facemech.geometry.ibug import generic_ibug68, read_ibug68
 from facemech.geometry.scan_ljson import read_ljson_points
+from scans import SCAN_ORDER, group, v3
 
-#: a landmarker.io-style template: the parts in another order than iBUG's, as real scans have
-SCAN_ORDER = [("chin", range(0, 17)), ("leye", range(36, 42)), ("reye", range(42, 48)),
-              ("leyebrow", range(17, 22)), ("nose", range(27, 36)), ("reyebrow", range(22, 27)),
-              ("mouth", range(48, 68))]
 #: menpo's face_ibug_68 labeller: iBUG's own order
 MENPO_ORDER = [("jaw", range(0, 17)), ("left_eyebrow", range(17, 22)),
                ("right_eyebrow", range(22, 27)), ("nose", range(27, 36)),
@@ -26,31 +23,9 @@ def ibug_mm():
     return generic_ibug68() * 1e3
 
 
-def group(points, order, *, shuffle=None):
-    """A version-2/3 body: the parts' points one after another (or in a shuffled row order),
-    each label's mask listing its rows."""
-    rows, labels = [], []
-    for name, r in order:
-        labels.append({"label": name, "mask": list(range(len(rows), len(rows) + len(r)))})
-        rows.extend(np.asarray(points)[list(r)].tolist())
-    if shuffle is not None:
-        perm = np.random.default_rng(shuffle).permutation(len(rows))  # new row of each old
-        new = [None] * len(rows)
-        for old, k in enumerate(perm):
-            new[k] = rows[old]
-        rows = new
-        for lab in labels:
-            lab["mask"] = [int(perm[m]) for m in lab["mask"]]
-    return {"landmarks": {"points": rows, "connectivity": []}, "labels": labels}
-
-
 def write(path, data):
     path.write_text(json.dumps(data))
     return path
-
-
-def v3(points, order=SCAN_ORDER, key="PTS", **kw):
-    return {"version": 3, "groups": {key: group(points, order, **kw)}}
 
 
 def one_line(exc, *needles):

@@ -129,7 +129,7 @@ def test_a_text_row_with_an_unknown_voice_variant_is_refused_first(monkeypatch, 
 
 # ---- a lip coil given as a bone point ----------------------------------------------------------
 #: the MOCHA-TIMIT sentence, beside the repository (../shared/data/mocha)
-MOCHA = str(__import__("pathlib").Path(__file__).resolve().parents[2] / "shared" / "data"
+MOCHA = str(__import__("pathlib").Path(__file__).resolve().parents[3] / "shared" / "data"
             / "mocha" / "fsew0_001.ema")
 
 

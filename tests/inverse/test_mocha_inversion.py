@@ -17,7 +17,7 @@ from scipy.signal import butter, sosfiltfilt
 from facemech.inverse.sensor_fit import fit_from_json
 from facemech.io.results import read_results
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 CANDIDATES = [Path(os.environ.get("FACEMECH_MOCHA", ROOT / "data" / "mocha" / "fsew0_001.ema")),
               ROOT / "tests" / "data" / "mocha" / "fsew0_001.ema",
               ROOT.parent / "shared" / "data" / "mocha" / "fsew0_001.ema"]

@@ -18,7 +18,7 @@ from facemech.kinematics.trim import drop_empty_ends, empty_ends, trim
 from facemech.markerset import MarkerSet, match_name, shared_names
 from test_articulography import XRMB_STEP_S, XRMB_UM, write_mocha
 
-_ROOT = Path(__file__).resolve().parents[1]
+_ROOT = Path(__file__).resolve().parents[2]
 #: MOCHA-TIMIT fsew0_001 (the real recording): shipped in the repository, or beside it
 MOCHA = next((p for p in (_ROOT / "data" / "mocha" / "fsew0_001.ema",
                           _ROOT.parent / "shared" / "data" / "mocha" / "fsew0_001.ema")

@@ -16,7 +16,7 @@ from facemech.speech.wav import read_wav
 
 parselmouth = pytest.importorskip("parselmouth")
 
-MOCHA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "mocha" / "fsew0_001.wav"
+MOCHA = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "mocha" / "fsew0_001.wav"
 RATE = 16000
 
 

@@ -104,7 +104,7 @@ def write_coloured_ply(path, vertices, faces, colours):
 @pytest.fixture(scope="module")
 def scan():
     # lip-line nodes 2.4 mm apart: the build takes the scan's vertices as they are (a coarser
-    # lip line is refined first: tests/test_refine.py)
+    # lip line is refined first: tests/geometry/test_refine.py)
     return scan_face(lip_points=25)
 
 

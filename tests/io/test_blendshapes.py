@@ -34,7 +34,7 @@ FRAMES = 25
 #: the fit's stated error over the lips on this module's result (coarse face), mm (measured 0.76)
 LIPS_RMS_MM = 1.0
 FACE_RMS_MM = 1.5  # the same over every epidermal node (measured 1.10)
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 @pytest.fixture(scope="module")

@@ -4,7 +4,7 @@ another exception, a hang or a child process left running.
 
 Profiles (``FACEMECH_FUZZ=ci|deep``): ``ci`` (the default) runs a fixed, derandomised 200
 examples per reader; ``deep`` runs 5000 random ones per reader (``FACEMECH_FUZZ=deep pytest
-tests/test_fuzz_readers.py``). C3D is read in a child process (crash- and hang-proof), so its
+tests/io/test_fuzz_readers.py``). C3D is read in a child process (crash- and hang-proof), so its
 header check runs 200 examples in-process and whole reads only 20.
 """
 
