@@ -1,10 +1,10 @@
 """Draw docs/img/architecture.png: facemech's layers and the imports between them, read from the
 code itself (every ``import`` of src/facemech, at a module's top or inside a function).
 
-The layers are docs/architecture.md's list (tests/docs/test_house.py checks the same list against the
-same imports). Each box is a folder or a top-level module, with its lines of code; an arrow is
-the imports from one box to another, its width growing with their number: grey downward, blue
-inside a layer, red upward (none, while the house test passes).
+The layers are docs/architecture.md's list (tests/docs/test_house.py checks the same list
+against the same imports). Each box is a folder or a top-level module, with its lines of code;
+an arrow is the imports from one box to another, its width growing with their number: grey
+downward, blue inside a layer, red upward (none, while the house test passes).
 
 Usage: python tools/architecture.py [-o docs/img/architecture.png]
 """

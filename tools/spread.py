@@ -5,8 +5,9 @@ Each *job* computes published numbers: Experiment 1 of Pitermann & Munhall (2001
 as docs/inversion.md and the tests run it), the default inversion of benchmarks/inversion.py
 (``inversion-default``: 3 s of the demo utterance, the jaw estimated), the demo twin through the
 command line (``demo-twin``: ``facemech invert`` on the demo's markers, the jaw estimated, as
-tests/inverse/test_inversion_trust.py) and the subject twin (``subject-twin``: ``facemech subject`` and
-``facemech analyse`` on a lab recording of the demo, as tests/workflows/test_subject.py), the visemes
+tests/inverse/test_inversion_trust.py) and the subject twin (``subject-twin``: ``facemech
+subject`` and ``facemech analyse`` on a lab recording of the demo, as
+tests/workflows/test_subject.py), the visemes
 (``visemes``), ``facemech speak`` (``speak``) and docs/model.md's gesture table (``gestures``).
 Each runs in a child process once per *environment*:
 
@@ -200,8 +201,8 @@ def job_subject_twin(folder: Path) -> dict:
 
 def job_speak(folder: Path) -> dict:
     """``facemech speak`` on :data:`SENTENCES`: at the acoustic middle of each phone, what
-    tests/speech/test_speak.py checks (bilabials' lip gap, rounded lips' protrusion, /i/'s width, /a/'s
-    jaw angle)."""
+    tests/speech/test_speak.py checks (bilabials' lip gap, rounded lips' protrusion, /i/'s width,
+    /a/'s jaw angle)."""
     import numpy as np
 
     from facemech import default_face, read_results

@@ -30,7 +30,7 @@ def test_3d_statistics_as_published_and_unbiased():
     rng = np.random.default_rng(0)
     v = rng.normal(size=(20, 3))
     n = len(v)
-    assert stats.corr3d(v, v) == 1.0  # one normalisation throughout (tests/kinematics/test_error_stats.py)
+    assert stats.corr3d(v, v) == 1.0  # one normalisation (tests/kinematics/test_error_stats.py)
     assert stats.corr3d(v, v, published=False) == 1.0
     assert stats.corr3d(v, 2 * v + 1, published=False) == pytest.approx(1.0)
     assert stats.corr3d(v, -v, published=False) == pytest.approx(-1.0)

@@ -1,6 +1,7 @@
 """The control pick and the identifiability agree (issue 54, item 3): on twins of 3 and 37
 markers (markers synthesised from known activity on the model; the 2-marker twin is
-tests/inverse/test_control_pick.py's), the combinations the inversion reports as determined at the noise
+tests/inverse/test_control_pick.py's),
+the combinations the inversion reports as determined at the noise
 floor are led by exactly the controls the pick kept by rank, and a control is called regularised
 exactly when it is not determined alone."""
 

@@ -15,8 +15,8 @@ relative to the lower incisor for the lower lip (the incisor moves with the jaw 
   default since issue 32) a seal is stiff: the measured penetration is about 1 um.
 
 Each part also turns its lip's red margin in (back, -z) and narrows the mouth. The parts are
-inert at rest: a default face's results do not change by their presence (tests/analysis/test_realism's
-tables are unchanged).
+inert at rest: a default face's results do not change by their presence
+(tests/analysis/test_realism's tables are unchanged).
 """
 
 import contextlib

@@ -1,29 +1,18 @@
 """The numbers that describe a stimulus' visible motion: displacement, speed, aperture, width.
 
-Perception studies rarely report more about their audiovisual stimuli than the talker's gender.
-:func:`describe` measures, from a results dataset, what a methods section needs: how far and how
+:func:`describe` measures from a results dataset what a methods section needs: how far and how
 fast the lips, the jaw and the mouth corners move, how wide the mouth opens, the audio-visual
-offset, and the settings and input hashes the file records. Every number is in mm, mm/s, degrees
-or ms (converted here, at the output; the dataset is SI).
+offset, and the settings and input hashes the file records; mm, mm/s, degrees or ms (converted
+here, at the output; the dataset is SI).
 
-Definitions
------------
-displacement
-    Euclidean distance (3-D) of a landmark's node from its rest position (``rest_positions``),
-    per frame. ``peak`` is its maximum, ``rms`` the root mean square over all frames.
-speed
-    Norm of the velocity, from Savitzky-Golay derivatives
-    (:func:`facemech.kinematics.resample.derivative`: 50-ms window, cubic); ``peak`` is its
-    maximum. Series shorter than the window have no speed (NaN).
-lip aperture
-    Vertical (y) distance between the facing points of the lips on the midline: the upper lip's
-    margin node at the stomion and its twin on the lower lip (the two nodes the mouth slit cut
-    apart, which coincide at rest). A face without such a twin falls back to the lip-centre
-    landmarks (noted in ``aperture_points``).
-mouth width
-    3-D distance between the ``mouth_corner_left`` and ``mouth_corner_right`` nodes.
-jaw angle
-    ``jaw_angle`` (opening positive) in degrees; its displacement is the angle itself (rest 0).
+- displacement: 3-D distance of a landmark's node from ``rest_positions`` per frame (``peak``,
+  ``rms``);
+- speed: the velocity's norm from Savitzky-Golay derivatives (50-ms window, cubic); NaN for
+  series shorter than the window;
+- lip aperture: vertical distance between the lips' facing midline nodes (the mouth slit's
+  twins), else the lip-centre landmarks (noted in ``aperture_points``);
+- mouth width: 3-D distance between the mouth-corner nodes;
+- jaw angle: ``jaw_angle`` in degrees, opening positive (rest 0).
 """
 
 from __future__ import annotations

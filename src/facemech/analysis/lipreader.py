@@ -1,30 +1,17 @@
 """A machine lip-reader on rendered frames: a standard face tracker against the model.
 
-An independent check of the movies: a standard face tracker, trained on photos of real faces
-and knowing nothing of facemech, reads the mouth opening off each rendered frame, and that
-reading is compared with the lip aperture the simulation computed.
+A tracker trained on photos of real faces, knowing nothing of facemech, reads the mouth opening
+off each rendered frame, compared with the simulated lip aperture. Trackers: dlib's HOG face
+detector and 68-point shape predictor (iBUG 300-W, Kazemi & Sullivan 2014; the ``photo`` extra,
+:class:`facemech.io.photo.DlibDetector`), or MediaPipe's face mesh (``tracker="mesh"``,
+:mod:`facemech.io.face_mesh`, the ``lipreader`` extra).
 
-The tracker is dlib's frontal face detector (histogram of oriented gradients) and its 68-point
-shape predictor trained on iBUG 300-W (Kazemi & Sullivan 2014), whose model file ships in the
-``face-recognition-models`` package (``pip install 'facemech[photo]'``); they are loaded
-through :class:`facemech.io.photo.DlibDetector`, imported when first needed. The other is
-MediaPipe's face mesh (468 points; :mod:`facemech.io.face_mesh`, the ``lipreader`` extra), run
-as MediaPipe tracks a video: ``read_lips(..., tracker="mesh")``.
-
-inner-lip distance
-    The mean vertical distance, pixels (image y grows downwards), from the upper inner lip's
-    three middle points to the lower inner lip's: iBUG points 62, 63, 64 against 68, 67, 66
-    counted from 1 as in the iBUG papers (0-based :data:`UPPER_INNER` and :data:`LOWER_INNER`,
-    paired column by column); of the face mesh, its points 82, 13, 312 against 87, 14, 317
-    (:data:`facemech.io.face_mesh.UPPER_INNER`, ``LOWER_INNER``: the midline and one either
-    side). NaN in a frame where no face is found.
-model aperture
-    The vertical distance (m) between the midline twins of the mouth slit, upper minus lower
-    (:func:`facemech.analysis.describe.lip_facing_nodes`): 0 at rest and with the lips closed,
-    the midline vermilion gap when they part.
-agreement
-    Pearson's r between the two series over the frames where the face is found
-    (:func:`compare`).
+- inner-lip distance: the mean vertical distance, px, from the upper inner lip's three middle
+  points to the lower's (:data:`UPPER_INNER`, :data:`LOWER_INNER`: iBUG 62-64 against 68-66,
+  counted from 1; the mesh's 82, 13, 312 against 87, 14, 317); NaN where no face is found;
+- model aperture: the vertical distance (m) between the mouth slit's midline twins
+  (:func:`facemech.analysis.describe.lip_facing_nodes`), 0 with the lips closed;
+- agreement: Pearson's r over the frames where the face is found (:func:`compare`).
 """
 
 from __future__ import annotations

@@ -1,32 +1,15 @@
 """The inertia that the implicit step's shared matrix adds to a motion, part by part.
 
-The linearly implicit step about its predictor (``Parameters.predictor``, docs/model.md) solves
-``A dv = h f(x + h v, v)`` with one constant matrix ``A = M + h C + h^2 K`` shared by x, y and z.
-Where A holds more stiffness or damping than the forces have along a motion, the excess acts on
-that motion as mass: a velocity field v meets the inertia
-
-    v^T (M + h C_m + h^2 K_m) v   in place of   v^T (M + h C_t + h^2 K_t) v
-
-(m: the matrix's, t: the forces' own tangent at rest). The shared matrix cannot follow the
-direction of a spring or of a prism's volume gradient, so it resists a rigid turn that the forces
-do not resist at all. This module splits the matrix into its parts and measures each one's added
-inertia on a velocity field, as a multiple of the field's own kinetic inertia ``v^T M v``:
-
-``springs_shared``   each spring's stiff branch on the whole relative velocity, ``k I`` (the
-                     shared matrix's springs, times ``implicit_stiffness_share``)
-``springs_along``    the same along the spring only, ``k e e^T`` (the forces' own at rest)
-``volume_gram``      each prism's Gram matrix ``(g_a . g_b) I`` of its volume gradient g (the
-                     shared matrix's volume term, times ``implicit_volume_scale``)
-``volume_rank_one``  the rank-one ``g g^T`` (the volume term's own Hessian at rest)
-``dashpots_shared``  each dashpot on the whole relative velocity, ``b I`` (eq. 8's form: the
-                     shared matrix's damping)
-``dashpots_along``   each dashpot along its spring, ``b e e^T`` (a Kelvin-Voigt solid's)
-
-The rank-one form never exceeds 3 times the Gram form (``tr(X)^2 <= 3 |X|_F^2`` for the 3 x 3
-matrix ``X = sum_a v_a g_a^T``), which is why the shared matrix takes the Gram matrices 3 times
-over when the predictor asks for at least 3/4 of every stiffness. The ``along`` and
-``rank_one`` parts resist no rigid motion; the shared ones resist a turn
-(tests/analysis/test_step_inertia.py).
+The linearly implicit step solves ``A dv = h f(x + h v, v)`` with one matrix
+``A = M + h C + h^2 K`` shared by x, y and z. Stiffness or damping in A beyond the forces' own
+along a motion acts as mass: a velocity field v meets ``v^T (M + h C_m + h^2 K_m) v`` in place
+of ``v^T (M + h C_t + h^2 K_t) v`` (m: the matrix's, t: the forces' tangent at rest). The parts,
+each measured as a multiple of ``v^T M v``: ``springs_shared`` (``k I``) against
+``springs_along`` (``k e e^T``); ``volume_gram`` (``(g_a . g_b) I``) against
+``volume_rank_one`` (``g g^T``); ``dashpots_shared`` (``b I``) against ``dashpots_along``
+(``b e e^T``). The rank-one form never exceeds 3 times the Gram form (``tr(X)^2 <= 3 |X|_F^2``
+for ``X = sum_a v_a g_a^T``). The ``along`` and ``rank_one`` parts resist no rigid motion; the
+shared ones resist a turn. Docs: docs/model.md.
 """
 
 from __future__ import annotations

@@ -1,32 +1,16 @@
 """Visible speech per phone: is each phone's lip shape visible when the face says a sentence?
 
 Given a phone alignment (:class:`facemech.speech.alignment.Alignment`) and the simulated
-epidermis of the face that said it, each phone is measured for what its class asks of the lips
-(issue 29):
-
-- bilabials (/p b m/): the lip gap at the phone's middle
-  (:func:`facemech.speech.mouth.mouth_measures`, the lips' midline contact twins; 0 with the
-  lips together);
-- open vowels (/ɑ æ a ɔ aɪ aʊ/: labels whose first class is ``open`` or ``open_rounded``,
-  the /ɔ/ of eSpeak's ``O:``, ``O``, ``O2``): the largest lip gap within the phone's interval
-  (the lip aperture), and whether the phone stands between two bilabials;
-- rounded phones (/u ʊ w oʊ/: :data:`ROUNDED_LABELS`): the largest forward (+z) displacement
-  from rest within the phone reached by both lip centres at once (``lips_forward``, the smaller
-  of ``upper_lip_center``'s and ``lower_lip_center``'s);
-- labiodentals (/f v/): the smallest distance within the phone from the upper incisors' edge
-  (:func:`upper_incisor_edge`, where the renderer draws it) to the lower lip's top, the cut
-  face of the mouth slit under the lower lip (:func:`lower_lip_top`), and contact when it is
-  :data:`CONTACT_MM` or less (on the default face at rest, the lips closed, the lip's top
-  passes 4.1 mm above the edge);
-- the sentence: the peak speed of the landmark ``lower_lip_center`` (:func:`peak_lower_lip_speed`),
-  and, beside it, the peak speed of the lower incisor tip (:func:`incisor_speed`), the jaw's
-  speed as articulography measures it, against the fastest jaw of issue 27's recordings
-  (:data:`REAL_JAW_PEAK_MM_S`).
-
-Every phone keeps its eSpeak stress (``'`` primary, ``,`` secondary), read off the label.
-:func:`summarize` tabulates the phones against the issue's criteria (:data:`CRITERIA`).
-
-Pure: numbers in, numbers out (m, s inside; the summary in mm and mm/s).
+epidermis of the face that said it, each phone is measured for what its class asks of the lips:
+a bilabial's lip gap at its middle (:func:`facemech.speech.mouth.mouth_measures`); an open
+vowel's largest lip gap within it, and whether it stands between two bilabials; a rounded
+phone's (:data:`ROUNDED_LABELS`) largest forward displacement of both lip centres at once; a
+labiodental's smallest distance from the upper incisors' edge (:func:`upper_incisor_edge`) to
+the lower lip's top (:func:`lower_lip_top`), contact within :data:`CONTACT_MM`. The sentence:
+the lower lip's peak speed (:func:`peak_lower_lip_speed`) and the lower incisor's
+(:func:`incisor_speed`) against :data:`REAL_JAW_PEAK_MM_S`. Every phone keeps its eSpeak stress;
+:func:`summarize` tabulates the phones against :data:`CRITERIA`. Pure: numbers in, numbers out
+(m, s inside; the summary in mm and mm/s). Definitions in full: docs/visible-speech.md.
 """
 
 from __future__ import annotations

@@ -55,7 +55,7 @@ from .surface_io import REQUIRED_LANDMARKS, check_manifold
 from .topology import Topology, anatomical_topology, check_prisms, uniform_topology
 from .warp import generic_frontal_mm
 
-_boundary_nodes = boundary_nodes  # the old private name, for old imports (tests/geometry/test_face.py)
+_boundary_nodes = boundary_nodes  # the old private name (tests/geometry/test_face.py)
 #: a surface with fewer vertices or triangles is too coarse to build a face from
 MIN_VERTICES, MIN_TRIANGLES = 200, 300
 

@@ -1,33 +1,17 @@
 """The generic face fitted to a photo's 68 iBUG landmarks: its shape, its size and the camera.
 
-A frontal photo gives the face's outline in the image plane; its size and depth it cannot give.
-:func:`fit_frontal` reads the photo through a pinhole camera at a stated distance and:
-
-1. levels the eyes (the camera's roll) and takes the metric scale from the interpupillary
-   distance, given or the adult norm :data:`IPD_NORM` (Dodgson 2004);
-2. back-projects every 2-D point to the depth the generic face has there (scaled by the
-   interpupillary distance over the generic face's), so that the perspective of a close
-   camera does not widen the nose or shrink the ears;
-3. warps the generic surface (:func:`generic.make_surface`) by the 2-D spline that takes the
-   generic face's iBUG points (:func:`ibug.generic_ibug68`) onto the back-projected ones
-   (:func:`_spline`: the linear radial kernel with a constant part, which levels off beyond
-   the points instead of carrying their trend outward), and scales its depth by the face's
-   size;
-4. optionally corrects the depth along the midline from a profile photo's silhouette
-   (:func:`profile_depth`), carried sideways by the same spline's smooth falloff.
-
-A detector's jaw line (iBUG 0-16) is its least certain part: it lies on the face's visible
-outline, which light, ears and hair move by several millimetres and more on one side than on
-the other, and its points slide along that outline. Such a jaw line is made mirror-symmetric
-about its own middle (:func:`symmetric_jaw`) and fitted loosely (a smoothing spline,
-:data:`JAW_SMOOTHING`), but for the chin's heights (:func:`chin_points`), which are
-interpolated: the inner points (brows, eyes, nose, lips) shape the face, the chin sets the
-lower face's length.
-
-The result is "a scan": vertices, triangles and 3-D iBUG points, metres, in facemech's axes
-(+x the subject's left, +y up, +z forward; the generic face's nasion near the origin), with the
-camera that sees it as the photo did (:class:`PhotoCamera`), to paint the photo on it
-(:mod:`photo_texture`).
+A frontal photo gives the face's outline in the image plane, not its size or depth.
+:func:`fit_frontal` reads the photo through a pinhole camera at a stated distance and
+(1) levels the eyes and takes the metric scale from the interpupillary distance (given, or
+:data:`IPD_NORM`, Dodgson 2004); (2) back-projects every point to the generic face's depth
+there; (3) warps the generic surface by the 2-D spline that takes its iBUG points onto those
+(:func:`_spline`: the linear radial kernel with a constant part) and scales its depth;
+(4) optionally corrects the midline's depth from a profile silhouette (:func:`profile_depth`).
+A detector's jaw line (iBUG 0-16), its least certain part, is made mirror-symmetric
+(:func:`symmetric_jaw`) and fitted loosely (:data:`JAW_SMOOTHING`), the chin's heights
+(:func:`chin_points`) interpolated. The result is "a scan": vertices, triangles and 3-D iBUG
+points, metres, facemech's axes, with the camera that sees it as the photo did
+(:class:`PhotoCamera`), to paint the photo on it (:mod:`photo_texture`). Docs: docs/photo.md.
 """
 
 from __future__ import annotations

@@ -1,34 +1,17 @@
 """menpo's landmark files (``.ljson``, versions 1 to 3) read into the iBUG-68 order.
 
-menpo keeps a point cloud and, beside it, labels: each label names a part of the face and
-lists (its ``mask``) which rows of the point cloud belong to it, in the part's own order. The
-versions differ in where these live:
-
-- version 1: ``groups`` a list of ``{"label", "landmarks": [{"point": [...]}, ...]}``; the
-  parts' points one after another, in the order of the list;
-- version 2: ``landmarks.points`` (rows of 2 or 3 numbers) and ``labels`` a list of
-  ``{"label", "mask": [row, ...]}``;
-- version 3: ``groups`` a mapping from a group's name (``PTS``, ``LJSON``, ``face_ibug_68``,
-  ``face_ibug_68_trimesh``, ...) to a version-2 body (``landmarks.points``, ``labels``).
-
-menpo's iBUG-68 labeller (``face_ibug_68``) names the parts ``jaw`` (points 0-16),
-``left_eyebrow`` (17-21), ``right_eyebrow`` (22-26), ``nose`` (27-35: the bridge 27-30, then the
-base 31-35), ``left_eye`` (36-41), ``right_eye`` (42-47) and ``mouth`` (48-67: the outer lips
-48-59, then the inner 60-67); "left" there is the image's left, the subject's right. Files made
-with other annotation templates (landmarker.io's) call the parts ``chin``, ``leye``, ``reye``,
-``leyebrow``, ``nose``, ``reyebrow``, ``mouth`` and may store them in another order: the points
-are then in the order of their parts, not iBUG's. :func:`read_ljson_points` puts every part's
-points at the part's iBUG indices, so both give the same (68, d) array.
-
-Which eye (and brow) is which is decided by the points themselves, not by the words left and
-right: the eye and brow that go to 36-41 and 17-21 are those on the side of the jaw line's
-first point (iBUG 0, the subject's right). The jaw, nose and mouth are each one part whose
-order fixes the side, so a file that names its eyes from the subject's view (its ``leye`` on the
-subject's left) is read correctly too. Where the jaw's points are missing the names decide, in
-menpo's sense.
-
-A group whose labels are not parts of the face (menpo's ``all``, the trimesh labeller's
-``tri``, or none) holds its points in the iBUG order already, as menpo stores them.
+menpo keeps a point cloud and labels that each name a part of the face and list (``mask``) its
+rows. Version 1: ``groups`` a list of ``{"label", "landmarks": [{"point": [...]}, ...]}``;
+version 2: ``landmarks.points`` and ``labels`` (``{"label", "mask"}``); version 3: ``groups`` a
+mapping from a group's name (``PTS``, ``face_ibug_68``, ...) to a version-2 body.
+:func:`read_ljson_points` puts every part's points at the part's iBUG indices, whether the parts
+carry menpo's iBUG-68 names (``jaw`` 0-16, ``left_eyebrow`` 17-21, ``right_eyebrow`` 22-26,
+``nose`` 27-35, ``left_eye`` 36-41, ``right_eye`` 42-47, ``mouth`` 48-67; "left" the image's)
+or landmarker.io's (``chin``, ``leye``, ``reye``, ``leyebrow``, ``nose``, ``reyebrow``,
+``mouth``), in any order. Which eye and brow is which is decided by the points: those on the
+side of the jaw line's first point (iBUG 0, the subject's right) go to 36-41 and 17-21; without
+a jaw the names decide, in menpo's sense. A group whose labels are not parts of the face
+(``all``, ``tri``, none) holds its points in the iBUG order already.
 """
 
 from __future__ import annotations

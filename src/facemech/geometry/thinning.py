@@ -1,33 +1,17 @@
 """Thick tissue layers kept from folding where a real head curves sharply.
 
-The anatomical skull layer lies up to 18 mm under the skin (:mod:`tissue`) along normals
-smoothed over about a centimetre. A real head curves more sharply than that in places: the jaw
-angle (the skin over the gonion turns from the side of the face to the underside of the jaw),
-under the chin, the neck, the ears and the nostrils. There a prism between two layers loses its
-volume in one of two ways:
-
-- sheared: the skin turns further than the smoothed offset direction, so a triangle's normal
-  lies more than 60 degrees (:data:`SHEAR_COS`) from its nodes' offsets and the prism leans
-  flat (the back of an ear, a crease);
-- squeezed: the skin bends round a radius smaller than the depth, so the offsets converge and
-  the layer below turns inside out (a convex edge: the jaw's lower border, an ear's rim).
-
-A prism keeping less than :data:`FOLDING` of a flat slab's volume counts as folded.
-:func:`relieve_folds` mends the places where one does and the prisms next to them, until each
-keeps :data:`MIN_QUALITY`, and changes nothing else:
-
-1. a sheared node's offset turns towards the middle direction of its own triangles' normals
-   (the direction farthest from shearing any of them): the inner layer no longer leans;
-2. the prisms still short of that share thin by steps, down to the thinnest tissue of the
-   anatomical map (:data:`MIN_DEPTH`, 3 mm at the nasal bridge), the thinning tapering into
-   the tissue around (by at most :data:`MAX_SLOPE` mm per mm of skin) so that the bone surface
-   has no step;
-3. those still folding there (a rim sharper than 3 mm) thin on to :data:`LAST_DEPTH`.
-
-What was done comes back as notes, one per connected patch: the region (:func:`region_name`),
-a point (mm), by how much the tissue thinned (mm, from what to what), by how much its offset
-turned (degrees) and over how many nodes. A face with no folding prism (the built-in faces at
-every resolution) comes back unchanged to the bit.
+The anatomical skull layer lies up to 18 mm under the skin (:mod:`tissue`) along smoothed
+normals. Where a real head curves more sharply (the jaw angle, under the chin, the neck, the
+ears, the nostrils) a prism between two layers loses its volume: *sheared* (a triangle's normal
+more than 60 degrees, :data:`SHEAR_COS`, from its nodes' offsets) or *squeezed* (the skin bends
+round a radius smaller than the depth). A prism keeping less than :data:`FOLDING` of a flat
+slab's volume is folded. :func:`relieve_folds` mends such places until each prism keeps
+:data:`MIN_QUALITY`, and changes nothing else: (1) a sheared node's offset turns towards the
+middle direction of its triangles' normals; (2) prisms still short thin by steps down to
+:data:`MIN_DEPTH` (3 mm), tapering into the tissue around by at most :data:`MAX_SLOPE` mm per
+mm of skin; (3) those still folding thin on to :data:`LAST_DEPTH`. Notes come back per
+connected patch (region, point mm, thinning mm, turn degrees, nodes); a face with no folding
+prism (the built-in faces) comes back unchanged to the bit.
 """
 
 from __future__ import annotations

@@ -1,54 +1,18 @@
 """The controls a set of markers determines, picked when they cannot determine the default set.
 
-Two lip sensors of midsagittal articulography give 4 coordinates per frame; three markers give
-9; the default controls are 9 muscle groups, and the jaw when it is estimated. A frame's fit
-cannot determine more controls than it has coordinates, so the default set is cut down to the
-controls that move these markers in the most independent ways, and the rest are held at rest (a
-muscle at 0, the jaw at its first pose). What the markers then determine are combinations of
-the kept controls (:mod:`facemech.inverse.combinations`, the same QR's rows).
-
-The markers' step responses S (coordinates, controls), each control held at 0.2 for 100 ms
-from rest (:func:`facemech.inverse.uncertainty.step_responses`, mm per unit; the responses that
-judge identifiability), are factorised by QR with column pivoting, ``S P = Q R`` (Businger &
-Golub 1965; the method of the marker regions, Lucero & Munhall 2008,
-:mod:`facemech.analysis.regions`). The pivot order takes first the control that moves the
-markers most, then at each step the one that adds the most motion the controls already taken
-cannot make; ``|R_kk|`` is that new motion (mm per unit). Controls are taken in that order
-while ``|R_kk|`` is at least :data:`MIN_NEW_MOTION_MM` (the identifiability threshold of
-:mod:`~facemech.inverse.uncertainty`: at 0.1 mm of marker noise such a control is fixed to a
-tenth of full activity), and no more than there are coordinates. An estimated jaw that moves
-the markers at least that much is taken first, whatever the muscles could mimic of it: it is
-the largest mover of the face in speech, and the inversion never leaves it silently at rest.
-
-Rank is not enough: activity is bounded to [0, 1] (a muscle only pulls), so a control moves
-the markers one way along its response and never back. Rank alone keeps, for two midsagittal lip
-points, DLI, LLS, OOS and OOSM: of these only OOS lifts the lower lip, 1.3 mm per unit beside
-4 mm of the upper lip forward, so every bilabial (the lower lip rising on the jaw) is out of
-reach of the fit. The pick is therefore completed for
-sign (:func:`cover_signs`): each coordinate some candidate moves by at least
-:data:`MIN_NEW_MOTION_MM` per unit one way and some candidate moves that much the other way
-(a *two-way coordinate*) must be moved each way by a kept control, that much and at least
-:data:`COVER_SHARE` of the most any candidate moves it that way. While one is not,
-the candidate that covers the most of the uncovered signed coordinates is added (ties: the
-largest summed motion on them); the jaw, whose bounds let it close a little past its first pose,
-counts both ways. This is the coordinate-wise form of a positive spanning set (Davis 1954; the
-cosine measure of Kolda, Lewis & Torczon 2003, SIAM Rev 45:385, restricted to the coordinate
-directions): it asks for what the inversion uses (each marker coordinate driven both ways by
-some muscle), not for every direction of the coordinate space, which the face cannot reach
-alone: on the default face, even with all the candidates, the upper lip is lowered with nothing
-else moving at only 0.07 mm per unit of summed activity (a linear programme on the step
-responses), so a full positive span at 1 mm per unit does not exist and a pick that asked for it
-would keep everything. A coordinate every candidate moves only one way (by 1 mm per unit) is named
-in the note. The sign step adds controls that rank alone holds (their motion is a combination
-of the kept controls' with negative weights): the kept set may exceed the coordinates, and the
-markers do not see an opposing pair's co-contraction, which the workflow's fit draws back with
-a weight on activity (:data:`facemech.inverse.workflow.SIGN_EFFORT`). Never more controls are
-kept than :func:`~facemech.inverse.invert.invert` accepts (3 per marker).
-
-The pick depends on the markers' places and the model, not on the recording: every utterance
-of one sensor layout is inverted with the same controls. For two midsagittal lip points it takes
-LLS (upper lip up), OOSM (upper lip down), DLI (lower lip down), OOS, and for sign MEN (the
-lower lip up); see docs/inversion.md for the measured table.
+A frame's fit cannot determine more controls than its markers have coordinates (two
+midsagittal lip sensors: 4), so the default set (9 muscle groups, and the jaw when estimated)
+is cut down to the controls that move the markers in the most independent ways; the rest are
+held at rest. The markers' step responses S (coordinates, controls; each control held at 0.2
+for 100 ms, :func:`facemech.inverse.uncertainty.step_responses`, mm per unit) are factorised by
+QR with column pivoting, ``S P = Q R`` (Businger & Golub 1965); controls are taken in pivot
+order while the new motion ``|R_kk|`` is at least :data:`MIN_NEW_MOTION_MM`, an estimated jaw
+that moves the markers that much first. Activity is bounded to [0, 1], so the pick is then
+completed for sign (:func:`cover_signs`): each coordinate some candidate moves each way must be
+moved each way by a kept control (by :data:`COVER_SHARE` of the most any candidate does), the
+coordinate-wise form of a positive spanning set (Davis 1954; Kolda, Lewis & Torczon 2003).
+At most 3 controls per marker; the pick depends on the layout and the model, not on the
+recording. The method and the measured table: docs/inversion.md, "Controls the markers determine".
 """
 
 from __future__ import annotations
@@ -73,7 +37,8 @@ MIN_NEW_MOTION_MM = U.NOISE_FLOOR_MM / U.IDENTIFIABLE_SE
 #: motions elsewhere, which the bounded fit cannot cancel: with the contacts stepped on their own
 #: (issue 32) OOS lifts the lower lip 1.3 mm per unit beside 4.0 mm of the upper lip forward,
 #: while mentalis lifts it 3.1 mm; counting OOS as the lifter left a twin of closing lips 0.38 mm
-#: RMS off (tests/inverse/test_control_pick.py). Half: the weaker of two comparable movers still counts.
+#: RMS off (tests/inverse/test_control_pick.py). Half: the weaker of two comparable movers
+#: still counts.
 COVER_SHARE = 0.5
 
 

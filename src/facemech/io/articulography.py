@@ -7,52 +7,13 @@ became the model's, and the evidence), ``missing_value``, ``midsagittal`` (True 
 every sensor has x = 0 and only y and z are data) and ``roles`` (sensor name -> one of
 :data:`ROLES`), plus ``file_units``, ``notes`` and the channels left out.
 
-Layouts (the facts each one rests on, with their sources)
----------------------------------------------------------
-**EST track files** (``.ema``, ``.est``; MOCHA-TIMIT and mngu0 distribute EMA this way). A text
-header ``EST_File Track``, then ``key value`` lines (``DataType binary|ascii``, ``ByteOrder``
-``01`` little- or ``10`` big-endian, ``NumFrames``, ``NumChannels``, ``EqualSpace``,
-``BreaksPresent``, ``CommentChar``, ``Channel_N name``) up to a line ``EST_Header_End``. Each
-frame is the time (s), then a break flag when the header has a ``BreaksPresent`` line at all (0
-marks a frame without data), then ``NumChannels`` values; binary bodies are float32 in the
-header's byte order, ascii bodies whitespace-separated rows. Source: Edinburgh Speech Tools,
-``speech_class/EST_TrackFile.cc`` (``load_est_ts``, ``save_est_binary_ts``) and
-``utils/EST_FileType.cc`` (``read_est_header``), github.com/festvox/speech_tools.
-
-**MOCHA-TIMIT** (Wrench, CSTR Edinburgh): 2-D midsagittal EMA at 500 Hz, 20 channels named
-``ui_x li_x ul_x ll_x tt_x ui_y li_y ul_y ll_y tt_y tb_x td_x v_x **** bn_x tb_y td_y v_y ****
-bn_y`` (upper and lower incisor, upper and lower lip, tongue tip, blade and dorsum, velum, bridge
-of the nose; ``****`` are unused channels), in units of 0.01 mm (1e-5 m), +x toward the back of
-the head and +y up. Sources: the header of the ``msak0_v1.1`` ``.ema`` files (binary, ByteOrder
-01, EqualSpace 1, BreaksPresent true), as quoted in public MOCHA readers, and MOCHAtools (Qin &
-Carreira-Perpinan 2008, github.com/eecqin/TongueReconstruction ``code/MOCHAtools``):
-``MOCHAread.m`` reads the plain-text layout (22 columns: time, present flag, the 20 channels
-in header order) and divides by 100 to get mm; ``MOCHAframe.m`` draws the lips at x < 0 and
-the pharynx wall at x = +68 mm. The plain layout without the time and flag columns (20
-columns) is read at MOCHA's 500 Hz.
-
-**mngu0** (Richmond, Hoole & King 2011, Carstens AG500): EST binary tracks whose channels name a
-coil and a coordinate, ``T1_px T1_py T1_pz ... upperlip_px ... jaw_pz ref_pz`` (and angle and
-RMS channels, left out here), in mm, NaN where a coil was lost; ``py`` front-back and ``pz``
-vertical (the midsagittal pair readers use), ``px`` lateral. Sources: public mngu0 readers
-(``T1_py T1_pz ... upperlip_py ... lowerlip_pz`` selections, NaN samples spline-filled).
-
-**Wisconsin X-ray microbeam** ``.txy`` (Westbury 1994, X-ray Microbeam Speech Production
-Database User's Handbook, University of Wisconsin): whitespace-separated text, a time column then
-x y for the pellets UL LL T1 T2 T3 T4 MNI MNM (upper and lower lip, four tongue pellets,
-mandibular incisor and molar; MI/MM in some copies), resampled to about 145.6 Hz, positions in
-micrometres in a frame with its origin at the maxillary incisors, x along the maxillary
-occlusal plane (+ anterior) and y perpendicular to it (+ up); 1000000 marks a lost pellet.
-The time unit is not stated in the files: it is taken from the step (s, ms or µs, whichever
-gives a rate between 20 and 2000 Hz) and reported in ``meta["time_units"]``.
-
-Axes
-----
-The front-back sign of a file is checked against anatomy whenever it has a lip sensor and a
-tongue, velum or molar sensor (the lips lie in front of them, by 20-60 mm), and the vertical
-sign whenever it has both lips or a lip and the incisor (the upper lip lies above the lower lip
-and the lower incisor): the anatomy decides, the layout's documented convention is the fallback,
-and ``meta["axes"]`` says which decided. A 3-D file's lateral axis keeps the frame right-handed.
+Layouts: EST track files (``.ema``, ``.est``; Edinburgh Speech Tools), MOCHA-TIMIT's 20
+channels in 0.01 mm (EST or plain text, 500 Hz), mngu0's ``NAME_px NAME_py NAME_pz`` coils in
+mm, XRMB ``.txy`` pellets in micrometres (1000000: lost; the time unit taken from the step).
+Axes: the anatomy decides the signs where the sensors allow (the lips in front of the tongue,
+velum or molar; the upper lip above the lower lip and the lower incisor), the layout's
+convention otherwise; a 3-D file stays right-handed. Layouts, sources and axes in full:
+docs/formats.md, "Articulography".
 """
 
 from __future__ import annotations

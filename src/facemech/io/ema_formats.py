@@ -6,29 +6,12 @@ whose roles :func:`facemech.io.articulography.sensor_role` finds). The result is
 :mod:`facemech.io.articulography` makes it (metres, model axes, ``meta["roles"]``, empty ends
 dropped, the anatomy checked).
 
-**Carstens .pos** (AG500, AG501; Carstens Medizinelektronik). AG501 files (and AG500 files
-written by its later software) start with a text header: a line ``AG50xDATA_V00n`` (n = 1-3),
-a line of 8 digits giving the header's length in bytes (all of it, these lines included), lines
-``NumberOfChannels=N`` and ``SamplingFrequencyHz=F``, others, and padding; then the samples:
-float32, little-endian, per frame and channel 7 values ``x y z phi theta rms extra`` (mm,
-degrees, the fit's RMS, one spare). Files without the header (the AG500's) hold the same
-records for 12 channels at 200 Hz, the AG500's rate (``rate`` overrides it). The 7-value record
-is the one supported: it is what the AG501 writes and what the AG500 software writes since
-positions carry the RMS and spare values. Sources: Carstens' AG501 manual as implemented in
-Praat (``EMA.cpp``, Weenink 2023: header lines, 7 float32 little-endian per sensor) and in
-the ema-tools of the m2ci project (``AG500PosFile``: no header, 12 channels of 7 fields).
-Axes: as mngu0's AG500 data (:mod:`facemech.io.articulography`): y front-back, z up, x lateral;
-the signs are decided by the anatomy where the sensors are named. A sample with x = y = z = 0
-or a NaN is missing (a coil at the transmitters' centre is not measured).
-
-**NDI Wave** (WaveFront's tab-separated export): a header row, then a row per frame; a time
-column (its name holds ``time``; s, ms or us from its step) and, per sensor, a group of
-columns that ends in ``Q0 Qx Qy Qz Tx Ty Tz`` (quaternion and position, mm), preceded by the
-sensor's ID and ``State``/``Status`` columns; names may carry the sensor's number (``Sensor 3
-Tx``) or a suffix. A frame whose state is not ``OK`` or whose Tx-Tz are empty is missing. Axes:
-x front-back, z up, y lateral (the signs decided by the anatomy where the sensors are named).
-Source: the layout as read by the ultratils NDI reader (UC Berkeley Phonology Lab), "one time
-column, then repetitions of a State column and Q0, Qx, Qy, Qz, Tx, Ty, Tz".
+Carstens ``.pos``: an optional text header (``AG50xDATA_V00n``, its length in bytes,
+``NumberOfChannels``, ``SamplingFrequencyHz``), then float32 little-endian records of 7 values
+per frame and channel (``x y z phi theta rms extra``, mm and degrees; without a header 12
+channels at 200 Hz); y front-back, z up; x = y = z = 0 or NaN is missing. NDI Wave: a time
+column, then per sensor a group ending in ``Q0 Qx Qy Qz Tx Ty Tz`` (mm); a frame whose state
+is not ``OK`` is missing; x front-back, z up. Sources and details: docs/formats.md.
 """
 
 from __future__ import annotations

@@ -3,47 +3,19 @@
 Per-frame series for a talking face (:func:`liveliness`), from the utterance's audio, its frame
 times and a seed; deterministic given the seed. The physics does not see them: the simulation
 stays in the head's frame, the renderer turns the whole head (:meth:`facemech.viz.scene.Scene.
-frame`), so the stimulus parameters (:mod:`facemech.analysis.describe`) stay relative to the
-head. Everything is SI: s, rad, Hz.
+frame`), so the stimulus parameters stay relative to the head. Everything is SI: s, rad, Hz.
 
-Blinks (:func:`blink_schedule`, :func:`blink_closure`)
-    Rate: :data:`BLINK_RATE_PER_MIN` = 26 blinks/min, the mean that Bentivoglio et al. (1997,
-    Movement Disorders 12:1028) measured in 150 healthy adults during conversation (17/min at
-    rest, 4.5/min reading). Intervals: :data:`BLINK_MIN_INTERVAL_S` (a refractory interval, our
-    choice) plus a gamma variate of shape :data:`BLINK_INTERVAL_SHAPE` (our choice: blink
-    intervals are right-skewed, e.g. Ponder & Kennedy 1927, Q J Exp Physiol 18:89), so that the
-    mean interval is 60 / rate. Shape of one blink: the lid closes in :data:`BLINK_CLOSE_S`,
-    stays shut :data:`BLINK_HOLD_S` and opens in :data:`BLINK_OPEN_S`, each phase a raised
-    cosine: the down phase is faster than the up phase (VanderWerf et al. 2003, J Neurophysiol
-    89:2784; the durations are our choice, within the few hundred ms of spontaneous
-    blinks).
-Gaze (:func:`gaze_schedule`, :func:`gaze_series`)
-    While speaking, the eyes fixate and shift by small saccades: fixations of
-    :data:`GAZE_MIN_INTERVAL_S` plus a gamma variate, mean :data:`GAZE_MEAN_INTERVAL_S`; each new
-    target drawn about straight ahead with SD :data:`GAZE_SD_RAD` (yaw, pitch), clipped to
-    :data:`GAZE_MAX_RAD` (these three are our choices: a talker looking at a listener about a
-    metre away, whose eyes and mouth lie within a few degrees). A saccade lasts
-    ``21 ms + 2.2 ms/deg`` of its amplitude (the main sequence, Carpenter 1988, Movements of
-    the Eyes, 2nd ed.; Baloh et al. 1975, Neurology 25:1065), with a minimum-jerk profile.
-Head (:func:`head_motion`)
-    Nodding (pitch) follows the voice's F0 (Praat's autocorrelation pitch,
-    :func:`facemech.speech.pitch.track_f0`): Yehia, Kuratate & Vatikiotis-Bateson (2002, J
-    Phonetics 30:555) found F0 and head motion correlated (r about 0.73 from head motion to
-    F0), and Munhall et al. (2004, Psychol Sci 15:133) that the head motion correlated with F0
-    and amplitude and helped listeners understand speech in noise. The pitch is
-    :data:`HEAD_PITCH_PER_SEMITONE_RAD` per semitone of F0 above the talker's median (F0 held
-    across unvoiced stretches, faded out in pauses), smoothed by a Gaussian of SD
-    :data:`HEAD_SMOOTH_S` (the head is heavy), and leads F0 by :data:`HEAD_LEAD_S`. Yaw and
-    roll wander slowly (smoothed seeded noise, SD :data:`HEAD_WANDER_SD_S` in time), their
-    amplitude scaled by the voice's intensity: SD :data:`HEAD_YAW_RAD` and
-    :data:`HEAD_ROLL_RAD` while speaking at full level, less as the voice falls, none in
-    silence. The gain and its sign (up with a higher F0), the lead, the smoothing and the yaw
-    and roll amplitudes are our choices: rotations of a few degrees (head movements accompany
-    speech, Hadar et al. 1983, Lang Speech 26:117), nods that anticipate the pitch accent, as
-    co-speech gestures' apexes do (e.g. Esteve-Gibert et al. 2017, J Acoust Soc Am 141:4727).
+- blinks (:func:`blink_schedule`, :func:`blink_closure`): :data:`BLINK_RATE_PER_MIN` (26/min in
+  conversation, Bentivoglio et al. 1997), gamma intervals after a refractory one, each blink
+  three raised-cosine phases, closing faster than opening (VanderWerf et al. 2003);
+- gaze (:func:`gaze_schedule`, :func:`gaze_series`): fixations and small saccades of
+  ``21 ms + 2.2 ms/deg`` (the main sequence, Carpenter 1988; Baloh et al. 1975), minimum jerk;
+- head (:func:`head_motion`): pitch follows the voice's F0 (Yehia et al. 2002; Munhall et al.
+  2004), smoothed and leading it; yaw and roll wander with the voice's level.
 
 :class:`Liveliness` holds the switches, the seed and the blink rate; :func:`laws` lists the
-constants, as the manifest records them.
+constants, as the manifest records them. Sources and choices: docs/stimuli.md, "A face that
+is alive".
 """
 
 from __future__ import annotations

@@ -1,29 +1,18 @@
 """Coarticulation: a phone alignment -> muscle activity and jaw angle per frame.
 
-Each phone's viseme target (:mod:`facemech.speech.visemes`) is weighted by its dominance
-function (Cohen & Massaro 1993), a peak at the phone's acoustic centre that falls off
-exponentially in time, at its own rate before the centre (anticipation) and after it
-(carry-over)::
+Each phone's viseme target T_s (:mod:`facemech.speech.visemes`) is weighted by its dominance
+(Cohen & Massaro 1993), peaking at the phone's acoustic centre::
 
     D_s(t) = alpha_s exp(-theta_s |tau|^c),   tau = centre_s - t,
     theta_s = anticipatory rate for tau >= 0, carry-over rate for tau < 0
-
-and the controls are the dominance-weighted mean of the targets::
-
     controls(t) = sum_s D_s(t) T_s / sum_s D_s(t)
 
-separately for the muscle activity (the lips' magnitudes alpha) and the jaw (the jaw's). Pauses
-are the rest target with a dominance flat over the pause (tau is the distance to the pause's
-interval, 0 inside it), so the face rests for the whole pause; the time before 0 and after the
-alignment's duration count as pauses. A diphthong is its parts (:mod:`.phoneclass`) sharing its
-interval equally, each with its own centre.
-
-The muscles take time to act: their activation filter (eq. 4 of Lucero & Munhall 1999; tau
-16.5 ms under the anatomical preset) and the tissue delay the visible motion behind the
-activity. The controls are therefore computed ``lead_s`` ahead: the activity of frame t is the
-blend at t + lead_s, so that the face is at a phone's target at the phone's acoustic centre (the
-lead and the lag it makes up for were measured on the default face: docs/stimuli.md). The jaw is
-a kinematic drive whose skin follows within a few ms, so its lead is ``jaw_lead_s``.
+separately for the muscle activity and the jaw. Pauses (and the time outside the alignment)
+are the rest target with a dominance flat over the pause; a diphthong is its parts
+(:mod:`.phoneclass`) sharing its interval. The activation filter (eq. 4 of Lucero & Munhall
+1999) and the tissue delay the visible motion, so the activity of frame t is the blend at
+t + ``lead_s`` (measured: docs/stimuli.md, "The lead"); the jaw, a kinematic drive, leads by
+``jaw_lead_s``.
 """
 
 from __future__ import annotations

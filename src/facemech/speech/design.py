@@ -3,47 +3,15 @@ a face and its sound (:func:`make_stimulus`). Making the files (results, WAV and
 manifest: :func:`facemech.workflows.stimuli.run_design`.
 
 A table is CSV (a header row, then one row per stimulus) or TOML (``[[stimulus]]`` tables, and
-an optional ``[defaults]`` table whose keys every stimulus starts from). Columns:
-
-=====================  ==========================================================================
-``id``                 required, unique; names the outputs (letters, digits, ``-``, ``_``, ``.``)
-``results``            the face item's results (.nc), relative to the table's folder ...
-``audio``              ... and its sound (WAV); both, or
-``text``               (and any other column) for ``make_item``, the hook that simulates a face
-``face``               the face to use: passed to ``make_item``; checked against a results
-                       file's ``face`` attribute
-``dub_audio``          a WAV dubbed on the face, or
-``dub_from``           the id of another row whose source sound is dubbed on
-``dub_align``          ``onset`` (default), ``start`` or ``peak``
-``dub_face_anchor_s``  override the anchor's time in the face's own sound, s
-``dub_audio_anchor_s`` override it in the dubbed sound, s
-``time_scale``         new duration / old (default 1)
-``time_scale_audio``   ``stretch`` (default; WSOLA), ``resample`` (varispeed) or ``none``
-``amplitude``          motion about rest times this (default 1)
-``amplitude_region``   ``face`` (default), ``lips``, ``jaw``, ``upper_face``, or several
-                       comma-separated
-``freeze_region``      a region held still (default: none)
-``freeze_at``          ``rest`` (default), a frame number, or a time ``0.25s``
-``av_offset_ms``       the audio moved against the video, ms, positive = audio later (default 0)
-``blinks``             blinks: ``yes``/``no`` (also ``true``/``false``, ``1``/``0``, ``on``/``off``;
-                       default ``no``)
-``gaze``               small gaze shifts, the same values (default ``no``)
-``head_motion``        head motion driven by the voice's F0 and level, the same (default ``no``)
-``seed``               the seed of the blinks, gaze shifts and head motion, an integer in
-                       [0, 2**32 - 1] (default 0)
-``notes``              free text, copied to the manifest
-=====================  ==========================================================================
-
-The manipulations are applied in this order: dub, time scale, amplitude, freeze, AV offset.
-
-Blinks, gaze shifts and head motion (:mod:`facemech.speech.alive`, ``speak``'s
-``--no-blinks``, ``--no-gaze``, ``--no-head-motion`` and ``--seed``) are **off** in a design
-unless a row (or a TOML table's ``[defaults]``) turns them on, unlike ``speak``: a design's
-conditions then differ only in what they manipulate. They are drawn for the finished stimulus's
-frames, the head driven by the face's own voice on the face's time line (time-scaled with the
-face; not the dubbed sound, and not moved by ``av_offset_ms``), so that they belong to the
-video; with the same seed, stimuli of the same length blink and look at the same times
-(:func:`stimulus_liveliness`).
+an optional ``[defaults]`` table whose keys every stimulus starts from). A row names its
+``id``, its face item (``results`` and ``audio``, or ``text`` for ``make_item``) and its
+manipulations: ``dub_*``, ``time_scale*``, ``amplitude*``, ``freeze_*``, ``av_offset_ms``,
+applied in this order: dub, time scale, amplitude, freeze, AV offset. ``blinks``, ``gaze``,
+``head_motion`` and ``seed`` (:mod:`facemech.speech.alive`) are off unless a row turns them
+on, and are drawn for the finished stimulus's frames from the face's own voice, so that with
+the same seed stimuli of the same length blink and look at the same times
+(:func:`stimulus_liveliness`). Every column, its values and default: docs/stimuli.md,
+"The design table".
 """
 
 from __future__ import annotations

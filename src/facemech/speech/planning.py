@@ -1,79 +1,19 @@
 """Controls planned for the face's dynamics: per-phone gains learnt on the simulated face.
 
 The dominance blend (:mod:`.coarticulation`) says where each phone's viseme wants the lips and
-the jaw; the face, with its muscles' activation, its tissue's inertia and its neighbours' pulls,
-may not get there in running speech: a short open vowel between two bilabials stays shut, a
-bilabial after a stressed vowel stays apart. The planner turns each phone into a kinematic
-target of the lips and the jaw at its middle and reaches it by iterative learning control over
-the phone instances: simulate the utterance's controls, measure each phone on the simulated
-face, adjust the gestures of the phones that missed, and simulate again.
-
-The targets (:data:`TARGETS`; measured as :mod:`facemech.analysis.visible_speech` does):
-
-- a bilabial (/p b m/): the lips together at the phone's middle (the midline lip gap 0);
-- a stressed open vowel (/ɑ æ a ɔ/, the open part of /aɪ aʊ/): a lip aperture of 12 to 17 mm
-  within the phone (real open vowels open the lips 10-20 mm; a wider one is not narrowed
-  below 17 mm);
-- a rounded phone (/u ʊ w oʊ/): both lip centres 3 mm forward within the phone;
-- a labiodental (/f v/): the lower lip's top at the upper incisors' edge.
-
-What is adjusted, per phone instance (its gestures: :class:`~.coarticulation.Gesture`): the
-factor on its targets' departure from rest (the per-phone ``scale`` of :mod:`.articulation`,
-multiplying what the rules gave), an offset added to its jaw target, factors on its dominance
-magnitudes (lips and jaw), so that a phone can win the blend over its neighbours, and a factor
-on its neighbours' dominance rates (a missed open vowel, or bilabial, narrows the dominance of
-the gestures beside it, so that a short vowel between two bilabials gets its own interval),
-and, for a bilabial whose lips stayed apart, activity of the marginal orbicularis oris of both
-lips (``OOSM``, ``OOIM``) added to its own target (``press``: it lowers the upper lip and lifts
-the lower one; not in the bilabial's viseme, where it would narrow the mouth of every bilabial
-by about 10 mm, docs/stimuli.md), and, for a bilabial whose lips closed before its middle and
-opened again by it, a shift of its dominance later in time (``shift``, by a share of how early
-the closure's centre was, :func:`_timing`; up to 40 ms). A bilabial wins the blend with a
-large dominance, so with the activity led by 100 ms for the muscles' lag
-(:data:`~.coarticulation.LEAD_S`) its lips can close early: measured, the /m/ of "Say mom
-again." was shut at its start and 3.8 mm apart at its middle. It is never shifted earlier: a
-bilabial that closes late has lips too slow for its neighbours, and moving it earlier took the
-lips from the phone before it (the /m/ of "lemons", 34 ms earlier, held the lower lip forward
-through the /v/ of "of" before it, 1.3 mm from the upper incisors' edge instead of 0.7).
-Each update is proportional to the phone's miss (mm) with a fixed gain (:data:`GAIN`), and
-bounded (:data:`BOUNDS`); the blended activity stays clipped to
-[0, 1] and the jaw target within [0, :data:`JAW_MAX_DEG`]. A labiodental moves the way its
-error's sign says (the lip's top above the incisors' edge: its jaw opens and its own gesture,
-scaled by its own bound ``labiodental_scale`` down to 0, grows; below the edge: both shrink),
-its dominance over the lips and the jaw growing, at half the step each time the sign flips (the
-lip's top passed the edge). A rounded phone whose lips stayed back also closes its jaw (0.5
-degrees per mm of miss) and grows its dominance over the jaw: an open vowel after a /w/ had
-opened the jaw within it and carried the lower lip back. The plan's jaw is held to
-:data:`JAW_SPEED_MAX` at the lower incisor (:func:`slew_limited`). An iteration whose cost is
-larger than the best so far is undone: the next update starts again from the best gestures
-with half the step. The cost is the sum over the phones of their misses beyond the
-tolerances (mm) plus :data:`PASS_WEIGHT` times their misses past the issue's pass lines
-(:data:`PASS_LINES`): where a short open vowel and its bilabial compete for the jaw, the plan
-kept opens the vowel past 8 mm and closes the bilabial within 0.5 mm rather than opening the
-vowel to 12 mm with the bilabial a millimetre apart. Only the model is used: the simulation of
-the utterance itself, so nothing is tuned to a text.
-
-The utterance as a whole has one target more: its lower lip's peak speed, at least
-:data:`SPEED_TARGET` (115 mm/s, the slowest real lower lip of issue 27's recordings, within
-:data:`SPEED_TOLERANCE`, 5 mm/s; issue 29's pass line :data:`SPEED_LINE`, 100 mm/s, weighed as
-the phones' are). In a sentence with few labials the lower lip rides the jaw, and the
-dominance blend smoothed each syllable's opening away: "These days a chicken leg is a rare
-dish." moved its jaw at 42 mm/s at the incisor (the slowest real jaw: 58) and its lower lip at
-38, its jaw between 1.6 and 4.8 degrees. While the lip is slower than the target, two things
-grow in proportion to the shortfall, as a real jaw opens and closes with each syllable and
-opens further in stressed ones: every gesture's jaw rates
-(:attr:`~.coarticulation.Gesture.jaw_rate`, ``GAIN["speed_jaw_rate"]`` per mm/s, up to 2.5
-times the table's: a jaw less coarticulated, nearer each phone's own target, its 10-90 %
-transitions between two phones 50 ms at the bound against 125 ms in the table, where real
-jaws take 44-205 ms), and the jaw targets of the stressed vowels (``GAIN["speed_jaw_deg"]``
-degrees per mm/s, within :data:`BOUNDS`); the lips' blend is left as it is, and the jaw stays
-within :data:`JAW_SPEED_MAX`. The cost adds :data:`SPEED_COST` per mm/s short (and
-:data:`PASS_WEIGHT` times more below the pass line), so an iteration that parts a bilabial for
-a faster lip is kept only when it gains that much speed.
-
-Cost: one forward simulation per iteration (``iterations + 1`` in all; fewer when every phone
-is within its tolerance); the controls returned are those of the iteration with the smallest
-cost (above), with their simulation.
+the jaw; the face may not get there in running speech. Each phone gets a kinematic target at
+its middle (:data:`TARGETS`: a bilabial's lips together, a stressed open vowel's lip aperture
+12 to 17 mm, a rounded phone's lip centres 3 mm forward, a labiodental's lower lip at the upper
+incisors' edge), the utterance a peak lower-lip speed (:data:`SPEED_TARGET`), and iterative
+learning control reaches them: simulate, measure each phone as
+:mod:`facemech.analysis.visible_speech` does, adjust the gestures of the phones that missed
+(:class:`~.coarticulation.Gesture`: scale, jaw offset, dominance, neighbours' rates, ``press``,
+``shift``; each update the miss times :data:`GAIN`, within :data:`BOUNDS`), simulate again.
+An iteration whose cost (misses beyond the tolerances, :data:`PASS_WEIGHT` times misses past
+:data:`PASS_LINES`, :data:`SPEED_COST` per mm/s short) exceeds the best is undone with half
+the step; the jaw is held to :data:`JAW_SPEED_MAX` (:func:`slew_limited`). At most
+``iterations + 1`` simulations; the best iteration's controls are returned with their
+simulation. The method in full: docs/stimuli.md, "Controls planned for the face's dynamics".
 """
 
 from __future__ import annotations

@@ -8,33 +8,11 @@ results dataset (and its audio) that returns new ones.
 - :func:`offset_audio`: the audio moved against the video, by whole samples;
 - :func:`dub`: one item's face with another item's audio (McGurk-type stimuli).
 
-Regions (:func:`region_weights`) are defined on the rest face from its landmarks, in the
-frontal (x, y) plane; they are a smooth partition of unity over the skin nodes, so that scaling
-one region leaves the nodes wholly inside the others untouched:
-
-``lips``
-    an ellipse centred on the stomion: half-axes 1.2 x half the mouth width across, 0.7 x the
-    subnasale-stomion height upwards and 0.6 x the stomion-chin height downwards; weight 1
-    inside, falling to 0 by a raised cosine between 1 and 1.4 ellipse radii.
-``jaw``
-    the rest of the skin below the jaw line (the lip line between the mouth corners, then the
-    line from each corner to the jaw-angle landmark), blending across a band of 0.3 x the
-    subnasale-stomion height (raised cosine).
-``upper_face``
-    everything else: nose, cheeks above the jaw line, eyes, brows, forehead.
-``face``
-    every node (weight 1).
-
-Several regions may be named together (``"lips,jaw"``); their weights add. The jaw angle and the
-condyles' shift follow the ``jaw`` region (they are scaled or frozen when it is named, or
-``face``); the teeth, which the renderer moves with the jaw, then follow too, and so does the
-tongue tip's pose (``tongue_tip``, :mod:`.tongue`) where the results have one.
-
-Every manipulation keeps the skin, the markers and the jaw consistent (markers are re-read from
-the manipulated skin at their nodes), records itself in the ``stimulus`` attribute (a JSON list,
-in order) and drops the muscle outputs (``muscle_force`` ..., every variable on
-``muscle_instance``), which the manipulated motion no longer matches; ``activity`` is kept as
-the source's drive (time-scaled with the motion).
+Regions (:func:`region_weights`: ``lips``, ``jaw``, ``upper_face``, ``face``; several add) are a
+smooth partition of unity over the skin nodes, drawn on the rest face from its landmarks
+(docs/stimuli.md, "The manipulations"); the jaw, teeth and tongue tip follow ``jaw``. Every
+manipulation keeps skin, markers and jaw consistent, records itself in the ``stimulus``
+attribute (a JSON list) and drops the muscle outputs; ``activity`` is kept as the source's drive.
 """
 
 from __future__ import annotations

@@ -1,37 +1,15 @@
 """The tongue tip's pose per frame from a phone alignment (kinematic: render geometry only).
 
 The tongue is not part of the physics; the renderer bends its tip (:mod:`facemech.viz.dentition`)
-by a pose of two numbers, in the mandible's frame, from the resting tip (behind the lower
-incisors, :data:`~facemech.viz.dentition.TONGUE_TIP_SETBACK` behind their labial face,
-:data:`~facemech.viz.dentition.TONGUE_TIP_BELOW_STOMION` under the stomion):
-
-* ``protrusion`` (m): forward (+z);
-* ``elevation`` (m): up (+y).
-
-Each articulatory class (:mod:`.phoneclass`) has a target (:data:`TARGETS`); the classes that
-ask nothing of the tongue tip (the vowels, the labials, the velars, ...) have the resting pose.
-The targets are blended in time as the visemes are (:mod:`.coarticulation`): each gesture's
-dominance peaks at its acoustic centre and falls off exponentially before and after it (Cohen &
-Massaro 1993), and the pose is the dominance-weighted mean of the targets. The tip consonants
-dominate strongly and the vowels weakly, so that the tip, free during a vowel, takes its
-neighbours' positions (the tip's coarticulatory resistance: Recasens, Pallares & Fontdevila
-1997, J. Acoust. Soc. Am. 102, 544-561). The tongue is driven directly (no muscle lag), so the
-pose is computed with no lead; it is tapered to rest over the utterance's first and last
-:data:`~facemech.speech.coarticulation.EDGE_S` like the controls, and scaled by the
-articulation's strength and rules like them.
-
-The targets (our estimates, set against the rendered dentition, whose incisors and resting tip
-are placed as in :mod:`facemech.viz.dentition`):
-
-* dental (/θ ð/): the tip 2.5 mm past the upper incisors' labial face and raised to just under
-  their edge (American English /θ ð/ are mostly interdental, the tip visible between the teeth:
-  Ladefoged & Maddieson 1996, *The Sounds of the World's Languages*, sec. 2.1; Dart 1991, UCLA
-  Working Papers in Phonetics 79; the 0-5 mm the tip passes the incisal edges is our reading);
-* alveolar (/t d n s z/) and /l/: the tip raised behind the upper incisors towards the alveolar
-  ridge (apical contact: Dart 1991), a little forward;
-* postalveolar (/ʃ ʒ tʃ dʒ/): raised a little less and 3 mm further back (the blade behind the
-  ridge);
-* every other class and the pauses: rest.
+by a pose of two numbers, in the mandible's frame, from the resting tip: ``protrusion`` (m,
+forward +z) and ``elevation`` (m, up +y). Each articulatory class (:mod:`.phoneclass`) has a
+target (:data:`TARGETS`: dental /θ ð/ 2.5 mm past the upper incisors, interdental, Ladefoged &
+Maddieson 1996, Dart 1991; alveolar and /l/ raised towards the ridge; postalveolar 3 mm further
+back; every other class rest). The targets are blended as the visemes are
+(:mod:`.coarticulation`, Cohen & Massaro 1993), the tip consonants dominating strongly and the
+vowels weakly (coarticulatory resistance, Recasens et al. 1997), with no lead (no muscle lag),
+tapered to rest over :data:`~facemech.speech.coarticulation.EDGE_S` at the ends and scaled by
+the articulation's strength and rules. Details: docs/stimuli.md, "The tongue".
 """
 
 from __future__ import annotations

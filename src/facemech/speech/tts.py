@@ -1,33 +1,20 @@
 """Text to speech with eSpeak NG: audio and a word and phone alignment from synthesis events.
 
 eSpeak NG comes from the ``espeakng-loader`` package (the ``speech`` extra), which ships the
-shared library and its data, so nothing is installed by hand. The library is driven through
-ctypes in synchronous retrieval mode: a callback receives the 16-bit samples and, with them,
-the synthesis events. Phoneme events (``espeakEVENT_PHONEME``) give eSpeak's phoneme mnemonic
-and the sample at which it starts; word events give the word's place in the input text.
+shared library and its data. The library is driven through ctypes in synchronous retrieval
+mode: a callback receives the 16-bit samples and the synthesis events (phoneme events give
+eSpeak's mnemonic and its first sample, word events the word's place in the text).
 
-The alignment (notation ``"espeak"``):
+The alignment (notation ``"espeak"``): each phone runs from its event to the next phone's;
+pauses (mnemonics starting with ``_``) are gaps; a word's first stop or affricate
+(:func:`_has_closure`) starts at the word's event when that comes earlier (eSpeak marks a stop's
+release), and a phone after at least 10 ms of digital silence starts where the silence starts
+(a bilabial's lips shut at its middle); labels keep eSpeak's stress marks (``'``, ``,``).
 
-* each phone runs from its event to the next phone's event (or the end of the audio);
-* pauses (mnemonics starting with ``_``, e.g. ``_:`` at a clause end) are left out, so they are
-  gaps between phones, as in alignments read from TextGrids;
-* eSpeak's event for a voiceless stop marks its release; the closure comes before it. A
-  word's first phone, when it is a stop or an affricate (:func:`_has_closure`), therefore
-  starts at the word's event when that comes earlier (the closure of "puppy"'s first /p/ lies
-  between the two). Any other first phone keeps its own event: eSpeak gives the word's event
-  at the previous word's last phone's event, so moving it there left that phone no time at all
-  (the /m/ of "mom" in "Say mom again.", of "swam" in "swam in", of "from" in "from the", and
-  many word-final /l/). A phone inside a word that follows at least
-  10 ms of digital silence at the end of the previous phone starts where that silence starts
-  (the closure of the second /p/); so at a bilabial's middle the lips are shut;
-* a word runs from its first phone's start to its last phone's end; labels keep eSpeak's stress
-  marks (``'`` primary, ``,`` secondary), e.g. ``'0`` in "Bob".
-
-eSpeak NG carries state from one utterance to the next: in one process the same text comes out
-a few samples (up to ~1 %) longer or shorter depending on what was said before. By default each
-call therefore runs eSpeak in a fresh worker process (about 50 ms), so that the audio depends on
-the arguments only, bit for bit; ``isolated=False`` uses one engine in this process instead
-(initialised on first use; a lock makes threads take turns), for speed.
+eSpeak NG carries state from one utterance to the next (the same text a few samples longer or
+shorter), so by default each call runs it in a fresh worker process and the audio depends on
+the arguments only, bit for bit; ``isolated=False`` uses one engine in this process (a lock
+makes threads take turns). Details: docs/stimuli.md, "What eSpeak NG gives".
 """
 
 from __future__ import annotations

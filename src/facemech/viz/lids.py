@@ -1,37 +1,15 @@
 """Blinks and gaze: the eyeballs turn, the lids close over them and follow their pitch.
 
 The skin's palpebral fissure is a cut-out of its texture (:mod:`.textures`); behind it sits
-the eyeball. An upper lid is a skin-coloured cap just outside the eyeball (0.4 mm), spanning
-the fissure's width, from 2 degrees above the fissure's upper margin (behind the skin) down to
-its edge, which carries the lashes. Open and looking straight ahead the edge is at the cap's
-top: the lid has no area and nothing changes. It comes down
-
-* with the blink closure ``b`` (0 open .. 1 closed): to the closed line, 0.5 mm under the
-  lower margin, tucked behind the lower lid (the upper lid makes nearly all of a blink's
-  travel);
-* with the gaze's pitch when the eye looks down: the upper lid follows the eye by 0.8 of its
-  angle (lid-eye coordination; the lid does not rise above its open position looking up).
-
-A lower lid is the same kind of cap, 0.1 mm further out (the closed upper lid's edge tucks
-behind it), from 2 degrees below the fissure's lower margin up to its edge, which carries the
-lower lashes. Open and looking straight ahead it has no area. It rises
-
-* with the blink: 1.2 mm at its middle when closed (the lower lid's small share of a blink),
-  in front of the closed upper lid's edge;
-* with the gaze's pitch when the eye looks up: by 0.35 of the eye's angle (it stays at the
-  fissure's margin looking down: the fissure is cut in the skin and cannot open further);
-
-and never above the open upper lid's margin.
-
-Gaze (yaw, pitch) in radians turns each eyeball about its centre: yaw > 0 towards the
-subject's left (+x), pitch > 0 up.
-
-Where the eyeball lies deeper than :data:`LID_RIM` behind the skin (the skin round the built-in
-face's eye slopes back laterally, so the fissure's medial end is far in front of the globe), a
-lid lies at that depth behind the skin instead (``Lid.front``, joined to the cap by a smooth
-maximum), so that closed it covers the fissure from the side too; and a wall round the fissure
-(:func:`margin_mesh`) runs from the skin's cut straight back onto the eyeball, the lids' rim and
-conjunctiva, where a line of sight from the side would otherwise pass between skin and globe.
+the eyeball. Each lid is a skin-coloured cap just outside the eyeball (upper 0.4 mm, lower 0.1
+mm further out) whose edge carries the lashes; open and looking ahead it has no area. The upper
+lid comes down with the blink closure ``b`` (0 open .. 1 closed; to 0.5 mm under the lower
+margin) and follows the eye down by 0.8 of its pitch; the lower lid rises 1.2 mm in a blink and
+by 0.35 of the pitch looking up, never above the open upper lid's margin. Gaze (yaw, pitch) rad
+turns each eyeball about its centre: yaw > 0 towards the subject's left (+x), pitch > 0 up.
+Where the eyeball lies deeper than :data:`LID_RIM` behind the skin, a lid lies at that depth
+instead (``Lid.front``) and a wall (:func:`margin_mesh`) closes the gap from the skin's cut to
+the globe. Details: docs/rendering.md, "Blinks, gaze and head motion".
 """
 
 from __future__ import annotations

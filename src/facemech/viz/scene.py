@@ -1,35 +1,20 @@
 """The rendered scene: the moving skin plus render-only anatomy that the physics does not carry.
 
-* **skin**: the epidermal surface of the results, coloured by the scan's own texture or vertex
-  colours when it has them, else by a procedural texture drawn from its landmarks (vermilion,
-  brows, lashes, hairline), with the palpebral fissures cut out and its inner side drawn dark
-  (:mod:`.face_parts`);
-* **eyes**: eyeballs (sclera, iris, pupil) set behind the fissures, as far forward as the lids
-  allow, in socket linings, turned by the gaze, upper lids that close with the blink and
-  follow the gaze down, and lower lids that rise a little in a blink and looking up
-  (:mod:`.face_parts`, :mod:`.lids`); a face with its own texture image (a scan, a photo
-  talker) has the same fissures cut from that image, and its lids and irises take the
-  colours the image has round and inside them (:mod:`.fissures`); a face coloured per vertex
-  keeps its eyes painted;
-* **mouth**: a dark oral cavity, the upper teeth and gums fixed to the skull, the lower teeth,
-  gums and the tongue moving with the mandible (the results' jaw angle about the model's
-  hinge, plus the hinge's shift), the tongue's tip bent per frame by its pose (protrusion,
-  elevation: :func:`.dentition.bend_tongue`) (:mod:`.dentition`), and a dark seal across the
-  slit between the lips' edges, facing into the mouth (it moves with the skin)
-  (:mod:`.face_parts`);
-* **head motion**: the whole head (every part above) turns rigidly about :func:`head_pivot`
-  (the top of the neck) by a pose (pitch, yaw, roll) rad (:func:`head_rotation`); the skin's
-  positions, from the simulation, stay in the head's frame;
-* **head**: where the skin's edge goes once round the back of the head (the built-in face, a
-  photo talker, most scans cropped to the face), the closure that makes skin and head one
-  surface from the crown to the neck, its edge ring the skin's edge nodes (:mod:`.closure`,
-  :mod:`.cranium`; a textured face's in its own skin colour), hair with volume and a strand
-  fringe (:mod:`.hair`) and ears with relief (:mod:`.ears`) where the skin stops in front of
-  them; elsewhere a head shell with hair, ears and a skirt from the skin's edge into the shell
-  (:mod:`.head`).
+* **skin**: the results' epidermis, coloured by the scan's texture or vertex colours, else a
+  procedural texture from its landmarks, the palpebral fissures cut out (:mod:`.face_parts`);
+* **eyes**: eyeballs behind the fissures turned by the gaze, lids that close with the blink
+  (:mod:`.face_parts`, :mod:`.lids`; a textured face's from its own image, :mod:`.fissures`);
+* **mouth**: a dark cavity, the upper teeth on the skull, the lower teeth and the tongue moving
+  with the mandible (jaw angle about the hinge, plus its shift; the tongue tip bent by its pose,
+  :mod:`.dentition`), and a dark seal across the slit between the lips;
+* **head motion**: every part turns rigidly about :func:`head_pivot` by a pose (pitch, yaw,
+  roll) rad (:func:`head_rotation`); the skin's simulated positions stay in the head's frame;
+* **head**: a closure from the skin's edge round the back of the head (:mod:`.closure`,
+  :mod:`.cranium`) with hair (:mod:`.hair`) and ears (:mod:`.ears`), or a head shell with a
+  skirt from the skin's edge (:mod:`.head`).
 
 :func:`build_scene` packs the parts for the rasteriser (one vertex array, one texture atlas);
-:meth:`Scene.frame` places them for one time step.
+:meth:`Scene.frame` places them for one time step. What is drawn: docs/rendering.md.
 """
 
 from __future__ import annotations

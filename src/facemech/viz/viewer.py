@@ -1,70 +1,14 @@
 """An interactive viewer: one self-contained HTML page (WebGL, no network) of a results file.
 
-The page holds its template (``viewer_template.html``, shipped with the package) and a data block,
-``<script id="facemech-data" type="application/json">``, that :func:`viewer_data` fills:
-
-==============  ==========================================================================
-key             content
-==============  ==========================================================================
-format          ``"facemech-viewer/1"``
-title           page title
-frameRate       Hz (the results' ``frame_rate_hz``)
-time            (frames,) s, a JSON list
-nNodes          epidermal nodes
-triangles       ``{"dtype": "uint16"|"uint32", "data": base64}``, (triangles, 3) node indices
-rest            base64 float32, (nodes, 3) m, the shape the positions are quantised around
-positions       ``{"dtype": "int16", "scale": q, "data": base64}``: (frames, nodes, 3) integers
-                k with positions = rest + q k (m); |error| <= q / 2
-markers         ``{"names": [...], "data": base64 float32}``, (frames, markers, 3) m
-measured        null, or the same plus ``source``, ``coverage`` ([t0, t1] s on the results'
-                timeline) and ``note``; NaN where no measured sample covers a frame
-activity        ``{"names": [...], "data": base64 float32, "undetermined": [...]}``, (frames,
-                muscles) in [0, 1]; ``undetermined``: of an inversion, the muscles the markers
-                do not determine alone (their legend entries say "reg.")
-warning         null, or (an inversion with such muscles) the line the page shows about them
-jawDeg          base64 float32, (frames,) degrees
-jawShift        base64 float32, (frames, 2) m: the hinge's shift along y and z (zeros for a hinge)
-tongueTip       base64 float32, (frames, 2) m: the tongue tip's pose (protrusion, elevation) from
-                rest, the results' ``tongue_tip`` (zeros for results without it: at rest)
-scene           the whole head the movie renderer draws (:func:`scene_block`)
-==============  ==========================================================================
-
-``scene`` is :func:`facemech.viz.scene.build_scene` of the results, packed:
-
-==============  ==========================================================================
-key             content
-==============  ==========================================================================
-nVertices       N, the vertices of all parts (the skin's first)
-rest            base64 float32, (N, 3) m, every part at rest
-triangles       ``{"dtype", "data"}``, (F, 3) vertex indices, counter-clockwise from the front
-flags           base64 uint8, (F,): bit 0 textured, bit 1 alpha-tested, bit 2 two-sided
-uv              base64 uint16, (textured triangles, 3, 2): atlas coordinates of their corners
-                (u right, v down from the top-left corner) times 65535
-albedo          base64 uint8, (N, 3) sRGB colour of the untextured triangles' vertices
-atlas           ``{"width", "height", "color", "alpha"}``: the texture atlas as data URIs, an
-                sRGB PNG (a JPEG when the PNG's URI would pass 2 MB) and a grey PNG of its alpha
-                (null when all opaque), at most 4096 texels a side
-parts           ``[{"name", "motion": "skin"|"skull"|"jaw"|"skirt"|"follow", "inward", "start",
-                "count", "faceStart", "faceCount", "gloss": [strength, exponent],
-                "framed"}]``: each part's vertex and triangle ranges (a part whose gloss varies
-                per vertex adds base64 float32 ``glossVertex`` (count, 2), its mean in
-                ``gloss``; 'eye' and 'lid' parts stay at rest: the viewer shows the eyes
-                open and looking ahead); a 'follow' part (the
-                head closing the skin) also has base64 ``nodes``, ``inner`` (uint32) and
-                ``weights``, ``reach`` (float32) per vertex (:class:`.closure.Closure`); the
-                'tongue' part has base64 float32 ``modes`` (count, 2, 3): each vertex moves by
-                ``tongueTip[f] @ modes`` before the jaw moves it
-                (:func:`.dentition.tongue_modes`)
-hinge           ``{"point": [x, y, z] m, "axis": [x, y, z]}``: 'jaw' parts turn about it by
-                the frame's jaw angle (positive opens the mouth), then move by its shift
-frameY          [bottom, top] m: the views fit the ``framed`` parts between these heights
-light           the renderer's lights (:mod:`facemech.viz.raster`): ``dirs`` (3, 3) unit
-                camera-space directions, ``intensity``, ``sky``, ``ground``, ``wrap``, ``inside``
-==============  ==========================================================================
-
-Binary arrays are little-endian and C-ordered. Measured markers are matched to the model's by
-name, linearly interpolated onto the results' times, and left out (NaN) outside their own time
-span and across their gaps: nothing is extrapolated.
+The page holds its template (``viewer_template.html``, shipped with the package) and a data
+block, ``<script id="facemech-data" type="application/json">``, that :func:`viewer_data` fills
+(format ``"facemech-viewer/1"``: the skin's positions quantised as int16 about the rest shape,
+|error| <= q / 2, the markers, measured markers, activity, jaw and tongue tip per frame, and
+the whole head as :func:`scene_block` packs :func:`facemech.viz.scene.build_scene`). Binary
+arrays are base64, little-endian and C-ordered; every key, its shape and unit:
+docs/viewer.md, "The data block". Measured markers are matched to the model's by name,
+linearly interpolated onto the results' times, and left out (NaN) outside their own time span
+and across their gaps: nothing is extrapolated.
 """
 
 from __future__ import annotations

@@ -1,26 +1,17 @@
 """Text, or a recording with its alignment, to a talking face: the ``speak`` workflow.
 
 1. The audio and its phone alignment: eSpeak NG (:func:`facemech.speech.tts.synthesize`, with
-   :data:`LEAD_IN_S` of silence before and :data:`TAIL_S` after), or a
-   recorded WAV with a Praat TextGrid (:func:`facemech.speech.alignment_io.read_textgrid`, e.g.
-   from the Montreal Forced Aligner or by hand).
-2. The muscle activity and jaw angle per 60-Hz frame: visemes blended by dominance functions
-   (:func:`facemech.speech.coarticulation.controls_from_alignment`), leading the acoustics;
-   by default planned for the face's dynamics (:func:`facemech.speech.planning.plan_controls`:
-   per-phone gains learnt over a few simulations of the utterance, so that the lips reach
-   each phone's target; ``plan=False`` leaves the blend as it is).
-3. The forward simulation on the chosen face (:func:`facemech.simulate`; when planned, the
-   simulation of the plan's kept iteration); the tongue tip's pose
-   per frame (:func:`facemech.speech.tongue.tongue_tip`, render geometry) joins the results as
-   ``tongue_tip``.
-4. Blinks, gaze shifts and head motion driven by the voice (:mod:`facemech.speech.alive`; on by
-   default, each off with :class:`~facemech.speech.alive.Liveliness`): the renderer turns the
-   whole head, the simulation stays in the head's frame.
-5. The alignment as a TextGrid and a CSV with IPA phone labels (eSpeak NG's own codes in a
-   tier of their own; :func:`relabel_folder` for ARPABET or eSpeak's codes instead).
-6. The movie with the audio muxed in, and a manifest with the settings, the input hashes, the
-   stimulus parameters (:func:`facemech.analysis.describe.describe`, relative to the head) and
-   the blinks', gaze shifts' and head motion's times and laws.
+   :data:`LEAD_IN_S` of silence before and :data:`TAIL_S` after), or a recorded WAV with a
+   Praat TextGrid (:func:`facemech.speech.alignment_io.read_textgrid`).
+2. Muscle activity and jaw angle per 60-Hz frame, blended by dominance
+   (:func:`facemech.speech.coarticulation.controls_from_alignment`) and by default planned for
+   the face's dynamics (:func:`facemech.speech.planning.plan_controls`; ``plan=False``: the blend).
+3. The forward simulation (:func:`facemech.simulate`; when planned, the kept iteration's), the
+   tongue tip's pose (:func:`facemech.speech.tongue.tongue_tip`) joining the results.
+4. Blinks, gaze shifts and head motion (:mod:`facemech.speech.alive`, on by default).
+5. The alignment as a TextGrid and a CSV with IPA labels (:func:`relabel_folder`: others).
+6. The movie with the audio, and a manifest: settings, input hashes, stimulus parameters
+   (:func:`facemech.analysis.describe.describe`) and the liveliness's times and laws.
 
 Every file is written atomically; the folder's manifest names them all.
 """
