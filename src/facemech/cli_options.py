@@ -218,7 +218,7 @@ NAMES: dict[str, tuple[str, ...]] = {
 
 #: option groups: options that a command takes as one parameter, a dict of them, which it hands
 #: to the object that takes them (group -> option -> (type, default)), so that no command has
-#: more than 12 parameters (issue 28). The options keep their names, help and order of checks
+#: more than 12 parameters. The options keep their names, help and order of checks
 _JAW = {k: (str | None, None) for k in ("chin_marker", "jaw_second_marker", "jaw_incisor",
                                          "jaw_molar")}
 GROUPS: dict[str, dict[str, tuple]] = {

@@ -8,7 +8,7 @@ the tissue's stiffness and the force of orbicularis oris's chain can be fitted t
 They are fitted, by bounded least squares on their logarithms, to gesture amplitudes:
 
 - the built-in targets (:data:`TARGETS`): a maximal smile and a maximal pucker measured in 3-D,
-  the seeds' own Experiment 1 movement, and the issue's minimum amplitudes of single muscles
+  the seeds' own Experiment 1 movement, and the minimum amplitudes of single muscles (docs/model.md)
   (as one-sided terms that count only when a gesture falls short);
 - a subject's own maximal gestures (:func:`gestures_from_markers`): a marker recording per
   gesture and the muscle groups it uses, measured as the largest displacement of each marker
@@ -59,6 +59,8 @@ class Target:
     source: str = ""
 
 
+#: the source of the single-muscle minimum amplitudes (the table in docs/model.md)
+_MINIMUM = "minimum of a single muscle (docs/model.md)"
 #: the built-in calibration targets (mm)
 TARGETS: tuple[Target, ...] = (
     Target("smile, corner up", ("ZYG", "LAO", "RIS"), "corner_up", 5.6,
@@ -71,23 +73,23 @@ TARGETS: tuple[Target, ...] = (
     Target("pucker, mouth narrower", ("OOS", "OOI"), "mouth_narrower", 14.5,
            source="maximal pucker, mouth width 42.9 -> 28.4 mm (same)"),
     Target("pucker, lips forward", ("OOS", "OOI"), "lips_forward", 2.0, "at_least",
-           source="issue 11 minimum; lips protrude several mm (Popat et al. 2010)"),
+           source=_MINIMUM + "; lips protrude several mm (Popat et al. 2010)"),
     Target("Experiment 1 movement", ("EXPERIMENT1",), "movement", 2.024,
            source="Pitermann & Munhall 2001, Experiment 1: the 8 perioral pairs on the "
                   "triangle sequence move the 11 right-side markers 2.024 mm (2 x RMS 3-D s.d.)"),
-    Target("ZYG corner up", ("ZYG",), "corner_up", 4.0, "at_least", source="issue 11"),
-    Target("ZYG corner out", ("ZYG",), "corner_out", 2.0, "at_least", source="issue 11"),
-    Target("LAO corner up", ("LAO",), "corner_up", 3.0, "at_least", source="issue 11"),
-    Target("DAO corner down", ("DAO",), "corner_up", -3.0, "at_most", source="issue 11"),
-    Target("RIS corner out", ("RIS",), "corner_out", 3.0, "at_least", source="issue 11"),
-    Target("LLS upper lip up", ("LLS",), "upper_lip_up", 3.0, "at_least", source="issue 11"),
+    Target("ZYG corner up", ("ZYG",), "corner_up", 4.0, "at_least", source=_MINIMUM),
+    Target("ZYG corner out", ("ZYG",), "corner_out", 2.0, "at_least", source=_MINIMUM),
+    Target("LAO corner up", ("LAO",), "corner_up", 3.0, "at_least", source=_MINIMUM),
+    Target("DAO corner down", ("DAO",), "corner_up", -3.0, "at_most", source=_MINIMUM),
+    Target("RIS corner out", ("RIS",), "corner_out", 3.0, "at_least", source=_MINIMUM),
+    Target("LLS upper lip up", ("LLS",), "upper_lip_up", 3.0, "at_least", source=_MINIMUM),
     Target("DLI lower lip down", ("DLI",), "lower_lip_down", 3.0, "at_least",
-           source="issue 11"),
-    Target("MEN chin up", ("MEN",), "chin_up", 1.5, "at_least", source="issue 11"),
+           source=_MINIMUM),
+    Target("MEN chin up", ("MEN",), "chin_up", 1.5, "at_least", source=_MINIMUM),
     Target("OO mouth narrower", ("OOS", "OOI"), "mouth_narrower", 10.0, "at_least",
-           source="issue 11"),
-    Target("largest, DLI", ("DLI",), "largest", 20.0, "at_most", source="issue 11"),
-    Target("largest, LLS", ("LLS",), "largest", 20.0, "at_most", source="issue 11"),
+           source=_MINIMUM),
+    Target("largest, DLI", ("DLI",), "largest", 20.0, "at_most", source=_MINIMUM),
+    Target("largest, LLS", ("LLS",), "largest", 20.0, "at_most", source=_MINIMUM),
 )
 
 

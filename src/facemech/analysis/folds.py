@@ -4,7 +4,7 @@ A crease is a line along which the skin folds sharply: the normals of the two tr
 either side of an edge turn away from each other. :func:`fold_increase` gives, for every interior
 edge of the epidermal surface, the angle between the two normals in a deformed state minus the
 same angle at rest (degrees). Realistic skin bends smoothly, so no edge outside the lips should
-gain much (the issue's bound: 20 degrees for a 10-degree jaw opening).
+gain much (the bound: 20 degrees for a 10-degree jaw opening).
 """
 
 from __future__ import annotations

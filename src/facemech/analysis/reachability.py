@@ -1,7 +1,7 @@
 """Can the face reach the lip positions of real speech? Synthetic targets and their inversion.
 
 The targets are not made by the model: they are marker trajectories laid out by hand from the
-ranges of real speech (issues 11 and 27, from X-ray microbeam and EMA recordings: the upper lip
+ranges of real speech (from X-ray microbeam and EMA recordings, docs/model.md: the upper lip
 3 mm down and 3 mm front to back, the lower lip 9 mm vertical and 4.5 mm front to back, 6 mm of
 it relative to the jaw), as a string of postures (bilabial closure, /a/, /u/, /i/) joined by
 smooth (raised-cosine) transitions: the lower lip's 9 mm in 120 ms peaks at 118 mm/s, the

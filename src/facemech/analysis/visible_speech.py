@@ -30,15 +30,15 @@ __all__ = ["CONTACT_MM", "CRITERIA", "OPEN_EXTRA_LABELS", "ROUNDED_LABELS", "Pho
 
 #: mm: the lower lip touches the upper incisors when it comes this close to their edge
 CONTACT_MM = 1.0
-#: mm/s, the fastest lower incisor of issue 27's real recordings (EMA and X-ray microbeam, a
-#: read sentence and repeated syllables: peak jaw speeds 58-186 mm/s); recorded beside the
-#: lower lip's speed, not a criterion of issue 29
+#: mm/s, the fastest lower incisor of the real recordings (EMA and X-ray microbeam, a read
+#: sentence and repeated syllables: peak jaw speeds 58-186 mm/s); recorded beside the lower
+#: lip's speed, not a criterion
 REAL_JAW_PEAK_MM_S = 186.0
-#: eSpeak labels of /ɔ/ (the issue counts them open; phoneclass's class ``open_rounded``)
+#: eSpeak labels of /ɔ/ (counted open; phoneclass's class ``open_rounded``)
 OPEN_EXTRA_LABELS = frozenset({"O:", "O", "O2"})
 #: eSpeak labels of /u ʊ w oʊ/
 ROUNDED_LABELS = frozenset({"u:", "u", "U", "w", "w#", "W", "oU"})
-#: the issue's criteria (lengths mm, speeds mm/s, shares of the phones)
+#: the pass criteria (lengths mm, speeds mm/s, shares of the phones)
 CRITERIA = {
     "bilabial": {"gap_max_mm": 0.5, "share": 0.95, "none_above_mm": 1.0},
     "open": {"aperture_min_mm": 8.0, "share": 0.90, "median_min_mm": 10.0},
@@ -57,7 +57,7 @@ class PhoneMeasure:
     label, start, end : the eSpeak label (with its stress mark) and interval (s)
     classes : articulatory classes (:func:`facemech.speech.phoneclass.phone_classes`)
     stress : ``"primary"``, ``"secondary"`` or None (unstressed or not marked)
-    group : the issue's group: ``"bilabial"``, ``"open"``, ``"rounded"``, ``"labiodental"``
+    group : the group: ``"bilabial"``, ``"open"``, ``"rounded"``, ``"labiodental"``
         or None
     between_bilabials : the phones on both sides are bilabials
     lip_gap_mid : m, the lip gap at the middle of the phone (every phone)
@@ -297,7 +297,7 @@ def _stats(values_mm: list[float], passed: list[bool]) -> dict:
 
 
 def summarize(phones: list[PhoneMeasure], peak_speeds: list[float] | None = None) -> dict:
-    """The phones (and sentences) against the issue's criteria (:data:`CRITERIA`).
+    """The phones (and sentences) against the pass criteria (:data:`CRITERIA`).
 
     Parameters
     ----------
@@ -309,7 +309,7 @@ def summarize(phones: list[PhoneMeasure], peak_speeds: list[float] | None = None
     dict
         Per group: ``n``, ``share_passing`` (of the phones meeting the group's per-phone
         threshold), ``median_mm``, ``min_mm``, ``max_mm``, ``worst`` (the worst phone's label
-        and value, mm) and ``met`` (the issue's criterion as a whole). ``open`` counts stressed
+        and value, mm) and ``met`` (the criterion as a whole). ``open`` counts stressed
         phones only (primary or secondary) and adds ``between_bilabials`` (the same for those
         of them between two bilabials); ``rounded`` adds the medians of each lip. ``speed``:
         ``n``, ``min``, ``median``, ``max`` (mm/s), ``share_passing`` and ``met``.

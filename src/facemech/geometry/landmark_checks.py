@@ -3,7 +3,7 @@
 A landmark file that reads without complaint can still be wrong: a landmark typed 100 mm off,
 one point copied under two names, the left and right sides swapped (or a mirrored scan). Each
 builds a face with a different jaw and muscles, so each is refused here with one line naming
-the landmark file and the landmark (issue 18).
+the landmark file and the landmark.
 """
 
 from __future__ import annotations

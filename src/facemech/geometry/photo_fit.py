@@ -391,13 +391,8 @@ def _spline(src: np.ndarray, disp: np.ndarray, smooth_x: np.ndarray, smooth_y: n
 
     The kernel is the linear radial one, -|r| (the polyharmonic spline of order 1), with a
     constant part only. Its weights sum to zero, so far from the points the displacement levels
-    off to a bounded value. The thin-plate spline with an affine part (the usual choice, and
-    this fit's until 2026-11-29) carries the inner points' trend outward instead: a mouth wider
-    than the generic face's, with eyes as wide, reads as a width growing downward and widened
-    the jaw angles 50 mm out from the mouth's corners by 2-2.4 mm too much. Over 24 renders of
-    two faces through dlib the worst landmark's mean fell from 1.43 to 1.14 mm (built-in face,
-    six sizes), 2.43 to 2.16 (six turns), 2.28 to 1.47 (the variant's sizes), 3.43 to 2.84
-    (its turns); from exact points nothing changes by more than 0.1 mm (docs/photo.md).
+    off to a bounded value, where a thin-plate spline with an affine part would carry the inner
+    points' trend outward (why: docs/design-log.md, "The photo fit's spline").
     """
     fx, fy = (RBFInterpolator(src, disp[:, i], kernel="linear", degree=0, smoothing=sm)
               for i, sm in enumerate((smooth_x, smooth_y)))

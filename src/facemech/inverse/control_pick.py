@@ -35,7 +35,7 @@ MIN_NEW_MOTION_MM = U.NOISE_FLOOR_MM / U.IDENTIFIABLE_SE
 #: must make to cover it (:func:`cover_signs`). A kept control that moves a coordinate a little
 #: that way (over the 1-mm threshold) reaches it only near full activity and with its own large
 #: motions elsewhere, which the bounded fit cannot cancel: with the contacts stepped on their own
-#: (issue 32) OOS lifts the lower lip 1.3 mm per unit beside 4.0 mm of the upper lip forward,
+#: OOS lifts the lower lip 1.3 mm per unit beside 4.0 mm of the upper lip forward,
 #: while mentalis lifts it 3.1 mm; counting OOS as the lifter left a twin of closing lips 0.38 mm
 #: RMS off (tests/inverse/test_control_pick.py). Half: the weaker of two comparable movers
 #: still counts.

@@ -343,7 +343,7 @@ def _pace_for_pick(solver, options):
 def pick_candidates(model) -> tuple[str, ...]:
     """The groups a control pick chooses from: the speech controls and, on a face that has it,
     orbicularis oris's marginal part (what lowers the upper lip and lifts the lower lip on the
-    jaw: the reach of real lips, issue 27)."""
+    jaw: the reach of real lips, docs/model.md)."""
     from ..params import MARGINAL_GROUPS, MUSCLE_GROUPS
     from .invert import SPEECH_CONTROLS
 

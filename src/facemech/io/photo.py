@@ -20,12 +20,8 @@ import numpy as np
 
 from ..errors import InputError, missing_input
 
-#: the smallest face the landmarks are taken from: the detector's box, pixels across. Measured
-#: on tests/viz/test_photo.py's photo of the built-in face scaled down, the fit's worst landmark:
-#: from 155 px up 1.0-3.6 mm (four sizes, 155-385 px); from 129 px down it jumps about,
-#: 2.7-8.7 mm (seven sizes, 62-129 px). Again with the points the median over the predictor's
-#: boxes (2026-11-29; x and y, 13 sizes): 1.1-2.1 mm from 155 px up (one box: 1.2-3.4 mm),
-#: 1.3-2.5 mm at 90-129 px (one box: 2.0-7.3 mm); the limit is kept
+#: the smallest face the landmarks are taken from: the detector's box, pixels across; below
+#: it the fit's worst landmark jumps about (measured: docs/design-log.md, "Photo talkers")
 MIN_FACE_PX = 150
 #: the most a frontal face may be turned (yaw, from the nose between the eyes), degrees
 MAX_YAW_DEG = 20.0

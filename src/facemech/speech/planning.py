@@ -48,7 +48,7 @@ TARGETS = {
 #: bounds of the per-instance adjustments: scale factor, dominance factor, jaw offset (deg),
 #: factor on the dominance's rates, a labiodental's own scale factor, a bilabial's press
 #: (activity added to OOSM and OOIM, :attr:`~.coarticulation.Gesture.press`) and a bilabial's
-#: shift in time (s, :attr:`~.coarticulation.Gesture.shift`; later only, module doc)
+#: shift in time (s, :attr:`~.coarticulation.Gesture.shift`; later only, docs/stimuli.md)
 BOUNDS = {"scale": (0.5, 1.6), "dominance": (1.0, 30.0), "jaw_deg": (-4.0, 14.0),
           "rate": (1.0, 3.0), "labiodental_scale": (0.0, 1.6), "press": (0.0, 0.8),
           "shift_s": (0.0, 0.04), "jaw_rate": (1.0, 2.5)}
@@ -61,7 +61,7 @@ GAIN = {"open_jaw_deg": 0.8, "open_dominance": 0.1, "bilabial_dominance": 1.0,
         "rounded_scale": 0.2, "rounded_dominance": 0.5, "labiodental_jaw_deg": 0.5,
         "labiodental_dominance": 0.5, "labiodental_scale": 0.2, "bilabial_timing": 0.7,
         "rounded_jaw_deg": 0.5, "speed_jaw_rate": 0.025, "speed_jaw_deg": 0.025}
-#: what a mm of a miss past the issue's pass line weighs in the plan's cost on top of its mm
+#: what a mm of a miss past the pass line weighs in the plan's cost on top of its mm
 #: past the tolerance (:func:`_summary`: the iteration kept): a bilabial's gap beyond 0.5 mm,
 #: an open vowel's aperture under 8 mm, a rounded phone's lips under 2 mm forward, a
 #: labiodental's lip farther than 1 mm from the incisors (:data:`PASS_LINES`). Without it a
@@ -69,19 +69,19 @@ GAIN = {"open_jaw_deg": 0.8, "open_dominance": 0.1, "bilabial_dominance": 1.0,
 #: (the open vowel at 12 mm); with the bilabials' mm alone weighed 4 times, open vowels between
 #: two bilabials fell to 2.6 mm
 PASS_WEIGHT = 4.0
-#: m: the issue's pass lines as the planner's errors (:func:`_measure`) measure them: a
+#: m: the pass lines as the planner's errors (:func:`_measure`) measure them: a
 #: bilabial's gap, an open vowel's shortfall from 12 mm (8 mm open), a rounded phone's from
 #: 3 mm (2 mm forward), a labiodental's distance (1 mm,
 #: :data:`facemech.analysis.visible_speech.CONTACT_MM`)
 PASS_LINES = {"bilabial": 0.5e-3, "open": 4.0e-3, "rounded": 1.0e-3, "labiodental": 1.0e-3}
 #: m/s, the peak lower-lip speed an utterance is planned for: the slowest of the real lower
-#: lips of issue 27's recordings (115-233 mm/s); an utterance whose lower lip stays slower gets
-#: a jaw less coarticulated (module doc)
+#: lips recorded (115-233 mm/s, docs/visible-speech.md); an utterance whose lower lip stays
+#: slower gets a jaw less coarticulated (docs/stimuli.md)
 SPEED_TARGET = 0.115
 #: m/s, within this of :data:`SPEED_TARGET` the utterance is left as it is (a phone's
 #: tolerance, :data:`TARGETS`): its shortfall is counted from 110 mm/s
 SPEED_TOLERANCE = 0.005
-#: m/s, issue 29's pass line for an utterance's peak lower-lip speed (100-250 mm/s in each
+#: m/s, the pass line for an utterance's peak lower-lip speed (100-250 mm/s in each
 #: sentence): a shortfall below it weighs :data:`PASS_WEIGHT` times more, as the phones' do
 SPEED_LINE = 0.100
 #: mm of the plan's cost per mm/s that the peak lower-lip speed falls short of
@@ -93,9 +93,9 @@ SPEED_COST = 0.02
 #: s, how far beyond a bilabial's interval its closure is looked for (its timing, :func:`_timing`)
 TIMING_WINDOW_S = 0.06
 #: m/s, the fastest a plan moves the lower incisor's tip: the jaw is a kinematic drive, and the
-#: planner, left free, sped it to 400-800 mm/s (the fastest jaw of issue 27's recordings moves
+#: planner, left free, sped it to 400-800 mm/s (the fastest jaw of the real recordings moves
 #: at 186, :data:`facemech.analysis.visible_speech.REAL_JAW_PEAK_MM_S`; real lower lips at
-#: 115-233). 250 mm/s, the top of issue 29's range for the lower lip, which rides the jaw: a
+#: 115-233). 250 mm/s, the top of the pass range for the lower lip, which rides the jaw: a
 #: faster jaw alone carried the lower lip past it (docs/visible-speech.md, "The jaw carries
 #: the lips")
 JAW_SPEED_MAX = 0.25
@@ -413,7 +413,7 @@ def _timing(time: np.ndarray, gap: np.ndarray, start: float, end: float) -> floa
 def _summary(misses: list[_Miss], speed: float | None = None) -> dict:
     """Per group: n, the median and largest miss beyond the tolerance (mm), the share within
     it; ``cost_mm``: the sum of the misses beyond the tolerances; ``cost``: that sum plus
-    :data:`PASS_WEIGHT` times the misses past the issue's pass lines (:data:`PASS_LINES`),
+    :data:`PASS_WEIGHT` times the misses past the pass lines (:data:`PASS_LINES`),
     plus :data:`SPEED_COST` times the mm/s by which ``speed`` (the utterance's peak lower-lip
     speed, m/s; None: not weighed) falls short of :data:`SPEED_TARGET` beyond
     :data:`SPEED_TOLERANCE` (``speed_short_mm_s``) and :data:`PASS_WEIGHT` times that of

@@ -69,8 +69,8 @@ VISEMES: MappingProxyType = MappingProxyType({
     "postalveolar": _v(1.5, 4.0, 4.0, 20.0, 25.0, OOS=0.4, OOI=0.4),
     "velar": _v(3.0, 0.4, 1.5, 20.0, 25.0),
     "glottal": _v(4.0, 0.05, 0.05, 20.0, 25.0),
-    # /w/: the jaw nearly closed, as for /u/; its jaw's dominance 12 (8 until 2026-12-07: an
-    # open vowel after it opened the jaw within the /w/ and drew the lower lip back with it)
+    # /w/: the jaw nearly closed, as for /u/; its jaw's dominance 12, so that an open vowel after
+    # it does not open the jaw within the /w/ and draw the lower lip back with it
     "w": _v(1.5, 40.0, 12.0, 15.0, 20.0, OOS=0.9, OOI=1.0, MEN=0.5),
     "r": _v(2.0, 2.0, 1.5, 18.0, 22.0, OOS=0.35, OOI=0.3),
     "l": _v(3.5, 0.4, 1.5, 20.0, 25.0),

@@ -28,7 +28,7 @@ from .render import Renderer
 
 T = TypeVar("T")
 
-#: the most threads a movie is drawn on by default (the 2-core machine of issue 29)
+#: the most threads a movie is drawn on by default
 DEFAULT_WORKERS = 2
 
 

@@ -120,7 +120,7 @@ def _image_uri(pixels: np.ndarray, mode: str, fmt: str) -> str:
 
 def atlas_block(atlas: np.ndarray) -> dict:
     """The texture atlas (H, W, 4) linear RGBA as data URIs: the ``scene.atlas`` of the data
-    block (see the module docstring)."""
+    block (docs/viewer.md, "The data block")."""
     from PIL import Image
 
     rgb = linear_to_srgb8(atlas[..., :3])
@@ -140,7 +140,7 @@ def atlas_block(atlas: np.ndarray) -> dict:
 
 
 def scene_block(scene) -> dict:
-    """The data block's ``scene`` (see the module docstring) of a
+    """The data block's ``scene`` (docs/viewer.md) of a
     :class:`~facemech.viz.scene.Scene`."""
     from .raster import GROUND, INSIDE, LIGHTS, SKY, WRAP
     from .scene import SKIRT_DEPTH
@@ -240,7 +240,7 @@ def decode_scene(block: dict) -> dict:
 
 
 def viewer_data(results, measured=None, title: str | None = None) -> dict:
-    """The JSON-ready data block of the page (see the module docstring for its keys).
+    """The JSON-ready data block of the page (its keys: docs/viewer.md, "The data block").
 
     Parameters
     ----------

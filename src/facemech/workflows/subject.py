@@ -1,5 +1,5 @@
-"""One path from a recording to results (issue 14): a subject folder made once from a face and a
-rest recording, then any number of recordings analysed against it.
+"""One path from a recording to results: a subject folder made once from a face and a rest
+recording, then any number of recordings analysed against it.
 
 ``make_subject`` writes ``SUBJECT/``:
 
