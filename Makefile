@@ -11,7 +11,7 @@ LOW_BIN  := $(LOW_VENV)/bin
 LOW_STAMP := $(LOW_VENV)/.installed
 SUDO   := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
-.PHONY: demo test test-lowest test-portable lint bench clean chromium blender docs docs-check
+.PHONY: demo test test-fast test-lowest test-portable lint bench clean chromium blender docs docs-check
 
 # every package pinned, then the lip-reader's face-mesh model, kept from the mediapipe 0.10.21
 # wheel (pip download; facemech.io.face_mesh): that wheel pins numpy < 2 and is not installed;
@@ -62,6 +62,12 @@ XDIST  := -n $(JOBS) --dist loadgroup
 test: $(STAMP) chromium blender lint
 	MPLBACKEND=Agg $(BIN)/python -m pytest -q $(XDIST) --durations=20
 
+# the suite less the tests marked slow (pyproject's `slow` marker: ten seconds and more each),
+# while working; `make test` runs them all. A folder alone: `make test-fast TESTS=tests/io`
+TESTS ?= tests
+test-fast: $(STAMP) lint
+	MPLBACKEND=Agg $(BIN)/python -m pytest -q $(XDIST) --durations=20 -m "not slow" $(TESTS)
+
 # the suite on the oldest versions that pyproject's ranges allow (constraints-lowest.txt), in
 # .venv-lowest; no lint (an old ruff knows other rules); numba's cache apart, so that the two
 # numba versions do not overwrite each other's compiled kernels in src/
@@ -70,14 +76,16 @@ test-lowest: $(LOW_STAMP) chromium
 
 # the numeric tests once more under another OpenBLAS kernel (CI runs it after `make test`):
 # results must not hang on the last bit of the BLAS (docs/reproducibility.md)
-PORTABLE_TESTS := tests/inverse/test_inverse.py tests/inverse/test_inversion_rolls.py tests/inverse/test_inversion_steps.py \
-	tests/inverse/test_inversion_trust.py tests/workflows/test_subject.py tests/analysis/test_regions.py tests/analysis/test_realism.py \
-	tests/inverse/test_calibrate.py tests/speech/test_speak.py tests/docs/test_docs_tables.py tests/speech/test_visemes.py \
-	tests/physics/test_lip_reach.py tests/inverse/test_control_pick.py tests/inverse/test_jaw_bone.py tests/solvers/test_contacts.py \
-	tests/speech/test_planning.py tests/analysis/test_visible_speech.py
+PORTABLE_TESTS := $(addprefix tests/inverse/test_,inverse.py inversion_rolls.py inversion_steps.py \
+	inversion_trust.py calibrate.py control_pick.py jaw_bone.py) \
+	$(addprefix tests/analysis/test_,regions.py realism.py visible_speech.py) \
+	$(addprefix tests/speech/test_,speak.py visemes.py planning.py) \
+	tests/workflows/test_subject.py tests/docs/test_docs_tables.py tests/physics/test_lip_reach.py \
+	tests/solvers/test_contacts.py
 CORETYPE ?= Prescott
 test-portable: $(STAMP)
-	OPENBLAS_CORETYPE=$(CORETYPE) MPLBACKEND=Agg $(BIN)/python -m pytest -q $(XDIST) $(PORTABLE_TESTS)
+	OPENBLAS_CORETYPE=$(CORETYPE) MPLBACKEND=Agg $(BIN)/python -m pytest -q $(XDIST) --durations=20 \
+	  $(PORTABLE_TESTS)
 
 # the numeric tables of docs/*.md, regenerated in place from the commands that produce them
 # (tools/docs_tables.py; 15-40 minutes on 2 shared cores, Powell's Experiment 1 and
