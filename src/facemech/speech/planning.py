@@ -96,8 +96,8 @@ TIMING_WINDOW_S = 0.06
 #: planner, left free, sped it to 400-800 mm/s (the fastest jaw of the real recordings moves
 #: at 186, :data:`facemech.analysis.visible_speech.REAL_JAW_PEAK_MM_S`; real lower lips at
 #: 115-233). 250 mm/s, the top of the pass range for the lower lip, which rides the jaw: a
-#: faster jaw alone carried the lower lip past it (docs/visible-speech.md, "The jaw carries
-#: the lips")
+#: faster jaw alone carried the lower lip past it (docs/design-log.md, "The jaw carries the
+#: lips")
 JAW_SPEED_MAX = 0.25
 
 
