@@ -17,11 +17,9 @@ data's utterance structure and neutral frames), times ``sqrt(1 + ||X||_2^2)`` fo
 the fit carries over from the k noisy independent columns: the markers beyond it move no more,
 independently, than noise would.
 
-Speed: A is stacked in column-major (Fortran) order, the layout LAPACK's geqp3 works in, so the
-factorisation needs no transposed copy (and none at all where A is not needed afterwards); only
-the (N, N) triangle R is kept. The factorisation, the noise Gram matrix and the SVD run with
-BLAS capped at one thread (:func:`one_blas_thread`): on a busy two-core machine the default two
-OpenBLAS threads made the fit of 57 markers x 100,000 samples several times slower.
+A is stacked in column-major order (LAPACK's geqp3 needs no transposed copy); only the (N, N)
+triangle R is kept; the factorisation, the noise Gram matrix and the SVD run with BLAS capped at
+one thread (:func:`one_blas_thread`; why: docs/design-log.md, "Marker regions").
 """
 
 from __future__ import annotations
