@@ -62,7 +62,7 @@ XDIST  := -n $(JOBS) --dist loadgroup
 test: $(STAMP) chromium blender lint
 	MPLBACKEND=Agg $(BIN)/python -m pytest -q $(XDIST) --durations=20
 
-# the suite less the tests marked slow (pyproject's `slow` marker: ten seconds and more each),
+# the suite less the tests marked slow (pyproject's `slow` marker: 20 s and more each),
 # while working; `make test` runs them all. A folder alone: `make test-fast TESTS=tests/io`
 TESTS ?= tests
 test-fast: $(STAMP) lint

@@ -5,6 +5,8 @@ import subprocess
 import sys
 import time
 
+import pytest
+
 from facemech.progress import HEARTBEAT_S, LogProgress, count_line, duration, staged
 
 
@@ -91,6 +93,7 @@ def test_heartbeat_thread_prints_while_silent_and_stops_cleanly():
     assert s.getvalue().splitlines() == lines  # nothing after the end
 
 
+@pytest.mark.slow
 def test_demo_under_a_pipe_keeps_printing_lines(tmp_path):
     """``facemech demo`` with stderr piped: log lines come while it works (the stages' counts,
     the heartbeat's when a stage is silent), and the last one soon before the exit.

@@ -30,6 +30,9 @@ from facemech.errors import InputError
 from facemech.io.blendshapes import read_weights_csv, write_blendshape_gltf
 from test_export import Glb
 
+#: its module fixtures take 20 s and more: the whole module is slow
+pytestmark = pytest.mark.slow
+
 FRAMES = 25
 #: the fit's stated error over the lips on this module's result (coarse face), mm (measured 0.76)
 LIPS_RMS_MM = 1.0

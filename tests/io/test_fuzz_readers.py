@@ -336,8 +336,13 @@ def _check(name, suffix, make, read, folder):
     run()
 
 
-@pytest.mark.parametrize("name, suffix, make, read", TEXT_READERS + FILE_READERS,
-                         ids=[r[0] for r in TEXT_READERS + FILE_READERS])
+#: readers whose fuzzing takes tens of seconds (a NetCDF file written per example): marked slow
+SLOW_READERS = {"results-nc"}
+
+
+@pytest.mark.parametrize("name, suffix, make, read", [
+    pytest.param(*r, id=r[0], marks=pytest.mark.slow if r[0] in SLOW_READERS else ())
+    for r in TEXT_READERS + FILE_READERS])
 def test_a_reader_survives_fuzzing(folder, name, suffix, make, read):
     _check(name, suffix, make, read, folder)
 

@@ -310,6 +310,7 @@ def run_cli(*args):
     return run
 
 
+@pytest.mark.slow
 def test_markers_cli(face, tmp_path):
     pytest.importorskip("ezc3d")
     moved = move_head(face_markers(face, frames=60))

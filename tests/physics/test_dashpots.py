@@ -38,6 +38,7 @@ def _forces(springs, pos, vel):
     return out
 
 
+@pytest.mark.slow
 def test_stretch_rate_dashpots_do_not_resist_a_rigid_turn():
     """At rest length, a rigid motion (a turn and a drift) meets no force from dashpots on the
     rate of stretch, and a force from eq. 8's dashpots on the whole relative velocity."""

@@ -277,6 +277,7 @@ def test_slabs_are_cut_across_the_axis_the_nodes_are_numbered_along(face):
     assert slab_axis(springs, prisms, rest[order]) == "x"
 
 
+@pytest.mark.slow
 def test_slab_forces_do_not_depend_on_the_thread_count(face):
     """The slabs' forces on one thread and on two are the same to the bit (each node's
     additions in the order the slabs fix), and equal the element order's within 1e-15."""

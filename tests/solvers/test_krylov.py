@@ -41,6 +41,7 @@ def _off(a, b):
     return float(np.abs(a - b).max())
 
 
+@pytest.mark.slow
 def test_the_iterations_converge_on_the_true_linearisation(lower_lip):
     """The constant matrix's excess stiffness acts on its step as inertia: without iterations
     the lower lip's path is millimetres from the path of the step solved with 4 iterations (the
@@ -51,6 +52,7 @@ def test_the_iterations_converge_on_the_true_linearisation(lower_lip):
     assert _off(lower_lip[2], lower_lip[4]) < 0.4 * plain
 
 
+@pytest.mark.slow
 def test_the_solved_step_follows_the_fine_steps(lower_lip):
     """And the 4-step path solved so lies closer to the 48-step path than the constant matrix's
     alone (measured: 1.28 and 4.85 mm at worst; what is left is backward Euler's own error at

@@ -79,6 +79,7 @@ def test_the_lower_incisors_stand_where_the_jaw_solver_puts_them(face):
     assert abs(top[:, 2].max() - want[2]) < 0.5e-3, (top[:, 2].max(), want)
 
 
+@pytest.mark.slow
 def test_the_lower_arch_and_tongue_move_with_the_mandible(mouth):
     scene, rest, _ = mouth
     look = scene.look
@@ -93,6 +94,7 @@ def test_the_lower_arch_and_tongue_move_with_the_mandible(mouth):
         np.testing.assert_allclose(moved[sl], want, atol=1e-12)
 
 
+@pytest.mark.slow
 def test_open_mouth_shows_separate_crowns_and_the_tongue(mouth):
     """The mouth close-up (a frontal camera) with the jaw at 15 degrees: the lower incisors
     show as four crowns, and between neighbours the picture darkens (their rounded sides and
@@ -124,6 +126,7 @@ def test_open_mouth_shows_separate_crowns_and_the_tongue(mouth):
     assert np.median(rgb[:, 0] - rgb[:, 1]) > 40  # pink: red well over green
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("view", ["frontal", "three-quarter", "profile", "mouth"])
 def test_nothing_of_the_mouth_shows_through_closed_lips(mouth, view):
     """At rest, lips closed: no pixel sees a tooth, the gums or the tongue; with the jaw at

@@ -149,6 +149,7 @@ def test_a_clipped_iris_takes_the_other_eyes_colour(flat):
         np.testing.assert_allclose(cut.colours[name].iris, IRIS, atol=0.01)
 
 
+@pytest.mark.slow
 def test_a_textured_face_gets_eyes_and_a_vertex_coloured_one_keeps_them_painted(flat):
     from facemech.viz.scene import build_scene
 

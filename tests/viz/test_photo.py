@@ -573,6 +573,7 @@ def _save(image: np.ndarray, path) -> None:
     Image.fromarray(np.ascontiguousarray(image)).save(path)
 
 
+@pytest.mark.slow
 def test_from_photo_then_speak(built_in, tmp_path, monkeypatch, capsys):
     import json
 

@@ -83,6 +83,7 @@ def test_open_mouth_shows_the_mouth_interior_not_the_background(open_mouth):
     assert teeth.sum() > 50
 
 
+@pytest.mark.slow
 def test_no_background_enclosed_by_the_face_in_any_demo_frame(demo_results):
     ds = demo_results
     scene = build_scene(look_from_dataset(ds))
@@ -125,6 +126,7 @@ def test_mouth_seal_closes_the_slit_from_inside(face, open_mouth):
     assert -n[:, 2].sum() == pytest.approx(contour, rel=1e-9)
 
 
+@pytest.mark.slow
 def test_mouth_interior_is_dark_from_oblique_views(demo_results):
     """Close-ups of the mouth from the side, above and below: no background shows through the
     lips in any fourth frame of the demo (lips a hair apart, apart, the jaw open)."""
@@ -172,6 +174,7 @@ def test_eyes_differ_from_skin_and_sit_under_the_lids(face):
     assert lip[0] - lip[1] > skin[0] - skin[1] + 0.05
 
 
+@pytest.mark.slow
 def test_textured_face_renders_its_texture(face):
     look = look_from_model(face)
     # a texture of four flat quadrants, mapped frontally from the rest (x, y)
@@ -257,6 +260,7 @@ def test_size_view_and_transparency_are_honoured(face, tmp_path):
     assert parse_size("1920x1080") == (1080, 1920)
 
 
+@pytest.mark.slow
 def test_render_command_frames_and_stills(open_mouth, tmp_path, monkeypatch, capsys):
     from facemech.io.results import write_results  # noqa: F401  (the CLI reads files)
 

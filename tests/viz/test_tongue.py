@@ -124,6 +124,7 @@ def test_the_dental_shows_the_tongue_between_the_lips(theta, scene):
     assert _tongue_pixels(scene, bent, cam) > 20
 
 
+@pytest.mark.slow
 def test_results_round_trip_and_files_without_the_series(theta, tmp_path):
     ds, k = theta
     path = write_dataset(tmp_path / "r.nc", ds)
@@ -218,6 +219,7 @@ def test_the_manipulations_carry_the_tongue_with_the_jaw(theta):
     np.testing.assert_allclose(results_tongue(slow)[::2][: len(pose)], pose, atol=1e-12)
 
 
+@pytest.mark.slow
 def test_the_viewer_page_bends_the_tongue_in_headless_chromium(theta, scene, tmp_path):
     """The page's tongue at the /θ/'s middle: its foremost vertex where the renderer puts it."""
     from facemech.viz.video import jaw_poses_of

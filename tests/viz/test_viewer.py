@@ -117,6 +117,7 @@ def test_data_block_decodes_to_the_results(result):
     assert d["measured"] is None
 
 
+@pytest.mark.slow
 def test_scene_block_decodes_to_the_scene(result):
     ds = read_results(result)
     d = viewer_data(ds)
@@ -195,6 +196,7 @@ def test_measured_markers_resampled_onto_the_results_times():
     assert coverage == [pytest.approx(times[keep][0]), pytest.approx(times[keep][-1])]
 
 
+@pytest.mark.slow
 def test_measured_markers_matched_by_name(result, measured_csv):
     from facemech.io.markers import read_markers
 
@@ -349,6 +351,7 @@ def _region(img, probe, x0, x1, y0, y1):
     return img[y0:y1, x0:x1][keep]
 
 
+@pytest.mark.slow
 def test_open_mouth_shows_cavity_teeth_and_eyes(open_mouth, tmp_path):
     """At 14 degrees of jaw the lips part: the mouth shows the dark cavity and the teeth, never
     the background; at rest it shows neither. The eyes show sclera and iris in their fissures."""
