@@ -89,6 +89,7 @@ def mesh_read(spoken, detector):
     return reading, aperture, compare(reading.distance, aperture)
 
 
+@pytest.mark.slow
 def test_the_tracker_finds_the_face_and_sees_the_mouth_open(read):
     reading, aperture, agreement = read
     assert agreement.frames == len(aperture) == len(reading.distance)
@@ -104,6 +105,7 @@ def test_the_tracker_finds_the_face_and_sees_the_mouth_open(read):
     assert np.all(pts[:, 62, 1] > pts[:, 33, 1]) and np.all(pts[:, 66, 1] < pts[:, 8, 1])
 
 
+@pytest.mark.slow
 def test_the_face_mesh_reads_the_aperture_as_the_issue_asks(mesh_read):
     """The issue's r >= 0.9 with MediaPipe's face mesh (measured :data:`R_MESH_MEASURED`), the
     face in every frame, wider open read wider, and the inner-lip points between the outer
@@ -117,6 +119,7 @@ def test_the_face_mesh_reads_the_aperture_as_the_issue_asks(mesh_read):
     assert np.all(pts[:, 13, 1] >= pts[:, 0, 1] - 1) and np.all(pts[:, 14, 1] <= pts[:, 17, 1] + 1)
 
 
+@pytest.mark.slow
 def test_lipread_on_the_command_line_gives_the_same_reading(spoken, mesh_read, tmp_path,
                                                             monkeypatch, capsys):
     """``facemech lipread RESULT`` draws the same frames and reads the same r as the Python
@@ -150,6 +153,7 @@ def test_lipread_on_the_command_line_gives_the_same_reading(spoken, mesh_read, t
     "640x360 (docs/lipreader.md): dlib's predictor puts the inner-lip points inside the "
     "vermilion of the rounded, protruded lips (reading their thickness as opening) and on the "
     "teeth between spread lips (reading them as closed)"))
+@pytest.mark.slow
 def test_dlibs_inner_lip_distance_correlates_with_the_aperture_as_the_issue_asks(read):
     assert read[2].r >= R_ISSUE, read[2]
 

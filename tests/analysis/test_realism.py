@@ -22,6 +22,7 @@ from facemech.params import MUSCLE_GROUPS, preset
 from facemech.solvers.forward import simulate
 
 
+@pytest.mark.slow
 def test_gesture_amplitudes_reach_real_faces_through_the_cli(tmp_path, monkeypatch, capsys):
     """Each muscle group pair at full activity (ramped 0.2 s, held 0.5 s), simulated with
     ``facemech simulate`` as a user calls it, moves the named landmark at least as far as the
@@ -71,6 +72,7 @@ RESOLUTION_MEASURES = [("ZYG", "corner_up"), ("LAO", "corner_up"), ("DAO", "corn
 RESOLUTION_MISSES = [("ZYG", "corner_out"), ("MEN", "chin_up")]
 
 
+@pytest.mark.slow
 def test_three_resolutions_give_the_same_gestures():
     """Coarse (about 2.6 mm at the lips), default (2 mm) and fine (1.5 mm) built-in faces move
     alike within 15 %: constants per volume, masses from density, forces over areas."""
@@ -247,6 +249,7 @@ def test_speech_targets_span_the_ranges_of_real_speech(face):
                    "and the marginal orbicularis; "
                    "4 times slower still 1.14 mm: reach, not speed (the upper lip 3 mm down "
                    "in /p/ drags the lower lip; docs/model.md, Reachability)")
+@pytest.mark.slow
 def test_the_lip_positions_of_real_speech_are_reachable(face):
     """Synthetic lip targets with the ranges of real speech, inverted with the jaw driven from
     the lower incisor, fit within 0.5 mm RMS (the issue's target; strict: this test fails the

@@ -211,6 +211,7 @@ def spoken_summary(tmp_path_factory):
     return out
 
 
+@pytest.mark.slow
 def test_sentences_cover_every_group(spoken_summary):
     for group in ("bilabial", "open", "rounded", "labiodental", "speed", "between_bilabials",
                   "their_bilabials"):
@@ -233,5 +234,6 @@ def test_sentences_cover_every_group(spoken_summary):
     "their_bilabials",  # planned: 4 of 4 within 0.45 mm (the /m/ of 'map'; 0.56 mm on the
     # coarse face before the bilabials' shift in time, Gesture.shift)
 ])
+@pytest.mark.slow
 def test_sentences_meet_the_issues_criteria(spoken_summary, group):
     assert spoken_summary[group]["met"], spoken_summary[group]
