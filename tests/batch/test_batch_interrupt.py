@@ -75,6 +75,7 @@ def _one_line(run: subprocess.CompletedProcess) -> None:
     assert "Traceback" not in run.stderr and "KeyError" not in run.stderr
 
 
+@pytest.mark.slow
 def test_ctrl_c_keeps_the_finished_items_and_a_rerun_resumes(tmp_path):
     """Ctrl-C: SIGINT to the command and its workers alike, s0 finished, s1 running."""
     from facemech.workflows.batch import run_batch

@@ -29,6 +29,7 @@ def recorded(tmp_path, name, groups, params):
     return path
 
 
+@pytest.mark.slow
 def test_calibrate_recovers_a_twin_subjects_force(tmp_path, monkeypatch, capsys):
     subject = anatomical({"force": 1.25})
     smile = recorded(tmp_path, "smile", ("ZYG", "LAO"), subject)

@@ -15,6 +15,7 @@ a fifth (827 against 692 steps), and the bounds took the largest value measured.
 import warnings
 
 import numpy as np
+import pytest
 
 from facemech.inverse.experiments import EXPERIMENT_SETTINGS, synthetic_data
 from facemech.inverse.invert import invert
@@ -27,6 +28,7 @@ from facemech.params import preset
 STEPS, MEDIAN_MM, MAX_MM = 905, 0.008194, 0.056424
 
 
+@pytest.mark.slow
 def test_anatomical_experiment1_trial_rolls_do_not_come_back(face):
     prm = preset("anatomical")
     data, _ = synthetic_data(face, params=prm)

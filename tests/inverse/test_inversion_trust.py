@@ -55,6 +55,7 @@ def _recovery(truth_path, inv_path):
     return r, inv
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("jaw", ["estimated", "chin marker"])
 def test_demo_twin_through_the_cli(demo_markers, tmp_path, jaw, monkeypatch, capsys):
     truth, markers = demo_markers
@@ -94,6 +95,7 @@ def test_demo_twin_through_the_cli(demo_markers, tmp_path, jaw, monkeypatch, cap
     assert np.isfinite(inv["control_se"].values[:-1]).all()
 
 
+@pytest.mark.slow
 def test_standard_errors_cover_the_truth_with_noisy_markers(demo_markers):
     """0.5 mm of marker noise: +-2 standard errors cover the true activity in at least 80 % of
     the frame-muscle pairs that the inversion marks identifiable."""
@@ -168,6 +170,7 @@ def test_method_objects_validate_their_own_options():
     assert info.value.field == "xtol"
 
 
+@pytest.mark.slow
 def test_invert_command_refuses_a_foreign_option(demo_markers, tmp_path, monkeypatch, capsys):
     _, markers = demo_markers
     code, _, err = run_cli(monkeypatch, capsys, "invert", "--markers", markers, "-o",

@@ -22,7 +22,9 @@ CANDIDATES = [Path(os.environ.get("FACEMECH_MOCHA", ROOT / "data" / "mocha" / "f
               ROOT / "tests" / "data" / "mocha" / "fsew0_001.ema",
               ROOT.parent / "shared" / "data" / "mocha" / "fsew0_001.ema"]
 MOCHA = next((p for p in CANDIDATES if p.is_file()), None)
-pytestmark = pytest.mark.skipif(MOCHA is None, reason="the MOCHA recording is not at hand")
+#: slow as a whole: its module fixture inverts the recording (20 s and more)
+pytestmark = [pytest.mark.skipif(MOCHA is None, reason="the MOCHA recording is not at hand"),
+              pytest.mark.slow]
 
 #: activity units: the most content above 15 Hz of any control. Issue 54 asks 0.02; the paced
 #: fit measures 0.023 (OOS; DLI 0.018, the others under 0.013; 0.03-0.07 unpaced); settings

@@ -32,6 +32,7 @@ def _stream_seconds(movie, which):
     return 3600 * int(h) + 60 * int(m) + float(s), p.stderr
 
 
+@pytest.mark.slow
 def test_speak_makes_audio_alignment_results_movie_and_manifest(tmp_path, monkeypatch, capsys):
     out = tmp_path / "bob"
     code, stdout, err = run_cli(monkeypatch, capsys, "speak", "Bob bought a puppy", "-o", out,
@@ -62,6 +63,7 @@ def test_speak_makes_audio_alignment_results_movie_and_manifest(tmp_path, monkey
 BILABIAL_GAP_MAX = 1.0e-3
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("text", ["Bob bought a puppy", "Pop, a blue balloon, and a large car."])
 def test_spoken_visemes_reach_their_targets(tmp_path, monkeypatch, capsys, text):
     """At the acoustic middle of each phone of an eSpeak sentence: /p b m/ closed (< 1 mm),
@@ -122,6 +124,7 @@ def test_speak_with_a_recorded_voice_and_its_textgrid(tmp_path, monkeypatch, cap
     assert code == 2 and "rate" in err and "Traceback" not in err
 
 
+@pytest.mark.slow
 def test_a_design_of_text_items_makes_a_mcgurk_set(tmp_path, monkeypatch, capsys):
     table = tmp_path / "mcgurk.csv"
     # the dubbing and the scaling are what is tested: the syllables are spoken unplanned

@@ -210,6 +210,7 @@ def _failing_hook(row):
 _failing_hook.version = "fails"
 
 
+@pytest.mark.slow
 def test_design_bad_row_rerun_and_manifest(item, tmp_path):
     from facemech.viz.render import RenderOptions
 
