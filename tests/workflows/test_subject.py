@@ -77,6 +77,7 @@ def test_markers_are_laid_on_the_skin_from_a_rough_frame(pitch_deg):
     np.testing.assert_allclose(fit(lab), pts, atol=1e-6)
 
 
+@pytest.mark.slow
 def test_subject_maps_every_marker_to_its_node(subject, twin):
     out, done = subject
     _, rec = twin
@@ -95,6 +96,7 @@ def test_subject_maps_every_marker_to_its_node(subject, twin):
                                atol=2e-6)
 
 
+@pytest.mark.slow
 def test_analyse_recovers_the_twin(subject, twin, monkeypatch, capsys):
     out, _ = subject
     d, rec = twin
@@ -152,6 +154,7 @@ def _refused(monkeypatch, capsys, *args) -> str:
     return lines[0]
 
 
+@pytest.mark.slow
 def test_subject_refuses_what_it_cannot_place(twin, tmp_path, monkeypatch, capsys):
     _, rec = twin
     base = ("subject", "default", "--markers", rec["rest"], "-o", tmp_path / "S")
@@ -170,6 +173,7 @@ def test_subject_refuses_what_it_cannot_place(twin, tmp_path, monkeypatch, capsy
     assert "not a subject folder" in line
 
 
+@pytest.mark.slow
 def test_a_recording_without_some_of_the_subjects_markers(subject, twin, tmp_path, monkeypatch,
                                                           capsys):
     out, done = subject
@@ -190,6 +194,7 @@ def test_a_recording_without_some_of_the_subjects_markers(subject, twin, tmp_pat
     assert read_results(tmp_path / "O" / "result.nc").sizes["time"] == 24  # 0.4 s at 60 Hz
 
 
+@pytest.mark.slow
 def test_a_rest_recording_as_labs_have_them(twin, tmp_path, monkeypatch, capsys):
     """A reference marker on the table, a lip marker hidden all through the rest, a head
     marker lost: the subject is made from what is left, and the notes say so."""
@@ -214,6 +219,7 @@ def test_a_rest_recording_as_labs_have_them(twin, tmp_path, monkeypatch, capsys)
     assert "M06" not in mapping and "REF" not in mapping and mapping.count("\n") == 1 + 34
 
 
+@pytest.mark.slow
 def test_analyse_estimates_the_jaw_when_the_chin_marker_has_a_long_gap(subject, twin, tmp_path,
                                                                         monkeypatch, capsys):
     out, _ = subject
