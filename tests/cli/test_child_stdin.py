@@ -22,6 +22,7 @@ def _words_in_alignment(path: Path) -> list[str]:
     return [r["label"] for r in csv.DictReader(lines) if r["tier"] == "words"]
 
 
+@pytest.mark.slow
 def test_speak_in_a_shell_loop_keeps_every_word(tmp_path):
     pytest.importorskip("imageio_ffmpeg")
     pytest.importorskip("espeakng_loader")

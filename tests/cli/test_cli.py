@@ -148,6 +148,7 @@ def test_emg_process_command(tmp_path, monkeypatch, capsys):
     assert lao[(t > 1.1) & (t < 1.3)].mean() > 0.5 and lao[t < 0.8].mean() < 0.05
 
 
+@pytest.mark.slow
 def test_render_and_plot(tmp_path, monkeypatch, capsys, face):
     pytest.importorskip("imageio_ffmpeg")
     import imageio_ffmpeg
@@ -188,6 +189,7 @@ def test_cli_entry_point_runs_as_a_program():
     assert "Traceback" not in run.stderr
 
 
+@pytest.mark.slow
 def test_demo_runs_without_data(tmp_path, monkeypatch, capsys):
     code, out, err = cli(monkeypatch, capsys, "demo", "-o", tmp_path / "d", "--no-video")
     assert code == 0, err

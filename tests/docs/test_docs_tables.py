@@ -162,6 +162,7 @@ def generated():
 
 # one test for every table: under pytest-xdist the tests of one parametrised function were
 # handed to both workers in spite of their group, and each worker ran every command again
+@pytest.mark.slow
 def test_docs_tables_match_their_commands(generated):
     """Each table of docs/*.md matches what its command prints, numbers within the table's
     tolerance (the spread of docs/reproducibility.md), the rest exactly: the last bits of an
