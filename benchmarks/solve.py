@@ -27,6 +27,8 @@ import scipy.sparse as sp  # noqa: E402
 from scipy.sparse.linalg import splu  # noqa: E402
 from threadpoolctl import threadpool_limits  # noqa: E402
 
+from facemech.physics.model import model as face_model
+
 
 def _superlu(matrix):
     return splu(sp.csc_matrix(matrix), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
@@ -69,7 +71,7 @@ def main(argv=None) -> int:
     x_c, x_l = chol.solve(rhs), lu.solve(rhs)
     _, act, jaw = utterance()
     duration = len(act) / params.frame_rate
-    simulate(face, act[:3], jaw[:3], params=params)  # compile
+    simulate(face_model(face, params), act[:3], jaw[:3])  # compile
     sims = {"cholmod": [], "superlu": []}
     runs = {}
     real = implicit.factorise
@@ -78,7 +80,7 @@ def main(argv=None) -> int:
             for name, factor in (("cholmod", real), ("superlu", _superlu)):
                 implicit.factorise = factor
                 t0 = time.perf_counter()
-                out = simulate(face, act, jaw, params=params)
+                out = simulate(face_model(face, params), act, jaw)
                 sims[name].append((time.perf_counter() - t0) / duration)
                 runs[name] = np.asarray(out.positions)
     finally:

@@ -19,6 +19,7 @@ import time
 import numpy as np
 
 from facemech.params import ITO_ACTIVATION, Parameters
+from facemech.physics.model import model as face_model
 
 #: (groups, landmark, axis) of each gesture, as in benchmarks/realism.py's dynamics table
 #: and the two of issue 27's speed targets: the marginal orbicularis lowering the upper lip,
@@ -137,7 +138,7 @@ def measure(face, params, groups, landmark, axis, seconds):
     act = np.zeros((frames, len(MUSCLE_GROUPS)))
     for g in groups:
         act[:, MUSCLE_GROUPS.index(g)] = 1.0
-    sim = simulate(face, act, params=params)
+    sim = simulate(face_model(face, params), act)
     x = sim.positions[:, face.landmarks[landmark], axis]
     y = np.abs(x - x[0])
     t = np.arange(frames) / params.frame_rate
@@ -168,7 +169,7 @@ def measure_open_jaw(face, params, groups, landmark, axis, seconds, jaw_deg=10.0
     act = np.zeros((frames, len(MUSCLE_GROUPS)))
     for g in groups:
         act[t >= lead - 1e-9, MUSCLE_GROUPS.index(g)] = 1.0
-    sim = simulate(face, act, jaw, params=params)
+    sim = simulate(face_model(face, params), act, jaw)
     k0 = int(round(lead * params.frame_rate))
     x = sim.positions[k0:, face.landmarks[landmark], axis]
     y = np.abs(x - x[0])
@@ -191,7 +192,7 @@ def overshoot(face, params, groups, landmark, axis, seconds):
     act = np.zeros((int(round(seconds * params.frame_rate)), len(MUSCLE_GROUPS)))
     for g in groups:
         act[:int(round(0.1 * params.frame_rate)), MUSCLE_GROUPS.index(g)] = 1.0
-    x = simulate(face, act, params=params).positions[:, face.landmarks[landmark], axis]
+    x = simulate(face_model(face, params), act).positions[:, face.landmarks[landmark], axis]
     x = x - x[0]
     x = x * np.sign(x[np.argmax(np.abs(x))])
     k = int(np.argmax(x))

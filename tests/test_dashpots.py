@@ -16,6 +16,7 @@ from facemech.io.activity import write_activity
 from facemech.params import MUSCLE_GROUPS, preset, read_preset
 from facemech.physics.assembly import element_forces
 from facemech.physics.bundles import PrismBundle, SpringBundle
+from facemech.physics.model import model as face_model
 from facemech.solvers.forward import simulate
 
 
@@ -73,7 +74,7 @@ def _path(face, params, group, landmark, frames=25):
     """A landmark's displacement (frames, 3) m under a step of full activity of ``group``."""
     act = np.zeros((frames, len(MUSCLE_GROUPS)))
     act[:, MUSCLE_GROUPS.index(group)] = 1.0
-    x = simulate(face, act, params=params).positions[:, face.landmarks[landmark]]
+    x = simulate(face_model(face, params), act).positions[:, face.landmarks[landmark]]
     return x - x[0]
 
 

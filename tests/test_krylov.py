@@ -10,6 +10,7 @@ import pytest
 from facemech import default_face
 from facemech.errors import InputError
 from facemech.params import MUSCLE_GROUPS, preset
+from facemech.physics.model import model as face_model
 from facemech.solvers.forward import simulate
 
 #: the step about its predictor with dashpots on the rate of stretch (a Kelvin-Voigt tissue)
@@ -21,7 +22,7 @@ KV = {"predictor": True, "implicit_stiffness_share": 0.75, "implicit_volume_scal
 def _path(face, params, group, landmark, frames=24):
     act = np.zeros((frames, len(MUSCLE_GROUPS)))
     act[:, MUSCLE_GROUPS.index(group)] = 1.0
-    sim = simulate(face, act, params=params)
+    sim = simulate(face_model(face, params), act)
     return sim.positions[:, face.landmarks[landmark]]
 
 

@@ -15,6 +15,7 @@ from facemech import default_face
 from facemech.errors import InputError
 from facemech.params import MUSCLE_GROUPS, preset, read_preset
 from facemech.physics.assembly import Physics, accumulate_forces, rest_anchors
+from facemech.physics.model import model as face_model
 from facemech.solvers.forward import simulate
 from facemech.solvers.implicit import LinearImplicitEuler
 from facemech.solvers.krylov_region import mouth_centre, restrict_forces
@@ -87,7 +88,7 @@ def test_the_regions_solve_is_its_block_with_the_muscles_exactly(coarse):
 def _path(face, params, frames=24):
     act = np.zeros((frames, len(MUSCLE_GROUPS)))
     act[:, MUSCLE_GROUPS.index("DLI")] = 1.0
-    return simulate(face, act, params=params).positions[:, face.landmarks["lower_lip_center"]]
+    return simulate(face_model(face, params), act).positions[:, face.landmarks["lower_lip_center"]]
 
 
 def test_the_corrected_step_converges_on_the_whole_faces_as_the_region_grows():

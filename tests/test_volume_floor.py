@@ -8,6 +8,7 @@ import pytest
 
 from facemech.geometry.prism import rest_geometry, volume_gradients
 from facemech.params import MUSCLE_GROUPS, preset
+from facemech.physics.model import model as face_model
 from facemech.solvers.volume_floor import VolumeFloor, resolve_volume_floor
 
 #: a right prism 2 mm high over a right triangle of legs 2 mm: volume 4 mm^3
@@ -105,7 +106,7 @@ def test_a_held_lip_gesture_keeps_every_prism_above_the_floor():
     act[:, MUSCLE_GROUPS.index("LLS")] = 1.0
     ratio = {}
     for floor in (0.0, 0.5):
-        sim = simulate(face, act, params=p.with_(volume_floor=floor, volume_floor_modulus=1e6))
+        sim = simulate(face_model(face, p.with_(volume_floor=floor, volume_floor_modulus=1e6)), act)
         ratio[floor] = (rest_geometry(sim.final_state.positions, face.prism_nodes,
                                       symmetric=True)[0] / v0).min()
     assert ratio[0.0] < 0.3

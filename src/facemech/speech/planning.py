@@ -199,7 +199,7 @@ def check_iterations(iterations) -> int:
     return n
 
 
-def plan_controls(alignment: Alignment, model, *, params=None,
+def plan_controls(alignment: Alignment, model, *,
                   strength: float | Articulation = 1.0, iterations: int = PLAN_ITERATIONS,
                   jaw_speed: float | None = JAW_SPEED_MAX,
                   progress: Callable[[int, int], None] | None = None) -> Plan:
@@ -208,8 +208,8 @@ def plan_controls(alignment: Alignment, model, *, params=None,
     Parameters
     ----------
     alignment : the phones (eSpeak, IPA or ARPABET), times in s
-    model : FaceModel, the face simulated
-    params : Parameters (default: the default preset); its frame rate is the controls'
+    model : Model, the face simulated and its parameters (:func:`facemech.physics.model.model`);
+        its frame rate is the controls'
     strength : a global strength or an :class:`~.articulation.Articulation`, as
         :func:`~.coarticulation.controls_from_alignment`; the plan starts from its gestures
     iterations : updates after the first simulation (0: the blend's controls, simulated once)
@@ -230,7 +230,6 @@ def plan_controls(alignment: Alignment, model, *, params=None,
     import time as _time
 
     from ..analysis.visible_speech import incisor_speed, peak_lower_lip_speed
-    from ..params import preset as load_preset
     from ..solvers.forward import simulate
     from .coarticulation import controls_from_alignment
 
@@ -238,14 +237,14 @@ def plan_controls(alignment: Alignment, model, *, params=None,
     if jaw_speed is not None and not (np.isfinite(jaw_speed) and jaw_speed > 0):
         raise InputError(f"the jaw's speed limit must be a positive number of m/s, got "
                          f"{jaw_speed!r}", field="jaw_speed")
-    params = load_preset("anatomical") if params is None else params
+    params = model.params
     articulation = as_articulation(strength)
     # the checks of the plain controls (frame rate, strength, duration, labels)
     controls_from_alignment(alignment, frame_rate=params.frame_rate, strength=articulation)
     items = gestures(alignment, articulation)
     phones = _phone_gestures(alignment)
     vowels = _stressed_vowels(alignment)
-    jaw_limit = None if jaw_speed is None else jaw_rate_limit(model, params, jaw_speed)
+    jaw_limit = None if jaw_speed is None else jaw_rate_limit(model.face, params, jaw_speed)
     t0 = _time.perf_counter()
     history, best, turns, step = [], None, {}, 1.0
     for it in range(iterations + 1):
@@ -254,7 +253,7 @@ def plan_controls(alignment: Alignment, model, *, params=None,
                                              strength=articulation.strength)
         if jaw_limit is not None:
             jaw = np.maximum(slew_limited(jaw, jaw_limit / params.frame_rate), 0.0)
-        sim = simulate(model, act, jaw, params=params)
+        sim = simulate(model, act, jaw)
         misses = _measure(alignment, sim, phones)
         speed = peak_lower_lip_speed(sim.time, sim.positions, sim.model)
         summary = _summary(misses, speed)
@@ -376,12 +375,12 @@ def _stressed_vowels(alignment: Alignment) -> tuple[int, ...]:
     """The indices in :func:`gestures` of the vowel gestures of stressed phones (eSpeak's
     ``'`` and ``,``, IPA's ``ˈ ˌ``, ARPABET's ``1 2``; every vowel's in an alignment that marks
     no stress): where a slow utterance's jaw opens further (:func:`_update`)."""
-    from ..analysis.visible_speech import _stress, reads_stress
+    from .phone_labels import phone_stress, reads_stress
     from .phoneclass import VOWEL_CLASSES
 
     marked = reads_stress(alignment)
     return tuple(k + j for seg, k, parts in _phone_parts(alignment)
-                 if not marked or _stress(seg.label, alignment.notation) is not None
+                 if not marked or phone_stress(seg.label, alignment.notation) is not None
                  for j, cls in enumerate(parts) if cls in VOWEL_CLASSES)
 
 

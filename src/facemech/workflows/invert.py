@@ -83,19 +83,17 @@ def invert_markers(
     -------
     facemech.inverse.result.Inversion
     """
-    from ..geometry.builder import load_face
     from ..inverse.methods import method_from_options
     from ..inverse.workflow import invert_marker_set
     from ..io.markers import read_markers
     from ..kinematics.mapping import read_mapping
-    from ..params import default_parameters
+    from ..physics.model import model as face_model
 
     method_from_options(method, **(options or {}))  # a bad option before any file is read
-    params = params or default_parameters()
     ms = markers if isinstance(markers, MarkerSet) else read_markers(markers)
-    model = load_face(face, tissue=params.tissue)
-    mapping = None if map_file is None else read_mapping(map_file, ms, model)
-    return invert_marker_set(ms, model, mapping=mapping, scale_pair=scale_pair, params=params,
+    model = face_model(face, params)  # the command's one model (None: the default preset)
+    mapping = None if map_file is None else read_mapping(map_file, ms, model.face)
+    return invert_marker_set(ms, model, mapping=mapping, scale_pair=scale_pair,
                              method=method, positive=positive, controls=controls, jaw=jaw,
                              noise=noise, options=options, progress=progress)
 
