@@ -40,7 +40,7 @@ def main(argv=None) -> int:
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--preset", default="anatomical")
     args = ap.parse_args(argv)
-    import facemech.solvers.implicit as implicit
+    import facemech.solvers.implicit_matrix as implicit
     from facemech import Physics, default_face, preset, simulate
     from facemech.demo import utterance
     from facemech.solvers.cholesky import CholeskyFactor

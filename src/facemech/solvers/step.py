@@ -39,14 +39,13 @@ from ..physics.assembly import Physics
 from .explicit import ExplicitEuler
 from .implicit import IMPLICIT_STIFFNESS_SHARE, ROS2_GAMMA, LinearImplicitEuler, Rosenbrock2
 from .jaw import jaw_poses
-from .solver_state import SolverState
+from .solver_state import Solver, SolverState
 from .state import Controls, State
 
 #: the integrators' names, as presets and the command line give them, and their solvers
 SOLVERS = {"euler": ExplicitEuler, "implicit": LinearImplicitEuler, "rosenbrock": Rosenbrock2}
 INTEGRATORS = tuple(SOLVERS)
 JAW_DRIVES = ("ramp", "hold")
-Solver = ExplicitEuler | LinearImplicitEuler | Rosenbrock2
 
 
 def solver_from_options(integrator: str | None, params: Parameters, *,
@@ -97,11 +96,12 @@ class Stepper:
     Parameters
     ----------
     physics : Physics
-    integrator : {"euler", "implicit", "rosenbrock"} or a solver object, optional
+    integrator : {"euler", "implicit", "rosenbrock"} or a :class:`Solver`, optional
         Default: the preset's (``params.integrator``): ``euler`` for the seeds' presets,
         ``implicit`` for the anatomical one, whose physiological forces and tissue viscosity
         make explicit steps unstable. A solver object (``ExplicitEuler(dt)``,
-        ``LinearImplicitEuler(substeps)``, ``Rosenbrock2(substeps)``) carries its own options.
+        ``LinearImplicitEuler(substeps)``, ``Rosenbrock2(substeps)``, or any object with
+        the protocol's ``name``, ``init`` and ``step``) carries its own options.
     substeps : int, optional
         Steps per frame of the implicit integrators (default: the preset's, 4: h = 4.2 ms); an
         error with ``euler``.
@@ -112,7 +112,7 @@ class Stepper:
 
     Attributes
     ----------
-    solver : ExplicitEuler, LinearImplicitEuler or Rosenbrock2
+    solver : Solver
     solver_state : SolverState -- ``solver.init(physics)``
     integrator : str -- the solver's name
     n_steps : int -- steps per frame
@@ -124,7 +124,7 @@ class Stepper:
         if jaw_drive not in JAW_DRIVES:
             raise InputError(f"unknown jaw drive {jaw_drive!r} (expected ramp or hold)",
                              field="jaw_drive")
-        if isinstance(integrator, (ExplicitEuler, LinearImplicitEuler, Rosenbrock2)):
+        if isinstance(integrator, Solver):
             for name, value in (("substeps", substeps), ("dt", dt)):
                 if value is not None:
                     raise InputError(f"give {name} to the solver object, not beside it",
