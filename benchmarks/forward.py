@@ -215,7 +215,7 @@ def main() -> None:
     simulate(face_model(anat_face, anat), act[:3], jaw[:3])
     wall, sim = timed(lambda: simulate(face_model(anat_face, anat), act, jaw), repeat)
     ph_a = Physics.build(anat_face, anat)
-    ss_a = Stepper(ph_a).solver_state
+    ss_a = Stepper(face_model(anat_face, anat)).solver_state
     m_a = np.zeros(ph_a.n_muscles)
     anchors_a = rest_anchors(ph_a)
     pos_a = anat_face.rest_positions.copy()
@@ -269,7 +269,7 @@ def main() -> None:
         results[label]["rms_deviation_nodes_mm"] = float(np.sqrt(np.mean(nodes**2)) * 1e3)
     # where the time of one step goes
     ph = Physics.build(face, seeds)
-    ss = Stepper(ph, integrator="rosenbrock", substeps=4).solver_state
+    ss = Stepper(face_model(face, seeds), integrator="rosenbrock", substeps=4).solver_state
     m = np.zeros(ph.n_muscles)
     anchors = rest_anchors(ph)
     pos = face.rest_positions.copy()

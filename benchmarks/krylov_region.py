@@ -36,7 +36,7 @@ def main(argv=None) -> int:
 
     from facemech import default_face
     from facemech.demo import utterance
-    from facemech.params import preset
+    from facemech.params import preset_pair
     from facemech.physics.threads import set_threads
     from facemech.solvers.forward import simulate
 
@@ -44,7 +44,7 @@ def main(argv=None) -> int:
     face = default_face("default")
     t, act, jaw = utterance()
     names = args.variants.split(",")
-    params = {n: preset("anatomical").with_(**VARIANTS[n]) for n in names}
+    params = {n: preset_pair("anatomical").with_(**VARIANTS[n]) for n in names}
     best = {n: float("inf") for n in names}
     with threadpool_limits(1):
         for n in names:  # compile and load once, untimed
@@ -55,7 +55,7 @@ def main(argv=None) -> int:
                 simulate(face_model(face, params[n]), act, jaw)
                 best[n] = min(best[n], time.perf_counter() - t0)
                 print(f"{n} {best[n]:.2f} s", file=sys.stderr, flush=True)
-    seconds = len(t) / params[names[0]].frame_rate
+    seconds = len(t) / params[names[0]].params.frame_rate
     out = {"utterance_s": round(seconds, 3), "repeat": args.repeat, "variants": {
         n: {"changes": {k: float(v) for k, v in VARIANTS[n].items()},
             "wall_s": round(best[n], 2), "real_time_factor": round(seconds / best[n], 2)}

@@ -43,6 +43,7 @@ def main(argv=None) -> int:
     import facemech.solvers.implicit_matrix as implicit
     from facemech import Physics, default_face, preset, simulate
     from facemech.demo import utterance
+    from facemech.params import preset_steps
     from facemech.solvers.cholesky import CholeskyFactor
 
     threadpool_limits(1)
@@ -50,8 +51,9 @@ def main(argv=None) -> int:
     params = preset(args.preset)
     physics = Physics.build(face, params)
     h = 1.0 / (params.frame_rate * 4)
-    system = implicit.implicit_system(physics, h)
-    a = (sp.diags(system.mass * (1.0 + h * params.mass_drag)) + h * system.damping
+    steps = preset_steps(args.preset)
+    system = implicit.implicit_system(physics, h, steps)
+    a = (sp.diags(system.mass * (1.0 + h * steps.mass_drag)) + h * system.damping
          + h * h * system.stiffness).tocsc()
     rhs = np.random.default_rng(0).standard_normal((a.shape[0], 3))
     t0 = time.perf_counter()

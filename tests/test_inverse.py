@@ -13,7 +13,6 @@ from facemech.inverse.invert import control_matrix, invert
 from facemech.inverse.methods import LeastSquares
 from facemech.kinematics import stats
 from facemech.params import MUSCLE_GROUPS, Parameters
-from facemech.physics.assembly import Physics
 from facemech.physics.model import model as face_model
 from facemech.solvers.state import State
 from facemech.solvers.step import Stepper
@@ -102,7 +101,7 @@ def frame_problem(face, frames, horizon, settle=None):
     activity for six frames."""
     ms, mapping, truth = twin(face, frames=frames)
     names, g = control_matrix(["DLI", "OOS", "LLS"])
-    st = Stepper(Physics.build(face, Parameters()), integrator="euler", dt=1e-3)
+    st = Stepper(face_model(face, Parameters()), integrator="euler", dt=1e-3)
     s0 = State.at_rest(face.rest_positions, st.physics.n_muscles)
     for _ in range(0 if settle is None else 6):
         s0 = st.advance(s0, g @ settle, 0.0)

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from facemech import default_face
-from facemech.params import MUSCLE_GROUPS, preset
+from facemech.params import MUSCLE_GROUPS, preset, preset_steps
 from facemech.physics.assembly import Physics
 from facemech.physics.model import model as face_model
 from facemech.solvers.forward import simulate
@@ -32,7 +32,7 @@ def test_a_rigid_translation_meets_no_stiffness_in_the_step(coarse):
     volume term's Gram matrices and the tethers resist no translation); without the coupling it
     is the drag the jaw's tissue met."""
     physics = Physics.build(coarse, preset("anatomical"))
-    system = implicit_system(physics, 1.0 / 240.0)
+    system = implicit_system(physics, 1.0 / 240.0, preset_steps("anatomical"))
     u = np.array([0.01, -0.02, 0.005])  # m/s
     everywhere = np.broadcast_to(u, (coarse.n_nodes, 3)).copy()
     moving = everywhere[physics.dynamic]

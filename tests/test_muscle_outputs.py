@@ -129,8 +129,9 @@ def test_outputs_from_a_list_of_states_equal_the_simulation(constant_run, tmp_pa
     """The generic path an inversion takes: its accepted states -> the same numbers, the same
     file variables."""
     prm, sim = constant_run
-    ph = Physics.build(sim.model, prm)
-    stepper = Stepper(ph, integrator="implicit")
+    model = face_model(sim.model, prm)
+    ph = model.physics
+    stepper = Stepper(model, integrator="implicit")
     states = [State.at_rest(ph.model.rest_positions, ph.n_muscles)]
     for a in sim.activity[:-1]:
         states.append(stepper.advance(states[-1], a, 0.0))

@@ -218,7 +218,7 @@ def arkit_basis(model, *, ramp: float = 0.2,
     if isinstance(rest, str):
         raise InputError(f"the face does not rest: {rest}", field="face")
     face = model.face
-    skin_x = face.rest_positions[: model.n_surface, 0]
+    skin_x = face.rest_positions[: face.n_surface, 0]
     x = skin_x - np.median(skin_x)
     disp = np.zeros((len(ARKIT_SHAPES), face.n_surface, 3))
     notes = []

@@ -152,7 +152,7 @@ def step_response_matrix(model, nodes, gmat, *, estimate_jaw: bool,
     from .frame import JAW_UNIT
 
     physics = model.physics
-    stepper = Stepper(physics, dt=model.params.fast_dt if dt is None else dt)
+    stepper = Stepper(model, dt=model.steps.fast_dt if dt is None else dt)
     nm = gmat.shape[1]
     start = np.asarray(jaw_start, float)
 

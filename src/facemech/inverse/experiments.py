@@ -70,7 +70,7 @@ def synthetic_data(model, *, dt: float | None = None, noise: float = 0.0, seed: 
     """The synthetic markers (MarkerSet, metres), the true group activity (36, groups).
 
     ``model`` is a :class:`~facemech.physics.model.Model`; ``dt`` (s) defaults to its
-    parameters' ``fast_dt`` (used by the explicit integrator of the seeds' presets); ``noise``
+    method's ``fast_dt`` (used by the explicit integrator of the seeds' presets); ``noise``
     (m) is the standard deviation of Gaussian noise added to every coordinate (seeded by
     ``seed``).
     """
@@ -81,7 +81,7 @@ def synthetic_data(model, *, dt: float | None = None, noise: float = 0.0, seed: 
     for g in PERIORAL:
         act[:, MUSCLE_GROUPS.index(g)] = tri
     params = model.params
-    sim = simulate(model, act, dt=params.fast_dt if dt is None else dt)
+    sim = simulate(model, act, dt=model.steps.fast_dt if dt is None else dt)
     face = sim.model
     names = [n for n in face.markers if n[0] in "RL"]
     pos = sim.positions[:, [face.markers[n] for n in names]]
@@ -236,11 +236,11 @@ def run_synthetic(model, *, methods=("lsq",), dt: float | None = None, noise: fl
     SyntheticExperiment
     """
     params, face = model.params, model.face
-    dt = params.fast_dt if dt is None else dt
+    dt = model.steps.fast_dt if dt is None else dt
     data, truth = synthetic_data(model, dt=dt, noise=noise)
     # with noise, the re-animation is also compared with the noise-free markers (the true motion)
     clean = synthetic_data(model, dt=dt)[0] if noise > 0 else None
-    stepped = model if dt == params.fast_dt else model.with_params(fast_dt=dt)
+    stepped = model.with_steps(fast_dt=dt)
     used = {n: face.markers[n] for n in data.names if n.startswith("R")}
     all_nodes = [face.markers[n] for n in data.names]
     runs: dict = {}
@@ -415,8 +415,8 @@ def run_crosstalker(model, *, frames: int = 120, dt: float | None = None,
     from ..solvers.jaw_drive import jaw_angles_from_marker
 
     params, face = model.params, model.face
-    dt = params.fast_dt if dt is None else dt
-    talker = face_model(second_talker(), params)
+    dt = model.steps.fast_dt if dt is None else dt
+    talker = face_model(second_talker(), params, steps=model.steps)
     other = talker.face
     act, jaw = gesture_controls(frames, params.frame_rate)
     sim = simulate(talker, act, jaw, dt=dt)
@@ -429,10 +429,11 @@ def run_crosstalker(model, *, frames: int = 120, dt: float | None = None,
     for adaptation in ("scaling", "warp"):
         if adaptation == "scaling":
             adapted = scale_adapt(data, face, mapping_all, ("R02", "L07")).markers
-            on = model if dt == params.fast_dt else model.with_params(fast_dt=dt)
+            on = model.with_steps(fast_dt=dt)
         else:
             adapted = data
-            on = face_model(warp_face(face, data, mapping_all), params.with_(fast_dt=dt))
+            on = face_model(warp_face(face, data, mapping_all), params,
+                            steps=model.steps.with_(fast_dt=dt))
         jaw_est = jaw_angles_from_marker(on, mapping_all["R01"], adapted.marker("R01")[:, 1])
         label = f"lsq, positive, {adaptation}"
         t0 = time.perf_counter()

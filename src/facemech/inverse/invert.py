@@ -121,7 +121,7 @@ def invert(
     Parameters
     ----------
     model : Model -- the face, its parameters and physics (:func:`facemech.physics.model.model`);
-        the parameters' ``fast_dt`` is the explicit Euler step of every evaluation (s); the
+        its method's ``fast_dt`` is the explicit Euler step of every evaluation (s); the
         implicit presets step at their own frame substeps and another step is an error there
     markers : MarkerSet in the model's frame (metres) at the model's frame rate (60 Hz); the
         first frame is taken as the face at rest
@@ -157,7 +157,7 @@ def invert(
     if noise_mm is not None:  # the command line's interval (facemech.checks)
         check_value("noise_mm", noise_mm)
     face, params, physics = model.face, model.params, model.physics
-    dt = params.fast_dt
+    dt = model.steps.fast_dt
     src = markers.meta.get("source")
     if abs(markers.rate - params.frame_rate) > 1e-3 * params.frame_rate:
         raise InputError(f"markers at {markers.rate:g} Hz, the model runs at "
@@ -179,7 +179,7 @@ def invert(
     if prior is not None and np.shape(prior) != (frames, len(cnames)):
         raise InputError(f"prior must be (frames, {len(cnames)})", field="prior")
     nodes = np.array([mapping[n] for n in names])
-    stepper = Stepper(physics, dt=dt)
+    stepper = Stepper(model, dt=dt)
     lo = np.full(nc, 0.0 if positive else -1.0)
     hi = np.ones(nc)
     if estimate_jaw:

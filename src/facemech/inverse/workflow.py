@@ -94,7 +94,7 @@ def invert_marker_set(
         (``meta["roles"]``) in its own frame and at its own rate: its lips are laid on the
         face's vermilion points, and it is resampled
     model : Model -- the face, its parameters and physics (:func:`facemech.physics.model.model`);
-        the parameters' ``fast_dt`` is the explicit Euler step of every evaluation (s)
+        its method's ``fast_dt`` is the explicit Euler step of every evaluation (s)
     mapping : marker name -> node (:func:`facemech.kinematics.mapping.read_mapping`; None: the
         closest nodes, articulography's lips their vermilion points)
     scale_pair : "A,B": adapt the markers by per-axis scaling from two markers far apart

@@ -321,9 +321,9 @@ def _setup(model, activity, jaw_angle, *, integrator, substeps, dt, jaw_drive,
     from .jaw import jaw_poses
 
     poses = jaw_poses(jaw_angle, params) if jaw_angle.ndim == 1 else jaw_angle.copy()
-    model = model.face
-    stepper = Stepper(physics, integrator=integrator, substeps=substeps, dt=dt,
+    stepper = Stepper(model, integrator=integrator, substeps=substeps, dt=dt,
                       jaw_drive=jaw_drive)
+    model = model.face
     names, nodes = marker_nodes(model)
     state = initial_state or State.at_rest(model.rest_positions, physics.n_muscles,
                                            float(poses[0, 0]), jaw_shift=poses[0, 1:])

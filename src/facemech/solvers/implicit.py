@@ -15,7 +15,7 @@
     approximation of the Jacobian, so one constant factorised matrix (gamma h in place of h)
     serves every step: two force evaluations and two solves per step.
 
-With ``Parameters.predictor`` linear implicit Euler instead evaluates the forces at the
+With ``StepOptions.predictor`` linear implicit Euler instead evaluates the forces at the
 explicit predictor, ``A dv = h f(x + h v, v)`` (the step linearised about the predictor; the
 same as backward Euler when K is the true stiffness): the matrix then acts only on the change of
 velocity, so it resists no steady rigid turn (the corrected form's drag), but its excess over
@@ -40,14 +40,14 @@ Sherman-Morrison-Woodbury identity on the constant factorisation
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import ClassVar
 
 import numpy as np
 
 from ..errors import InputError
-from ..params import Parameters
 from ..physics.assembly import Physics, accumulate_forces, rest_anchors
+from ..stepping import StepOptions
 from .frame import place_jaw_into
 from .implicit_matrix import ImplicitSystem, implicit_system
 from .krylov import KRYLOV_GROWTH, krylov_step, region_krylov_step
@@ -60,7 +60,7 @@ ROS2_GAMMA = 1.0 + 1.0 / np.sqrt(2.0)
 #: continuum carries by default (``Parameters.implicit_stiffness_share``): with the exact
 #: damping in the matrix, the rest left explicit is stable at 4 steps per frame and the lips do
 #: not ring (docs/model.md, Integration)
-IMPLICIT_STIFFNESS_SHARE = Parameters.implicit_stiffness_share
+IMPLICIT_STIFFNESS_SHARE = StepOptions.implicit_stiffness_share
 
 
 def _anchor_velocity(jaw, pose, rate, anchors, h):
@@ -79,10 +79,10 @@ def _check_substeps(substeps) -> int:
     return int(substeps)
 
 
-def _init(physics: Physics, substeps: int, gamma: float) -> SolverState:
+def _init(physics: Physics, substeps: int, gamma: float, options: StepOptions) -> SolverState:
     frame = 1.0 / physics.params.frame_rate
-    system = implicit_system(physics, gamma * (frame / substeps))
-    prepared = solver_state(physics, substeps, system)
+    system = implicit_system(physics, gamma * (frame / substeps), options)
+    prepared = solver_state(physics, substeps, system, options)
     _warm_up(prepared, physics)
     return prepared
 
@@ -116,9 +116,14 @@ class LinearImplicitEuler:
     ----------
     substeps : int
         Steps per frame (4 at 60 Hz: h = 4.2 ms).
+    options : StepOptions
+        The matrix's shares of the stiffness, the predictor and its Krylov correction, the
+        drag, the contacts and volume floor stepped after each solve (its ``substeps`` and
+        ``dt`` are not read).
     """
 
     substeps: int
+    options: StepOptions = field(default_factory=StepOptions)
     name: ClassVar[str] = "implicit"
 
     def __post_init__(self):
@@ -126,7 +131,7 @@ class LinearImplicitEuler:
 
     def init(self, physics: Physics) -> SolverState:
         """The solver state of a model: its matrix factorised for h = frame / substeps."""
-        return _init(physics, self.substeps, 1.0)
+        return _init(physics, self.substeps, 1.0, self.options)
 
     def step(self, solver_state: SolverState, state: State, controls: Controls) -> State:
         """``state`` advanced by one frame under ``controls`` (a new :class:`State`)."""
@@ -182,9 +187,12 @@ class Rosenbrock2:
     ----------
     substeps : int
         Steps per frame (each two force evaluations and two solves).
+    options : StepOptions
+        As :class:`LinearImplicitEuler`'s (no predictor: a form of the linear implicit step).
     """
 
     substeps: int
+    options: StepOptions = field(default_factory=StepOptions)
     name: ClassVar[str] = "rosenbrock"
 
     def __post_init__(self):
@@ -192,10 +200,10 @@ class Rosenbrock2:
 
     def init(self, physics: Physics) -> SolverState:
         """The solver state of a model: its matrix factorised for gamma h."""
-        if physics.params.predictor:
+        if self.options.predictor:
             raise InputError("predictor=True is a form of the linearly implicit Euler step "
                              "(integrator 'implicit'), not of 'rosenbrock'", field="predictor")
-        return _init(physics, self.substeps, ROS2_GAMMA)
+        return _init(physics, self.substeps, ROS2_GAMMA, self.options)
 
     def step(self, solver_state: SolverState, state: State, controls: Controls) -> State:
         """``state`` advanced by one frame under ``controls`` (a new :class:`State`)."""

@@ -18,6 +18,7 @@ import scipy.sparse as sp
 
 from ..geometry.prism import volume_gradients
 from ..physics.assembly import Physics
+from ..stepping import StepOptions
 from .cholesky import factorise
 from .krylov_region import KrylovRegion, krylov_region
 from .muscle_implicit import MuscleJacobian
@@ -89,8 +90,10 @@ class ImplicitSystem:
         return out
 
 
-def implicit_system(physics: Physics, h: float) -> ImplicitSystem:
-    """The constant matrices of a model, factorised for the step ``h`` s.
+def implicit_system(physics: Physics, h: float, options: StepOptions) -> ImplicitSystem:
+    """The constant matrices of a model, factorised for the step ``h`` s, as ``options``
+    says (the matrix's shares of the stiffness, the drag, the predictor and its Krylov
+    correction).
 
     Seeds' constants: K is the isotropic (per-axis) rest tangent stiffness: springs (mean of
     the elongation slope k and the compression slope pi sigma k / 2 of eqs. 1-2), the shape
@@ -102,7 +105,7 @@ def implicit_system(physics: Physics, h: float) -> ImplicitSystem:
     stiff branch, the volume term's Gram matrices and the tethers (see the module doc); the
     muscles join the solve through their beads.
     """
-    p = physics.params
+    p, o = physics.params, options
     forces = physics.forces
     springs, prisms, restoration = forces.springs, forces.prisms, forces.restoration
     nd = physics.n_dynamic
@@ -120,16 +123,16 @@ def implicit_system(physics: Physics, h: float) -> ImplicitSystem:
         # spring's stiff branch, the volume term's Gram matrices (within a factor 3 of its
         # rank-one Hessian) and the tethers
         damp = _graph_matrix(si, sj, springs.damping, nd)
-        k_springs = _graph_matrix(si, sj, p.implicit_stiffness_share * springs.k_high, nd)
+        k_springs = _graph_matrix(si, sj, o.implicit_stiffness_share * springs.k_high, nd)
         grads = volume_gradients(physics.model.rest_positions[prisms.nodes])  # (p, 6, 3)
         gram = (np.einsum("pac,pbc->pab", grads, grads) * prisms.bulk[:, None, None]
-                * p.implicit_volume_scale)
+                * o.implicit_volume_scale)
         tether = np.zeros(nd)
         np.add.at(tether, row[restoration.nodes], restoration.k_restore)
         stiff = (k_springs + sp.csc_matrix((gram.reshape(-1)[ok], (ra[ok], rb[ok])),
                                            shape=(nd, nd)) + sp.diags(tether)).tocsc()
         mass = 1.0 / physics.inv_mass[physics.dynamic]
-        boundary = _boundary_matrix(si, sj, springs, p.implicit_stiffness_share, ra, rb,
+        boundary = _boundary_matrix(si, sj, springs, o.implicit_stiffness_share, ra, rb,
                                     prisms.nodes[:, b_idx].reshape(-1), gram, nd,
                                     physics.model.n_nodes)
         tether_rows = row[restoration.nodes]
@@ -149,18 +152,18 @@ def implicit_system(physics: Physics, h: float) -> ImplicitSystem:
         boundary, tether_rows, tether_k = None, None, None
     stiff = stiff.tocsc()
     # a drag proportional to the mass (Parameters.mass_drag) is diagonal: exactly in the matrix
-    a_mat = (sp.diags(mass * (1.0 + h * p.mass_drag)) + h * damp + h * h * stiff).tocsc()
+    a_mat = (sp.diags(mass * (1.0 + h * o.mass_drag)) + h * damp + h * h * stiff).tocsc()
     # the matrix is symmetric positive definite: its Cholesky factor
     lu = factorise(a_mat)
     muscles = MuscleJacobian(physics, lu) if p.is_continuum else None
     region = None
-    if p.krylov_region > 0.0 and p.krylov_iterations:
-        region = krylov_region(physics, implicit_forces(physics)[0], a_mat,
-                               None if muscles is None else muscles.W, p.krylov_region)
+    if o.krylov_region > 0.0 and o.krylov_iterations:
+        region = krylov_region(physics, implicit_forces(physics, o)[0], a_mat,
+                               None if muscles is None else muscles.W, o.krylov_region)
     return ImplicitSystem(stiffness=stiff.tocsr(), damping=damp.tocsr(), mass=mass, lu=lu,
                           factor_step=h, muscles=muscles,
-                          predictor=bool(p.predictor), krylov=int(p.krylov_iterations),
-                          drag=float(p.mass_drag), boundary=boundary, tether_k=tether_k,
+                          predictor=bool(o.predictor), krylov=int(o.krylov_iterations),
+                          drag=float(o.mass_drag), boundary=boundary, tether_k=tether_k,
                           tether_rows=tether_rows, region=region)
 
 

@@ -21,6 +21,7 @@ import numpy as np
 from ..physics.assembly import Physics
 from ..physics.bundles import ForceBundles
 from ..physics.muscle import max_force
+from ..stepping import StepOptions
 from .contacts import ImplicitContacts, split_contacts
 from .frame import FrameStart, FrameTerms, filter_exact, place_jaw_into
 from .mandible import JawBundle, jaw_bundle
@@ -101,22 +102,24 @@ class SolverState:
         return self.frame.steady_force(activity)
 
 
-def solver_state(physics: Physics, n_steps: int, system: Any = None) -> SolverState:
+def solver_state(physics: Physics, n_steps: int, system: Any = None,
+                 options: StepOptions | None = None) -> SolverState:
     """The :class:`SolverState` of a model stepped ``n_steps`` times per frame.
 
-    With an implicit ``system``, the continuum's tissue and ``params.implicit_contacts``, the
+    With an implicit ``system``, the continuum's tissue and ``options.implicit_contacts``, the
     bone and lip contacts leave the force kernel and are stepped implicitly after each solve
-    (:mod:`.contacts`)."""
+    (:mod:`.contacts`); with ``options.volume_floor``, the prisms' floor too."""
     p = physics.params
     frame = 1.0 / p.frame_rate
     forces, contacts = physics.forces, ImplicitContacts.empty()
     if system is not None:
-        forces, contacts = implicit_forces(physics)
+        forces, contacts = implicit_forces(physics, options)
     floor = VolumeFloor.empty()
-    if system is not None and p.is_continuum and p.volume_floor > 0.0:
+    if (system is not None and options is not None and p.is_continuum
+            and options.volume_floor > 0.0):
         prisms = physics.forces.prisms
-        floor = VolumeFloor.of(prisms.nodes, prisms.rest_volume, p.volume_floor,
-                               p.volume_floor_modulus)
+        floor = VolumeFloor.of(prisms.nodes, prisms.rest_volume, options.volume_floor,
+                               options.volume_floor_modulus)
     return SolverState(
         forces=forces, contacts=contacts, volume_floor=floor, jaw=jaw_bundle(physics),
         dynamic=physics.dynamic,
@@ -126,12 +129,12 @@ def solver_state(physics: Physics, n_steps: int, system: Any = None) -> SolverSt
         zeta=float(p.activation_damping))
 
 
-def implicit_forces(physics: Physics) -> tuple[ForceBundles, ImplicitContacts]:
+def implicit_forces(physics: Physics,
+                    options: StepOptions | None) -> tuple[ForceBundles, ImplicitContacts]:
     """The force kernel's bundles of an implicit method and the contacts it steps apart: with
-    the continuum's tissue and ``params.implicit_contacts`` the bone and lip contacts leave the
+    the continuum's tissue and ``options.implicit_contacts`` the bone and lip contacts leave the
     kernel (:func:`.contacts.split_contacts`); otherwise the model's own bundles and none."""
-    p = physics.params
-    if p.is_continuum and p.implicit_contacts:
+    if physics.params.is_continuum and options is not None and options.implicit_contacts:
         return split_contacts(physics.forces)
     return physics.forces, ImplicitContacts.empty()
 

@@ -279,10 +279,10 @@ def simulate_files(output: str | Path, controls: Controls, jaw: JawSource = JawS
     SimulationRun
     """
     from ..atomic import check_output
-    from ..params import preset as get_preset
+    from ..params import preset_pair
     from ..physics.model import model as face_model
 
-    params = get_preset(preset)
+    params, steps = preset_pair(preset)
     if jaw_kinematics is not None:
         params = params.with_(jaw_kinematics=jaw_kinematics)
 
@@ -295,14 +295,14 @@ def simulate_files(output: str | Path, controls: Controls, jaw: JawSource = JawS
         movie = check_movie(movie, [*given, output], field="video")
     times, act, inputs = read_controls(controls, params.frame_rate)  # before the slow face
     notes = input_notes(controls, jaw)
-    model = face_model(face, params)
+    model = face_model(face, params, steps=steps)
     jaw_angles, jaw_inputs = jaw_series(jaw, model, times)
     inputs.update(jaw_inputs)
     src = str(controls.activity if controls.activity is not None else controls.emg)
     run = simulate_to_file(output, model, act, jaw_angles, inputs=inputs,
                            integrator=integrator, substeps=substeps, dt=dt, jaw_drive=jaw_drive,
                            source=src, progress=stage(
-                               progress, f"simulate ({integrator or params.integrator})"))
+                               progress, f"simulate ({integrator or model.steps.integrator})"))
     written = None
     if movie:  # from the file: the whole run in memory (rendering does not stream)
         from .pictures import render_movie

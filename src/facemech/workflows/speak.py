@@ -132,8 +132,7 @@ def speak(
     from ..analysis.describe import describe
     from ..io.activity import write_activity
     from ..io.results import file_hash, to_dataset, with_tongue, write_dataset
-    from ..params import MUSCLE_GROUPS
-    from ..params import preset as load_preset
+    from ..params import MUSCLE_GROUPS, preset_pair
     from ..physics.model import model as face_model
     from ..solvers.forward import simulate
     from ..speech.alignment_io import read_textgrid
@@ -168,7 +167,7 @@ def speak(
                 Path(given).name in FILES.values():
             raise InputError("an input would be overwritten by an output of the same name",
                              source=str(given), field="output")
-    params = load_preset(preset)
+    params, steps = preset_pair(preset)
     files = {k: out / v for k, v in FILES.items()}
     inputs: dict = {}
     if text is not None:
@@ -193,7 +192,7 @@ def speak(
         inputs["audio"] = file_hash(audio)
         inputs["textgrid"] = file_hash(textgrid)
     written = relabel(alignment, "ipa")  # before anything is written: a label without IPA
-    model = face_model(face, params)  # after the inputs are checked: it takes a while
+    model = face_model(face, params, steps=steps)  # after the inputs are checked: it takes a while
     out.mkdir(parents=True, exist_ok=True)
     write_wav(files["audio"], samples, rate)
     record = write_alignment(files, alignment, written)
