@@ -11,7 +11,6 @@ import pytest
 
 from conftest import run_cli
 from facemech import InputError, default_face
-from facemech.analysis.visible_speech import measure_phones
 from facemech.params import MUSCLE_GROUPS
 from facemech.physics.model import model as face_model
 from facemech.speech.alignment import Alignment, Segment
@@ -42,6 +41,7 @@ from facemech.speech.planning import (
     slew_limited,
 )
 from facemech.speech.visemes import VISEMES
+from facemech.speech.visible_speech import measure_phones
 
 MEN = MUSCLE_GROUPS.index("MEN")
 
@@ -272,7 +272,7 @@ def test_the_plan_opens_the_vowel_between_bilabials_and_closes_them(face):
     assert plan.record["kept_iteration"] > 0 and plan.record["final"]["cost_mm"] < 0.5 * \
         first["cost_mm"]
     # the jaw's speed is recorded with the lower lip's: the kept simulation's lower incisor
-    from facemech.analysis.visible_speech import incisor_speed
+    from facemech.speech.visible_speech import incisor_speed
 
     sim = plan.simulation
     assert plan.record["final"]["peak_incisor_speed_mm_s"] == pytest.approx(

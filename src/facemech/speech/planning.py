@@ -8,7 +8,7 @@ target of the lips and the jaw at its middle and reaches it by iterative learnin
 the phone instances: simulate the utterance's controls, measure each phone on the simulated
 face, adjust the gestures of the phones that missed, and simulate again.
 
-The targets (:data:`TARGETS`; measured as :mod:`facemech.analysis.visible_speech` does):
+The targets (:data:`TARGETS`; measured as :mod:`facemech.speech.visible_speech` does):
 
 - a bilabial (/p b m/): the lips together at the phone's middle (the midline lip gap 0);
 - a stressed open vowel (/ɑ æ a ɔ/, the open part of /aɪ aʊ/): a lip aperture of 12 to 17 mm
@@ -132,7 +132,7 @@ PASS_WEIGHT = 4.0
 #: m: the issue's pass lines as the planner's errors (:func:`_measure`) measure them: a
 #: bilabial's gap, an open vowel's shortfall from 12 mm (8 mm open), a rounded phone's from
 #: 3 mm (2 mm forward), a labiodental's distance (1 mm,
-#: :data:`facemech.analysis.visible_speech.CONTACT_MM`)
+#: :data:`facemech.speech.visible_speech.CONTACT_MM`)
 PASS_LINES = {"bilabial": 0.5e-3, "open": 4.0e-3, "rounded": 1.0e-3, "labiodental": 1.0e-3}
 #: m/s, the peak lower-lip speed an utterance is planned for: the slowest of the real lower
 #: lips of issue 27's recordings (115-233 mm/s); an utterance whose lower lip stays slower gets
@@ -154,7 +154,7 @@ SPEED_COST = 0.02
 TIMING_WINDOW_S = 0.06
 #: m/s, the fastest a plan moves the lower incisor's tip: the jaw is a kinematic drive, and the
 #: planner, left free, sped it to 400-800 mm/s (the fastest jaw of issue 27's recordings moves
-#: at 186, :data:`facemech.analysis.visible_speech.REAL_JAW_PEAK_MM_S`; real lower lips at
+#: at 186, :data:`facemech.speech.visible_speech.REAL_JAW_PEAK_MM_S`; real lower lips at
 #: 115-233). 250 mm/s, the top of issue 29's range for the lower lip, which rides the jaw: a
 #: faster jaw alone carried the lower lip past it (docs/visible-speech.md, "The jaw carries
 #: the lips")
@@ -229,9 +229,9 @@ def plan_controls(alignment: Alignment, model, *,
     """
     import time as _time
 
-    from ..analysis.visible_speech import incisor_speed, peak_lower_lip_speed
     from ..solvers.forward import simulate
     from .coarticulation import controls_from_alignment
+    from .visible_speech import incisor_speed, peak_lower_lip_speed
 
     iterations = check_iterations(iterations)
     if jaw_speed is not None and not (np.isfinite(jaw_speed) and jaw_speed > 0):
@@ -385,7 +385,7 @@ def _stressed_vowels(alignment: Alignment) -> tuple[int, ...]:
 
 
 def _phone_gestures(alignment: Alignment) -> list[list[int]]:
-    """Per phone that :func:`facemech.analysis.visible_speech.measure_phones` measures (those
+    """Per phone that :func:`facemech.speech.visible_speech.measure_phones` measures (those
     with classes other than a pause), the indices of its gestures in :func:`gestures`."""
     return [list(range(k, k + len(parts))) for _, k, parts in _phone_parts(alignment)
             if parts and parts != (PAUSE,)]
@@ -411,12 +411,12 @@ def _measure(alignment: Alignment, sim, phones: list[list[int]]) -> list[_Miss]:
     aperture short of 12 mm (0 up to :data:`TARGETS`'s ``too_wide``, negative beyond), rounded
     forward short of 3 mm, labiodental distance signed (positive: the lip's top above the
     incisors' edge)."""
-    from ..analysis.visible_speech import (
+    from .mouth import mouth_measures
+    from .visible_speech import (
         lower_lip_top,
         measure_phones,
         upper_incisor_edge,
     )
-    from .mouth import mouth_measures
 
     measured = measure_phones(alignment, sim.model, sim.time, sim.positions)
     edge = upper_incisor_edge(sim.model)

@@ -36,9 +36,9 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from ..geometry.teeth import teeth_depth
-from ..speech.mouth import midline_lip_pair, mouth_measures
-from ..speech.phone_labels import phone_stress, reads_stress
-from ..speech.phoneclass import phone_classes
+from .mouth import midline_lip_pair, mouth_measures
+from .phone_labels import phone_stress, reads_stress
+from .phoneclass import phone_classes
 
 __all__ = ["CONTACT_MM", "CRITERIA", "OPEN_EXTRA_LABELS", "ROUNDED_LABELS", "PhoneMeasure",
            "REAL_JAW_PEAK_MM_S", "class_table", "incisor_distance", "incisor_speed",
