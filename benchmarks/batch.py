@@ -23,6 +23,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from facemech.physics.model import model as face_model
+
 os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
@@ -39,7 +41,7 @@ def make_corpus(folder: Path, utterances: int, frames: int) -> Path:
     rows = ["id,job,markers"]
     for k in range(utterances):
         a = slice(k * step, k * step + frames)
-        sim = simulate(face, act[a], jaw[a])
+        sim = simulate(face_model(face), act[a], jaw[a])
         ms = MarkerSet(sim.markers, tuple(sim.marker_names), 60.0)
         write_markers(folder / f"utt{k}.csv", ms)
         rows.append(f"u{k},invert,utt{k}.csv")

@@ -35,6 +35,7 @@ from facemech import Physics, Stepper, default_face, load_face, preset, simulate
 from facemech.demo import utterance
 from facemech.physics.assembly import accumulate_forces, element_forces_one_thread, rest_anchors
 from facemech.physics.bundles import PrismBundle, SlabBundle
+from facemech.physics.model import model as face_model
 from facemech.physics.slabs import slab_axis
 from facemech.physics.threads import set_threads
 from facemech.solvers.explicit import EulerSteps, euler_frame
@@ -211,10 +212,10 @@ def main() -> None:
     repeat = 1 if args.quick else 3
     anat = preset("anatomical")
     anat_face = default_face()
-    simulate(anat_face, act[:3], jaw[:3], params=anat)
-    wall, sim = timed(lambda: simulate(anat_face, act, jaw, params=anat), repeat)
+    simulate(face_model(anat_face, anat), act[:3], jaw[:3])
+    wall, sim = timed(lambda: simulate(face_model(anat_face, anat), act, jaw), repeat)
     ph_a = Physics.build(anat_face, anat)
-    ss_a = Stepper(ph_a).solver_state
+    ss_a = Stepper(face_model(anat_face, anat)).solver_state
     m_a = np.zeros(ph_a.n_muscles)
     anchors_a = rest_anchors(ph_a)
     pos_a = anat_face.rest_positions.copy()
@@ -240,8 +241,8 @@ def main() -> None:
     face = default_face(tissue="uniform")
     seeds = preset("lucero1999")
     # warm up the compiled kernels
-    simulate(face, act[:3], jaw[:3], params=seeds, integrator="euler")
-    simulate(face, act[:3], jaw[:3], params=seeds, integrator="rosenbrock")
+    simulate(face_model(face, seeds), act[:3], jaw[:3], integrator="euler")
+    simulate(face_model(face, seeds), act[:3], jaw[:3], integrator="rosenbrock")
     variants = [("euler", "euler", {}), ("euler-1ms", "euler", {"dt": 1e-3}),
                 ("implicit-4", "implicit", {"substeps": 4}),
                 ("implicit-8", "implicit", {"substeps": 8}),
@@ -251,8 +252,8 @@ def main() -> None:
     results = {}
     sims = {}
     for label, integ, kw in variants:
-        wall, sim = timed(lambda i=integ, k=kw: simulate(face, act, jaw, integrator=i,
-                                                         params=seeds, **k), repeat)
+        wall, sim = timed(lambda i=integ, k=kw: simulate(face_model(face, seeds), act, jaw,
+                                                         integrator=i, **k), repeat)
         sims[label] = sim
         results[label] = {"integrator": integ, **kw,
                           "wall_s_per_simulated_s": wall / simulated,
@@ -268,7 +269,7 @@ def main() -> None:
         results[label]["rms_deviation_nodes_mm"] = float(np.sqrt(np.mean(nodes**2)) * 1e3)
     # where the time of one step goes
     ph = Physics.build(face, seeds)
-    ss = Stepper(ph, integrator="rosenbrock", substeps=4).solver_state
+    ss = Stepper(face_model(face, seeds), integrator="rosenbrock", substeps=4).solver_state
     m = np.zeros(ph.n_muscles)
     anchors = rest_anchors(ph)
     pos = face.rest_positions.copy()

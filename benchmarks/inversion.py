@@ -31,17 +31,18 @@ from facemech.demo import utterance  # noqa: E402
 from facemech.inverse.experiments import EXPERIMENT_SETTINGS, synthetic_data  # noqa: E402
 from facemech.inverse.invert import invert  # noqa: E402
 from facemech.params import preset  # noqa: E402
+from facemech.physics.model import model as face_model  # noqa: E402
 
 
 def default_inversion(face, seconds: float) -> dict:
     t, act, jaw = utterance()
     n = min(int(round(seconds * 60)), len(t))
-    sim = simulate(face, act[:n], jaw[:n])
+    sim = simulate(face_model(face), act[:n], jaw[:n])
     names = list(sim.marker_names)
     ms = MarkerSet(sim.markers, tuple(names), 60.0)
     mapping = dict(zip(names, [*face.landmarks.values(), *face.markers.values()], strict=True))
     t0 = time.perf_counter()
-    res = invert(face, ms, mapping)
+    res = invert(face_model(face), ms, mapping)
     wall = time.perf_counter() - t0
     s = res.error_summary()
     g = [res.control_names.index(c) for c in res.control_names if c != "jaw"]
@@ -66,7 +67,7 @@ def _group(name: str) -> int:
 
 def experiment1(face, powell_frames: int, methods=("lsq",)) -> dict:
     prm = preset("lucero1999")
-    data, truth = synthetic_data(face, params=prm)
+    data, truth = synthetic_data(face_model(face, prm))
     used = {n: face.markers[n] for n in data.names if n.startswith("R")}
     out: dict = {"frames": data.n_frames, "preset": "lucero1999", "methods": {}}
     for method in methods:
@@ -75,7 +76,7 @@ def experiment1(face, powell_frames: int, methods=("lsq",)) -> dict:
         kw = (dict(EXPERIMENT_SETTINGS) if method == "lsq"
               else {"controls": EXPERIMENT_SETTINGS["controls"]})
         t0 = time.perf_counter()
-        res = invert(face, part, used, method=method, params=prm,
+        res = invert(face_model(face, prm), part, used, method=method,
                      jaw_angle=np.zeros(n), **kw)
         wall = time.perf_counter() - t0
         entry = {"frames_run": n, "wall_s": wall, "steps": int(res.evaluations.sum()),
@@ -100,7 +101,7 @@ def experiment1_default(face) -> dict:
 
     prm = preset("anatomical")
     t0 = time.perf_counter()
-    res = run_synthetic(face, methods=("lsq",), params=prm)
+    res = run_synthetic(face_model(face, prm), methods=("lsq",))
     out: dict = {"preset": "anatomical", "frames": res.frames,
                  "wall_s": time.perf_counter() - t0, "runs": {}}
     for label, run in res.runs.items():

@@ -20,6 +20,7 @@ import time
 
 os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 
+from facemech.physics.model import model as face_model
 from speed import VARIANTS  # noqa: E402  (benchmarks/ is the script's folder)
 
 DEFAULT = ("default,kv_krylov4_floor_stiff4_drag200,kv_krylov4_floor_stiff4_drag200_region45,"
@@ -35,7 +36,7 @@ def main(argv=None) -> int:
 
     from facemech import default_face
     from facemech.demo import utterance
-    from facemech.params import preset
+    from facemech.params import preset_pair
     from facemech.physics.threads import set_threads
     from facemech.solvers.forward import simulate
 
@@ -43,18 +44,18 @@ def main(argv=None) -> int:
     face = default_face("default")
     t, act, jaw = utterance()
     names = args.variants.split(",")
-    params = {n: preset("anatomical").with_(**VARIANTS[n]) for n in names}
+    params = {n: preset_pair("anatomical").with_(**VARIANTS[n]) for n in names}
     best = {n: float("inf") for n in names}
     with threadpool_limits(1):
         for n in names:  # compile and load once, untimed
-            simulate(face, act[:3], jaw[:3], params=params[n])
+            simulate(face_model(face, params[n]), act[:3], jaw[:3])
         for _ in range(args.repeat):
             for n in names:
                 t0 = time.perf_counter()
-                simulate(face, act, jaw, params=params[n])
+                simulate(face_model(face, params[n]), act, jaw)
                 best[n] = min(best[n], time.perf_counter() - t0)
                 print(f"{n} {best[n]:.2f} s", file=sys.stderr, flush=True)
-    seconds = len(t) / params[names[0]].frame_rate
+    seconds = len(t) / params[names[0]].params.frame_rate
     out = {"utterance_s": round(seconds, 3), "repeat": args.repeat, "variants": {
         n: {"changes": {k: float(v) for k, v in VARIANTS[n].items()},
             "wall_s": round(best[n], 2), "real_time_factor": round(seconds / best[n], 2)}

@@ -25,6 +25,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from facemech.physics.model import model as face_model
+
 os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 
 
@@ -48,17 +50,17 @@ def child(mode: str, minutes: float, block: int, out: str) -> dict:
     act, jaw = controls(minutes)
     t0 = time.perf_counter()
     if mode == "floor":
-        simulate(face, act[:3], jaw[:3], params=prm)
+        simulate(face_model(face, prm), act[:3], jaw[:3])
         frames = 3
     elif mode == "memory":
         from facemech.io.results import write_results
 
-        write_results(out, simulate(face, act, jaw, params=prm))
+        write_results(out, simulate(face_model(face, prm), act, jaw))
         frames = len(act)
     else:
         from facemech.workflows.simulate import simulate_to_file
 
-        simulate_to_file(out, face, act, jaw, params=prm, block_frames=block)
+        simulate_to_file(out, face_model(face, prm), act, jaw, block_frames=block)
         frames = len(act)
     wall = time.perf_counter() - t0
     peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024  # KiB on Linux

@@ -36,6 +36,8 @@ os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
 
+from facemech.physics.model import model as face_model
+
 #: Ito, Murano & Gomi (2004): the lips' force response, 6.1 Hz, damping ratio 0.7
 FAST = {"fv_vmax": 20.0, "tau_activation": 1.0 / (2.0 * np.pi * 6.1),
         "activation_damping": 0.7, "substeps": 12, "dt": 1.0 / 720.0, "fast_dt": 1.0 / 720.0}
@@ -64,7 +66,7 @@ def run(face, name: str) -> dict:
     params = preset("anatomical").with_(**changes)
     ms = speech_targets(face, posture_s=0.16 * slow, transition_s=0.12 * slow,
                         frame_rate=params.frame_rate)
-    r = reach(face, params, markers=ms, controls=controls or REACH_CONTROLS, **options)
+    r = reach(face_model(face, params), markers=ms, controls=controls or REACH_CONTROLS, **options)
     return {"rms_mm": round(r.rms * 1e3, 3), "largest_mm": round(r.largest * 1e3, 2),
             "components_rms_mm": {k: round(v * 1e3, 3) for k, v in r.components.items()},
             "share_of_squared_error": {k: round(v, 3) for k, v in r.share.items()},

@@ -31,6 +31,7 @@ from facemech import default_face, simulate  # noqa: E402
 from facemech.analysis.folds import largest_fold_increase  # noqa: E402
 from facemech.analysis.gestures import TARGETS, check_targets, run_gesture  # noqa: E402
 from facemech.params import MUSCLE_GROUPS, preset  # noqa: E402
+from facemech.physics.model import model as face_model  # noqa: E402
 
 KEYS = ("corner_up", "corner_out", "corner_forward", "upper_lip_up", "lower_lip_down",
         "chin_up", "upper_lip_forward", "lower_lip_forward", "mouth_narrower", "largest")
@@ -39,7 +40,7 @@ KEYS = ("corner_up", "corner_out", "corner_forward", "upper_lip_up", "lower_lip_
 def gesture_table(face, params) -> dict:
     out = {}
     for name in [*MUSCLE_GROUPS, "OOS+OOI"]:
-        m = run_gesture(face, tuple(name.split("+")), params=params).measures
+        m = run_gesture(face_model(face, params), tuple(name.split("+"))).measures
         out[name] = {k: round(float(m[k]), 2) for k in (*KEYS, "lips_forward")}
     return out
 
@@ -55,7 +56,7 @@ def rise_and_overshoot(face, params, substeps=None) -> dict:
             act = np.zeros((61, len(MUSCLE_GROUPS)))
             for g in group.split("+"):
                 act[:, MUSCLE_GROUPS.index(g)] = level
-            sim = simulate(face, act, params=params, substeps=substeps)
+            sim = simulate(face_model(face, params), act, substeps=substeps)
             node = sim.model.landmarks[lm]
             y = np.abs(sim.positions[:, node, ax] - sim.positions[0, node, ax])
             fin = y[-1]
@@ -67,7 +68,7 @@ def rise_and_overshoot(face, params, substeps=None) -> dict:
         act = np.zeros((60, len(MUSCLE_GROUPS)))
         for g in group.split("+"):
             act[:6, MUSCLE_GROUPS.index(g)] = 1.0
-        sim = simulate(face, act, params=params, substeps=substeps)
+        sim = simulate(face_model(face, params), act, substeps=substeps)
         node = sim.model.landmarks[lm]
         x = sim.positions[:, node, ax] - sim.positions[0, node, ax]
         x = x * np.sign(x[np.argmax(np.abs(x))])
@@ -81,7 +82,7 @@ def rise_and_overshoot(face, params, substeps=None) -> dict:
 
 def crease(face, params) -> float:
     jaw = np.radians(10.0) * np.clip(np.arange(40) / 15, 0, 1)
-    sim = simulate(face, np.zeros((40, len(MUSCLE_GROUPS))), jaw, params=params)
+    sim = simulate(face_model(face, params), np.zeros((40, len(MUSCLE_GROUPS))), jaw)
     return round(largest_fold_increase(sim.model, sim.positions[-1]), 1)
 
 
@@ -94,9 +95,10 @@ def main() -> None:
     t0 = time.perf_counter()
     report: dict = {"benchmark": "realism", "preset_scales": {
         "force": anat.k_force, "lip_stiffness_factor": anat.lip_stiffness_factor}}
-    table = gesture_table(face, anat)
+    table = gesture_table(face_model(face, anat))
     report["gestures"] = {"anatomical": table,
-                          "lucero1999": gesture_table(default_face(tissue="uniform"), seeds),
+                          "lucero1999": gesture_table(face_model(default_face(tissue="uniform"),
+                                                                 seeds)),
                           "targets": [{"groups": "+".join(g), "measure": m, "at_least": v}
                                       for g, m, v in TARGETS],
                           "misses": check_targets(table)}
@@ -107,7 +109,7 @@ def main() -> None:
         for name in ("default-coarse", "default", "default-fine"):
             f = default_face(name)
             for g in ("ZYG", "RIS", "LAO", "DAO", "LLS", "DLI", "MEN", "OOS+OOI"):
-                m = run_gesture(f, tuple(g.split("+")), params=anat).measures
+                m = run_gesture(face_model(f, anat), tuple(g.split("+"))).measures
                 for k in ("corner_up", "corner_out", "upper_lip_up", "lower_lip_down",
                           "chin_up", "mouth_narrower", "lips_forward"):
                     res.setdefault(f"{g} {k}", []).append(round(float(m[k]), 2))
@@ -125,7 +127,7 @@ def main() -> None:
         report["reachability"] = {}
         for label, controls in (("speech+marginal", REACH_CONTROLS),
                                 ("speech", SPEECH_CONTROLS)):
-            r = reach(face, anat, controls=controls)
+            r = reach(face_model(face, anat), controls=controls)
             report["reachability"][label] = {
                 "rms_mm": round(r.rms * 1e3, 3),
                 "median_frame_rms_mm": round(float(np.median(r.frame_rms)) * 1e3, 3),

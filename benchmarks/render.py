@@ -39,6 +39,8 @@ os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 from threadpoolctl import threadpool_limits  # noqa: E402
 
+from facemech.physics.model import model as face_model
+
 
 def _median_ms(fn, n: int) -> float:
     fn()
@@ -81,7 +83,7 @@ def main() -> None:
     n = 19
     act = np.zeros((n, len(MUSCLE_GROUPS)))
     jaw = np.radians(12.0) * np.linspace(0, 1, n)
-    sim = simulate(face, act, jaw)
+    sim = simulate(face_model(face), act, jaw)
     skin, angle = sim.positions[-1], float(jaw[-1])
     if args.against:
         return _compare(args, skin, angle)

@@ -7,14 +7,14 @@ at its default rate (175 words per minute; ``speak``'s own default is 160), the 
 chosen face, planned for the face's dynamics as ``speak`` plans them by default
 (:func:`facemech.speech.planning.plan_controls`; ``--no-plan``: the blend as it is,
 ``--plan-iterations N``); no movie, no blinks, gaze or head motion. Each phone is measured by
-:func:`facemech.analysis.visible_speech.measure_phones`.
+:func:`facemech.speech.visible_speech.measure_phones`.
 
 Prints JSON: the settings; ``criteria`` (the issue's); ``summary``
-(:func:`~facemech.analysis.visible_speech.summarize`: per group the share passing, the median,
+(:func:`~facemech.speech.visible_speech.summarize`: per group the share passing, the median,
 the worst phone, whether the criterion is met; the sentences' peak lower-lip speeds;
 ``incisor_speed``: the sentences' peak lower-incisor speeds, the jaw's, and how many exceed the
 fastest jaw of issue 27's real recordings, 186 mm/s);
-``classes`` (:func:`~facemech.analysis.visible_speech.class_table`: lip gap and protrusion at
+``classes`` (:func:`~facemech.speech.visible_speech.class_table`: lip gap and protrusion at
 the phones' middles per articulatory class); ``sentences`` (per sentence: the duration, the
 peak lower-lip and lower-incisor speeds, the wall time, the plan's simulations and kept
 iteration);
@@ -143,12 +143,12 @@ def spoken_phones(text: str, *, voice: str = "en-us", rate_wpm: int = ESPEAK_DEF
     (phone measures, peak lower-lip speed m/s, the utterance's duration s, the manifest's
     ``plan``, the lower incisor's peak speed m/s). ``plan``: as
     :func:`~facemech.workflows.speak.speak`'s."""
-    from facemech.analysis.visible_speech import (
+    from facemech.speech.alive import Liveliness
+    from facemech.speech.visible_speech import (
         incisor_speed,
         measure_phones,
         peak_lower_lip_speed,
     )
-    from facemech.speech.alive import Liveliness
     from facemech.workflows.speak import speak
 
     with tempfile.TemporaryDirectory() as tmp:
@@ -190,7 +190,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     plan = False if args.no_plan else (True if args.plan_iterations is None
                                         else args.plan_iterations)
-    from facemech.analysis.visible_speech import (
+    from facemech.speech.visible_speech import (
         CRITERIA,
         REAL_JAW_PEAK_MM_S,
         class_table,

@@ -27,6 +27,8 @@ import scipy.sparse as sp  # noqa: E402
 from scipy.sparse.linalg import splu  # noqa: E402
 from threadpoolctl import threadpool_limits  # noqa: E402
 
+from facemech.physics.model import model as face_model
+
 
 def _superlu(matrix):
     return splu(sp.csc_matrix(matrix), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
@@ -38,9 +40,10 @@ def main(argv=None) -> int:
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--preset", default="anatomical")
     args = ap.parse_args(argv)
-    import facemech.solvers.implicit as implicit
+    import facemech.solvers.implicit_matrix as implicit
     from facemech import Physics, default_face, preset, simulate
     from facemech.demo import utterance
+    from facemech.params import preset_steps
     from facemech.solvers.cholesky import CholeskyFactor
 
     threadpool_limits(1)
@@ -48,8 +51,9 @@ def main(argv=None) -> int:
     params = preset(args.preset)
     physics = Physics.build(face, params)
     h = 1.0 / (params.frame_rate * 4)
-    system = implicit.implicit_system(physics, h)
-    a = (sp.diags(system.mass * (1.0 + h * params.mass_drag)) + h * system.damping
+    steps = preset_steps(args.preset)
+    system = implicit.implicit_system(physics, h, steps)
+    a = (sp.diags(system.mass * (1.0 + h * steps.mass_drag)) + h * system.damping
          + h * h * system.stiffness).tocsc()
     rhs = np.random.default_rng(0).standard_normal((a.shape[0], 3))
     t0 = time.perf_counter()
@@ -69,7 +73,7 @@ def main(argv=None) -> int:
     x_c, x_l = chol.solve(rhs), lu.solve(rhs)
     _, act, jaw = utterance()
     duration = len(act) / params.frame_rate
-    simulate(face, act[:3], jaw[:3], params=params)  # compile
+    simulate(face_model(face, params), act[:3], jaw[:3])  # compile
     sims = {"cholmod": [], "superlu": []}
     runs = {}
     real = implicit.factorise
@@ -78,7 +82,7 @@ def main(argv=None) -> int:
             for name, factor in (("cholmod", real), ("superlu", _superlu)):
                 implicit.factorise = factor
                 t0 = time.perf_counter()
-                out = simulate(face, act, jaw, params=params)
+                out = simulate(face_model(face, params), act, jaw)
                 sims[name].append((time.perf_counter() - t0) / duration)
                 runs[name] = np.asarray(out.positions)
     finally:

@@ -19,6 +19,7 @@ import time
 import numpy as np
 
 from facemech.params import ITO_ACTIVATION, Parameters
+from facemech.physics.model import model as face_model
 
 #: (groups, landmark, axis) of each gesture, as in benchmarks/realism.py's dynamics table
 #: and the two of issue 27's speed targets: the marginal orbicularis lowering the upper lip,
@@ -130,23 +131,25 @@ VARIANTS = {
 
 def measure(face, params, groups, landmark, axis, seconds):
     """Rise (s), peak speed (m/s), amplitude (m) and creep (share) of one gesture."""
+    model = face_model(face, params)  # params: a preset name, Parameters or Preset
+    rate = model.params.frame_rate
     from facemech.params import MUSCLE_GROUPS
     from facemech.solvers.forward import simulate
 
-    frames = int(round(seconds * params.frame_rate)) + 1
+    frames = int(round(seconds * rate)) + 1
     act = np.zeros((frames, len(MUSCLE_GROUPS)))
     for g in groups:
         act[:, MUSCLE_GROUPS.index(g)] = 1.0
-    sim = simulate(face, act, params=params)
+    sim = simulate(model, act)
     x = sim.positions[:, face.landmarks[landmark], axis]
     y = np.abs(x - x[0])
-    t = np.arange(frames) / params.frame_rate
+    t = np.arange(frames) / rate
     mono = np.maximum.accumulate(y)
     t10 = np.interp(0.1 * y[-1], mono, t)
     t90 = np.interp(0.9 * y[-1], mono, t)
     settled = np.interp(t90 + 0.3, t, y)
     return {"rise_ms": round(1e3 * (t90 - t10), 1),
-            "peak_speed_mm_s": round(1e3 * float(np.max(np.abs(np.diff(x)))) * params.frame_rate,
+            "peak_speed_mm_s": round(1e3 * float(np.max(np.abs(np.diff(x)))) * rate,
                                      1),
             "amplitude_mm": round(1e3 * float(y[-1]), 2),
             "creep_after_300ms": round(float((y[-1] - settled) / y[-1]), 3)}
@@ -157,19 +160,21 @@ def measure_open_jaw(face, params, groups, landmark, axis, seconds, jaw_deg=10.0
     degrees over the first 0.2 s (raised cosine) and held: the upper lip lowering as before a
     bilabial in speech, the lips apart (from rest they touch, and the upper lip presses on the
     lower one). Rise and speed are of the motion after the step."""
+    model = face_model(face, params)  # params: a preset name, Parameters or Preset
+    rate = model.params.frame_rate
     from facemech.params import MUSCLE_GROUPS
     from facemech.solvers.forward import simulate
     from facemech.waveforms import cosine_ramp
 
     lead = 0.6
-    frames = int(round((lead + seconds) * params.frame_rate)) + 1
-    t = np.arange(frames) / params.frame_rate
+    frames = int(round((lead + seconds) * rate)) + 1
+    t = np.arange(frames) / rate
     jaw = np.deg2rad(jaw_deg) * cosine_ramp(np.clip(t / 0.2, 0.0, 1.0))
     act = np.zeros((frames, len(MUSCLE_GROUPS)))
     for g in groups:
         act[t >= lead - 1e-9, MUSCLE_GROUPS.index(g)] = 1.0
-    sim = simulate(face, act, jaw, params=params)
-    k0 = int(round(lead * params.frame_rate))
+    sim = simulate(model, act, jaw)
+    k0 = int(round(lead * rate))
     x = sim.positions[k0:, face.landmarks[landmark], axis]
     y = np.abs(x - x[0])
     tt = t[k0:] - t[k0]
@@ -177,7 +182,7 @@ def measure_open_jaw(face, params, groups, landmark, axis, seconds, jaw_deg=10.0
     t10 = np.interp(0.1 * y[-1], mono, tt)
     t90 = np.interp(0.9 * y[-1], mono, tt)
     return {"rise_ms": round(1e3 * (t90 - t10), 1),
-            "peak_speed_mm_s": round(1e3 * float(np.max(np.abs(np.diff(x)))) * params.frame_rate,
+            "peak_speed_mm_s": round(1e3 * float(np.max(np.abs(np.diff(x)))) * rate,
                                      1),
             "amplitude_mm": round(1e3 * float(y[-1]), 2)}
 
@@ -185,13 +190,15 @@ def measure_open_jaw(face, params, groups, landmark, axis, seconds, jaw_deg=10.0
 def overshoot(face, params, groups, landmark, axis, seconds):
     """How far the landmark passes its rest after a 100-ms full pulse, as a share of its peak
     (tests/analysis/test_realism.py's ringing measure; its limit is 0.1)."""
+    model = face_model(face, params)  # params: a preset name, Parameters or Preset
+    rate = model.params.frame_rate
     from facemech.params import MUSCLE_GROUPS
     from facemech.solvers.forward import simulate
 
-    act = np.zeros((int(round(seconds * params.frame_rate)), len(MUSCLE_GROUPS)))
+    act = np.zeros((int(round(seconds * rate)), len(MUSCLE_GROUPS)))
     for g in groups:
-        act[:int(round(0.1 * params.frame_rate)), MUSCLE_GROUPS.index(g)] = 1.0
-    x = simulate(face, act, params=params).positions[:, face.landmarks[landmark], axis]
+        act[:int(round(0.1 * rate)), MUSCLE_GROUPS.index(g)] = 1.0
+    x = simulate(model, act).positions[:, face.landmarks[landmark], axis]
     x = x - x[0]
     x = x * np.sign(x[np.argmax(np.abs(x))])
     k = int(np.argmax(x))
@@ -212,13 +219,13 @@ def main(argv=None) -> int:
 
     from facemech import default_face
     from facemech.errors import SimulationBlowUp
-    from facemech.params import preset
+    from facemech.params import preset_pair
 
     face = default_face(args.face)
     out = {"face": args.face, "seconds": args.seconds, "variants": {}}
     with threadpool_limits(1):
         for name in args.variants.split(","):
-            p = preset("anatomical").with_(**VARIANTS[name])
+            p = preset_pair("anatomical").with_(**VARIANTS[name])
             rows = {}
             t0 = time.perf_counter()
             for groups, landmark, axis in GESTURES:

@@ -48,6 +48,7 @@ def main() -> None:
     from facemech.params import preset
     from facemech.physics.assembly import Physics
     from facemech.solvers.implicit import implicit_system
+    from facemech.stepping import StepOptions
 
     ap = argparse.ArgumentParser()
     ap.add_argument("--face", default="default")
@@ -74,9 +75,9 @@ def main() -> None:
     own = (h * parts["dashpots_along"] + h * h * (parts["springs_along"]
                                                  + parts["volume_rank_one"])).tocsr()
     a3 = sp.diags(np.repeat(mass, 3)) + own[idx][:, idx]
-    shared = implicit_system(physics.__class__.build(
-        physics.model, params.with_(predictor=True, implicit_stiffness_share=0.75,
-                                    implicit_volume_scale=3.0)), h)
+    shared = implicit_system(physics, h, StepOptions(
+        integrator="implicit", predictor=True, implicit_stiffness_share=0.75,
+        implicit_volume_scale=3.0))
     a1 = (sp.diags(shared.mass) + h * shared.damping + h * h * shared.stiffness)
     f1, s1 = _timed(a1, 3)  # x, y and z share it
     f3, s3 = _timed(a3, 1)

@@ -26,6 +26,7 @@ os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 
 from facemech import default_face, simulate  # noqa: E402
+from facemech.physics.model import model as face_model  # noqa: E402
 from facemech.speech.alignment import Alignment, Segment  # noqa: E402
 from facemech.speech.coarticulation import (  # noqa: E402
     JAW_LEAD_S,
@@ -44,7 +45,7 @@ def held_target(face, cls: str) -> dict:
     shape = np.clip(np.arange(frames) / RATE / RAMP, 0.0, 1.0)
     act = shape[:, None] * v.activity_vector()[None]
     jaw = max(v.jaw, 0.0)  # as the controls: the teeth meet, the jaw never closes past rest
-    sim = simulate(face, act, shape * jaw)
+    sim = simulate(face_model(face), act, shape * jaw)
     m = mouth_measures(sim.model, sim.positions[-1])
     return {"lip_gap_mm": round(1e3 * m["lip_gap"], 2),
             "upper_forward_mm": round(1e3 * m["upper_forward"], 2),
@@ -77,7 +78,7 @@ def lag_series(face, before: str, label: str, after: str, key: str, *, dur: floa
                    notation="espeak", duration=float(edges[-1]))
     k = labels.index(label)
     t, act, jaw = controls_from_alignment(al, lead_s=lead, jaw_lead_s=jaw_lead)
-    sim = simulate(face, act, jaw)
+    sim = simulate(face_model(face), act, jaw)
     series = mouth_measures(sim.model, sim.positions)[key]
     return t, series, 0.5 * (edges[k] + edges[k + 1])
 

@@ -12,6 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
+from facemech.physics.model import model as face_model
+
 #: (title, groups, parameter changes) of each panel after the rest
 PANELS = (
     ("full LLS, 1.5 s\n(the anatomical preset)", ("LLS",), {}),
@@ -74,7 +76,7 @@ def main(argv=None) -> int:
         for g in groups:
             act[:, MUSCLE_GROUPS.index(g)] = 1.0
         with threadpool_limits(1):
-            sim = simulate(face, act, params=base.with_(**changes))
+            sim = simulate(face_model(face, base.with_(**changes)), act)
         x = sim.final_state.positions
         ratio = rest_geometry(x, face.prism_nodes, symmetric=True)[0] / v0
         sc = draw(ax, x, title, ratio)

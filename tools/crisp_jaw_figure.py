@@ -24,9 +24,9 @@ def _spoken(text: str, speed: bool):
     plan's speed target or (``speed`` False) without it."""
     from unittest import mock
 
-    from facemech.analysis.visible_speech import incisor_speed, lower_lip_speed
     from facemech.speech import planning
     from facemech.speech.alive import Liveliness
+    from facemech.speech.visible_speech import incisor_speed, lower_lip_speed
     from facemech.workflows.speak import speak
 
     off = {"SPEED_COST": 0.0, "GAIN": {**planning.GAIN, "speed_jaw_rate": 0.0}}

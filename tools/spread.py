@@ -51,6 +51,8 @@ import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
+from facemech.physics.model import model as face_model
+
 ROOT = Path(__file__).resolve().parent.parent
 PERTURBATION = 1e-12  #: relative size of the ``perturbed`` environment's marker changes
 
@@ -143,7 +145,7 @@ def job_experiment1(preset_name: str) -> dict:
     from facemech.inverse.experiments import run_synthetic
     from facemech.params import preset
 
-    res = run_synthetic(default_face(), methods=("lsq",), params=preset(preset_name))
+    res = run_synthetic(face_model(default_face(), preset(preset_name)), methods=("lsq",))
     out = {}
     for label, run in res.runs.items():
         for c, r in run.activity_correlation.items():
@@ -241,7 +243,7 @@ def job_gestures() -> dict:
     from facemech.analysis.gestures import TARGETS, gesture_table
 
     groups = sorted({"+".join(t[0]) for t in TARGETS})
-    table = gesture_table(default_face(), groups=groups)
+    table = gesture_table(face_model(default_face()), groups=groups)
     return {f"{g}: {k} mm": float(v) for g, row in table.items() for k, v in row.items()}
 
 

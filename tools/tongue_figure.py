@@ -14,6 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
+from facemech.physics.model import model as face_model
+
 #: (label, eSpeak phones, their boundaries s, the time shown s)
 CASES = (("/θ/ in _ T i: _", ("_", "T", "i:", "_"), (0.0, 0.3, 0.42, 0.7, 1.0), 0.36),
          ("/t/ in _ t a _", ("_", "t", "a", "_"), (0.0, 0.3, 0.38, 0.7, 1.0), 0.34))
@@ -34,7 +36,7 @@ def _panels(face, labels, edges, when):
                                                            strict=True))
     al = Alignment((), phones, "espeak", edges[-1])
     _, act, jaw = controls_from_alignment(al, frame_rate=60.0)
-    sim = simulate(face, act, jaw)
+    sim = simulate(face_model(face), act, jaw)
     k = int(np.argmin(np.abs(sim.time - when)))
     pose = tongue_tip(al, sim.time)[k]
     look = look_from_model(face)

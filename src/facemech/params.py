@@ -8,11 +8,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 from types import MappingProxyType
+from typing import NamedTuple
 
 import numpy as np
 
 from .checks import check_fields
 from .errors import InputError
+from .stepping import PRESET_STEPS, StepOptions, split_overrides
 from .units import CM, DYNE, GRAM
 
 #: Muscle groups of the model, in the order used for activity arrays.
@@ -114,11 +116,6 @@ class Parameters:
     k_shape: float = 2000 * DYNE / CM  # N/m, k_e2 of eq. (9) (2000 dyne/cm)
     k_restore: float = 200 * DYNE / CM  # N/m, k_h of eq. (11) (200 dyne/cm)
     k_lip_contact: float = 50.0  # N/m, penalty stiffness that keeps the lips apart (our choice)
-    dt: float = 0.33e-3  # s, explicit Euler step of the paper
-    # s, the step of the fast paths (inversion, experiments): 1 ms stays close to the paper's step
-    # under the published k_f (markers within 0.18 mm on the demo utterance); presets on which
-    # 1 ms blows up or overshoots keep the paper's step (docs/model.md)
-    fast_dt: float = 1e-3
     frame_rate: float = FRAME_RATE_HZ  # Hz, control and output rate
     areas_cm2: MappingProxyType = field(default_factory=lambda: AREA_CM2)
     # ---- how the constants above are read, and what the anatomical preset adds ---------------
@@ -127,8 +124,6 @@ class Parameters:
     # node masses by the volume of the elements around them (physics/materials.py)
     material: str = "per_spring"
     tissue: str = "uniform"  # tissue geometry of the face: "uniform" (the seeds') or "anatomical"
-    integrator: str = "euler"  # the integrator every command uses with this preset
-    substeps: int = 4  # steps per frame of the implicit integrators
     density: float = 1050.0  # kg/m^3, soft tissue (continuum)
     shear_superficial: float = 0.0  # Pa, shear modulus between skin and muscle plane (continuum)
     shear_deep: float = 0.0  # Pa, shear modulus between muscle plane and bone (continuum)
@@ -142,28 +137,6 @@ class Parameters:
     #: viscosity), which does not resist a rigid turn of the tissue (issue 27: the lower lip
     #: everts as a nearly rigid flap, and eq. 8's dashpots made it slow)
     dashpot_isotropy: float = 1.0
-    #: the implicit methods evaluate the forces at the explicit predictor x + h v (the
-    #: linearly implicit step linearised about it) instead of at x with the constant matrix's
-    #: correction -h K v, which resists rigid turns as it resists stretch (numerical drag); the
-    #: matrix must then hold most of each stiffness (below)
-    predictor: bool = False
-    #: with the predictor: GMRES iterations on the step's true linearisation (the forces'
-    #: Jacobian applied by a finite difference of the forces), the constant matrix its
-    #: preconditioner; 0: the constant matrix's solve alone (its excess over the true stiffness
-    #: acts as inertia)
-    krylov_iterations: int = 0
-    #: m: with the Krylov correction, the radius about the mouth within which it is sought
-    #: (solvers/krylov_region.py: a node outside keeps the constant matrix's step, and each
-    #: iteration costs the region's share of the face); 0: the whole face
-    krylov_region: float = 0.0
-    #: s^-1, a drag on every moving node proportional to its mass and its velocity against the
-    #: skull (Rayleigh's mass-proportional damping), taken exactly into the implicit matrix;
-    #: the linearly implicit step only; 0: none
-    mass_drag: float = 0.0
-    #: the share of each spring's stiff branch, and the factor on the prisms' volume Gram
-    #: matrices, that the implicit methods' constant matrix holds (solvers/implicit.py)
-    implicit_stiffness_share: float = 0.3
-    implicit_volume_scale: float = 1.0
     # continuum: strain stiffening, the stiffness of every spring times this beyond
     # ``biphasic_knee`` of stretch (eq. 1's law on all springs; 1: linear)
     stiffening: float = 1.0
@@ -172,16 +145,6 @@ class Parameters:
     tether: float = 0.0  # N/m^3, stiffness per area holding the sliding deep surface (continuum)
     incisive_area_cm2: float = 0.10  # cm^2, each incisive bundle of orbicularis oris (estimate)
     k_bone_contact: float = 0.0  # N/m^3, one-sided contact of the sliding surface with the bone
-    #: the implicit methods step the bone and lip contacts on their own, after the global solve
-    #: (solvers/contacts.py); False keeps them in the force as penalties (they chatter at 4 steps
-    #: per frame, and the chatter made results hang on the last bit: docs/reproducibility.md).
-    #: On in the anatomical preset (issue 32); the seeds' presets do not use it (explicit Euler).
-    implicit_contacts: bool = False
-    #: the implicit methods' floor under each prism's volume (solvers/volume_floor.py): a
-    #: prism below ``volume_floor`` x its rest volume is pushed back by a one-sided penalty of
-    #: modulus ``volume_floor_modulus`` (Pa), stepped on its own after the solve; 0: none
-    volume_floor: float = 0.0
-    volume_floor_modulus: float = 0.0
     # how a jaw angle alone moves the mandible (JAW_KINEMATICS): the seeds' hinge, or the hinge
     # with the condyle's coupled glide of glide_rate (m/rad) along glide_slope (rad below the
     # horizontal)
@@ -194,7 +157,6 @@ class Parameters:
         check_jaw_kinematics(self.jaw_kinematics, self.glide_rate, self.glide_slope)
         check_muscle_dynamics(self.fv_vmax, self.fv_curvature, self.tau_activation,
                               self.activation_damping)
-        check_predictor(self)
 
     @property
     def is_continuum(self) -> bool:
@@ -221,11 +183,6 @@ class Parameters:
         if group in MARGINAL_GROUPS:
             return 0.0
         return self.k_passive_per_cm2 * self.areas_cm2[group]
-
-    @property
-    def steps_per_frame(self) -> int:
-        """Euler steps per 60-Hz frame: 50 at the paper's 0.33 ms (the step becomes 1/3000 s)."""
-        return max(1, int(1.0 / (self.frame_rate * self.dt) + 1e-9))
 
     def with_(self, **changes) -> Parameters:
         """A copy with some fields changed."""
@@ -264,39 +221,6 @@ MUSCLE_DYNAMICS_KEYS = MappingProxyType({
     "activation_tau_ms": ("tau_activation", 1e-3),
     "activation_damping": ("activation_damping", 1.0),
 })
-
-
-#: the least shares of the stiffness that the implicit matrix must hold for the predictor's
-#: step to be stable at any stiffness: 3/4 of each spring's stiff branch (the scalar step's
-#: spectral radius, docs/model.md), and 3 x each prism's volume Gram matrix (whose largest
-#: eigenvalue is at least a third of the volume term's rank-one Hessian's)
-PREDICTOR_LEAST_SHARES = {"implicit_stiffness_share": 0.75, "implicit_volume_scale": 3.0}
-
-
-def check_predictor(params: Parameters) -> None:
-    """The predictor's step needs most of each stiffness in the matrix: InputError naming the
-    field that holds too little (:data:`PREDICTOR_LEAST_SHARES`); the Krylov correction is a
-    solve of the predictor's step and needs it."""
-    if params.mass_drag and params.integrator != "implicit":
-        raise InputError(f"mass_drag is taken into the linearly implicit step's matrix: it needs "
-                         f"integrator 'implicit' (got {params.integrator!r})", field="mass_drag")
-    region = params.krylov_region
-    if not (isinstance(region, (int, float)) and np.isfinite(region) and 0.0 <= region <= 0.5):
-        raise InputError(f"krylov_region is a radius about the mouth in metres, 0 (the whole "
-                         f"face) to 0.5 (got {region!r})", field="krylov_region")
-    if region and not params.krylov_iterations:
-        raise InputError("krylov_region confines the Krylov correction: it needs "
-                         "krylov_iterations > 0", field="krylov_region")
-    if not params.predictor:
-        if params.krylov_iterations:
-            raise InputError("krylov_iterations solves the step about its predictor: it needs "
-                             "predictor=True", field="krylov_iterations")
-        return
-    for name, least in PREDICTOR_LEAST_SHARES.items():
-        if getattr(params, name) < least:
-            raise InputError(f"{name} must be at least {least} with predictor=True (got "
-                             f"{getattr(params, name)}): with less stiffness in the implicit "
-                             f"matrix the predictor's step blows up", field=name)
 
 
 def check_muscle_dynamics(vmax, curvature, tau, zeta, *, source: str | None = None) -> None:
@@ -338,9 +262,9 @@ def preset(name: str) -> Parameters:
     if name == "lucero1999":
         return Parameters()
     if name == "pitermann2001":
-        return Parameters(name="pitermann2001", damping=0.050, fast_dt=0.33e-3)
+        return Parameters(name="pitermann2001", damping=0.050)
     if name == "calibrated":
-        return Parameters(name="calibrated", k_force=CALIBRATED_K_FORCE, fast_dt=0.33e-3)
+        return Parameters(name="calibrated", k_force=CALIBRATED_K_FORCE)
     if name.lower().endswith(".json"):
         return read_preset(name)
     raise InputError(f"unknown preset {name!r} (expected {', '.join(PRESETS)} or a .json "
@@ -425,8 +349,8 @@ def anatomical(scales: dict | None = None) -> Parameters:
       critically damped filter with tau :data:`LIP_ACTIVATION_TAU` = 16.5 ms, whose 10-90 %
       rise is that of the lips' measured force response (55.5 ms; Ito, Murano & Gomi 2004).
       The seeds' f4 = 20 s/m and tau = 15 ms stay in their presets;
-    - integration: linearly implicit Euler, 4 steps per 60-Hz frame, with the bone and lip
-      contacts stepped on their own after each solve (``implicit_contacts``, issue 32).
+    The preset's numerical method (linearly implicit Euler, 4 steps per frame, the contacts
+    stepped after each solve) is :data:`facemech.stepping.PRESET_STEPS`.
     """
     s = {**ANATOMICAL_SCALES, **(scales or {})}
     unknown = set(s) - set(ANATOMICAL_SCALES)
@@ -438,8 +362,7 @@ def anatomical(scales: dict | None = None) -> Parameters:
             raise InputError(f"scale {k!r} must be a positive number (got {v!r})",
                              field=k or "scales")
     return Parameters(
-        name="anatomical", material="continuum", tissue="anatomical", integrator="implicit",
-        substeps=4, fast_dt=1.0 / 240.0, dt=1.0 / 240.0,
+        name="anatomical", material="continuum", tissue="anatomical",
         k_force=SPECIFIC_TENSION * FITTED_FORCE * s["force"],
         shear_superficial=6e3 * s["stiffness"], shear_deep=1.5e3 * s["stiffness"],
         lip_stiffness_factor=FITTED_LIPS * s["lips"], sphincter_scale=0.05 * s["sphincter"],
@@ -451,7 +374,7 @@ def anatomical(scales: dict | None = None) -> Parameters:
         k_restore=0.0, k_lip_contact=1e5, fixed_skull_contact=False,
         areas_cm2=ANATOMICAL_AREA_CM2, incisive_area_cm2=0.25, tether=0.0,
         k_bone_contact=1e7, jaw_kinematics="glide", glide_rate=GLIDE_RATE,
-        glide_slope=GLIDE_SLOPE, implicit_contacts=True,
+        glide_slope=GLIDE_SLOPE,
         fv_vmax=FACIAL_VMAX, tau_activation=LIP_ACTIVATION_TAU,
         activation_damping=LIP_ACTIVATION_DAMPING,
     )
@@ -459,7 +382,17 @@ def anatomical(scales: dict | None = None) -> Parameters:
 
 def read_preset(path) -> Parameters:
     """A preset saved by :func:`write_preset` (``facemech calibrate``): JSON with the base preset
-    and the scales fitted to a subject."""
+    and the scales fitted to a subject (its step options: :func:`read_preset_steps`)."""
+    return _read_preset_file(path)[0]
+
+
+def read_preset_steps(path) -> StepOptions:
+    """The :class:`~facemech.stepping.StepOptions` of a preset file: the base preset's with the
+    file's ``step`` block."""
+    return _read_preset_file(path)[1]
+
+
+def _read_preset_file(path) -> tuple[Parameters, StepOptions]:
     import json
     from pathlib import Path
 
@@ -488,10 +421,12 @@ def read_preset(path) -> Parameters:
         p = anatomical({k: _file_number(v) for k, v in scales.items()})
     except InputError as exc:
         raise InputError(exc.message, source=str(path), field=exc.field) from None
-    return p.with_(name=str(data.get("name", path.stem)),
-                   **_read_jaw(data.get("jaw"), p, str(path)),
-                   **_read_muscle(data.get("muscle"), p, str(path)),
-                   **_read_step(data.get("step"), p, str(path)))
+    base_steps = PRESET_STEPS["anatomical"]
+    tissue, steps = _read_step(data.get("step"), p, base_steps, str(path))
+    return (p.with_(name=str(data.get("name", path.stem)),
+                    **_read_jaw(data.get("jaw"), p, str(path)),
+                    **_read_muscle(data.get("muscle"), p, str(path)), **tissue),
+            base_steps.with_(**steps))
 
 
 def _file_number(v) -> float | None:
@@ -506,8 +441,9 @@ def _file_number(v) -> float | None:
     return x if np.isfinite(x) else None
 
 
-#: a preset file's ``step`` block: the file's key -> (the Parameters field, its kind and the
-#: factor to SI): issue 27's options of the step and the tissue's viscosity and volume
+#: a preset file's ``step`` block: the file's key -> (the field, its kind and the factor to
+#: SI): the step's options (:class:`~facemech.stepping.StepOptions`) and the tissue's viscosity
+#: and stiffening (:class:`Parameters`)
 STEP_KEYS = MappingProxyType({
     "substeps": ("substeps", int, 1),
     "predictor": ("predictor", bool, 1),
@@ -524,12 +460,12 @@ STEP_KEYS = MappingProxyType({
 })
 
 
-def _read_step(block, base: Parameters, source: str) -> dict:
-    """The step and tissue options of a preset file's ``step`` block (absent: the base
-    preset's; :data:`STEP_KEYS`), checked as a whole: a bad entry is an InputError naming the
-    file and ``step.KEY``."""
+def _read_step(block, base: Parameters, steps: StepOptions, source: str) -> tuple[dict, dict]:
+    """The tissue and step options of a preset file's ``step`` block (absent: the base
+    preset's; :data:`STEP_KEYS`), as changes to the parameters and to the step options, checked
+    as a whole: a bad entry is an InputError naming the file and ``step.KEY``."""
     if block is None:
-        return {}
+        return {}, {}
     if not isinstance(block, dict):
         raise InputError("step must be an object", source=source, field="step")
     unknown = sorted(set(block) - set(STEP_KEYS))
@@ -546,13 +482,15 @@ def _read_step(block, base: Parameters, source: str) -> dict:
                              f"{' of steps' if kind is int else ''} (got {v!r})", source=source,
                              field="step." + key)
         out[name] = v if kind is bool else kind(number) * scale
+    method, tissue = split_overrides(out)
     try:
-        base.with_(**out)
+        base.with_(**tissue)
+        steps.with_(**method)
     except InputError as exc:
         key = next((k for k, (f, _, _) in STEP_KEYS.items() if f == exc.field), None)
         raise InputError(exc.message, source=source,
                          field="step." + key if key else "step") from None
-    return out
+    return tissue, method
 
 
 def _read_muscle(block, base: Parameters, source: str) -> dict:
@@ -643,6 +581,37 @@ def write_preset(path, name: str, scales: dict, extra: dict | None = None, *,
 
 PRESETS = ("anatomical", "lucero1999", "pitermann2001", "calibrated")
 DEFAULT_PRESET = "anatomical"
+
+
+class Preset(NamedTuple):
+    """A preset as a command takes it: its :class:`Parameters` and its
+    :class:`~facemech.stepping.StepOptions` (:func:`preset_pair`)."""
+
+    params: Parameters
+    steps: StepOptions
+
+    def with_(self, **changes) -> Preset:
+        """A copy with some fields of either changed (each checked where it lives)."""
+        method, physical = split_overrides(changes)
+        return Preset(self.params.with_(**physical) if physical else self.params,
+                      self.steps.with_(**method) if method else self.steps)
+
+
+def preset_pair(name: str) -> Preset:
+    """The :class:`Preset` of a name or a ``.json`` file: :func:`preset`, :func:`preset_steps`."""
+    return Preset(preset(name), preset_steps(name))
+
+
+def preset_steps(name: str) -> StepOptions:
+    """The numerical method of a preset (name or ``.json`` file; :func:`preset`'s names):
+    :data:`facemech.stepping.PRESET_STEPS`, a file's with its ``step`` block."""
+    name = str(name)
+    if name in PRESET_STEPS:
+        return PRESET_STEPS[name]
+    if name.lower().endswith(".json"):
+        return read_preset_steps(name)
+    preset(name)  # the unknown name's error
+    raise AssertionError(name)
 
 
 def default_parameters() -> Parameters:

@@ -91,10 +91,10 @@ def warm_up(progress: StagedProgress | None = None) -> float:
     each), then write the stamp. ``progress`` (staged) gets :data:`STAGE`, parts done of 4.
     Returns the wall time, s."""
     from .demo import utterance
-    from .geometry.builder import default_face
     from .inverse.workflow import invert_marker_set
     from .io.markers import read_markers
     from .io.results import write_results
+    from .physics.model import model as face_model
     from .solvers.forward import simulate
     from .viz.movie import write_snapshot
     from .viz.render import RenderOptions
@@ -106,11 +106,12 @@ def warm_up(progress: StagedProgress | None = None) -> float:
 
     t0 = time.perf_counter()
     say(0)
-    face = default_face()
+    model = face_model("default")
+    face = model.face
     say(1)
     _, act, jaw = utterance()
     frames = slice(40, 44)  # a closure: muscles, lips in contact, the jaw moving
-    sim = simulate(face, act[frames], jaw[frames])
+    sim = simulate(model, act[frames], jaw[frames])
     say(2)
     with tempfile.TemporaryDirectory(prefix="facemech-warmup-") as tmp:
         write_results(Path(tmp) / "r.nc", sim)
@@ -118,7 +119,7 @@ def warm_up(progress: StagedProgress | None = None) -> float:
         write_snapshot(Path(tmp) / "s.png", scene, sim.positions[-1], sim.jaw_pose[-1],
                        options=RenderOptions(size=(96, 96)))
         say(3)
-        invert_marker_set(read_markers(Path(tmp) / "r.nc"), face)
+        invert_marker_set(read_markers(Path(tmp) / "r.nc"), model)
         say(4)
     seconds = time.perf_counter() - t0
     _write_stamp(seconds)

@@ -6,12 +6,13 @@ import numpy as np
 import pytest
 
 from facemech.analysis.reachability import COMPONENTS, GROUPS, reach, speech_targets
+from facemech.physics.model import model as face_model
 
 
 def test_components_add_up_to_the_total(face):
     # a short /p/: the upper lip 3 mm down in 0.05 s, 10 frames
     ms = speech_targets(face, posture_s=0.05, transition_s=0.05, sequence=("rest", "p"))
-    r = reach(face, markers=ms)
+    r = reach(face_model(face), markers=ms)
     assert set(r.components) == {*COMPONENTS, "lower_lip_on_jaw_vertical"}
     # mean square over the 6 fitted markers = the groups' (2 markers each) per-axis squares
     lateral = 1.0 - sum(r.share.values())  # the lips' lateral coordinates

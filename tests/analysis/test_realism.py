@@ -19,6 +19,7 @@ from facemech.analysis.gestures import (
 )
 from facemech.io.activity import write_activity
 from facemech.params import MUSCLE_GROUPS, preset
+from facemech.physics.model import model as face_model
 from facemech.solvers.forward import simulate
 
 
@@ -56,12 +57,12 @@ def test_opening_the_jaw_draws_no_crease(which):
         v, f, lm = scan_face()
         face = build_face(v, f, lm, name="scan", options=tissue_options("anatomical"))
     jaw = np.radians(10.0) * np.clip(np.arange(40) / 15, 0, 1)
-    sim = simulate(face, np.zeros((40, len(MUSCLE_GROUPS))), jaw)
+    sim = simulate(face_model(face), np.zeros((40, len(MUSCLE_GROUPS))), jaw)
     assert np.degrees(sim.jaw_angle[-1]) == pytest.approx(10.0)
     assert largest_fold_increase(sim.model, sim.positions[-1]) < 20.0
     # the seeds' tissue on the same face creases (the issue's complaint)
-    seeds = simulate(face, np.zeros((40, len(MUSCLE_GROUPS))), jaw,
-                     params=preset("lucero1999"))
+    seeds = simulate(face_model(face, preset("lucero1999")), np.zeros((40, len(MUSCLE_GROUPS))),
+                     jaw)
     assert largest_fold_increase(seeds.model, seeds.positions[-1]) > 25.0
 
 
@@ -80,7 +81,7 @@ def test_three_resolutions_give_the_same_gestures():
     for name in ("default-coarse", "default", "default-fine"):
         face = default_face(name)
         for groups in {g for g, _ in RESOLUTION_MEASURES}:
-            m = run_gesture(face, tuple(groups.split("+"))).measures
+            m = run_gesture(face_model(face), tuple(groups.split("+"))).measures
             for g, key in RESOLUTION_MEASURES:
                 if g == groups:
                     got.setdefault((g, key), []).append(m[key])
@@ -98,7 +99,7 @@ def test_three_resolutions_agree_on_every_named_measure():
     for name in ("default-coarse", "default", "default-fine"):
         face = default_face(name)
         for g, key in RESOLUTION_MISSES:
-            got.setdefault((g, key), []).append(run_gesture(face, (g,)).measures[key])
+            got.setdefault((g, key), []).append(run_gesture(face_model(face), (g,)).measures[key])
     for (g, key), v in got.items():
         v = np.abs(np.array(v))
         assert (v.max() - v.min()) / v[1] < 0.15, (g, key, v)
@@ -109,7 +110,7 @@ def rise_time(face, group, landmark, axis, level=1.0, frames=61):
     activity, against its value after ``frames`` frames."""
     act = np.zeros((frames, len(MUSCLE_GROUPS)))
     act[:, MUSCLE_GROUPS.index(group)] = level
-    sim = simulate(face, act)
+    sim = simulate(face_model(face), act)
     y = np.abs(sim.positions[:, face.landmarks[landmark], axis]
                - sim.positions[0, face.landmarks[landmark], axis])
     t = np.arange(frames) / 60.0
@@ -171,7 +172,7 @@ def test_a_full_pulse_returns_to_rest_without_ringing(face, group, landmark, axi
     act[:6, MUSCLE_GROUPS.index(group)] = 1.0
     if group == "OOS":
         act[:6, MUSCLE_GROUPS.index("OOI")] = 1.0
-    sim = simulate(face, act)
+    sim = simulate(face_model(face), act)
     x = sim.positions[:, face.landmarks[landmark], axis] - sim.positions[0, face.landmarks[
         landmark], axis]
     sign = np.sign(x[np.argmax(np.abs(x))])
@@ -192,8 +193,8 @@ def test_a_chin_marker_drives_the_jaw_in_the_tissue(face):
     node = face.markers["R01"]
     y = face.rest_positions[node, 1] - np.concatenate([np.linspace(0, 6e-3, 12),
                                                        np.full(48, 6e-3)])
-    jaw = jaw_angles_from_marker(face, p, node, y, lead=0)
-    sim = simulate(face, np.zeros((60, len(MUSCLE_GROUPS))), jaw, params=p)
+    jaw = jaw_angles_from_marker(face_model(face, p), node, y, lead=0)
+    sim = simulate(face_model(face, p), np.zeros((60, len(MUSCLE_GROUPS))), jaw)
     drop = sim.positions[-1, node, 1] - sim.positions[0, node, 1]
     assert drop * 1e3 == pytest.approx(-6.0, abs=0.4)
 
@@ -256,4 +257,4 @@ def test_the_lip_positions_of_real_speech_are_reachable(face):
     suite the day it passes, so that the mark comes off)."""
     from facemech.analysis.reachability import reach
 
-    assert reach(face).rms < 0.5e-3
+    assert reach(face_model(face)).rms < 0.5e-3

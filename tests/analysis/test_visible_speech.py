@@ -8,7 +8,10 @@ import json
 import numpy as np
 import pytest
 
-from facemech.analysis.visible_speech import (
+from facemech.speech.alignment import Alignment, Segment
+from facemech.speech.mouth import midline_lip_pair
+from facemech.speech.planning import PLAN_ITERATIONS as DEFAULT_PLAN_ITERATIONS
+from facemech.speech.visible_speech import (
     CONTACT_MM,
     REAL_JAW_PEAK_MM_S,
     PhoneMeasure,
@@ -19,9 +22,6 @@ from facemech.analysis.visible_speech import (
     summarize,
     upper_incisor_edge,
 )
-from facemech.speech.alignment import Alignment, Segment
-from facemech.speech.mouth import midline_lip_pair
-from facemech.speech.planning import PLAN_ITERATIONS as DEFAULT_PLAN_ITERATIONS
 
 RATE = 100.0  # Hz of the hand-made frames
 

@@ -10,6 +10,7 @@ import pytest
 
 from conftest import run_cli
 from facemech.errors import InputError
+from facemech.physics.model import model as face_model
 from test_bad_input_31 import refused
 
 
@@ -68,7 +69,8 @@ def item(face, tmp_path_factory):
     a = activity(24)
     bump = np.sin(np.linspace(0, np.pi, 24))
     a[:, 2] = 0.5 * bump
-    write_dataset(folder / "a.nc", to_dataset(simulate(face, a, np.radians(5.0) * bump)))
+    write_dataset(folder / "a.nc", to_dataset(simulate(face_model(face), a,
+                                                       np.radians(5.0) * bump)))
     write_wav(folder / "a.wav", np.sin(np.arange(6400) / 5.0), 16000)
     return folder
 

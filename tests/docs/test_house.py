@@ -191,8 +191,8 @@ def test_the_bump_is_the_ramp_mirrored_about_its_centre():
 
 # ---- the layers (issue 28): every import runs downward ------------------------------------------
 ARCHITECTURE = Path(__file__).resolve().parents[2] / "docs" / "architecture.md"
-#: the one cycle allowed: imports for type checking only
-TYPE_CHECKING_CYCLE = frozenset({"facemech.solvers.implicit", "facemech.solvers.solver_state"})
+#: the cycle allowed: none (not even one of imports for type checking only)
+TYPE_CHECKING_CYCLE = frozenset()
 
 
 def _layers() -> dict[str, int]:
@@ -279,9 +279,8 @@ def test_every_import_runs_downward():
     assert not upward, "\n".join(upward)
 
 
-def test_no_import_cycle_but_the_type_checking_one():
+def test_no_import_cycle():
     graph = {m: {t for t, _, _ in imports if t != m} for m, imports in _import_graph().items()}
-    checking = {(m, t) for m, imports in _import_graph().items() for t, _, tc in imports if tc}
     # Tarjan's strongly connected components
     index, low, stack, on, cycles = {}, {}, [], set(), []
 
@@ -313,10 +312,6 @@ def test_no_import_cycle_but_the_type_checking_one():
             visit(v)
     bad = [sorted(c) for c in cycles if c != TYPE_CHECKING_CYCLE]
     assert not bad, bad
-    # and the allowed one closes only through imports for type checking
-    for comp in cycles:
-        a, b = sorted(comp)
-        assert (a, b) in checking or (b, a) in checking, comp
 
 
 def test_importing_facemech_changes_no_environment_variable_nor_thread_count():

@@ -27,6 +27,7 @@ from facemech.geometry.surface_io import (
     read_surface_with_appearance,
     write_landmarks,
 )
+from facemech.physics.model import model as face_model
 from scans import scan_face
 
 TEX_H, TEX_W = 96, 160
@@ -237,7 +238,7 @@ def test_vertex_colours_map_to_the_same_positions(scan, tmp_path, monkeypatch, c
     from facemech.io.results import to_dataset
     from facemech.solvers.forward import simulate
 
-    ds = to_dataset(simulate(other, activity(2, OOS=0.1)))
+    ds = to_dataset(simulate(face_model(other), activity(2, OOS=0.1)))
     assert appearance_from_dataset(ds) == look and ds["vertex_colour"].dims == ("node", "rgb")
     assert "texture_uv" not in ds
 

@@ -32,6 +32,7 @@ from facemech.geometry.thinning import (
 from facemech.geometry.tissue import tissue_depth_mm
 from facemech.geometry.warp import generic_frontal_mm
 from facemech.params import MUSCLE_GROUPS
+from facemech.physics.model import model as face_model
 from facemech.physics.volume import rest_geometry
 from facemech.solvers.forward import simulate
 from scans import scan_face, scan_head
@@ -194,7 +195,7 @@ def test_the_head_builds_with_every_prism_whole_and_notes_that_say_where(head):
 
 def _open_jaw(model, degrees=15.0, frames=40):
     jaw = np.radians(degrees) * np.clip(np.arange(frames) / 15, 0, 1)
-    sim = simulate(model, np.zeros((frames, len(MUSCLE_GROUPS))), jaw)
+    sim = simulate(face_model(model), np.zeros((frames, len(MUSCLE_GROUPS))), jaw)
     assert np.degrees(sim.jaw_angle[-1]) == pytest.approx(degrees)
     return sim
 
@@ -223,7 +224,7 @@ def test_the_mended_head_smiles_with_both_corners_alike(head):
     frames = 40
     act = np.zeros((frames, len(MUSCLE_GROUPS)))
     act[:, MUSCLE_GROUPS.index("ZYG")] = np.clip(np.arange(frames) / 10, 0, 1)
-    sim = simulate(model, act, np.zeros(frames))
+    sim = simulate(face_model(model), act, np.zeros(frames))
     moved = {}
     for side, out in (("left", 1.0), ("right", -1.0)):
         i = model.landmarks[f"mouth_corner_{side}"]

@@ -12,6 +12,7 @@ from facemech.geometry.appearance import Appearance
 from facemech.geometry.builder import build_face, tissue_options
 from facemech.geometry.refine import lip_spacing, refine_perioral, split_faces
 from facemech.params import MUSCLE_GROUPS
+from facemech.physics.model import model as face_model
 from facemech.workflows.faces import build_face_file
 from scans import scan_face, write_landmark_csv, write_obj
 
@@ -66,7 +67,7 @@ def _corner_motion(model):
     act = np.zeros((40, len(MUSCLE_GROUPS)))
     for g in ("ZYG", "RIS", "DAO", "LLS"):
         act[:, MUSCLE_GROUPS.index(g)] = 0.6 * np.clip(np.arange(40) / 15, 0, 1)
-    sim = simulate(model, act)
+    sim = simulate(face_model(model), act)
     left = sim.marker("mouth_corner_left")[-1] - sim.marker("mouth_corner_left")[0]
     right = sim.marker("mouth_corner_right")[-1] - sim.marker("mouth_corner_right")[0]
     return left, right * [-1.0, 1.0, 1.0]  # the right side mirrored onto the left

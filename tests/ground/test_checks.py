@@ -12,7 +12,8 @@ from facemech import cli_options
 from facemech.checks import CHOICES, KINDS, RANGES
 from facemech.errors import InputError
 from facemech.inverse.methods import LeastSquares, Powell
-from facemech.params import PRESETS, Parameters, preset
+from facemech.params import PRESETS, Parameters, preset, preset_steps
+from facemech.stepping import STEP_FIELDS, StepOptions
 
 
 def test_an_unknown_material_is_an_error_naming_the_field():
@@ -22,10 +23,12 @@ def test_an_unknown_material_is_an_error_naming_the_field():
 
 
 @pytest.mark.parametrize("field, value", [("integrator", "eulr"), ("tissue", "anatomic"),
-                                         ("material", 1), ("fixed_skull_contact", "yes")])
+                                         ("material", 1), ("fixed_skull_contact", "yes"),
+                                         ("predictor", "yes")])
 def test_a_word_not_among_its_choices_is_an_error_naming_the_field(field, value):
+    made = StepOptions if field in STEP_FIELDS else Parameters
     with pytest.raises(InputError) as exc:
-        Parameters(**{field: value})
+        made(**{field: value})
     assert exc.value.field == field
 
 
@@ -39,22 +42,29 @@ def _outside(interval: str) -> list[float]:
 
 
 def _field_rows():
-    names = {f.name for f in fields(Parameters)}
+    names = {f.name for f in fields(Parameters)} | STEP_FIELDS
     return [(n, v) for n, r in RANGES.items() if n in names for v in _outside(r)]
 
 
 @pytest.mark.parametrize("field, value", _field_rows())
 def test_every_field_out_of_its_interval_is_refused_when_made(field, value):
+    """Of the constants (:class:`Parameters`) and of the method (:class:`StepOptions`)."""
     if KINDS[field] == "int" and math.isfinite(value):
         value = int(value)
+    made = StepOptions if field in STEP_FIELDS else Parameters
     with pytest.raises(InputError) as exc:
-        Parameters(**{field: value})
+        made(**{field: value})
     assert exc.value.field == field
+
+
+def test_the_constants_and_the_method_share_no_field():
+    assert not {f.name for f in fields(Parameters)} & STEP_FIELDS
 
 
 def test_the_presets_pass_their_own_checks_and_the_table_names_every_choice():
     for name in PRESETS:
         preset(name)
+        preset_steps(name)
     from facemech.solvers.step import INTEGRATORS
 
     assert CHOICES["integrator"] == INTEGRATORS
@@ -66,8 +76,8 @@ def test_the_command_lines_intervals_are_the_tables():
 
 #: the command line's numbers and the Python objects that take them
 _API = {"window": LeastSquares, "tol": LeastSquares, "bend": LeastSquares, "smooth": LeastSquares,
-        "effort": LeastSquares, "max_evaluations": LeastSquares, "dt": Parameters,
-        "substeps": Parameters}
+        "effort": LeastSquares, "max_evaluations": LeastSquares, "dt": StepOptions,
+        "substeps": StepOptions}
 
 
 @pytest.mark.parametrize("name, value", [(n, v) for n in _API for v in
@@ -104,7 +114,7 @@ def test_the_solver_options_of_a_run_are_checked_too():
 
     for option, value in (("dt", 1.0), ("dt", -1e-5), ("substeps", 0)):
         with pytest.raises(InputError) as exc:
-            solver_from_options("implicit", preset("anatomical"), **{option: value})
+            solver_from_options("implicit", preset_steps("anatomical"), 60.0, **{option: value})
         assert exc.value.field == option
 
 

@@ -13,6 +13,7 @@ from facemech.errors import InputError
 from facemech.io.markers import write_markers
 from facemech.markerset import MarkerSet
 from facemech.params import anatomical, preset, read_preset, write_preset
+from facemech.physics.model import model as face_model
 from facemech.solvers.forward import simulate
 
 MARKERS = ("R03", "R05", "R07", "L06", "R01")
@@ -22,7 +23,7 @@ MARKERS = ("R03", "R05", "R07", "L06", "R01")
 def recorded(tmp_path, name, groups, params):
     """A twin subject's recording of a maximal gesture: the model's markers (mm CSV)."""
     face = default_face()
-    sim = simulate(face, gesture_activity(groups), params=params)
+    sim = simulate(face_model(face, params), gesture_activity(groups))
     pos = sim.positions[:, [face.markers[m] for m in MARKERS]]
     path = tmp_path / f"{name}.csv"
     write_markers(path, MarkerSet(pos, MARKERS, 60.0), units="mm")

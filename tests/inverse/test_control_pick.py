@@ -20,6 +20,7 @@ from facemech.inverse.sensor_fit import fit_from_json
 from facemech.inverse.workflow import pick_candidates
 from facemech.io.results import read_results
 from facemech.params import preset
+from facemech.physics.model import model as face_model
 from facemech.solvers.forward import simulate
 from facemech.solvers.jaw import move_points
 from facemech.solvers.jaw_bone import poses_with_protrusion
@@ -40,7 +41,7 @@ S[1, 6], S[4, 6] = -1.2, 1.2     # G: m1 down and m2 up
 
 
 def _pick(face, names=NAMES, s=S):
-    return pick_controls(face, preset("anatomical"), [0, 1], list(names), estimate_jaw=False,
+    return pick_controls(None, [0, 1], list(names), estimate_jaw=False,
                          axes=(1, 2), responses=s, labels=["UL", "LL"])
 
 
@@ -100,7 +101,7 @@ def lips_twin(face):
         act[:, MUSCLE_GROUPS.index(group)] = level * when
     angle = np.radians(3.0) * bump + np.radians(8.0) * late
     poses = poses_with_protrusion(angle, np.zeros(frames), prm)
-    sim = simulate(face, act, poses)
+    sim = simulate(face_model(face), act, poses)
     lm = face.landmarks
     lips = sim.positions[:, [lm["upper_lip_center"], lm["lower_lip_center"]]]
     tip = lower_incisor_point(face)
@@ -135,7 +136,7 @@ def test_lips_closing_and_opening_on_the_jaw_are_reanimated_from_a_txy(face, lip
     prm = preset("anatomical")
     lm = face.landmarks
     nodes = [lm["upper_lip_center"], lm["lower_lip_center"]]
-    pick = pick_controls(face, prm, nodes, pick_candidates(face), estimate_jaw=False,
+    pick = pick_controls(face_model(face, prm), nodes, pick_candidates(face), estimate_jaw=False,
                          axes=(1, 2), labels=["UL", "LL"])
     for coord in ("UL y", "LL y"):
         assert f"{coord}+" not in {d for d, _, _ in pick.one_way}

@@ -13,7 +13,7 @@ from facemech.inverse.invert import control_matrix, invert
 from facemech.inverse.methods import LeastSquares
 from facemech.kinematics import stats
 from facemech.params import MUSCLE_GROUPS, Parameters
-from facemech.physics.assembly import Physics
+from facemech.physics.model import model as face_model
 from facemech.solvers.state import State
 from facemech.solvers.step import Stepper
 
@@ -74,7 +74,7 @@ def twin(face, frames=10):
     t = np.arange(frames) / 60
     c = np.stack([0.5 + 0.4 * np.sin(2 * np.pi * 2 * t), 0.3 + 0.2 * np.cos(2 * np.pi * t),
                   0.2 + 0.2 * np.sin(2 * np.pi * 1.5 * t)], axis=1)
-    sim = simulate(face, c @ g.T, integrator="euler", dt=1e-3, params=SEEDS)
+    sim = simulate(face_model(face, SEEDS), c @ g.T, integrator="euler", dt=1e-3)
     mk = list(face.markers)
     ms = MarkerSet(sim.positions[:, [face.markers[n] for n in mk]], tuple(mk), 60.0)
     mapping = {n: face.markers[n] for n in mk if n.startswith("R")}
@@ -84,15 +84,15 @@ def twin(face, frames=10):
 def test_twin_experiment_recovers_known_activity(seeds_face):
     face = seeds_face
     ms, mapping, truth = twin(face)
-    res = invert(face, ms, mapping, controls=["DLI", "OOS", "LLS"], params=SEEDS, **held(ms))
+    res = invert(face_model(face, SEEDS), ms, mapping, controls=["DLI", "OOS", "LLS"], **held(ms))
     # the activity of the last two frames shows mostly after the recording ends
     np.testing.assert_allclose(res.controls[:-3], truth[:-3], atol=0.05)
     np.testing.assert_allclose(res.controls[-3:-1], truth[-3:-1], atol=0.1)
     assert np.median(res.rms_error[1:]) < 1e-6
     assert np.all(np.isfinite(res.condition[1:])) and np.nanmax(res.condition) < 1e4
     # the re-animation is the forward simulation of the recovered activity
-    again = simulate(face, np.clip(res.activity, 0, 1), integrator="euler", dt=1e-3,
-                     params=SEEDS)
+    again = simulate(face_model(face, SEEDS), np.clip(res.activity, 0, 1), integrator="euler",
+                     dt=1e-3)
     np.testing.assert_allclose(again.positions, res.positions, atol=1e-12)
 
 
@@ -101,7 +101,7 @@ def frame_problem(face, frames, horizon, settle=None):
     activity for six frames."""
     ms, mapping, truth = twin(face, frames=frames)
     names, g = control_matrix(["DLI", "OOS", "LLS"])
-    st = Stepper(Physics.build(face, Parameters()), integrator="euler", dt=1e-3)
+    st = Stepper(face_model(face, Parameters()), integrator="euler", dt=1e-3)
     s0 = State.at_rest(face.rest_positions, st.physics.n_muscles)
     for _ in range(0 if settle is None else 6):
         s0 = st.advance(s0, g @ settle, 0.0)
@@ -157,8 +157,9 @@ def test_window_jacobian_from_lag_responses(seeds_face):
 def test_powell_baseline_with_the_positive_constraint(seeds_face):
     face = seeds_face
     ms, mapping, truth = twin(face, frames=4)
-    res = invert(face, ms, mapping, method="powell", controls=["DLI", "OOS", "LLS"],
-                 max_evaluations=150, params=SEEDS, jaw_angle=np.zeros(ms.n_frames))
+    res = invert(face_model(face, SEEDS), ms, mapping, method="powell",
+                 controls=["DLI", "OOS", "LLS"],
+                 max_evaluations=150, jaw_angle=np.zeros(ms.n_frames))
     assert np.all(res.controls >= 0)
     assert np.median(res.rms_error[1:]) < 0.02e-3
     assert res.evaluations[1:].min() > 10
@@ -166,7 +167,7 @@ def test_powell_baseline_with_the_positive_constraint(seeds_face):
 
 def test_experiment1_synthetic_data(seeds_face):
     face = seeds_face
-    data, truth = synthetic_data(face, params=SEEDS)
+    data, truth = synthetic_data(face_model(face, SEEDS))
     assert data.n_frames == 36 and len(data.names) == 19
     assert truth[:, :8].max() == 1.0 and truth[:, 8:].max() == 0.0
 
@@ -175,20 +176,20 @@ def test_inversion_bad_input(seeds_face):
     face = seeds_face
     ms, mapping, _ = twin(face, frames=4)
     with pytest.raises(InputError, match="resample first"):
-        invert(face, MarkerSet(ms.positions, ms.names, 120.0), mapping, params=SEEDS)
+        invert(face_model(face, SEEDS), MarkerSet(ms.positions, ms.names, 120.0), mapping)
     with pytest.raises(InputError, match="coordinates for 17 controls"):
-        invert(face, ms, {"R03": mapping["R03"], "R05": mapping["R05"]}, controls="all",
-               params=SEEDS)
+        invert(face_model(face, SEEDS), ms, {"R03": mapping["R03"], "R05": mapping["R05"]},
+               controls="all")
     gap = ms.positions.copy()
     gap[2, ms.index("R05")] = np.nan
-    res = invert(face, ms.with_positions(gap), mapping, controls=["DLI", "OOS", "LLS"],
-                 params=SEEDS, **held(ms))
+    res = invert(face_model(face, SEEDS), ms.with_positions(gap), mapping,
+                 controls=["DLI", "OOS", "LLS"], **held(ms))
     assert res.markers_used[2] == 10 and any("missing" in n for n in res.notes)
     few = ms.positions.copy()
     few[2, [ms.index(n) for n in mapping][1:]] = np.nan
     with pytest.raises(InputError, match="frame 2: 1 usable markers for 4 controls"):
-        invert(face, ms.with_positions(few), mapping, controls=["DLI", "OOS", "LLS", "MEN"],
-               params=SEEDS, **held(ms))
+        invert(face_model(face, SEEDS), ms.with_positions(few), mapping,
+               controls=["DLI", "OOS", "LLS", "MEN"], **held(ms))
 
 
 def test_invert_and_compare_commands(seeds_face, tmp_path, monkeypatch, capsys):
@@ -240,7 +241,7 @@ def test_second_talker_adaptation_by_scaling_and_warp(seeds_face):
     # the warped face is a working model: a short simulation stays finite and moves
     act = np.zeros((6, len(MUSCLE_GROUPS)))
     act[:, 6:8] = 0.5
-    sim = simulate(warped, act, params=SEEDS)
+    sim = simulate(face_model(warped, SEEDS), act)
     assert np.isfinite(sim.positions).all() and np.ptp(sim.positions[:, :, 0], axis=0).max() > 0
 
 
@@ -248,7 +249,7 @@ def test_crosstalker_experiment_runs(seeds_face):
     face = seeds_face
     from facemech.inverse.experiments import run_crosstalker
 
-    res = run_crosstalker(face, frames=10, params=SEEDS)
+    res = run_crosstalker(face_model(face, SEEDS), frames=10)
     assert set(res.runs) == {"lsq, positive, scaling", "lsq, positive, warp"}
     for r in res.runs.values():
         assert len(r.corr3d) == 22
@@ -282,23 +283,23 @@ def test_tolerance_stops_early_without_losing_the_fit(seeds_face):
     face = seeds_face
     ms, mapping, truth = twin(face, frames=8)
     kw = dict(controls=["DLI", "OOS", "LLS"])
-    tight = invert(face, ms, mapping, **held(ms, tol=0.0), **kw, params=SEEDS)
-    loose = invert(face, ms, mapping, **held(ms), **kw, params=SEEDS)
+    tight = invert(face_model(face, SEEDS), ms, mapping, **held(ms, tol=0.0), **kw)
+    loose = invert(face_model(face, SEEDS), ms, mapping, **held(ms), **kw)
     assert loose.evaluations.sum() < tight.evaluations.sum()
     # 1 um of RMS improvement is the stopping rule: the fit stays within a few micrometres
     assert np.median(loose.rms_error[1:]) < 3e-6
     np.testing.assert_allclose(loose.controls[:-3], truth[:-3], atol=0.05)
     with pytest.raises(InputError, match="tol"):
-        invert(face, ms, mapping, tol=-1.0, **kw, params=SEEDS)
+        invert(face_model(face, SEEDS), ms, mapping, tol=-1.0, **kw)
     with pytest.raises(InputError, match="window"):
-        invert(face, ms, mapping, window=0, **kw, params=SEEDS)
+        invert(face_model(face, SEEDS), ms, mapping, window=0, **kw)
 
 
 def test_noisy_experiment_is_also_scored_against_the_true_motion(seeds_face):
     face = seeds_face
     from facemech.inverse.experiments import run_synthetic
 
-    res = run_synthetic(face, noise=0.5e-3, params=SEEDS)
+    res = run_synthetic(face_model(face, SEEDS), noise=0.5e-3)
     for run in res.runs.values():
         noisy = run.frame_error_mm["median"]
         true = run.vs_noise_free.frame_error_mm["median"]
@@ -313,20 +314,20 @@ def test_regularisation_pulls_activity_as_documented(seeds_face):
     ms, mapping, truth = twin(face, frames=6)
     kw = dict(controls=["DLI", "OOS", "LLS"])
     kw.update(held(ms))
-    free = invert(face, ms, mapping, **kw, params=SEEDS)
+    free = invert(face_model(face, SEEDS), ms, mapping, **kw)
     # a strong prior (e.g. processed EMG) wins over the markers
     prior = np.clip(truth + 0.2, 0, 1)
-    led = invert(face, ms, mapping, prior=prior, prior_weight=100.0, **kw, params=SEEDS)
+    led = invert(face_model(face, SEEDS), ms, mapping, prior=prior, prior_weight=100.0, **kw)
     np.testing.assert_allclose(led.controls[:-1], prior[:-1], atol=0.01)
     # a strong effort term drives activity towards zero, at a cost in marker error
-    lazy = invert(face, ms, mapping, effort=100.0, **kw, params=SEEDS)
+    lazy = invert(face_model(face, SEEDS), ms, mapping, effort=100.0, **kw)
     assert np.abs(lazy.controls[:-1]).max() < 0.02 < np.abs(free.controls[:-1]).max()
     assert np.median(lazy.rms_error[1:]) > 10 * np.median(free.rms_error[1:])
     # a strong smoothness term holds activity near the previous frame's (zero at the start)
-    still = invert(face, ms, mapping, **{**kw, "smooth": 100.0}, params=SEEDS)
+    still = invert(face_model(face, SEEDS), ms, mapping, **{**kw, "smooth": 100.0})
     assert np.abs(np.diff(still.controls[:-1], axis=0)).max() < 0.02
     with pytest.raises(InputError, match="bend"):
-        invert(face, ms, mapping, bend=-1.0, **kw, params=SEEDS)
+        invert(face_model(face, SEEDS), ms, mapping, bend=-1.0, **kw)
 
 
 
@@ -337,10 +338,11 @@ def test_anatomical_twin_experiment_recovers_known_activity(face):
     t = np.arange(8) / 60
     c = np.stack([0.4 + 0.3 * np.sin(2 * np.pi * 2 * t), 0.3 + 0.2 * np.cos(2 * np.pi * t),
                   0.2 + 0.15 * np.sin(2 * np.pi * 1.5 * t)], axis=1)
-    sim = simulate(face, c @ g.T)
+    sim = simulate(face_model(face), c @ g.T)
     mk = [n for n in face.markers if n.startswith("R")]
     ms = MarkerSet(sim.positions[:, [face.markers[n] for n in mk]], tuple(mk), 60.0)
-    res = invert(face, ms, {n: face.markers[n] for n in mk}, controls=["DLI", "OOS", "LLS"],
+    res = invert(face_model(face), ms, {n: face.markers[n] for n in mk},
+                 controls=["DLI", "OOS", "LLS"],
                  **held(ms))
     np.testing.assert_allclose(res.controls[:-3], c[:-3], atol=0.05)
     assert np.median(res.rms_error[1:]) < 1e-5

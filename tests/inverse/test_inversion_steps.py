@@ -15,6 +15,7 @@ there; the steps keep a margin of 2 % for CPUs not measured.
 
 from facemech.inverse.experiments import run_synthetic
 from facemech.params import preset
+from facemech.physics.model import model as face_model
 
 #: measured at commit 82f879e (the same in the default, Prescott and perturbed environments):
 #: label -> (median, max per-frame error in mm, frame steps over 35 frames)
@@ -25,7 +26,7 @@ MEASURED = {
 
 
 def test_experiment1_errors_stay_within_10_percent_and_steps_do_not_grow(face):
-    result = run_synthetic(face, methods=("lsq",), params=preset("lucero1999"))
+    result = run_synthetic(face_model(face, preset("lucero1999")), methods=("lsq",))
     assert result.frames == 36
     for label, (median, worst, steps) in MEASURED.items():
         run = result.runs[label]

@@ -16,6 +16,7 @@ from conftest import run_cli
 from facemech import InputError, MarkerSet, read_markers, read_results
 from facemech.inverse import uncertainty as U
 from facemech.inverse.methods import LeastSquares, Powell, method_from_options
+from facemech.physics.model import model as face_model
 
 
 def _facemech(*args):
@@ -112,7 +113,7 @@ def test_standard_errors_cover_the_truth_with_noisy_markers(demo_markers):
     face = default_face()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)  # ill-posed frames are expected here
-        res = invert(face, noisy, closest_nodes(noisy, face))
+        res = invert(face_model(face), noisy, closest_nodes(noisy, face))
     assert res.noise_mm == pytest.approx(0.5, rel=0.25)  # estimated from the residuals
     covered, pairs = 0, 0
     for j, name in enumerate(res.control_names):

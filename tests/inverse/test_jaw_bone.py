@@ -17,6 +17,7 @@ from facemech.io.results import read_results
 from facemech.kinematics.roles import bone_points, marker_roles, on_sites
 from facemech.markerset import MarkerSet
 from facemech.params import preset
+from facemech.physics.model import model as face_model
 from facemech.solvers.forward import simulate
 from facemech.solvers.jaw import angles_from_chin, glide_of, move_points
 from facemech.solvers.jaw_bone import (
@@ -231,7 +232,7 @@ def test_simulate_cli_drives_the_jaw_from_the_incisor(face, tmp_path, monkeypatc
     roled = ms.with_positions(ms.positions, meta={"roles": {"LI": "lower_incisor",
                                                             "MM": "molar"}})
     monkeypatch.setattr("facemech.io.markers.read_markers", lambda *a, **k: roled)
-    jaw, _ = wsim.jaw_series(wsim.JawSource(markers=tmp_path / "ema.csv"), face, prm, t)
+    jaw, _ = wsim.jaw_series(wsim.JawSource(markers=tmp_path / "ema.csv"), face_model(face, prm), t)
     np.testing.assert_allclose(jaw, poses, atol=1e-12)
     monkeypatch.undo()
     code, _, err = cli(monkeypatch, capsys, *base, "--jaw-incisor", "LI", "--chin-marker", "R01",
@@ -253,7 +254,7 @@ def talking(face):
     ramp = np.sin(np.linspace(0, np.pi, frames))
     for group, level in (("OOS", 0.3), ("DLI", 0.2), ("LLS", 0.2)):
         act[:, MUSCLE_GROUPS.index(group)] = level * ramp
-    return poses, act, simulate(face, act, poses)
+    return poses, act, simulate(face_model(face), act, poses)
 
 
 def test_invert_cli_with_an_incisor_keeps_it_out_of_the_skin(face, talking, tmp_path,
@@ -319,7 +320,7 @@ def test_the_pick_follows_the_rank_of_the_responses(face):
     s[0, 1] = [5.0, 0.0, 5.0, 0.0]
     s[1, 2] = [0.0, 3.0, 0.0, 0.5]
     s[1, 1] = [0.0, 1.0, 0.0, 0.2]
-    pick = pick_controls(face, preset("anatomical"), [0, 1], ["LLS", "DLI", "OOS", "OOI"],
+    pick = pick_controls(None, [0, 1], ["LLS", "DLI", "OOS", "OOI"],
                          estimate_jaw=False, axes=(1, 2), responses=s.reshape(6, 4))
     assert pick.coordinates == 4
     assert set(pick.order) == {"LLS", "DLI"} and pick.held == ("OOS", "OOI")
@@ -327,7 +328,7 @@ def test_the_pick_follows_the_rank_of_the_responses(face):
     assert pick.new_motion["OOI"] < MIN_NEW_MOTION_MM
     assert "adds less than 1 mm per unit" in pick.note(2, midsagittal=True)
     with pytest.raises(InputError):
-        pick_controls(face, preset("anatomical"), [0, 1], ["OOI"], estimate_jaw=False,
+        pick_controls(None, [0, 1], ["OOI"], estimate_jaw=False,
                       responses=np.full((6, 1), 0.1))
 
 
@@ -339,7 +340,7 @@ def test_midsagittal_articulography_fits_the_lips_with_the_jaw_from_the_incisor(
     _, _, poses = speech_jaw(prm, frames)
     from facemech.inverse.workflow import pick_candidates
 
-    pick = pick_controls(face, prm, nodes, pick_candidates(face), estimate_jaw=False,
+    pick = pick_controls(face_model(face, prm), nodes, pick_candidates(face), estimate_jaw=False,
                          axes=(1, 2))
     # rank keeps 4 (one per coordinate); the sign step adds what lifts the lower lip
     assert 4 < len(pick.order) <= 6 and not pick.jaw
@@ -349,7 +350,7 @@ def test_midsagittal_articulography_fits_the_lips_with_the_jaw_from_the_incisor(
     ramp = np.sin(np.linspace(0, np.pi, frames))
     for j, group in enumerate(pick.muscles):
         act[:, MUSCLE_GROUPS.index(group)] = (0.1 + 0.05 * j) * ramp
-    sim = simulate(face, act, poses)
+    sim = simulate(face_model(face), act, poses)
     lips = sim.positions[:, nodes]
     inc = carried(face, lower_incisor_point(face), poses)
     ema = np.concatenate([lips, inc[:, None], inc[:, None] + [0, 0.01, -0.05]], axis=1)

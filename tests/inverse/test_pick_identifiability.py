@@ -16,6 +16,7 @@ from facemech.inverse.control_pick import MIN_NEW_MOTION_MM, pick_controls
 from facemech.inverse.workflow import invert_marker_set, pick_candidates
 from facemech.markerset import MarkerSet
 from facemech.params import preset
+from facemech.physics.model import model as face_model
 from facemech.solvers.forward import simulate
 
 FRAMES = 6
@@ -28,7 +29,7 @@ def _twin(face, names):
     ramp = np.linspace(0.0, 0.2, FRAMES)
     act[:, MUSCLE_GROUPS.index("LLS")] = ramp
     act[:, MUSCLE_GROUPS.index("DLI")] = ramp[::-1] * 0.5
-    sim = simulate(face, act, np.zeros(FRAMES))
+    sim = simulate(face_model(face), act, np.zeros(FRAMES))
     sites = {**face.landmarks, **face.markers}
     nodes = [sites[n] for n in names]
     return MarkerSet(sim.positions[:, nodes], tuple(names), 60.0), dict(zip(names, nodes,
@@ -54,8 +55,8 @@ def _consistent(res):
 def test_three_markers_the_pick_and_the_combinations_agree(face):
     names = ("R03", "R05", "R07")
     ms, mapping = _twin(face, names)
-    res = invert_marker_set(ms, face, mapping=mapping)
-    pick = pick_controls(face, preset("anatomical"), [mapping[n] for n in names],
+    res = invert_marker_set(ms, face_model(face), mapping=mapping)
+    pick = pick_controls(face_model(face, preset("anatomical")), [mapping[n] for n in names],
                          pick_candidates(face), estimate_jaw=True, labels=list(names))
     rank = [c for c in pick.order if c not in {s for s, _, _ in pick.for_sign}]
     assert set(res.control_names) == set(pick.muscles) | ({"jaw"} if pick.jaw else set())
@@ -71,7 +72,7 @@ def test_thirty_seven_markers_determine_single_controls_and_say_the_rest(face):
     names = tuple({**face.landmarks, **face.markers})
     assert len(names) == 37
     ms, mapping = _twin(face, names)
-    res = invert_marker_set(ms, face, mapping=mapping)
+    res = invert_marker_set(ms, face_model(face), mapping=mapping)
     assert "controls: " not in " ".join(res.notes)  # no pick: 111 coordinates for 10 controls
     combos = from_json(_consistent(res))
     assert len(combos) == len(res.control_names)  # full rank: one combination per control

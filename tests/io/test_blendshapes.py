@@ -28,6 +28,7 @@ from facemech.analysis.blendshapes import (
 )
 from facemech.errors import InputError
 from facemech.io.blendshapes import read_weights_csv, write_blendshape_gltf
+from facemech.physics.model import model as face_model
 from test_export import Glb
 
 #: its module fixtures take 20 s and more: the whole module is slow
@@ -42,7 +43,7 @@ ROOT = Path(__file__).resolve().parents[2]
 
 @pytest.fixture(scope="module")
 def basis():
-    return arkit_basis(load_face("default-coarse"))
+    return arkit_basis(face_model(load_face("default-coarse")))
 
 
 @pytest.fixture(scope="module")
@@ -51,7 +52,7 @@ def result(tmp_path_factory):
     ramp = np.clip(np.arange(FRAMES) / 10.0, 0.0, 1.0)[:, None]
     act = activity(FRAMES, OOS=0.4, OOI=0.4, DLI=0.3) * ramp
     act[15:] = activity(FRAMES - 15, ZYG=0.6, LAO=0.6)
-    sim = simulate(load_face("default-coarse"), act, np.radians(8.0) * ramp[:, 0])
+    sim = simulate(face_model(load_face("default-coarse")), act, np.radians(8.0) * ramp[:, 0])
     path = tmp_path_factory.mktemp("blend") / "r.nc"
     write_results(path, sim)
     return path, sim.positions

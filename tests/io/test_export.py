@@ -19,6 +19,7 @@ from facemech.io.export import (
     write_markers,
     write_mesh_sequence,
 )
+from facemech.physics.model import model as face_model
 
 FRAMES = 19  # 0.3 s at 60 Hz
 
@@ -29,7 +30,7 @@ def result(tmp_path_factory):
     model = load_face("default-coarse")
     act = activity(FRAMES, OOS=0.5, OOI=0.5)
     act[:5] = 0.0
-    sim = simulate(model, act)
+    sim = simulate(face_model(model), act)
     path = tmp_path_factory.mktemp("result") / "r.nc"
     write_results(path, sim)
     return path

@@ -15,6 +15,7 @@ from facemech import simulate
 from facemech.io.results import write_results
 from facemech.kinematics import stats
 from facemech.params import preset
+from facemech.physics.model import model as face_model
 
 
 def test_corr3d_is_one_for_itself_in_both_forms():
@@ -114,7 +115,7 @@ def results_pair(seeds_face, tmp_path_factory):
     """A short simulation's results and a copy with one marker still to 0.05 um, and a copy
     with every marker moved 2 mm along x."""
     d = tmp_path_factory.mktemp("compare")
-    sim = simulate(seeds_face, activity(30, OOS=0.5, ZYG=0.3), params=preset("lucero1999"),
+    sim = simulate(face_model(seeds_face, preset("lucero1999")), activity(30, OOS=0.5, ZYG=0.3),
                    integrator="implicit")
     markers = sim.markers.copy()
     markers[:, 0] = markers[0, 0] + np.random.default_rng(3).normal(scale=5e-8,

@@ -169,12 +169,13 @@ def test_woodbury_solve_equals_the_direct_solve(face):
     import scipy.sparse as sp
     from scipy.sparse.linalg import spsolve
 
-    from facemech.physics.assembly import Physics
+    from facemech.physics.model import model as face_model
     from facemech.solvers.step import Stepper
 
     p = preset("anatomical")
-    ph = Physics.build(face, p)
-    system = Stepper(ph).solver_state.system
+    model = face_model(face, p)
+    ph = model.physics
+    system = Stepper(model).solver_state.system
     mj = system.muscles
     m_force = np.zeros(ph.n_muscles)
     m_force[ph.model.muscles.names.index("OOI_L")] = 3.0

@@ -1,6 +1,6 @@
 """Issue 27's numerics of speed: dashpots on the rate of stretch (a Kelvin-Voigt solid's
 viscosity, ``Parameters.dashpot_isotropy``) and the implicit step linearised about its explicit
-predictor (``Parameters.predictor``)."""
+predictor (``StepOptions.predictor``)."""
 
 from __future__ import annotations
 
@@ -13,9 +13,10 @@ from conftest import run_cli
 from facemech import default_face
 from facemech.errors import InputError
 from facemech.io.activity import write_activity
-from facemech.params import MUSCLE_GROUPS, preset, read_preset
+from facemech.params import MUSCLE_GROUPS, preset_pair, read_preset
 from facemech.physics.assembly import element_forces
 from facemech.physics.bundles import PrismBundle, SpringBundle
+from facemech.physics.model import model as face_model
 from facemech.solvers.forward import simulate
 
 
@@ -74,7 +75,7 @@ def _path(face, params, group, landmark, frames=25):
     """A landmark's displacement (frames, 3) m under a step of full activity of ``group``."""
     act = np.zeros((frames, len(MUSCLE_GROUPS)))
     act[:, MUSCLE_GROUPS.index(group)] = 1.0
-    x = simulate(face, act, params=params).positions[:, face.landmarks[landmark]]
+    x = simulate(face_model(face, params), act).positions[:, face.landmarks[landmark]]
     return x - x[0]
 
 
@@ -84,7 +85,7 @@ def test_the_predictor_removes_most_of_the_drag_on_a_turning_lip():
     48-step path at worst (measured), with the forces at the predictor 1.8 mm. Same physics in
     all three runs; only the step differs."""
     face = default_face("default-coarse")
-    p = preset("anatomical").with_(implicit_stiffness_share=0.75, implicit_volume_scale=3.0)
+    p = preset_pair("anatomical").with_(implicit_stiffness_share=0.75, implicit_volume_scale=3.0)
     ref = _path(face, p.with_(substeps=48), "DLI", "lower_lip_center")
     corrected = np.abs(_path(face, p, "DLI", "lower_lip_center") - ref).max()
     predicted = np.abs(_path(face, p.with_(predictor=True), "DLI", "lower_lip_center")
@@ -97,10 +98,10 @@ def test_a_predictor_with_too_little_stiffness_in_the_matrix_is_refused():
     """The predictor's step is stable only when the matrix holds at least three quarters of
     each stiffness (docs/model.md): less is an error naming the field, not a blow-up."""
     with pytest.raises(InputError, match="implicit_stiffness_share"):
-        preset("anatomical").with_(predictor=True)
+        preset_pair("anatomical").with_(predictor=True)
     with pytest.raises(InputError, match="implicit_volume_scale"):
-        preset("anatomical").with_(predictor=True, implicit_stiffness_share=0.75)
-    preset("anatomical").with_(predictor=True, implicit_stiffness_share=0.75,
+        preset_pair("anatomical").with_(predictor=True, implicit_stiffness_share=0.75)
+    preset_pair("anatomical").with_(predictor=True, implicit_stiffness_share=0.75,
                                implicit_volume_scale=3.0)
 
 
@@ -115,9 +116,10 @@ def test_a_preset_files_step_block_sets_the_options(tmp_path, monkeypatch, capsy
             "scales": {}, "step": step}
     path = tmp_path / "fast.json"
     path.write_text(json.dumps(good))
-    p = read_preset(path)
-    assert (p.predictor, p.implicit_stiffness_share, p.implicit_volume_scale,
-            p.dashpot_isotropy, p.substeps, p.krylov_iterations) == (True, 0.75, 3.0, 0.25, 8, 2)
+    p, s = preset_pair(str(path))
+    assert p == read_preset(path)
+    assert (s.predictor, s.implicit_stiffness_share, s.implicit_volume_scale,
+            p.dashpot_isotropy, s.substeps, s.krylov_iterations) == (True, 0.75, 3.0, 0.25, 8, 2)
     assert p.viscous_time == pytest.approx(4.5e-3, rel=1e-12)
     act = tmp_path / "act.csv"
     level = np.zeros((7, len(MUSCLE_GROUPS)))

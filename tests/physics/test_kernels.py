@@ -7,6 +7,7 @@ import pytest
 
 from facemech.params import Parameters, preset
 from facemech.physics import muscle, springs, volume
+from facemech.stepping import StepOptions
 
 
 def test_presets_are_si_conversions_of_the_paper():
@@ -18,7 +19,7 @@ def test_presets_are_si_conversions_of_the_paper():
     assert p.f4 == pytest.approx(20.0)
     assert p.k_volume == pytest.approx(1.0e4)
     assert p.passive_stiffness("OOS") == pytest.approx(17.3 * 0.6)
-    assert p.steps_per_frame == 50
+    assert StepOptions().steps_per_frame(p.frame_rate) == 50
     assert preset("pitermann2001").damping == pytest.approx(0.050)
 
 

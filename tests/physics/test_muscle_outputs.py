@@ -13,6 +13,7 @@ from facemech import Stepper, simulate
 from facemech.io.results import read_results, results_muscles, write_results
 from facemech.params import MUSCLE_GROUPS, preset
 from facemech.physics.assembly import Physics
+from facemech.physics.model import model as face_model
 from facemech.physics.muscle import activation_response
 from facemech.physics.muscle_outputs import muscle_output_variables, muscle_series
 from facemech.solvers.state import State
@@ -81,7 +82,7 @@ def constant_run(request, face, seeds_face):
     prm = (preset("anatomical").with_(**FIBRE_DYNAMICS) if request.param == "fibre-dynamics"
            else preset(request.param))
     model = face if prm.tissue != "uniform" else seeds_face
-    sim = simulate(model, activity(FRAMES, ZYG=LEVEL, OOS=LEVEL), params=prm,
+    sim = simulate(face_model(model, prm), activity(FRAMES, ZYG=LEVEL, OOS=LEVEL),
                    integrator="implicit")
     return prm, sim
 
@@ -128,8 +129,9 @@ def test_outputs_from_a_list_of_states_equal_the_simulation(constant_run, tmp_pa
     """The generic path an inversion takes: its accepted states -> the same numbers, the same
     file variables."""
     prm, sim = constant_run
-    ph = Physics.build(sim.model, prm)
-    stepper = Stepper(ph, integrator="implicit")
+    model = face_model(sim.model, prm)
+    ph = model.physics
+    stepper = Stepper(model, integrator="implicit")
     states = [State.at_rest(ph.model.rest_positions, ph.n_muscles)]
     for a in sim.activity[:-1]:
         states.append(stepper.advance(states[-1], a, 0.0))

@@ -9,6 +9,7 @@ import pytest
 from facemech.geometry.builder import default_face
 from facemech.inverse.experiments import PERIORAL, triangle_sequence
 from facemech.params import MUSCLE_GROUPS, preset
+from facemech.physics.model import model as face_model
 from facemech.solvers.contacts import resolve_contacts
 from facemech.solvers.forward import simulate
 
@@ -103,17 +104,17 @@ def test_the_anatomical_face_does_not_amplify_a_rounding_difference():
     same change grows past 1e-11 m (measured: 2e-10 m by frame 21, 7e-5 m by frame 35)."""
     face = default_face()
     p = preset("anatomical")
-    assert p.implicit_contacts
+    assert face_model(face, p).steps.implicit_contacts
     tri = triangle_sequence()[:24]
     act = np.zeros((len(tri), len(MUSCLE_GROUPS)))
     for g in PERIORAL:
         act[:, MUSCLE_GROUPS.index(g)] = tri
-    a = simulate(face, act, params=p).positions
+    a = simulate(face_model(face, p), act).positions
     act[1:] *= 1 - 1e-15
-    b = simulate(face, act, params=p).positions
+    b = simulate(face_model(face, p), act).positions
     assert np.abs(a - b).max() < 1e-11
-    penalty = preset("anatomical").with_(implicit_contacts=False)
-    c = simulate(face, act, params=penalty).positions
+    penalty = face_model(face, p, implicit_contacts=False)
+    c = simulate(penalty, act).positions
     act[1:] /= 1 - 1e-15
-    d = simulate(face, act, params=penalty).positions
+    d = simulate(penalty, act).positions
     assert np.abs(c - d).max() > 1e-11

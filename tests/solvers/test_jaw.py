@@ -12,6 +12,7 @@ from facemech.errors import InputError
 from facemech.geometry.teeth import lower_incisor_point
 from facemech.io.results import read_results, to_dataset, write_results
 from facemech.params import GLIDE_RATE, GLIDE_SLOPE, Parameters, preset, read_preset, write_preset
+from facemech.physics.model import model as face_model
 from facemech.solvers.forward import simulate
 from facemech.solvers.jaw import (
     condyle_glide,
@@ -116,7 +117,7 @@ def synthetic_path(face, frames=10):
 def two_marker_run(face):
     poses, p1, p2 = synthetic_path(face)
     got = jaw_poses_from_points(p1, p2, hinge_point=face.hinge_point, lead=0)
-    sim = simulate(face, activity(len(poses)), got, integrator="implicit")
+    sim = simulate(face_model(face), activity(len(poses)), got, integrator="implicit")
     return poses, p1, p2, got, sim
 
 
@@ -162,12 +163,12 @@ def test_pose_series_round_trips_through_the_results_file(tmp_path, two_marker_r
 
 def test_angles_alone_follow_the_presets_kinematics(face, seeds_face):
     angles = np.radians(np.linspace(0.0, 6.0, 5))
-    sim = simulate(face, activity(5), angles, integrator="implicit")
+    sim = simulate(face_model(face), activity(5), angles, integrator="implicit")
     np.testing.assert_allclose(sim.jaw_shift, np.column_stack(condyle_glide(angles)))
     ds = to_dataset(sim)
     np.testing.assert_allclose(ds["jaw_shift"].values, sim.jaw_shift)
-    seeds = simulate(seeds_face, activity(3), np.radians([0.0, 2.0, 4.0]),
-                     params=preset("lucero1999"))
+    seeds = simulate(face_model(seeds_face, preset("lucero1999")), activity(3),
+                     np.radians([0.0, 2.0, 4.0]))
     np.testing.assert_array_equal(seeds.jaw_shift, 0.0)
     assert seeds.attrs["jaw_kinematics"] == "hinge"
 
@@ -201,7 +202,7 @@ def test_bad_jaw_inputs_name_the_field(face, tmp_path):
         preset("anatomical").with_(glide_rate=-0.01)
     assert exc.value.field == "glide_rate"
     with pytest.raises(InputError) as exc:
-        simulate(face, activity(4), np.zeros((4, 2)))
+        simulate(face_model(face), activity(4), np.zeros((4, 2)))
     assert exc.value.field == "jaw_angle"
     # preset files: the jaw block round-trips and is checked
     write_preset(tmp_path / "p.json", "mine", {"force": 0.9}, jaw_kinematics="hinge",

@@ -13,8 +13,9 @@ import numpy as np
 import pytest
 
 from facemech import default_face
-from facemech.params import MUSCLE_GROUPS, preset
+from facemech.params import MUSCLE_GROUPS, preset, preset_steps
 from facemech.physics.assembly import Physics
+from facemech.physics.model import model as face_model
 from facemech.solvers.forward import simulate
 from facemech.solvers.implicit import implicit_system
 from facemech.waveforms import cosine_ramp
@@ -31,7 +32,7 @@ def test_a_rigid_translation_meets_no_stiffness_in_the_step(coarse):
     volume term's Gram matrices and the tethers resist no translation); without the coupling it
     is the drag the jaw's tissue met."""
     physics = Physics.build(coarse, preset("anatomical"))
-    system = implicit_system(physics, 1.0 / 240.0)
+    system = implicit_system(physics, 1.0 / 240.0, preset_steps("anatomical"))
     u = np.array([0.01, -0.02, 0.005])  # m/s
     everywhere = np.broadcast_to(u, (coarse.n_nodes, 3)).copy()
     moving = everywhere[physics.dynamic]
@@ -55,7 +56,7 @@ def test_the_lower_lip_rides_an_opening_jaw_as_the_fine_step_does(coarse):
     node = coarse.landmarks["lower_lip_center"]
     paths = {}
     for sub in (4, 24):
-        sim = simulate(coarse, np.zeros((n, len(MUSCLE_GROUPS))), jaw, params=p, substeps=sub)
+        sim = simulate(face_model(coarse, p), np.zeros((n, len(MUSCLE_GROUPS))), jaw, substeps=sub)
         paths[sub] = sim.positions[:, node] - sim.positions[0, node]
     end = 12  # the frame the jaw stops
     assert paths[24][end, 1] < -5e-3

@@ -1,6 +1,6 @@
 """Issue 27's step on the forces' true linearisation: GMRES iterations on the step about its
 explicit predictor, the constant shared matrix their preconditioner
-(``Parameters.krylov_iterations``, :func:`facemech.solvers.implicit._krylov_step`)."""
+(``StepOptions.krylov_iterations``, :func:`facemech.solvers.krylov.krylov_step`)."""
 
 from __future__ import annotations
 
@@ -9,8 +9,10 @@ import pytest
 
 from facemech import default_face
 from facemech.errors import InputError
-from facemech.params import MUSCLE_GROUPS, preset
+from facemech.params import MUSCLE_GROUPS, preset_pair
+from facemech.physics.model import model as face_model
 from facemech.solvers.forward import simulate
+from facemech.stepping import STEP_FIELDS
 
 #: the step about its predictor with dashpots on the rate of stretch (a Kelvin-Voigt tissue)
 KV = {"predictor": True, "implicit_stiffness_share": 0.75, "implicit_volume_scale": 3.0,
@@ -21,7 +23,7 @@ KV = {"predictor": True, "implicit_stiffness_share": 0.75, "implicit_volume_scal
 def _path(face, params, group, landmark, frames=24):
     act = np.zeros((frames, len(MUSCLE_GROUPS)))
     act[:, MUSCLE_GROUPS.index(group)] = 1.0
-    sim = simulate(face, act, params=params)
+    sim = simulate(face_model(face, params), act)
     return sim.positions[:, face.landmarks[landmark]]
 
 
@@ -30,7 +32,7 @@ def lower_lip():
     """Under full DLI, the lower lip's path on the coarse face at 4 steps per frame with 0, 2
     and 4 iterations, and with 48 steps per frame and none."""
     face = default_face("default-coarse")
-    p = preset("anatomical").with_(**KV)
+    p = preset_pair("anatomical").with_(**KV)
     paths = {k: _path(face, p.with_(krylov_iterations=k), "DLI", "lower_lip_center")
              for k in (0, 2, 4)}
     paths["fine"] = _path(face, p.with_(substeps=48), "DLI", "lower_lip_center")
@@ -62,10 +64,10 @@ def test_the_solved_step_follows_the_fine_steps(lower_lip):
 
 def test_krylov_iterations_need_the_predictor():
     with pytest.raises(InputError, match="krylov_iterations"):
-        preset("anatomical").with_(krylov_iterations=2)
+        preset_pair("anatomical").with_(krylov_iterations=2)
     with pytest.raises(InputError, match="krylov_iterations"):
-        preset("anatomical").with_(**KV, krylov_iterations=-1)
-    assert preset("anatomical").with_(**KV, krylov_iterations=2).krylov_iterations == 2
+        preset_pair("anatomical").with_(**KV, krylov_iterations=-1)
+    assert preset_pair("anatomical").with_(**KV, krylov_iterations=2).steps.krylov_iterations == 2
 
 
 def test_a_drag_on_the_mass_stops_the_released_lip_ringing():
@@ -83,7 +85,7 @@ def test_a_drag_on_the_mass_stops_the_released_lip_ringing():
     face = default_face("default-coarse")
     got = {}
     for drag in (0.0, 200.0):
-        p = preset("anatomical").with_(**KV, krylov_iterations=4, mass_drag=drag)
+        p = preset_pair("anatomical").with_(**KV, krylov_iterations=4, mass_drag=drag)
         got[drag] = (S.overshoot(face, p, ("DLI",), "lower_lip_center", 1, 0.8),
                      S.measure(face, p, ("DLI",), "lower_lip_center", 1, 0.8)["rise_ms"])
     assert got[0.0][0] > 0.1 and got[200.0][0] < 0.02
@@ -92,11 +94,11 @@ def test_a_drag_on_the_mass_stops_the_released_lip_ringing():
 
 def test_the_mass_drag_needs_the_linearly_implicit_step():
     with pytest.raises(InputError, match="mass_drag"):
-        preset("lucero1999").with_(mass_drag=50.0)
+        preset_pair("lucero1999").with_(mass_drag=50.0)
     with pytest.raises(InputError, match="mass_drag"):
-        preset("anatomical").with_(integrator="rosenbrock", mass_drag=50.0)
+        preset_pair("anatomical").with_(integrator="rosenbrock", mass_drag=50.0)
     with pytest.raises(InputError, match="mass_drag"):
-        preset("anatomical").with_(mass_drag=-1.0)
+        preset_pair("anatomical").with_(mass_drag=-1.0)
 
 
 def test_the_fast_lips_preset_file_is_the_measured_step():
@@ -106,12 +108,14 @@ def test_the_fast_lips_preset_file_is_the_measured_step():
     60 mm of the mouth)."""
     from pathlib import Path
 
-    from facemech.params import read_preset
+    p = preset_pair(str(Path(__file__).resolve().parents[2] / "benchmarks" / "presets"
+                        / "fast-lips.json"))
+    want = preset_pair("anatomical").with_(**KV, krylov_iterations=4, mass_drag=200.0,
+                                           krylov_region=0.060)
 
-    p = read_preset(Path(__file__).resolve().parents[2] / "benchmarks" / "presets"
-                    / "fast-lips.json")
-    want = preset("anatomical").with_(**KV, krylov_iterations=4, mass_drag=200.0,
-                                      krylov_region=0.060)
+    def value(pair, field):
+        return getattr(pair.steps if field in STEP_FIELDS else pair.params, field)
+
     for field in (*KV, "krylov_iterations", "mass_drag", "krylov_region", "fv_vmax",
                   "tau_activation", "k_force", "substeps"):
-        assert getattr(p, field) == pytest.approx(getattr(want, field), rel=1e-12), field
+        assert value(p, field) == pytest.approx(value(want, field), rel=1e-12), field

@@ -1,4 +1,4 @@
-"""The Krylov correction confined to a region about the mouth (``Parameters.krylov_region``,
+"""The Krylov correction confined to a region about the mouth (``StepOptions.krylov_region``,
 :mod:`facemech.solvers.krylov_region`): the region's forces are the whole face's there, its
 preconditioner is the constant matrix's block with the muscles solved exactly, and the
 corrected step converges on the whole face's correction as the region grows."""
@@ -13,8 +13,9 @@ import scipy.sparse as sp
 
 from facemech import default_face
 from facemech.errors import InputError
-from facemech.params import MUSCLE_GROUPS, preset, read_preset
+from facemech.params import MUSCLE_GROUPS, preset_pair, read_preset
 from facemech.physics.assembly import Physics, accumulate_forces, rest_anchors
+from facemech.physics.model import model as face_model
 from facemech.solvers.forward import simulate
 from facemech.solvers.implicit import LinearImplicitEuler
 from facemech.solvers.krylov_region import mouth_centre, restrict_forces
@@ -28,9 +29,9 @@ KV = {"predictor": True, "implicit_stiffness_share": 0.75, "implicit_volume_scal
 @pytest.fixture(scope="module")
 def coarse():
     face = default_face("default-coarse")
-    p = preset("anatomical").with_(**KV, krylov_region=0.03)
-    physics = Physics.build(face, p)
-    return face, physics, LinearImplicitEuler(4).init(physics)
+    p = preset_pair("anatomical").with_(**KV, krylov_region=0.03)
+    physics = Physics.build(face, p.params)
+    return face, physics, LinearImplicitEuler(4, p.steps).init(physics)
 
 
 def test_the_region_gets_the_whole_faces_forces_on_its_nodes(coarse):
@@ -87,7 +88,7 @@ def test_the_regions_solve_is_its_block_with_the_muscles_exactly(coarse):
 def _path(face, params, frames=24):
     act = np.zeros((frames, len(MUSCLE_GROUPS)))
     act[:, MUSCLE_GROUPS.index("DLI")] = 1.0
-    return simulate(face, act, params=params).positions[:, face.landmarks["lower_lip_center"]]
+    return simulate(face_model(face, params), act).positions[:, face.landmarks["lower_lip_center"]]
 
 
 def test_the_corrected_step_converges_on_the_whole_faces_as_the_region_grows():
@@ -95,7 +96,7 @@ def test_the_corrected_step_converges_on_the_whole_faces_as_the_region_grows():
     correction on the region comes nearer the path corrected over the whole face as the region
     grows (measured, largest distance: no correction 5.1 mm, 20 mm 3.0, 40 mm 0.43)."""
     face = default_face("default-coarse")
-    p = preset("anatomical").with_(**KV)
+    p = preset_pair("anatomical").with_(**KV)
     whole = _path(face, p)
     off = {r: float(np.abs(_path(face, p.with_(krylov_region=r)) - whole).max())
            for r in (0.02, 0.04)}
@@ -107,8 +108,8 @@ def test_the_corrected_step_converges_on_the_whole_faces_as_the_region_grows():
 
 
 def test_the_region_is_checked():
-    base = preset("anatomical").with_(**KV)
-    assert base.with_(krylov_region=0.05).krylov_region == 0.05
+    base = preset_pair("anatomical").with_(**KV)
+    assert base.with_(krylov_region=0.05).steps.krylov_region == 0.05
     for bad in (-0.01, 0.6, float("nan"), float("inf")):
         with pytest.raises(InputError, match="krylov_region"):
             base.with_(krylov_region=bad)
@@ -140,9 +141,9 @@ def test_a_preset_file_sets_the_region_in_millimetres(tmp_path):
     """The fast-lips preset file confines its correction to 60 mm about the mouth; a preset
     file's ``step.krylov_region_mm`` is read in millimetres and checked, naming the file and
     the entry."""
-    p = read_preset(Path(__file__).resolve().parents[2] / "benchmarks" / "presets"
-                    / "fast-lips.json")
-    assert p.krylov_region == pytest.approx(0.060)
+    p = preset_pair(str(Path(__file__).resolve().parents[2] / "benchmarks" / "presets"
+                        / "fast-lips.json"))
+    assert p.steps.krylov_region == pytest.approx(0.060)
     bad = tmp_path / "bad.json"
     bad.write_text('{"format": "facemech-preset", "version": 1, "base": "anatomical", '
                    '"scales": {}, "step": {"predictor": true, "implicit_stiffness_share": 0.75, '
@@ -164,8 +165,8 @@ def test_the_fast_lips_step_gives_the_lips_real_speeds():
     import speed as S
 
     face = default_face("default")
-    fast = read_preset(Path(__file__).resolve().parents[2] / "benchmarks" / "presets"
-                       / "fast-lips.json")
+    fast = preset_pair(str(Path(__file__).resolve().parents[2] / "benchmarks" / "presets"
+                           / "fast-lips.json"))
     lower = S.measure(face, fast, ("DLI",), "lower_lip_center", 1, 1.0)
     upper = S.measure_open_jaw(face, fast, ("OOSM",), "upper_lip_center", 1, 0.5)
     assert lower["peak_speed_mm_s"] >= 120.0

@@ -8,7 +8,7 @@ from conftest import activity
 from facemech import SimulationBlowUp, Stepper, simulate
 from facemech.errors import InputError
 from facemech.params import MUSCLE_GROUPS, Parameters
-from facemech.physics.assembly import Physics
+from facemech.physics.model import model as face_model
 from facemech.solvers.explicit import ExplicitEuler
 from facemech.solvers.implicit import LinearImplicitEuler, Rosenbrock2
 from facemech.solvers.jaw import angle_for_drop, angles_from_chin, rotate_about
@@ -19,7 +19,7 @@ SEEDS = Parameters()  # lucero1999
 
 
 def moved(face, frames=FRAMES, jaw=None, integrator="euler", **levels):
-    sim = simulate(face, activity(frames, **levels), jaw, integrator=integrator, params=SEEDS)
+    sim = simulate(face_model(face, SEEDS), activity(frames, **levels), jaw, integrator=integrator)
     d = sim.positions[-1] - sim.positions[0]
     return sim, {k: d[v] for k, v in face.landmarks.items()}
 
@@ -95,7 +95,7 @@ def test_jaw_opening_lowers_lower_lip_and_chin_without_interpenetration(seeds_fa
     back = np.concatenate([jaw, np.linspace(theta, 0, 15), np.zeros(15)])
     act = np.zeros((60, len(MUSCLE_GROUPS)))
     act[30:, 6:8] = 1.0  # OOS and OOI
-    sim2 = simulate(face, act, back, params=SEEDS)
+    sim2 = simulate(face_model(face, SEEDS), act, back)
     assert lip_gaps(face, sim2).min() > -0.15e-3
 
 
@@ -119,9 +119,9 @@ def test_fast_integrators_follow_the_paper_integrator(seeds_face):
     face = seeds_face
     act = activity(30, OOS=0.8, OOI=0.8, ZYG=0.5, DLI=0.6)
     jaw = np.radians(4.0) * np.sin(np.linspace(0, np.pi, 30)) ** 2
-    ref = simulate(face, act, jaw, integrator="euler", params=SEEDS)
+    ref = simulate(face_model(face, SEEDS), act, jaw, integrator="euler")
     for integ in ("rosenbrock", "implicit"):
-        sim = simulate(face, act, jaw, integrator=integ, substeps=8, params=SEEDS)
+        sim = simulate(face_model(face, SEEDS), act, jaw, integrator=integ, substeps=8)
         dev = np.linalg.norm(sim.markers - ref.markers, axis=2).max()
         amp = np.linalg.norm(ref.markers - ref.markers[0], axis=2).max()
         assert dev < 0.1 * amp, (integ, dev, amp)
@@ -130,8 +130,9 @@ def test_fast_integrators_follow_the_paper_integrator(seeds_face):
 def test_state_restart_is_exact(seeds_face):
     face = seeds_face
     """Advancing 10 frames, or 5 then 5 from the saved state, gives the same state."""
-    ph = Physics.build(face, Parameters())
-    st = Stepper(ph, integrator="euler")
+    m = face_model(face, Parameters())
+    ph = m.physics
+    st = Stepper(m, integrator="euler")
     a = activity(1, DAO=0.7, LLS=0.4)[0]
     s0 = State.at_rest(face.rest_positions, ph.n_muscles)
     s = s0
@@ -153,15 +154,16 @@ def test_solver_objects_step_without_hidden_state(seeds_face):
     """Each integrator's name stands for one solver object; ``step`` of the object gives the
     stepper's state, the same state every time it is called on the same arguments (in any
     order), and leaves its arguments and the solver state as they were."""
-    ph = Physics.build(seeds_face, SEEDS)
+    m = face_model(seeds_face, SEEDS)
+    ph = m.physics
     a = activity(1, ZYG=0.6, OOS=0.3)[0]
     s0 = State.at_rest(ph.model.rest_positions, ph.n_muscles)
     opened = np.array([0.05, 0.0, 0.0])
     controls = Controls(a, s0.jaw_pose, opened)
-    for name, solver, kw in (("euler", ExplicitEuler(SEEDS.dt), {}),
+    for name, solver, kw in (("euler", ExplicitEuler(m.steps.dt), {}),
                              ("implicit", LinearImplicitEuler(4), {"substeps": 4}),
                              ("rosenbrock", Rosenbrock2(2), {"substeps": 2})):
-        stepper = Stepper(ph, integrator=name, **kw)
+        stepper = Stepper(m, integrator=name, **kw)
         assert stepper.solver == solver and stepper.integrator == name
         ss = solver.init(ph)
         jaw_before = [np.array(x) for x in ss.jaw]
@@ -182,7 +184,7 @@ def test_solver_objects_step_without_hidden_state(seeds_face):
 def test_an_option_a_solver_does_not_take_is_an_error(seeds_face):
     """``substeps`` with explicit Euler and a ``dt`` that is not the implicit step are errors
     naming the field; the presets' own defaults are not."""
-    ph = Physics.build(seeds_face, SEEDS)
+    m = face_model(seeds_face, SEEDS)
     for kw, field in (({"integrator": "euler", "substeps": 4}, "substeps"),
                       ({"integrator": "implicit", "dt": 1e-3}, "dt"),
                       ({"integrator": "rosenbrock", "substeps": 0}, "substeps"),
@@ -190,21 +192,21 @@ def test_an_option_a_solver_does_not_take_is_an_error(seeds_face):
                       ({"integrator": Rosenbrock2(2), "substeps": 2}, "substeps"),
                       ({"integrator": "midpoint"}, "integrator")):
         with pytest.raises(InputError) as info:
-            Stepper(ph, **kw)
+            Stepper(m, **kw)
         assert info.value.field == field, kw
     for bad in (lambda: ExplicitEuler(0.0), lambda: LinearImplicitEuler(2.5),
                 lambda: Rosenbrock2(True)):
         with pytest.raises(InputError):
             bad()
-    assert Stepper(ph).n_steps == 50  # the preset's euler and 0.33 ms
-    assert Stepper(ph, integrator="implicit").n_steps == SEEDS.substeps
-    assert Stepper(ph, integrator="implicit", dt=1 / 240).n_steps == 4  # dt repeats h
+    assert Stepper(m).n_steps == 50  # the preset's euler and 0.33 ms
+    assert Stepper(m, integrator="implicit").n_steps == m.steps.substeps
+    assert Stepper(m, integrator="implicit", dt=1 / 240).n_steps == 4  # dt repeats h
 
 
 def test_blow_up_is_caught_with_the_frame(seeds_face):
     face = seeds_face
     with pytest.raises(SimulationBlowUp) as info:
-        simulate(face, activity(20, OOS=1.0), integrator="euler", dt=4e-3, params=SEEDS)
+        simulate(face_model(face, SEEDS), activity(20, OOS=1.0), integrator="euler", dt=4e-3)
     assert info.value.frame >= 1
     assert "time step" in str(info.value)
 
@@ -218,7 +220,7 @@ def test_collapse_within_a_frame_is_a_blow_up_with_its_frame(seeds_face):
     act[:, :8] = triangle_sequence(1)[:, None]
     # the seeds' second damping value is too much for 1-ms explicit steps: nodes meet
     with pytest.raises(SimulationBlowUp, match=r"frame \d+.*time step") as info:
-        simulate(face, act, params=preset("pitermann2001"), dt=1e-3)
+        simulate(face_model(face, preset("pitermann2001")), act, dt=1e-3)
     assert 1 <= info.value.frame < 12
 
 
@@ -226,14 +228,15 @@ def test_calibrated_preset_moves_experiment1_as_published(seeds_face):
     face = seeds_face
     from facemech.inverse.experiments import synthetic_data
     from facemech.kinematics import stats
-    from facemech.params import preset
+    from facemech.params import preset, preset_steps
 
     base, cal = preset("lucero1999"), preset("calibrated")
     assert cal.k_force == pytest.approx(16 * base.k_force)
-    assert cal.with_(k_force=base.k_force, fast_dt=base.fast_dt) == base.with_(name="calibrated")
+    assert cal.with_(k_force=base.k_force) == base.with_(name="calibrated")
     # its fast paths keep the paper's step: 1-ms steps would overshoot by half
-    assert cal.fast_dt == cal.dt and base.fast_dt == 1e-3
-    data, _ = synthetic_data(face, params=cal)
+    steps, base_steps = preset_steps("calibrated"), preset_steps("lucero1999")
+    assert steps.fast_dt == steps.dt and base_steps.fast_dt == 1e-3
+    data, _ = synthetic_data(face_model(face, cal))
     right = [i for i, n in enumerate(data.names) if n.startswith("R")]
     # Pitermann & Munhall (2001), Table III: movement 2.024 mm
     assert stats.movement(data.positions[:, right]) * 1e3 == pytest.approx(2.02, rel=0.05)
@@ -246,6 +249,6 @@ def test_lucero1999_still_moves_experiment1_as_before(seeds_face):
     from facemech.kinematics import stats
     from facemech.params import preset
 
-    data, _ = synthetic_data(seeds_face, params=preset("lucero1999"), dt=1 / 3000)
+    data, _ = synthetic_data(face_model(seeds_face, preset("lucero1999")), dt=1 / 3000)
     right = [i for i, n in enumerate(data.names) if n.startswith("R")]
     assert stats.movement(data.positions[:, right]) * 1e3 == pytest.approx(0.223, abs=0.005)

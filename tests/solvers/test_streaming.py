@@ -10,6 +10,7 @@ from facemech import simulate
 from facemech.demo import utterance
 from facemech.errors import InputError
 from facemech.io.results import read_results, write_results
+from facemech.physics.model import model as face_model
 from facemech.solvers.forward import simulate_blocks
 from facemech.workflows.simulate import simulate_to_file
 
@@ -26,7 +27,7 @@ def controls():
 @pytest.fixture(scope="module")
 def in_memory(face, controls, tmp_path_factory):
     """The in-memory run and its results file, written by write_results."""
-    sim = simulate(face, *controls)
+    sim = simulate(face_model(face), *controls)
     path = tmp_path_factory.mktemp("mem") / "r.nc"
     write_results(path, sim, inputs={"activity": "0123456789abcdef"})
     return sim, path
@@ -43,7 +44,8 @@ def test_streamed_file_reads_exactly_as_the_in_memory_one(face, controls, in_mem
                                                           block):
     _, mem_path = in_memory
     out = tmp_path / "s.nc"
-    run = simulate_to_file(out, face, *controls, inputs={"activity": "0123456789abcdef"},
+    run = simulate_to_file(out, face_model(face), *controls,
+                           inputs={"activity": "0123456789abcdef"},
                            block_frames=block)
     mem, streamed = read_results(mem_path), read_results(out)
     assert list(streamed.variables) == list(mem.variables)
@@ -64,7 +66,7 @@ def test_streamed_file_reads_exactly_as_the_in_memory_one(face, controls, in_mem
 def test_blocks_follow_each_other_and_make_the_in_memory_run(face, controls, in_memory):
     sim, _ = in_memory
     blocks = []
-    run = simulate_blocks(face, *controls, sink=blocks.append, block_frames=13)
+    run = simulate_blocks(face_model(face), *controls, sink=blocks.append, block_frames=13)
     assert [len(b.time) for b in blocks] == [13, 13, 13, 1]
     assert [round(b.time[0] * 60) for b in blocks] == [0, 13, 26, 39]
     for name in ("time", "positions", "markers", "activity", "jaw_angle", "jaw_shift"):
@@ -84,11 +86,11 @@ def test_failed_run_leaves_no_file_and_keeps_the_old_one(face, controls, tmp_pat
             raise KeyboardInterrupt
 
     with pytest.raises(KeyboardInterrupt):
-        simulate_to_file(out, face, *controls, block_frames=13, progress=stop)
+        simulate_to_file(out, face_model(face), *controls, block_frames=13, progress=stop)
     assert list(tmp_path.iterdir()) == []  # neither the output nor a temporary file
     out.write_text("an earlier result")
     with pytest.raises(RuntimeError, match="boom"):
-        simulate_to_file(out, face, *controls, block_frames=13,
+        simulate_to_file(out, face_model(face), *controls, block_frames=13,
                          progress=lambda d, t: (_ for _ in ()).throw(RuntimeError("boom"))
                          if d == 20 else None)
     assert list(tmp_path.iterdir()) == [out] and out.read_text() == "an earlier result"
@@ -96,6 +98,6 @@ def test_failed_run_leaves_no_file_and_keeps_the_old_one(face, controls, tmp_pat
 
 def test_block_size_must_be_positive(face, controls, tmp_path):
     with pytest.raises(InputError, match="block_frames") as e:
-        simulate_to_file(tmp_path / "r.nc", face, *controls, block_frames=0)
+        simulate_to_file(tmp_path / "r.nc", face_model(face), *controls, block_frames=0)
     assert e.value.field == "block_frames"
     assert list(tmp_path.iterdir()) == []

@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from facemech.geometry.prism import rest_geometry, volume_gradients
-from facemech.params import MUSCLE_GROUPS, preset
+from facemech.params import MUSCLE_GROUPS, preset_pair
+from facemech.physics.model import model as face_model
 from facemech.solvers.volume_floor import VolumeFloor, resolve_volume_floor
 
 #: a right prism 2 mm high over a right triangle of legs 2 mm: volume 4 mm^3
@@ -89,7 +90,7 @@ def test_parameters_refuse_a_floor_at_or_above_the_rest_volume():
     from facemech import InputError
 
     with pytest.raises(InputError, match="volume_floor"):
-        preset("anatomical").with_(volume_floor=1.0)
+        preset_pair("anatomical").with_(volume_floor=1.0)
 
 
 def test_a_held_lip_gesture_keeps_every_prism_above_the_floor():
@@ -98,14 +99,14 @@ def test_a_held_lip_gesture_keeps_every_prism_above_the_floor():
     from facemech.geometry.builder import default_face, for_tissue
     from facemech.solvers.forward import simulate
 
-    p = preset("anatomical")
-    face = for_tissue(default_face(), p.tissue)
+    p = preset_pair("anatomical")
+    face = for_tissue(default_face(), p.params.tissue)
     v0 = rest_geometry(face.rest_positions, face.prism_nodes, symmetric=True)[0]
     act = np.zeros((31, len(MUSCLE_GROUPS)))
     act[:, MUSCLE_GROUPS.index("LLS")] = 1.0
     ratio = {}
     for floor in (0.0, 0.5):
-        sim = simulate(face, act, params=p.with_(volume_floor=floor, volume_floor_modulus=1e6))
+        sim = simulate(face_model(face, p.with_(volume_floor=floor, volume_floor_modulus=1e6)), act)
         ratio[floor] = (rest_geometry(sim.final_state.positions, face.prism_nodes,
                                       symmetric=True)[0] / v0).min()
     assert ratio[0.0] < 0.3

@@ -12,6 +12,7 @@ import pytest
 
 from conftest import activity, run_cli
 from facemech.io.results import read_results, to_dataset, write_dataset
+from facemech.physics.model import model as face_model
 from facemech.speech import stimuli as st
 from facemech.speech.design import check_design
 from facemech.speech.wav import Audio, write_audio
@@ -39,7 +40,7 @@ def item(tmp_path_factory):
     folder = tmp_path_factory.mktemp("alive-item")
     a = activity(24)
     a[:, 2] = 0.5 * np.sin(np.linspace(0, np.pi, 24))
-    ds = to_dataset(simulate(load_face("default-coarse"), a, np.radians(5.0) * a[:, 2]))
+    ds = to_dataset(simulate(face_model(load_face("default-coarse")), a, np.radians(5.0) * a[:, 2]))
     ds = st.time_scale(ds, SECONDS / 0.4)
     ds.attrs.pop("stimulus", None)
     write_dataset(folder / "a.nc", ds)

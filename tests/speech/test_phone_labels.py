@@ -245,7 +245,8 @@ def test_stress_reads_the_same_in_every_notation(spoken, notation):
     """The planner's stressed vowels (where a slow utterance opens its jaw further) and the
     phone measures' stress come out the same from eSpeak's marks, IPA's and ARPABET's digits;
     an alignment with no mark at all is read as unmarked (every vowel a candidate)."""
-    from facemech.analysis.visible_speech import _stress, reads_stress
+    from facemech.speech.phone_labels import phone_stress as _stress
+    from facemech.speech.phone_labels import reads_stress
     from facemech.speech.planning import _stressed_vowels
 
     written = L.relabel(spoken, notation)

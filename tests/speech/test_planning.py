@@ -11,8 +11,8 @@ import pytest
 
 from conftest import run_cli
 from facemech import InputError, default_face
-from facemech.analysis.visible_speech import measure_phones
 from facemech.params import MUSCLE_GROUPS
+from facemech.physics.model import model as face_model
 from facemech.speech.alignment import Alignment, Segment
 from facemech.speech.coarticulation import (
     Gesture,
@@ -41,6 +41,7 @@ from facemech.speech.planning import (
     slew_limited,
 )
 from facemech.speech.visemes import VISEMES
+from facemech.speech.visible_speech import measure_phones
 
 MEN = MUSCLE_GROUPS.index("MEN")
 
@@ -258,7 +259,7 @@ def test_the_plan_opens_the_vowel_between_bilabials_and_closes_them(face):
     1.16 mm apart at 4 iterations, 0.55 at 8, docs/visible-speech.md. 2026-11-29, the jaw
     free: 12.0, 0.0 and 0.0 mm. Before the bilabials' shift in time (`Gesture.shift`) the /m/
     stayed 0.98 mm apart: its lips closed and opened again before its middle.)"""
-    plan = plan_controls(MAP, face, iterations=4)
+    plan = plan_controls(MAP, face_model(face), iterations=4)
     assert plan.activity.min() >= 0.0 and plan.activity.max() <= 1.0
     assert plan.jaw.min() >= 0.0 and np.degrees(plan.jaw.max()) <= 35.0
     first = plan.record["misses"][0]
@@ -271,7 +272,7 @@ def test_the_plan_opens_the_vowel_between_bilabials_and_closes_them(face):
     assert plan.record["kept_iteration"] > 0 and plan.record["final"]["cost_mm"] < 0.5 * \
         first["cost_mm"]
     # the jaw's speed is recorded with the lower lip's: the kept simulation's lower incisor
-    from facemech.analysis.visible_speech import incisor_speed
+    from facemech.speech.visible_speech import incisor_speed
 
     sim = plan.simulation
     assert plan.record["final"]["peak_incisor_speed_mm_s"] == pytest.approx(
@@ -323,7 +324,7 @@ def test_the_jaw_speed_limit_is_the_incisors(coarse):
     assert jaw_rate_limit(coarse, preset("anatomical"), 0.125) == pytest.approx(w / 2)
     for bad in (0.0, -0.1, float("nan")):
         with pytest.raises(InputError) as e:
-            plan_controls(MAP, coarse, iterations=0, jaw_speed=bad)
+            plan_controls(MAP, face_model(coarse), iterations=0, jaw_speed=bad)
         assert e.value.field == "jaw_speed"
 
 

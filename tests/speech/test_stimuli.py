@@ -12,6 +12,7 @@ from facemech import simulate
 from facemech.analysis.describe import describe, marker_nodes
 from facemech.errors import InputError
 from facemech.io.results import read_results, to_dataset, write_dataset
+from facemech.physics.model import model as face_model
 from facemech.speech import stimuli as st
 from facemech.speech.audio import Audio, onset, read_wav, shift, write_wav
 from facemech.workflows.stimuli import run_design
@@ -34,7 +35,7 @@ def item(face, tmp_path_factory):
     a = activity(FRAMES)
     bump = np.sin(np.linspace(0, np.pi, FRAMES))
     a[:, 2] = 0.5 * bump  # OOS: the lips
-    sim = simulate(face, a, np.radians(5.0) * bump)
+    sim = simulate(face_model(face), a, np.radians(5.0) * bump)
     write_dataset(folder / "a.nc", to_dataset(sim))
     write_wav(folder / "a.wav", clicks(0.05, FRAMES / 60))
     write_wav(folder / "b.wav", clicks(0.08, FRAMES / 60, first_s=0.1))

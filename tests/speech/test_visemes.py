@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from facemech import MUSCLE_GROUPS, InputError, simulate
+from facemech.physics.model import model as face_model
 from facemech.speech.alignment import Alignment, Segment
 from facemech.speech.coarticulation import (
     EDGE_S,
@@ -232,7 +233,7 @@ def spoken(face):
         al = (utterance(*ROUNDED_CONTEXT, "espeak") if notation == "rounded"
               else utterance(LABELS[notation], DURATIONS, notation))
         _, act, jaw = controls_from_alignment(al)
-        sim = simulate(face, act, jaw)
+        sim = simulate(face_model(face), act, jaw)
         out[notation] = al, sim, mouth_measures(sim.model, sim.positions)
     return out
 
@@ -275,7 +276,7 @@ def test_a_held_i_widens_like_real_lips_and_keeps_the_lower_lip_in_range(face):
     v = VISEMES[SPREAD]
     rate = 60.0
     shape = np.clip(np.arange(int(0.4 * rate) + 1) / rate / 0.1, 0.0, 1.0)
-    sim = simulate(face, shape[:, None] * v.activity_vector()[None], shape * v.jaw)
+    sim = simulate(face_model(face), shape[:, None] * v.activity_vector()[None], shape * v.jaw)
     m = mouth_measures(sim.model, sim.positions[-1])
     assert 4e-3 <= m["width_change"] <= 8e-3, m
     assert m["lip_gap"] > 1.5e-3, m
@@ -293,7 +294,7 @@ def test_a_held_lax_i_is_less_spread_and_more_open_than_i(face):
     got = {}
     for cls in (SPREAD, LAX):
         v = VISEMES[cls]
-        sim = simulate(face, shape[:, None] * v.activity_vector()[None], shape * v.jaw)
+        sim = simulate(face_model(face), shape[:, None] * v.activity_vector()[None], shape * v.jaw)
         got[cls] = mouth_measures(sim.model, sim.positions[-1])
     lax, spread = got[LAX], got[SPREAD]
     assert VISEMES[SPREAD].jaw < VISEMES[LAX].jaw < VISEMES["mid"].jaw

@@ -8,6 +8,7 @@ import pytest
 
 from conftest import activity, seen_triangles
 from facemech.geometry.teeth import lower_incisor_point
+from facemech.physics.model import model as face_model
 from facemech.solvers.forward import simulate
 from facemech.solvers.jaw import rotate_about
 from facemech.viz import dentition as D
@@ -23,7 +24,8 @@ def mouth(face):
     """The built-in face's scene, its skin at rest and 0.5 s after the jaw began to open to 15
     degrees, the lower lip lowered by DLI (as in speech: the lower incisors show)."""
     n = 31
-    sim = simulate(face, activity(n, DLI=0.6), JAW * np.clip(np.linspace(0, 1.6, n), 0, 1))
+    sim = simulate(face_model(face), activity(n, DLI=0.6),
+                   JAW * np.clip(np.linspace(0, 1.6, n), 0, 1))
     look = look_from_model(face)
     return build_scene(look), look.rest, sim.positions[-1]
 

@@ -9,6 +9,7 @@ import trimesh
 from scipy import ndimage
 
 from conftest import activity, seen_triangles
+from facemech.physics.model import model as face_model
 from facemech.solvers.forward import simulate
 from facemech.viz.camera import view_camera
 from facemech.viz.closure import closed_surface
@@ -26,7 +27,7 @@ def head(face):
     for a moment, a colour step of 15 there against the cheek's 11, measured; 4 once held)."""
     n = 12
     jaw = np.radians(15.0) * np.minimum(np.arange(n) / 5, 1.0)
-    sim = simulate(face, activity(n), jaw)
+    sim = simulate(face_model(face), activity(n), jaw)
     look = look_from_model(face)
     return build_scene(look), [(look.rest, 0.0), (sim.positions[-1], float(jaw[-1]))]
 

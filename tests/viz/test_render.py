@@ -9,6 +9,7 @@ from scipy import ndimage
 from conftest import activity, run_cli
 from facemech.geometry.appearance import Appearance
 from facemech.io.results import read_results, to_dataset
+from facemech.physics.model import model as face_model
 from facemech.solvers.forward import simulate
 from facemech.viz.camera import parse_size
 from facemech.viz.raster import srgb_to_linear
@@ -25,7 +26,7 @@ def open_mouth(face):
     """0.5 s: the jaw opens to 14 degrees while DLI lowers the lower lip (in memory)."""
     n = 31
     jaw = np.radians(14.0) * np.clip(np.linspace(0, 1.6, n), 0, 1)
-    sim = simulate(face, activity(n, DLI=0.6), jaw)
+    sim = simulate(face_model(face), activity(n, DLI=0.6), jaw)
     return to_dataset(sim)
 
 

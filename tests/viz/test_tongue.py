@@ -13,6 +13,7 @@ import facemech as fm
 from conftest import seen_triangles
 from facemech.errors import InputError
 from facemech.io.results import read_results, results_tongue, to_dataset, with_tongue, write_dataset
+from facemech.physics.model import model as face_model
 from facemech.speech.alignment import Alignment, Segment
 from facemech.speech.coarticulation import controls_from_alignment
 from facemech.speech.tongue import FREE, REST_TIP_BEHIND_INCISORS, TARGETS, target_of, tongue_tip
@@ -91,7 +92,7 @@ def theta():
     frame at the /θ/'s middle."""
     al = _alignment(*THETA)
     _, act, jaw = controls_from_alignment(al, frame_rate=RATE)
-    sim = fm.simulate(fm.default_face("default-coarse"), act, jaw)
+    sim = fm.simulate(face_model(fm.default_face("default-coarse")), act, jaw)
     ds = with_tongue(to_dataset(sim), tongue_tip(al, sim.time))
     return ds, _frame(0.36)
 

@@ -18,6 +18,7 @@ from conftest import run_cli as cli
 from facemech import MUSCLE_GROUPS, read_results
 from facemech.io.markers import write_markers
 from facemech.markerset import MarkerSet
+from facemech.physics.model import model as face_model
 from facemech.viz.scene import build_scene, look_from_dataset
 from facemech.viz.viewer import (
     DATA_ID,
@@ -44,7 +45,8 @@ def result(tmp_path_factory):
 
     ramp = np.linspace(0.0, 1.0, FRAMES)[:, None]
     act = activity(FRAMES, ZYG=0.8, RIS=0.8) * ramp
-    sim = fm.simulate(fm.default_face("default-coarse"), act, np.radians(12.0) * ramp[:, 0])
+    sim = fm.simulate(face_model(fm.default_face("default-coarse")), act,
+                      np.radians(12.0) * ramp[:, 0])
     path = tmp_path_factory.mktemp("viewer") / "gesture.nc"
     fm.write_results(path, sim)
     return path
@@ -62,7 +64,7 @@ def open_mouth(tmp_path_factory):
     ramp = np.clip(np.linspace(0.0, 1.35, OPEN_FRAMES), 0.0, 1.0)
     act = np.zeros((OPEN_FRAMES, len(MUSCLE_GROUPS)))
     act[:, MUSCLE_GROUPS.index("DLI")] = 0.3 * ramp
-    sim = fm.simulate(fm.default_face("default-coarse"), act, np.radians(14.0) * ramp)
+    sim = fm.simulate(face_model(fm.default_face("default-coarse")), act, np.radians(14.0) * ramp)
     return write_viewer(to_dataset(sim), tmp_path_factory.mktemp("open") / "open.html")
 
 

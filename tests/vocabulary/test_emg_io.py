@@ -18,6 +18,7 @@ from facemech import (
 )
 from facemech.emg import integrate, trapezoid_kernel
 from facemech.params import MUSCLE_GROUPS
+from facemech.physics.model import model as face_model
 
 
 def burst_emg(rate=2500.0, duration=3.0, seed=0):
@@ -142,7 +143,7 @@ def test_marker_csv_round_trip_with_units_and_gaps(tmp_path):
 def test_results_round_trip(face, tmp_path):
     act = np.zeros((6, len(MUSCLE_GROUPS)))
     act[:, 0] = 0.5
-    sim = simulate(face, act, np.linspace(0, 0.05, 6))
+    sim = simulate(face_model(face), act, np.linspace(0, 0.05, 6))
     path = write_results(tmp_path / "r.nc", sim, inputs={"activity": "abc"})
     ds = read_results(path)
     np.testing.assert_array_equal(ds["positions"].values, sim.positions)
@@ -164,7 +165,7 @@ def test_results_name_the_numerical_environment(face, tmp_path):
 
     import numba
 
-    sim = simulate(face, np.zeros((3, len(MUSCLE_GROUPS))))
+    sim = simulate(face_model(face), np.zeros((3, len(MUSCLE_GROUPS))))
     ds = read_results(write_results(tmp_path / "r.nc", sim))
     for lib in ("numpy", "scipy", "numba", "llvmlite"):
         assert ds.attrs[f"{lib}_version"] == metadata.version(lib), lib
@@ -177,7 +178,7 @@ def test_results_name_the_numerical_environment(face, tmp_path):
 
 
 def test_results_refuse_non_finite(face, tmp_path):
-    sim = simulate(face, np.zeros((3, len(MUSCLE_GROUPS))))
+    sim = simulate(face_model(face), np.zeros((3, len(MUSCLE_GROUPS))))
     sim.positions[1, 0, 0] = np.nan
     with pytest.raises(InputError, match="non-finite"):
         write_results(tmp_path / "r.nc", sim)

@@ -9,6 +9,7 @@ import pytest
 from conftest import run_cli
 from facemech import InputError, preset, write_marker_csv
 from facemech.markerset import MarkerSet
+from facemech.physics.model import model as face_model
 from facemech.solvers.jaw_drive import jaw_angles_from_marker
 from facemech.workflows import emg as wemg
 from facemech.workflows import markers as wmarkers
@@ -30,22 +31,23 @@ def test_bite_block_gives_the_same_jaw_through_a_chin_marker_and_a_jaw_csv(tmp_p
                                                                              seeds_face):
     prm = preset("lucero1999")  # the seeds' thin tissue: angles from the bone under the marker
     t = chin_file(tmp_path / "chin.csv", seeds_face)
-    free, inputs = wsim.jaw_series(wsim.JawSource(markers=tmp_path / "chin.csv"), seeds_face,
-                                   prm, t)
+    free, inputs = wsim.jaw_series(wsim.JawSource(markers=tmp_path / "chin.csv"),
+                                   face_model(seeds_face, prm), t)
     assert set(inputs) == {"jaw_chin"} and free.max() > np.radians(3)
     node = seeds_face.markers["R01"]
     y = seeds_face.rest_positions[node, 1] - 6e-3 * np.minimum(t / t[15], 1.0)
-    np.testing.assert_allclose(free, jaw_angles_from_marker(seeds_face, prm, node, y),
+    np.testing.assert_allclose(free, jaw_angles_from_marker(face_model(seeds_face, prm), node, y),
                                atol=1e-6)  # the file holds mm to a few decimals
     with open(tmp_path / "jaw.csv", "w") as fh:
         fh.write("time,jaw_angle\n" + "".join(f"{a},{float(b)!r}\n" for a, b in zip(t, free,
                                                                            strict=True)))
-    held = [wsim.jaw_series(wsim.JawSource(**src, bite_block=True), seeds_face, prm, t)[0]
+    held = [wsim.jaw_series(wsim.JawSource(**src, bite_block=True), face_model(seeds_face, prm),
+                            t)[0]
             for src in ({"markers": tmp_path / "chin.csv"}, {"angles": tmp_path / "jaw.csv"})]
     np.testing.assert_allclose(held[0], np.full(len(t), free[0]), atol=0)
     np.testing.assert_allclose(held[1], held[0], atol=1e-12)
     # and as the solver's own bite block had it
-    np.testing.assert_allclose(held[0], jaw_angles_from_marker(seeds_face, prm, node, y,
+    np.testing.assert_allclose(held[0], jaw_angles_from_marker(face_model(seeds_face, prm), node, y,
                                                                bite_block=True), atol=1e-6)
     assert wsim.bite_block(np.arange(6.0).reshape(2, 3)).tolist() == [[0, 1, 2], [0, 1, 2]]
 

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import InputError
-from ..params import MUSCLE_GROUPS, Parameters, default_parameters
+from ..params import MUSCLE_GROUPS, Parameters
 
 #: Apple's 52 blendshape locations, in the order of Apple's documentation
 ARKIT_SHAPES: tuple[str, ...] = (
@@ -193,35 +193,34 @@ def _side_weight(x: np.ndarray, side: str | None) -> np.ndarray:
     return left if side == "Left" else 1.0 - left
 
 
-def arkit_basis(face, params: Parameters | None = None, *, ramp: float = 0.2,
+def arkit_basis(model, *, ramp: float = 0.2,
                 hold: float = 0.6, progress=None) -> Basis:
     """Make the 52 shapes on ``face`` by simulating each gesture of :data:`RECIPES`.
 
     Parameters
     ----------
-    face : FaceModel (rebuilt for the preset's tissue as :func:`~facemech.simulate` does)
-    params : the preset (default: the default preset)
+    model : Model -- the face and the preset (:func:`facemech.physics.model.model`)
     ramp, hold : s, the gesture's ramp to its level and the hold before it is taken
     progress : callable(done, total), optional, once per gesture simulated
     """
-    params = params or default_parameters()
+    params = model.params
     rate = params.frame_rate
     frames = int(round((ramp + hold) * rate)) + 1
     recipes = [Recipe(), *(RECIPES[s] for s in dict.fromkeys(
         stem(n)[0] for n in ARKIT_SHAPES if stem(n)[0] in RECIPES))]
     recipes += [r.less for r in recipes if r.less is not None]
-    posture, model = {}, face
+    posture = {}
     for k, r in enumerate(recipes):
-        posture[describe_recipe(r)], model = _posture(face, r, params, frames,
-                                                      int(round(ramp * rate)), model)
+        posture[describe_recipe(r)] = _posture(model, r, frames, int(round(ramp * rate)))
         if progress is not None:
             progress(k + 1, len(recipes))
     rest = posture[""]
     if isinstance(rest, str):
         raise InputError(f"the face does not rest: {rest}", field="face")
-    skin_x = model.rest_positions[: model.n_surface, 0]
+    face = model.face
+    skin_x = face.rest_positions[: face.n_surface, 0]
     x = skin_x - np.median(skin_x)
-    disp = np.zeros((len(ARKIT_SHAPES), model.n_surface, 3))
+    disp = np.zeros((len(ARKIT_SHAPES), face.n_surface, 3))
     notes = []
     for i, name in enumerate(ARKIT_SHAPES):
         s, side = stem(name)
@@ -239,25 +238,25 @@ def arkit_basis(face, params: Parameters | None = None, *, ramp: float = 0.2,
     notes = [f"{n} (no such muscle on this face)" if RECIPES.get(stem(nm)[0]) and not m
              and "ran away" not in n else n for nm, n, m in zip(ARKIT_SHAPES, notes, made,
                                                                 strict=True)]
-    lips = (np.asarray(model.lip_region, bool) if model.lip_region is not None
-            else np.zeros(model.n_surface, bool))
-    return Basis(ARKIT_SHAPES, disp, made, rest, np.asarray(model.faces), lips, tuple(notes))
+    lips = (np.asarray(face.lip_region, bool) if face.lip_region is not None
+            else np.zeros(face.n_surface, bool))
+    return Basis(ARKIT_SHAPES, disp, made, rest, np.asarray(face.faces), lips, tuple(notes))
 
 
-def _posture(face, r: Recipe, params: Parameters, frames: int, ramp_frames: int, model):
-    """(the epidermal nodes' positions (n_surface, 3) m at the end of the gesture ``r``, or
-    the reason it ran away; the face simulated)."""
+def _posture(model, r: Recipe, frames: int, ramp_frames: int):
+    """The epidermal nodes' positions (n_surface, 3) m at the end of the gesture ``r`` on
+    ``model`` (a :class:`~facemech.physics.model.Model`), or the reason it ran away."""
     from ..errors import SimulationBlowUp
     from ..solvers.forward import simulate
 
     if not set(r.muscles) <= set(MUSCLE_GROUPS):
         raise InputError(f"unknown muscle group in {r.muscles}", field="muscles")
-    act, pose = _gesture_controls(r, frames, ramp_frames, params)
+    act, pose = _gesture_controls(r, frames, ramp_frames, model.params)
     try:
-        sim = simulate(face, act, pose, params=params)
+        sim = simulate(model, act, pose)
     except SimulationBlowUp as exc:
-        return f"the gesture ran away ({exc})", model
-    return sim.positions[-1], sim.model
+        return f"the gesture ran away ({exc})"
+    return sim.positions[-1]
 
 
 @dataclass(frozen=True)

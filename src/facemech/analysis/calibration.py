@@ -157,8 +157,9 @@ class CalibrationResult:
         return "\n".join(out)
 
 
-def experiment1_movement(face, params) -> float:
-    """The movement (mm) of Experiment 1 of Pitermann & Munhall (2001) on a face: 2 x the RMS
+def experiment1_movement(model) -> float:
+    """The movement (mm) of Experiment 1 of Pitermann & Munhall (2001) on ``model`` (a
+    :class:`~facemech.physics.model.Model`): 2 x the RMS
     over the 11 right-side markers of their 3-D standard deviation, the 8 perioral pairs driven
     by the triangle sequence."""
     from ..inverse.experiments import PERIORAL, triangle_sequence
@@ -169,25 +170,25 @@ def experiment1_movement(face, params) -> float:
     act = np.zeros((len(tri), len(MUSCLE_GROUPS)))
     for g in PERIORAL:
         act[:, MUSCLE_GROUPS.index(g)] = tri
-    sim = simulate(face, act, params=params)
+    sim = simulate(model, act)
     names = [n for n in sim.model.markers if n.startswith("R")]
     return float(stats.movement(sim.positions[:, [sim.model.markers[n] for n in names]]) * 1e3)
 
 
 def _evaluate(face, scales: dict, targets, run) -> tuple[np.ndarray, list]:
+    from ..physics.model import model as face_model
     from .gestures import run_gesture
 
-    params = anatomical(scales)
+    model = face_model(face, anatomical(scales))  # one model per set of scales
     cache: dict = {}
     rows = []
     for t in targets:
         key = t.groups
         if key not in cache:
             if key == ("EXPERIMENT1",):
-                cache[key] = {"movement": experiment1_movement(face, params)}
+                cache[key] = {"movement": experiment1_movement(model)}
             else:
-                cache[key] = (run(face, key, params) if run
-                              else run_gesture(face, key, params=params).measures)
+                cache[key] = (run(model, key) if run else run_gesture(model, key).measures)
         got = cache[key][t.measure]
         rows.append(CalibrationRow(t.name, "+".join(t.groups), t.measure, t.value, t.kind,
                                    float(got), t.weight > 0, t.source))
@@ -330,11 +331,11 @@ def subject_targets(face, recordings, mapping: dict[str, int]):
                                       f"node{j}_{a}", float(d[j, a] * 1e3),
                                       weight=1.0 / (scale * 1e3), source=rec.source))
 
-    def run(model, groups, params):
+    def run(model, groups):
         from ..solvers.forward import simulate
 
-        act = gesture_activity(groups, frame_rate=params.frame_rate)
-        sim = simulate(model, act, params=params)
+        act = gesture_activity(groups, frame_rate=model.params.frame_rate)
+        sim = simulate(model, act)
         disp = (sim.positions[-1] - sim.positions[0])[specs[groups]] * 1e3
         return {f"node{j}_{a}": float(disp[j, a]) for j in range(len(disp)) for a in range(3)}
 

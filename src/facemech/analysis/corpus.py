@@ -136,17 +136,17 @@ def simulate_corpus(n_utterances: int = 40, frames: int = 60, seed: int = 2008,
     if cache and path.is_file():
         with np.load(path) as z:
             return [z[f"u{k}"] for k in range(n_utterances)]
-    from ..params import preset
+    from ..physics.model import model
 
-    face = default_face(tissue="uniform")
+    seeds = model(default_face(tissue="uniform"), "lucero1999")
+    face = seeds.face
     nodes = site_nodes(face)
     idx = np.array([nodes[n] for n in SITES])
     rng = np.random.default_rng(seed)
     out = []
-    seeds = preset("lucero1999")
     for k in range(n_utterances):
-        act, jaw = random_utterance(rng, frames, seeds.frame_rate)
-        sim = simulate(face, act, jaw, integrator="euler", dt=1e-3, params=seeds)
+        act, jaw = random_utterance(rng, frames, seeds.params.frame_rate)
+        sim = simulate(seeds, act, jaw, integrator="euler", dt=1e-3)
         out.append(sim.positions[:, idx])
         if progress is not None:
             progress(k + 1, n_utterances)

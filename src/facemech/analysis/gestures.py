@@ -101,22 +101,23 @@ class Gesture:
     landmarks: dict  # name -> (frames, 3) m displacement
 
 
-def run_gesture(face, groups, *, params: Parameters | None = None, ramp: float = 0.2,
+def run_gesture(model, groups, *, ramp: float = 0.2,
                 hold: float = 0.5, level: float = 1.0, jaw_angle: float = 0.0,
                 **simulate_kw) -> Gesture:
-    """Simulate one gesture and measure it at its end (see the module doc)."""
+    """Simulate one gesture on ``model`` (a :class:`~facemech.physics.model.Model`) and
+    measure it at its end (see the module doc)."""
     from ..solvers.forward import simulate
 
     act = gesture_activity(groups, ramp=ramp, hold=hold, level=level,
-                           frame_rate=(params.frame_rate if params else Parameters.frame_rate))
-    sim = simulate(face, act, np.full(len(act), jaw_angle), params=params, **simulate_kw)
+                           frame_rate=model.params.frame_rate)
+    sim = simulate(model, act, np.full(len(act), jaw_angle), **simulate_kw)
     model = sim.model
     disp = sim.positions - sim.positions[0]
     return Gesture(tuple(groups), measure(model, disp[-1], sim.positions[0]), sim.time,
                    {k: disp[:, v] for k, v in model.landmarks.items()})
 
 
-def gesture_table(face, *, params: Parameters | None = None, groups=None, **kw) -> dict:
+def gesture_table(model, *, groups=None, **kw) -> dict:
     """Measures (mm) of every muscle group (or of ``groups``) at full activity.
 
     Keys are group names, and ``"OOS+OOI"`` for the two orbicularis parts together.
@@ -125,7 +126,7 @@ def gesture_table(face, *, params: Parameters | None = None, groups=None, **kw) 
     out = {}
     for name in names:
         g = tuple(name.split("+"))
-        out[name] = run_gesture(face, g, params=params, **kw).measures
+        out[name] = run_gesture(model, g, **kw).measures
     return out
 
 

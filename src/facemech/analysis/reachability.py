@@ -127,15 +127,14 @@ class Reach:
     share: dict = None
 
 
-def reach(face, params=None, *, markers: MarkerSet | None = None, jaw: str = "incisor",
+def reach(model, *, markers: MarkerSet | None = None, jaw: str = "incisor",
           controls=REACH_CONTROLS, **invert_kw) -> Reach:
     """Invert the speech targets with the jaw from the lower incisor (``jaw="incisor"``, a bone
     point) or from the chin skin marker (``"chin"``); the fit's errors over the lip and corner
-    markers."""
+    markers. ``model``: a :class:`~facemech.physics.model.Model`."""
     from ..inverse.invert import invert
-    from ..params import default_parameters
 
-    params = params or default_parameters()
+    face, params = model.face, model.params
     ms = markers if markers is not None else speech_targets(face, frame_rate=params.frame_rate)
     if jaw == "incisor":
         from ..solvers.jaw_bone import jaw_poses_from_incisor
@@ -144,12 +143,11 @@ def reach(face, params=None, *, markers: MarkerSet | None = None, jaw: str = "in
     elif jaw == "chin":
         from ..solvers.jaw_drive import jaw_angles_from_marker
 
-        drive = jaw_angles_from_marker(face, params, face.markers["R01"],
-                                       ms.marker("R01")[:, 1])
+        drive = jaw_angles_from_marker(model, face.markers["R01"], ms.marker("R01")[:, 1])
     else:
         raise ValueError(f"jaw must be 'incisor' or 'chin', not {jaw!r}")
     fitted = {n: face.markers[n] for n in ms.names if n not in ("R01", "LI")}
-    res = invert(face, ms.select(list(fitted)), fitted, jaw_angle=drive, params=params,
+    res = invert(model, ms.select(list(fitted)), fitted, jaw_angle=drive,
                  controls=controls, **invert_kw)
     d = res.model_markers[1:] - res.data_markers[1:]
     err = np.linalg.norm(d, axis=2)

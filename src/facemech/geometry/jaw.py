@@ -99,3 +99,18 @@ def attach_jaw(bone_weight: np.ndarray, slides: np.ndarray, landmarks: dict[str,
                          nodes=layer_nodes(on_jaw, SKULL, len(bone_weight)),
                          weights=bone_weight[on_jaw], hinge_point=hinge_point,
                          hinge_axis=hinge_axis)
+
+
+def rotation_matrix(axis: np.ndarray, angle: float) -> np.ndarray:
+    """Rotation by ``angle`` (rad) about the unit ``axis`` (Rodrigues)."""
+    a = np.asarray(axis, float)
+    a = a / np.linalg.norm(a)
+    k = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
+    return np.eye(3) + np.sin(angle) * k + (1 - np.cos(angle)) * (k @ k)
+
+
+def rotate_about(points: np.ndarray, point: np.ndarray, axis: np.ndarray,
+                 angle: float) -> np.ndarray:
+    """Points (..., 3) rotated by ``angle`` about the line through ``point`` along ``axis``."""
+    r = rotation_matrix(axis, angle)
+    return (np.asarray(points) - point) @ r.T + point

@@ -103,22 +103,21 @@ class ControlPick:
                 f"{kept}{sign}{one}; held at rest: {held} ({why})")
 
 
-def step_response_matrix(face, params, nodes, gmat, *, estimate_jaw: bool,
+def step_response_matrix(model, nodes, gmat, *, estimate_jaw: bool,
                          jaw_start=(0.0, 0.0, 0.0), dt: float | None = None) -> np.ndarray:
     """Step responses (3 markers, controls), mm per unit, from rest at the jaw's first pose
     (:func:`facemech.inverse.uncertainty.step_responses`): the muscle controls ``gmat``
     (groups, controls) and, with ``estimate_jaw``, the jaw angle in units of
     :data:`~facemech.inverse.frame.JAW_UNIT` rad; a jaw that is not estimated is held at
-    ``jaw_start`` (angle rad, shift_y m, shift_z m)."""
-    from ..geometry.builder import for_tissue
-    from ..physics.assembly import Physics
+    ``jaw_start`` (angle rad, shift_y m, shift_z m). ``model``: a
+    :class:`~facemech.physics.model.Model`."""
     from ..solvers.forward import single_threaded_blas
     from ..solvers.state import State
     from ..solvers.step import Stepper
     from .frame import JAW_UNIT
 
-    physics = Physics.build(for_tissue(face, params.tissue), params)  # the preset's tissue
-    stepper = Stepper(physics, dt=params.fast_dt if dt is None else dt)
+    physics = model.physics
+    stepper = Stepper(model, dt=model.steps.fast_dt if dt is None else dt)
     nm = gmat.shape[1]
     start = np.asarray(jaw_start, float)
 
@@ -207,15 +206,15 @@ def cover_signs(s: np.ndarray, kept, *, two_way=(), limit: int | None = None,
     return added, covers, one_way
 
 
-def pick_controls(face, params, nodes, candidates, *, estimate_jaw: bool,
+def pick_controls(model, nodes, candidates, *, estimate_jaw: bool,
                   jaw_start=(0.0, 0.0, 0.0), axes=(0, 1, 2), dt: float | None = None,
                   responses: np.ndarray | None = None, labels=None) -> ControlPick:
     """Pick the controls that markers at ``nodes`` determine (see the module doc).
 
     Parameters
     ----------
-    face : FaceModel
-    params : Parameters (the inversion's preset)
+    model : Model -- the face and the inversion's preset (:func:`facemech.physics.model.model`);
+        None with ``responses``
     nodes : (markers,) epidermal nodes of the markers
     candidates : muscle groups to pick from (the default set), or ``"speech"``
     estimate_jaw : the jaw is a candidate (estimated as one more control)
@@ -241,7 +240,7 @@ def pick_controls(face, params, nodes, candidates, *, estimate_jaw: bool,
     names, gmat = control_matrix(candidates)
     cols = list(names) + (["jaw"] if estimate_jaw else [])
     nodes = np.asarray(nodes)
-    s = (step_response_matrix(face, params, nodes, gmat, estimate_jaw=estimate_jaw,
+    s = (step_response_matrix(model, nodes, gmat, estimate_jaw=estimate_jaw,
                               jaw_start=jaw_start, dt=dt)
          if responses is None else np.asarray(responses, float))
     s = s.reshape(len(nodes), 3, len(cols))[:, list(axes)].reshape(-1, len(cols))

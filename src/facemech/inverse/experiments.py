@@ -24,7 +24,7 @@ import numpy as np
 
 from ..kinematics import stats
 from ..markerset import MarkerSet
-from ..params import MUSCLE_GROUPS, Parameters, default_parameters
+from ..params import MUSCLE_GROUPS, Parameters
 from ..waveforms import cosine_bump
 from .invert import invert
 
@@ -49,14 +49,14 @@ PAPER = {
 EXPERIMENT_SETTINGS = {"controls": "emg7", "window": 3, "smooth": 0.0, "tol": 1e-3}
 
 
-def _invert_quietly(face, data, used, label, progress, **kw):
+def _invert_quietly(model, data, used, label, progress, **kw):
     """invert() with its ill-posedness warning kept for the tables, progress under a label."""
     kw = {**EXPERIMENT_SETTINGS, **kw}
     if kw.get("method", "lsq") == "powell":
         kw = {k: v for k, v in kw.items() if k not in ("window", "smooth", "tol")}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)
-        return invert(face, data, used, **kw, progress=None if progress is None else
+        return invert(model, data, used, **kw, progress=None if progress is None else
                       (lambda d, n: progress(label, d, n)))
 
 
@@ -66,13 +66,13 @@ def triangle_sequence(repeats: int = 3) -> np.ndarray:
     return np.tile(one, repeats)
 
 
-def synthetic_data(face, *, dt: float | None = None, noise: float = 0.0, seed: int = 0,
-                   params=None):
+def synthetic_data(model, *, dt: float | None = None, noise: float = 0.0, seed: int = 0):
     """The synthetic markers (MarkerSet, metres), the true group activity (36, groups).
 
-    ``params`` defaults to the default preset and ``dt`` (s) to its ``fast_dt`` (used by the
-    explicit integrator of the seeds' presets); ``noise`` (m) is the standard deviation of
-    Gaussian noise added to every coordinate (seeded by ``seed``).
+    ``model`` is a :class:`~facemech.physics.model.Model`; ``dt`` (s) defaults to its
+    method's ``fast_dt`` (used by the explicit integrator of the seeds' presets); ``noise``
+    (m) is the standard deviation of Gaussian noise added to every coordinate (seeded by
+    ``seed``).
     """
     from ..solvers.forward import simulate
 
@@ -80,8 +80,8 @@ def synthetic_data(face, *, dt: float | None = None, noise: float = 0.0, seed: i
     act = np.zeros((len(tri), len(MUSCLE_GROUPS)))
     for g in PERIORAL:
         act[:, MUSCLE_GROUPS.index(g)] = tri
-    params = params or default_parameters()
-    sim = simulate(face, act, dt=params.fast_dt if dt is None else dt, params=params)
+    params = model.params
+    sim = simulate(model, act, dt=model.steps.fast_dt if dt is None else dt)
     face = sim.model
     names = [n for n in face.markers if n[0] in "RL"]
     pos = sim.positions[:, [face.markers[n] for n in names]]
@@ -213,8 +213,7 @@ class SyntheticExperiment:
                 "runs": {k: r.as_dict() for k, r in self.runs.items()}, "paper": self.paper}
 
 
-def run_synthetic(face, *, methods=("lsq",), dt: float | None = None, noise: float = 0.0,
-                  params=None,
+def run_synthetic(model, *, methods=("lsq",), dt: float | None = None, noise: float = 0.0,
                   progress: Callable[[str, int, int], None] | None = None) -> SyntheticExperiment:
     """Experiment 1 for each method, with and without the positive constraint.
 
@@ -226,22 +225,22 @@ def run_synthetic(face, *, methods=("lsq",), dt: float | None = None, noise: flo
 
     Parameters
     ----------
-    face : FaceModel
+    model : Model -- the face and its preset (:func:`facemech.physics.model.model`)
     methods : inversion methods, each of "lsq" and "powell"
-    dt : Euler step of synthesis and inversion, s (default: ``params.fast_dt``)
+    dt : Euler step of synthesis and inversion, s (default: the preset's ``fast_dt``)
     noise : standard deviation of the Gaussian marker noise, m
-    params : Parameters (default: the default preset)
     progress : callable(stage, done, total)
 
     Returns
     -------
     SyntheticExperiment
     """
-    params = params or default_parameters()
-    dt = params.fast_dt if dt is None else dt
-    data, truth = synthetic_data(face, dt=dt, noise=noise, params=params)
+    params, face = model.params, model.face
+    dt = model.steps.fast_dt if dt is None else dt
+    data, truth = synthetic_data(model, dt=dt, noise=noise)
     # with noise, the re-animation is also compared with the noise-free markers (the true motion)
-    clean = synthetic_data(face, dt=dt, params=params)[0] if noise > 0 else None
+    clean = synthetic_data(model, dt=dt)[0] if noise > 0 else None
+    stepped = model.with_steps(fast_dt=dt)
     used = {n: face.markers[n] for n in data.names if n.startswith("R")}
     all_nodes = [face.markers[n] for n in data.names]
     runs: dict = {}
@@ -249,8 +248,8 @@ def run_synthetic(face, *, methods=("lsq",), dt: float | None = None, noise: flo
         for positive in (False, True):
             label = f"{method}, {'positive' if positive else 'no constraint'}"
             t0 = time.perf_counter()
-            res = _invert_quietly(face, data, used, label, progress, method=method,
-                                  positive=positive, params=params.with_(fast_dt=dt),
+            res = _invert_quietly(stepped, data, used, label, progress, method=method,
+                                  positive=positive,
                                   jaw_angle=np.zeros(data.n_frames))  # the jaw at rest
             wall = time.perf_counter() - t0
             model = res.positions[:, all_nodes]
@@ -397,7 +396,7 @@ class CrossTalkerExperiment:
                 "runs": {k: r.as_dict() for k, r in self.runs.items()}}
 
 
-def run_crosstalker(face, *, frames: int = 120, dt: float | None = None, params=None,
+def run_crosstalker(model, *, frames: int = 120, dt: float | None = None,
                     progress: Callable[[str, int, int], None] | None = None
                     ) -> CrossTalkerExperiment:
     """Experiment 3 analogue: markers of a second talker, inverted on the default face after
@@ -405,23 +404,22 @@ def run_crosstalker(face, *, frames: int = 120, dt: float | None = None, params=
 
     Parameters
     ----------
-    face : FaceModel (the default face)
+    model : Model -- the default face and the preset (:func:`facemech.physics.model.model`)
     frames : frames of the gesture sequence (at the parameters' frame rate)
-    dt : Euler step of synthesis and inversion, s (default: ``params.fast_dt``)
-    params : Parameters (default: the default preset)
+    dt : Euler step of synthesis and inversion, s (default: the preset's ``fast_dt``)
     progress : callable(stage, done, total)
     """
-    from ..geometry.builder import for_tissue
     from ..kinematics.mapping import scale_adapt, warp_face
+    from ..physics.model import model as face_model
     from ..solvers.forward import simulate
     from ..solvers.jaw_drive import jaw_angles_from_marker
 
-    params = params or default_parameters()
-    dt = params.fast_dt if dt is None else dt
-    face = for_tissue(face, params.tissue)
-    other = for_tissue(second_talker(), params.tissue)
+    params, face = model.params, model.face
+    dt = model.steps.fast_dt if dt is None else dt
+    talker = face_model(second_talker(), params, steps=model.steps)
+    other = talker.face
     act, jaw = gesture_controls(frames, params.frame_rate)
-    sim = simulate(other, act, jaw, dt=dt, params=params)
+    sim = simulate(talker, act, jaw, dt=dt)
     names = [*other.markers, *CROSS_EXTRA]
     nodes_other = [other.markers.get(n, other.landmarks.get(n)) for n in names]
     data = MarkerSet(sim.positions[:, nodes_other], tuple(names), params.frame_rate)
@@ -431,17 +429,16 @@ def run_crosstalker(face, *, frames: int = 120, dt: float | None = None, params=
     for adaptation in ("scaling", "warp"):
         if adaptation == "scaling":
             adapted = scale_adapt(data, face, mapping_all, ("R02", "L07")).markers
-            model = face
+            on = model.with_steps(fast_dt=dt)
         else:
             adapted = data
-            model = warp_face(face, data, mapping_all)
-        jaw_est = jaw_angles_from_marker(model, params, mapping_all["R01"],
-                                         adapted.marker("R01")[:, 1])
+            on = face_model(warp_face(face, data, mapping_all), params,
+                            steps=model.steps.with_(fast_dt=dt))
+        jaw_est = jaw_angles_from_marker(on, mapping_all["R01"], adapted.marker("R01")[:, 1])
         label = f"lsq, positive, {adaptation}"
         t0 = time.perf_counter()
-        res = _invert_quietly(model, adapted, used, label, progress, positive=True,
-                              jaw_angle=jaw_est,
-                              params=params if dt is None else params.with_(fast_dt=dt))
+        res = _invert_quietly(on, adapted, used, label, progress, positive=True,
+                              jaw_angle=jaw_est)
         idx = [mapping_all[n] for n in names]
         mod = res.positions[:, idx]
         table6 = {n: float(stats.corr3d(mod[:, m], adapted.positions[:, m]))

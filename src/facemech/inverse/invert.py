@@ -28,11 +28,10 @@ import numpy as np
 
 from ..checks import check_value
 from ..errors import InputError
-from ..geometry.builder import for_tissue
 from ..geometry.sites import marker_aliases, shared_points
 from ..markerset import MarkerSet
-from ..params import EMG_CHANNELS, MUSCLE_GROUPS, Parameters, default_parameters
-from ..physics.assembly import Physics
+from ..params import EMG_CHANNELS, MUSCLE_GROUPS, Parameters
+from ..physics.model import Model
 from ..physics.muscle_outputs import MuscleRecorder
 from ..solvers.forward import single_threaded_blas
 from ..solvers.jaw import MAX_JAW_ANGLE, jaw_poses
@@ -104,7 +103,7 @@ class JawRecording:
 
 
 def invert(
-    face,
+    model: Model,
     markers: MarkerSet,
     mapping: dict[str, int],
     *,
@@ -112,7 +111,6 @@ def invert(
     positive: bool = True,
     controls="speech",
     jaw_angle: np.ndarray | JawRecording | None = None,
-    params: Parameters | None = None,
     prior: np.ndarray | None = None,
     noise_mm: float | None = None,
     progress: Callable[[int, int], None] | None = None,
@@ -122,8 +120,9 @@ def invert(
 
     Parameters
     ----------
-    face : FaceModel; one built for another tissue geometry than the preset's is rebuilt for
-        it here, explicitly (:func:`facemech.geometry.builder.for_tissue`)
+    model : Model -- the face, its parameters and physics (:func:`facemech.physics.model.model`);
+        its method's ``fast_dt`` is the explicit Euler step of every evaluation (s); the
+        implicit presets step at their own frame substeps and another step is an error there
     markers : MarkerSet in the model's frame (metres) at the model's frame rate (60 Hz); the
         first frame is taken as the face at rest
     mapping : marker name -> epidermal node (see :func:`facemech.closest_nodes`)
@@ -137,9 +136,6 @@ def invert(
         (frames, 3) poses (angle, condyle shift y, z in m) from two jaw markers; or a
         :class:`JawRecording`: such a series, whether the jaw is estimated from it and what it
         is; None: no recording (the jaw is estimated)
-    params : Parameters (default: the default preset, ``anatomical``); its ``fast_dt`` is the
-        explicit Euler step of every evaluation (s); the implicit presets step at their own
-        frame substeps and another step is an error there
     prior : (frames, muscle controls) prior activity (e.g. processed EMG) for ``prior_weight``
     noise_mm : marker noise (mm, per coordinate) for the standard errors (default: estimated
         from the fit's residuals)
@@ -160,8 +156,8 @@ def invert(
         raise InputError(f"noise must be > 0 mm (got {noise_mm})", field="noise")
     if noise_mm is not None:  # the command line's interval (facemech.checks)
         check_value("noise_mm", noise_mm)
-    params = params or default_parameters()
-    dt = params.fast_dt
+    face, params, physics = model.face, model.params, model.physics
+    dt = model.steps.fast_dt
     src = markers.meta.get("source")
     if abs(markers.rate - params.frame_rate) > 1e-3 * params.frame_rate:
         raise InputError(f"markers at {markers.rate:g} Hz, the model runs at "
@@ -183,9 +179,7 @@ def invert(
     if prior is not None and np.shape(prior) != (frames, len(cnames)):
         raise InputError(f"prior must be (frames, {len(cnames)})", field="prior")
     nodes = np.array([mapping[n] for n in names])
-    face = for_tissue(face, params.tissue)  # explicit: the preset's tissue (same skin nodes)
-    physics = Physics.build(face, params)
-    stepper = Stepper(physics, dt=dt)
+    stepper = Stepper(model, dt=dt)
     lo = np.full(nc, 0.0 if positive else -1.0)
     hi = np.ones(nc)
     if estimate_jaw:

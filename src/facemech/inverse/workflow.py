@@ -20,11 +20,10 @@ import numpy as np
 from ..checks import check_value
 from ..errors import InputError
 from ..markerset import MarkerSet
-from ..params import Parameters, default_parameters
 from .result import Inversion
 
 if TYPE_CHECKING:
-    from ..geometry.model import FaceModel
+    from ..physics.model import Model
 
 __all__ = ["SKIN_JAW_LEAD", "SIGN_EFFORT", "JawMarkers", "invert_marker_set", "pick_candidates"]
 
@@ -75,11 +74,10 @@ class JawMarkers:
 
 def invert_marker_set(
     ms: MarkerSet,
-    model: FaceModel,
+    model: Model,
     *,
     mapping: dict[str, int] | None = None,
     scale_pair: str | None = None,
-    params: Parameters | None = None,
     method: str = "lsq",
     positive: bool = True,
     controls: str | None = None,
@@ -95,13 +93,11 @@ def invert_marker_set(
     ms : the markers (m) in the model's frame, at the preset's frame rate; articulography
         (``meta["roles"]``) in its own frame and at its own rate: its lips are laid on the
         face's vermilion points, and it is resampled
-    model : the face; rebuilt for the preset's tissue here, explicitly
-        (:func:`~facemech.geometry.builder.for_tissue`)
+    model : Model -- the face, its parameters and physics (:func:`facemech.physics.model.model`);
+        its method's ``fast_dt`` is the explicit Euler step of every evaluation (s)
     mapping : marker name -> node (:func:`facemech.kinematics.mapping.read_mapping`; None: the
         closest nodes, articulography's lips their vermilion points)
     scale_pair : "A,B": adapt the markers by per-axis scaling from two markers far apart
-    params : the parameters (default: the default preset); their ``fast_dt`` is the explicit
-        Euler step of every evaluation (s)
     method, positive : "lsq" or "powell"; activity kept >= 0
     controls : "speech", "emg7", "all" or comma-separated groups, an error if the markers give
         fewer coordinates than that; None (default): "speech", or the part of it the markers
@@ -119,7 +115,6 @@ def invert_marker_set(
     Inversion
         Its notes also say how articulography roles were used and which controls were held.
     """
-    from ..geometry.builder import for_tissue
     from ..kinematics.mapping import scale_adapt
     from ..kinematics.roles import bone_points, is_midsagittal
     from .invert import JawRecording, invert
@@ -129,7 +124,7 @@ def invert_marker_set(
     jaw = jaw or JawMarkers()
     chin_marker, jaw_second_marker = jaw.chin_marker, jaw.jaw_second_marker
     jaw_fixed, jaw_lead = jaw.jaw_fixed, jaw.jaw_lead
-    params = params or default_parameters()
+    params, face = model.params, model.face
     src = ms.meta.get("source")
     incisor, molar, by_role = bone_points(ms, incisor=jaw.jaw_incisor, molar=jaw.jaw_molar,
                                           skin_jaw=chin_marker)
@@ -139,20 +134,18 @@ def invert_marker_set(
     if jaw_fixed and chin_marker is None and incisor is None:
         raise InputError("--jaw-fixed needs a jaw recording (--chin-marker or --jaw-incisor)",
                          field="jaw-fixed")
-    model = for_tissue(model, params.tissue)
     midsagittal = is_midsagittal(ms)
-    skin, mapping, notes = _skin_markers(ms, model, mapping, (incisor, molar), midsagittal)
+    skin, mapping, notes = _skin_markers(ms, face, mapping, (incisor, molar), midsagittal)
     notes = resampled + dropped + filled + notes
     if scale_pair is not None:
         a, _, b = scale_pair.partition(",")
-        skin = scale_adapt(skin, model, mapping, (a.strip(), b.strip())).markers
+        skin = scale_adapt(skin, face, mapping, (a.strip(), b.strip())).markers
     lead = jaw_lead if jaw_lead is not None else (0 if incisor is not None else SKIN_JAW_LEAD)
-    drive, jaw_source = _jaw_drive(ms, model, params, mapping, src, lead, chin_marker,
+    drive, jaw_source = _jaw_drive(ms, model, mapping, src, lead, chin_marker,
                                    jaw_second_marker, incisor, molar, by_role)
     estimate = None if drive is None else (not jaw_fixed and drive.ndim == 1)
     ctrl, drive, estimate, jaw_source, pick_note, signed = _controls(
-        controls, model, params, skin, mapping, drive, estimate, jaw_source, midsagittal, None,
-        src)
+        controls, model, skin, mapping, drive, estimate, jaw_source, midsagittal, None, src)
     if signed:
         solver, effort_note = _effort_for_sign(solver, options)
         pick_note += effort_note
@@ -160,8 +153,8 @@ def invert_marker_set(
         solver, pace_note = _pace_for_pick(solver, options)
         pick_note += pace_note
     res = invert(model, skin, mapping, method=solver, positive=positive, controls=ctrl,
-                 jaw_angle=JawRecording(drive, estimate, jaw_source), params=params,
-                 noise_mm=noise, progress=progress)
+                 jaw_angle=JawRecording(drive, estimate, jaw_source), noise_mm=noise,
+                 progress=progress)
     return replace(res, notes=[*res.notes, *notes, *([pick_note] if pick_note else [])])
 
 
@@ -255,16 +248,16 @@ def _skin_markers(ms, model, given, bone, midsagittal):
     return skin, mapping, notes
 
 
-def _jaw_drive(ms, model, params, mapping, src, lead, chin_marker, second, incisor, molar,
-               by_role):
+def _jaw_drive(ms, model, mapping, src, lead, chin_marker, second, incisor, molar, by_role):
     """(the jaw series: None, (frames,) angles or (frames, 3) poses; what it is, for the
-    notes)."""
+    notes) on ``model`` (a :class:`~facemech.physics.model.Model`)."""
     from ..solvers.jaw import jaw_poses_from_points
     from ..solvers.jaw_bone import jaw_poses_from_bone, protrusion_of
     from ..solvers.jaw_drive import jaw_angles_from_marker
 
+    params = model.params
     if incisor is not None:
-        poses = jaw_poses_from_bone(ms.marker(incisor), model, params,
+        poses = jaw_poses_from_bone(ms.marker(incisor), model.face, params,
                                     molar=None if molar is None else ms.marker(molar),
                                     lead=lead, names=(incisor, molar or "molar"), source=src)
         pro = protrusion_of(poses, params) * 1e3
@@ -279,7 +272,7 @@ def _jaw_drive(ms, model, params, mapping, src, lead, chin_marker, second, incis
             if name not in ms.names:
                 raise InputError("jaw marker not in the file", source=src, field=name)
         jaw = jaw_poses_from_points(ms.marker(chin_marker), ms.marker(second),
-                                    hinge_point=model.hinge_point, lead=lead,
+                                    hinge_point=model.face.hinge_point, lead=lead,
                                     names=(chin_marker, second), source=src)
         return jaw, f"jaw markers {chin_marker},{second} ({lead}-frame lead)"
     if chin_marker is not None:
@@ -287,7 +280,7 @@ def _jaw_drive(ms, model, params, mapping, src, lead, chin_marker, second, incis
         if node is None:
             raise InputError("chin marker has no node (not in the file or not mapped)",
                              source=src, field=chin_marker)
-        jaw = jaw_angles_from_marker(model, params, node, ms.marker(chin_marker)[:, 1],
+        jaw = jaw_angles_from_marker(model, node, ms.marker(chin_marker)[:, 1],
                                      lead=lead, source=src)
         return jaw, f"chin marker {chin_marker} ({lead}-frame lead)"
     return None, None
@@ -351,10 +344,10 @@ def pick_candidates(model) -> tuple[str, ...]:
     return SPEECH_CONTROLS + tuple(g for g in MARGINAL_GROUPS if g in present)
 
 
-def _controls(controls, model, params, skin, mapping, jaw, estimate, jaw_source, midsagittal, dt,
-              src):
+def _controls(controls, model, skin, mapping, jaw, estimate, jaw_source, midsagittal, dt, src):
     """(controls for :func:`invert`, jaw series, estimate the jaw, jaw source, the note of
-    controls picked or None, whether the pick's sign step added controls)."""
+    controls picked or None, whether the pick's sign step added controls) on ``model`` (a
+    :class:`~facemech.physics.model.Model`)."""
     from ..solvers.jaw import jaw_poses
     from .control_pick import pick_controls
     from .invert import control_matrix
@@ -366,7 +359,7 @@ def _controls(controls, model, params, skin, mapping, jaw, estimate, jaw_source,
     names = [n for n in skin.names if n in mapping]
     per = 2 if midsagittal else 3
     coords = per * len(names)
-    n_controls = len(control_matrix(ctrl, model)[0]) + (1 if estimate in (None, True) else 0)
+    n_controls = len(control_matrix(ctrl, model.face)[0]) + (1 if estimate in (None, True) else 0)
     if coords >= n_controls or not names:
         return ctrl, jaw, estimate, jaw_source, None, False
     if given:
@@ -379,10 +372,10 @@ def _controls(controls, model, params, skin, mapping, jaw, estimate, jaw_source,
     elif jaw.ndim == 2:
         start = jaw[0]
     else:
-        start = jaw_poses(np.atleast_1d(jaw[0]), params)[0]
+        start = jaw_poses(np.atleast_1d(jaw[0]), model.params)[0]
     estimated = estimate in (None, True)
-    pick = pick_controls(model, params, np.array([mapping[n] for n in names]),
-                         pick_candidates(model), estimate_jaw=estimated, jaw_start=start,
+    pick = pick_controls(model, np.array([mapping[n] for n in names]),
+                         pick_candidates(model.face), estimate_jaw=estimated, jaw_start=start,
                          axes=(1, 2) if midsagittal else (0, 1, 2), dt=dt, labels=names)
     if estimated and not pick.jaw:
         held = np.full(len(skin.positions), start[0]) if jaw is None else jaw

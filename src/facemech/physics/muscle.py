@@ -41,6 +41,43 @@ def hill_force(m_filtered, length, rest_length, velocity, k_passive, f1, f2, f3,
     return active + passive
 
 
+#: half-width, as a share of a muscle's rest length, of the band over which the Jacobian takes
+#: up the passive stiffness (the tension's kink at the rest length, eq. 7): well above the
+#: rounding of a length (1e-16) and of a rest geometry built on another BLAS (1e-13), well below
+#: any motion that matters (30 nm on a 3-cm muscle)
+PASSIVE_STIFFNESS_BAND = 1e-6
+
+
+@nb.njit(cache=True, inline="always")
+def hill_derivatives(m_filtered, length, rest_length, velocity, k_passive, f1, f2, f3, f4):
+    """Tension F (N) of eqs. (5)-(7) and its derivatives dF/dl (N/m) and dF/dl' (N s/m)."""
+    r = length / rest_length
+    u = (r**2.3 - 1.0) / 1.26
+    fl = force_length(length, rest_length)
+    au = abs(u)
+    dfl = 0.0
+    if au > 0.0:
+        sgn = 1.0 if u > 0.0 else -1.0
+        dfl = fl * (-1.62 * au**0.62 * sgn) * (2.3 * r**1.3 / 1.26) / rest_length
+    arg = f3 + f4 * velocity
+    fv = f1 + f2 * np.arctan(arg)
+    tension = m_filtered * fl * fv
+    d_len = m_filtered * dfl * fv
+    stretch = length - rest_length
+    if stretch > 0.0:
+        tension += k_passive * stretch
+    # the passive branch's stiffness, blended over a narrow band about the rest length: the
+    # step's matrix is then continuous in the state (a sharp switch at l = l0 flipped on a
+    # rounding difference, since every muscle starts at its rest length to the last bit)
+    band = PASSIVE_STIFFNESS_BAND * rest_length
+    if stretch >= band:
+        d_len += k_passive
+    elif stretch > -band:
+        d_len += k_passive * (0.5 + 0.5 * stretch / band)
+    d_vel = m_filtered * fl * f2 * f4 / (1.0 + arg * arg)
+    return tension, d_len, d_vel
+
+
 @nb.njit(cache=True, inline="always")
 def activation_euler(m, m_rate, m_steady, tau, dt, zeta=1.0):
     """One explicit Euler step of tau^2 M'' + 2 zeta tau M' + M = M_bar (eq. 4; the seeds'

@@ -19,7 +19,7 @@ from ..physics.assembly import Physics, accumulate_forces, rest_anchors
 from ..physics.muscle import activation_euler
 from ..physics.threads import kernel_threads
 from .mandible import place_jaw, set_jaw_nodes
-from .solver_state import SolverState, finish_frame, solver_state, start_frame
+from .solver_state import SolverState, solver_state
 from .state import Controls, State
 
 
@@ -156,7 +156,7 @@ class ExplicitEuler:
 
     def step(self, solver_state: SolverState, state: State, controls: Controls) -> State:
         """``state`` advanced by one frame under ``controls`` (a new :class:`State`)."""
-        f = start_frame(solver_state, state, controls)
+        f = solver_state.frame.start(state, controls)
         steps = _euler_steps(solver_state, solver_state.n_steps)
         try:
             pos, vel, m_force, m_rate = euler_frame(
@@ -169,7 +169,8 @@ class ExplicitEuler:
                 "nodes collapsed onto each other within the frame; likely cause: the time "
                 f"step ({solver_state.step * 1e3:.3g} ms) is too large for the stiffness and "
                 "damping (try a smaller --dt)", frame=frame) from None
-        return finish_frame(solver_state, state, controls, pos, vel, m_force, m_rate, f.jaw_rate)
+        return solver_state.frame.finish(state, controls, pos, vel, m_force, m_rate,
+                                         f.jaw_rate)
 
 
 def _warm_up(solver_state: SolverState, physics: Physics) -> None:

@@ -14,9 +14,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import InputError, SimulationBlowUp
-from ..geometry.builder import FaceModel, for_tissue
-from ..params import MUSCLE_GROUPS, Parameters, default_parameters
+from ..geometry.builder import FaceModel
+from ..params import MUSCLE_GROUPS, Parameters
 from ..physics.assembly import Physics
+from ..physics.model import Model
 from ..physics.muscle_outputs import MuscleRecorder, MuscleSeries
 from ..physics.threads import get_threads
 from .state import State
@@ -122,11 +123,10 @@ def _check_state(state: State, rest: np.ndarray, frame: int, activity, jaw) -> N
 
 
 def simulate(
-    model: FaceModel,
+    model: Model,
     activity: np.ndarray,
     jaw_angle: np.ndarray | None = None,
     *,
-    params: Parameters | None = None,
     integrator: str | None = None,
     substeps: int | None = None,
     dt: float | None = None,
@@ -139,16 +139,13 @@ def simulate(
 
     Parameters
     ----------
-    model : FaceModel; one built for another tissue geometry than the preset's
-        (:attr:`Parameters.tissue`) is rebuilt for it here, explicitly
-        (:func:`facemech.geometry.builder.for_tissue`); ``Simulation.model`` is the face
-        simulated
+    model : Model -- the face, its parameters and physics (:func:`facemech.physics.model.model`);
+        ``Simulation.model`` is its face, ``Simulation.params`` its parameters
     activity : (frames, groups) array in [0, 1], columns :data:`~facemech.params.MUSCLE_GROUPS`
     jaw_angle : (frames,) rad or (frames, 3) poses, optional (default: jaw closed)
         The jaw's angle per frame, its condyles' shift then following the preset's
         ``jaw_kinematics`` (the coupled glide of the anatomical preset, none for the seeds'
         hinge), or its whole pose per frame: angle (rad), shift_y (m), shift_z (m).
-    params : Parameters (default: the default preset, ``anatomical``)
     integrator : {"euler", "implicit", "rosenbrock"}, optional (default: the preset's)
     substeps : steps per frame of the implicit integrators (default: the preset's)
     dt : step of the explicit integrator (default: the preset's, 0.33 ms for the seeds')
@@ -162,7 +159,7 @@ def simulate(
     -------
     Simulation
     """
-    run = _setup(model, activity, jaw_angle, params=params, integrator=integrator,
+    run = _setup(model, activity, jaw_angle, integrator=integrator,
                  substeps=substeps, dt=dt, jaw_drive=jaw_drive, initial_state=initial_state,
                  source=source)
     frames = len(run.activity)
@@ -207,7 +204,7 @@ class RunSummary:
 
 
 def simulate_blocks(
-    model: FaceModel,
+    model: Model,
     activity: np.ndarray,
     jaw_angle: np.ndarray | None = None,
     *,
@@ -233,8 +230,8 @@ def simulate_blocks(
         frames; ``final_state`` the state of its last frame, ``wall_seconds`` the time spent
         so far. The arrays are the sink's to keep.
     block_frames : frames per block (the last block may be shorter)
-    **options : ``params``, ``integrator``, ``substeps``, ``dt``, ``initial_state``,
-        ``source``, as :func:`simulate`
+    **options : ``integrator``, ``substeps``, ``dt``, ``initial_state``, ``source``, as
+        :func:`simulate`
 
     Returns
     -------
@@ -243,11 +240,10 @@ def simulate_blocks(
     if int(block_frames) < 1:
         raise InputError(f"block_frames must be at least 1, got {block_frames}",
                          field="block_frames")
-    unknown = set(options) - {"params", "integrator", "substeps", "dt", "initial_state",
-                              "source"}
+    unknown = set(options) - {"integrator", "substeps", "dt", "initial_state", "source"}
     if unknown:
         raise TypeError(f"simulate_blocks() got unexpected options {sorted(unknown)}")
-    run = _setup(model, activity, jaw_angle, **{"params": None, "integrator": None,
+    run = _setup(model, activity, jaw_angle, **{"integrator": None,
                                                 "substeps": None, "dt": None,
                                                 "initial_state": None, "source": None,
                                                 **options}, jaw_drive=jaw_drive)
@@ -301,10 +297,13 @@ class _Setup:
             muscles=muscles)
 
 
-def _setup(model, activity, jaw_angle, *, params, integrator, substeps, dt, jaw_drive,
+def _setup(model, activity, jaw_angle, *, integrator, substeps, dt, jaw_drive,
            initial_state, source) -> _Setup:
-    """Check the inputs of :func:`simulate` and build its physics, stepper and first state."""
-    params = params or default_parameters()
+    """Check the inputs of :func:`simulate` and make its stepper and first state."""
+    if not isinstance(model, Model):
+        raise TypeError("simulate takes a Model (facemech.model(face, preset)), got "
+                        f"{type(model).__name__}")
+    params, physics = model.params, model.physics
     activity = check_activity(activity, source=source)
     frames = len(activity)
     if jaw_angle is None:
@@ -322,10 +321,9 @@ def _setup(model, activity, jaw_angle, *, params, integrator, substeps, dt, jaw_
     from .jaw import jaw_poses
 
     poses = jaw_poses(jaw_angle, params) if jaw_angle.ndim == 1 else jaw_angle.copy()
-    model = for_tissue(model, params.tissue)  # explicit: the preset's tissue geometry
-    physics = Physics.build(model, params)
-    stepper = Stepper(physics, integrator=integrator, substeps=substeps, dt=dt,
+    stepper = Stepper(model, integrator=integrator, substeps=substeps, dt=dt,
                       jaw_drive=jaw_drive)
+    model = model.face
     names, nodes = marker_nodes(model)
     state = initial_state or State.at_rest(model.rest_positions, physics.n_muscles,
                                            float(poses[0, 0]), jaw_shift=poses[0, 1:])

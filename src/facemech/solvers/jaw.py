@@ -22,6 +22,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from ..errors import InputError
+from ..geometry.jaw import rotate_about, rotation_matrix  # noqa: F401 (re-exported)
 from ..params import GLIDE_RATE, GLIDE_SLOPE
 
 JAW_LEAD_SAMPLES = 2  #: 33 ms at 60 Hz
@@ -96,21 +97,6 @@ def move_points(points: np.ndarray, pose, hinge_point: np.ndarray, hinge_axis: n
     out, _ = moved_anchors(pose, np.asarray(hinge_point, float), np.asarray(hinge_axis, float),
                            w, pts, np.zeros_like(pts))
     return out
-
-
-def rotation_matrix(axis: np.ndarray, angle: float) -> np.ndarray:
-    """Rotation by ``angle`` (rad) about the unit ``axis`` (Rodrigues)."""
-    a = np.asarray(axis, float)
-    a = a / np.linalg.norm(a)
-    k = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
-    return np.eye(3) + np.sin(angle) * k + (1 - np.cos(angle)) * (k @ k)
-
-
-def rotate_about(points: np.ndarray, point: np.ndarray, axis: np.ndarray,
-                 angle: float) -> np.ndarray:
-    """Points (..., 3) rotated by ``angle`` about the line through ``point`` along ``axis``."""
-    r = rotation_matrix(axis, angle)
-    return (np.asarray(points) - point) @ r.T + point
 
 
 def angle_for_drop(node_rest: np.ndarray, point: np.ndarray, axis: np.ndarray,

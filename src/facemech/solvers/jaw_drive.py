@@ -35,7 +35,7 @@ def clear_curves() -> None:
     _CURVES.clear()
 
 
-def skin_drop_curve(model, params, node: int) -> tuple[np.ndarray, np.ndarray]:
+def skin_drop_curve(model, node: int) -> tuple[np.ndarray, np.ndarray]:
     """How an epidermal node moves down as the jaw opens, at rest, in the tissue of a preset.
 
     The jaw is opened in steps (4, 8, 13 and 19 degrees, each held 0.8 s, no muscle active) and
@@ -43,32 +43,35 @@ def skin_drop_curve(model, params, node: int) -> tuple[np.ndarray, np.ndarray]:
     (angles rad, drops m, negative down), from 0, increasing. In the seeds' thin tissue the skin
     moves with the bone under it; in the anatomical tissue (14 mm of it over the chin, whose pad
     slides on the bone) it does not, so a chin marker on the skin must be matched by the skin's
-    own response. Cached per face, preset and node while the face lives (:data:`_CURVES`).
+    own response. ``model``: a :class:`~facemech.physics.model.Model`. Cached per face, preset
+    and node while the face lives (:data:`_CURVES`).
     """
-    key = (id(model), repr(params), int(node))
+    face, params = model.face, model.params
+    key = (id(face), repr(params), int(node))
     hit = _CURVES.get(key)
     if hit is not None:
         return hit
     angles = np.repeat(CURVE_ANGLES, CURVE_HOLD_FRAMES)
     angles = np.concatenate([[0.0], angles])
-    sim = simulate(model, np.zeros((len(angles), len(MUSCLE_GROUPS))), angles, params=params)
+    sim = simulate(model, np.zeros((len(angles), len(MUSCLE_GROUPS))), angles)
     ends = np.arange(1, len(CURVE_ANGLES) + 1) * CURVE_HOLD_FRAMES
     drop = sim.positions[ends, node, 1] - sim.positions[0, node, 1]
     out = (np.concatenate([[0.0], CURVE_ANGLES]),
            np.minimum.accumulate(np.concatenate([[0.0], drop])))
     _CURVES[key] = out
-    weakref.finalize(model, _CURVES.pop, key, None)
+    weakref.finalize(face, _CURVES.pop, key, None)
     if len(_CURVES) > 16:
         _CURVES.pop(next(iter(_CURVES)))
     return out
 
 
-def jaw_angles_from_marker(model, params, node: int, marker_y: np.ndarray, *,
+def jaw_angles_from_marker(model, node: int, marker_y: np.ndarray, *,
                            lead: int = JAW_LEAD_SAMPLES, bite_block: bool = False,
                            source: str | None = None) -> np.ndarray:
     """Jaw angles (rad) per frame from a chin marker's vertical position (m) on the skin.
 
-    ``node`` is the marker's epidermal node. With the seeds' tissue the angle is the one that
+    ``model`` is a :class:`~facemech.physics.model.Model`; ``node`` the marker's epidermal
+    node. With the seeds' tissue the angle is the one that
     gives the skull node under the marker the marker's displacement (Lucero & Munhall 1999,
     :func:`angles_from_chin`); with the anatomical tissue, the one that gives the skin node that
     displacement in the tissue's quasi-static response to the jaw (:func:`skin_drop_curve`).
@@ -77,13 +80,11 @@ def jaw_angles_from_marker(model, params, node: int, marker_y: np.ndarray, *,
     Upward displacements (closing past rest) follow the curve's slope at rest. The lead and the
     bite block act as in :func:`angles_from_chin`.
     """
-    from ..geometry.builder import for_tissue
-
-    model = for_tissue(model, params.tissue)
+    face, params = model.face, model.params
     marker_y = np.asarray(marker_y, float)
     if not params.is_continuum:
-        return angles_from_chin(marker_y, model.rest_positions[node + 2 * model.n_surface],
-                                model.hinge_point, model.hinge_axis, lead=lead,
+        return angles_from_chin(marker_y, face.rest_positions[node + 2 * face.n_surface],
+                                face.hinge_point, face.hinge_axis, lead=lead,
                                 bite_block=bite_block, glide=glide_of(params))
     if marker_y.ndim != 1 or len(marker_y) == 0:
         raise InputError("chin trajectory must be a non-empty 1-D series", source=source,
@@ -92,7 +93,7 @@ def jaw_angles_from_marker(model, params, node: int, marker_y: np.ndarray, *,
         bad = int(np.nonzero(~np.isfinite(marker_y))[0][0])
         raise InputError(f"chin trajectory has a gap at sample {bad}", source=source,
                          field="chin")
-    angles, drop = skin_drop_curve(model, params, node)
+    angles, drop = skin_drop_curve(model, node)
     d = marker_y - marker_y[0]
     if d.min() < 1.25 * drop[-1]:
         raise InputError(f"a chin drop of {-d.min() * 1e3:.1f} mm is more than the jaw opens "

@@ -29,44 +29,9 @@ from scipy.linalg import lu_factor, lu_solve
 
 from ..physics.assembly import bead_positions
 from ..physics.kinds import SPHINCTER
-from ..physics.muscle import force_length
+from ..physics.muscle import PASSIVE_STIFFNESS_BAND, hill_derivatives
 
-#: half-width, as a share of a muscle's rest length, of the band over which the Jacobian takes
-#: up the passive stiffness (the tension's kink at the rest length, eq. 7): well above the
-#: rounding of a length (1e-16) and of a rest geometry built on another BLAS (1e-13), well below
-#: any motion that matters (30 nm on a 3-cm muscle)
-PASSIVE_STIFFNESS_BAND = 1e-6
-
-
-@nb.njit(cache=True, inline="always")
-def hill_derivatives(m_filtered, length, rest_length, velocity, k_passive, f1, f2, f3, f4):
-    """Tension F (N) of eqs. (5)-(7) and its derivatives dF/dl (N/m) and dF/dl' (N s/m)."""
-    r = length / rest_length
-    u = (r**2.3 - 1.0) / 1.26
-    fl = force_length(length, rest_length)
-    au = abs(u)
-    dfl = 0.0
-    if au > 0.0:
-        sgn = 1.0 if u > 0.0 else -1.0
-        dfl = fl * (-1.62 * au**0.62 * sgn) * (2.3 * r**1.3 / 1.26) / rest_length
-    arg = f3 + f4 * velocity
-    fv = f1 + f2 * np.arctan(arg)
-    tension = m_filtered * fl * fv
-    d_len = m_filtered * dfl * fv
-    stretch = length - rest_length
-    if stretch > 0.0:
-        tension += k_passive * stretch
-    # the passive branch's stiffness, blended over a narrow band about the rest length: the
-    # step's matrix is then continuous in the state (a sharp switch at l = l0 flipped on a
-    # rounding difference, since every muscle starts at its rest length to the last bit)
-    band = PASSIVE_STIFFNESS_BAND * rest_length
-    if stretch >= band:
-        d_len += k_passive
-    elif stretch > -band:
-        d_len += k_passive * (0.5 + 0.5 * stretch / band)
-    d_vel = m_filtered * fl * f2 * f4 / (1.0 + arg * arg)
-    return tension, d_len, d_vel
-
+__all__ = ["PASSIVE_STIFFNESS_BAND", "hill_derivatives", "bead_jacobian", "MuscleJacobian"]
 
 @nb.njit(cache=True)
 def bead_jacobian(muscles, bp, bv, pos, vel, m_force, active):

@@ -1,33 +1,48 @@
-"""What every solver makes once for a face model (its :class:`SolverState`) and the start and
-end of a frame that all of them share.
+"""The :class:`Solver` protocol and what a solver makes once for a face model, its
+:class:`SolverState`.
 
 A solver (:class:`~facemech.solvers.explicit.ExplicitEuler`,
 :class:`~facemech.solvers.implicit.LinearImplicitEuler`,
-:class:`~facemech.solvers.implicit.Rosenbrock2`) is a small frozen description of the method;
-``solver.init(physics)`` returns a :class:`SolverState` (the model's kernel bundles, the step, and
-for the implicit methods the factorised matrix) and ``solver.step(solver_state, state,
-controls)`` returns the next :class:`~facemech.solvers.state.State`, one frame later. Nothing
-is mutated between calls: each step works on its own copies of the state's arrays.
+:class:`~facemech.solvers.implicit.Rosenbrock2`, or any object with the protocol's ``name``,
+``init`` and ``step``) is a small frozen description of the method; ``solver.init(physics)``
+returns a :class:`SolverState` (the model's kernel bundles, the step, the physics' side of a
+frame, :class:`~facemech.solvers.frame.FrameTerms`, and any matrix the method keeps) and
+``solver.step(solver_state, state, controls)`` returns the next
+:class:`~facemech.solvers.state.State`, one frame later. Nothing is mutated between calls.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import Any, ClassVar, Protocol, runtime_checkable
 
-import numba as nb
 import numpy as np
 
 from ..physics.assembly import Physics
-from ..physics.bundles import Anchors, ForceBundles
-from ..physics.muscle import activation_exact_damped, max_force
+from ..physics.bundles import ForceBundles
+from ..physics.muscle import max_force
+from ..stepping import StepOptions
 from .contacts import ImplicitContacts, split_contacts
-from .mandible import JawBundle, jaw_bundle, place_jaw, set_jaw_nodes
+from .frame import FrameStart, FrameTerms, filter_exact, place_jaw_into
+from .mandible import JawBundle, jaw_bundle
 from .state import Controls, State
 from .volume_floor import VolumeFloor
 
-if TYPE_CHECKING:
-    from .implicit import ImplicitSystem
+
+@runtime_checkable
+class Solver(Protocol):
+    """An integrator: a frozen description of its method and options.
+
+    ``name`` is how presets and the command line call it; ``init(physics)`` makes its
+    :class:`SolverState` once per model; ``step(solver_state, state, controls)`` returns the
+    state one frame later. A new integrator is one module with such a class.
+    """
+
+    name: ClassVar[str]
+
+    def init(self, physics: Physics) -> SolverState: ...
+
+    def step(self, solver_state: SolverState, state: State, controls: Controls) -> State: ...
 
 
 @dataclass(frozen=True, eq=False)
@@ -48,13 +63,16 @@ class SolverState:
     frame_duration : float, s
     n_steps : int -- steps per frame
     step : float, s -- ``frame_duration / n_steps``
-    system : ImplicitSystem or None -- the implicit methods' factorised constant matrix and
-        the muscles' Jacobian (:mod:`facemech.solvers.implicit`); None for explicit Euler
+    system : the method's own constants, or None: the implicit methods' factorised constant
+        matrix and the muscles' Jacobian (:class:`~facemech.solvers.implicit_matrix.
+        ImplicitSystem`); None for explicit Euler
     zeta : float -- the damping ratio of the activation filter (eq. 4; 1 in the seeds)
     contacts : ImplicitContacts -- the stiff contacts the implicit methods step apart
         (:mod:`facemech.solvers.contacts`); left out of ``forces``; empty otherwise
     volume_floor : VolumeFloor -- the prisms' volume floor the implicit methods step apart
         (:mod:`facemech.solvers.volume_floor`); empty unless the preset sets one
+    frame : FrameTerms -- the start and end of a frame, the jaw, the activation filter, the
+        contacts and the volume floor, as every solver calls them (made from the above)
     """
 
     forces: ForceBundles
@@ -67,33 +85,41 @@ class SolverState:
     frame_duration: float
     n_steps: int
     step: float
-    system: ImplicitSystem | None = None
+    system: Any = None
     zeta: float = 1.0
     contacts: ImplicitContacts = ImplicitContacts.empty()
     volume_floor: VolumeFloor = VolumeFloor.empty()
 
+    def __post_init__(self):
+        object.__setattr__(self, "frame", FrameTerms(
+            jaw=self.jaw, inv_mass=self.inv_mass, muscle_group=self.muscle_group,
+            max_force=self.max_force, tau=self.tau, zeta=self.zeta,
+            frame_duration=self.frame_duration, contacts=self.contacts,
+            volume_floor=self.volume_floor))
+
     def steady_force(self, activity: np.ndarray) -> np.ndarray:
         """M_bar (muscles,) N of each instance from group activity (groups,) in [0, 1] (eq. 3)."""
-        return self.max_force * np.asarray(activity)[self.muscle_group]
+        return self.frame.steady_force(activity)
 
 
-def solver_state(physics: Physics, n_steps: int,
-                 system: ImplicitSystem | None = None) -> SolverState:
+def solver_state(physics: Physics, n_steps: int, system: Any = None,
+                 options: StepOptions | None = None) -> SolverState:
     """The :class:`SolverState` of a model stepped ``n_steps`` times per frame.
 
-    With an implicit ``system``, the continuum's tissue and ``params.implicit_contacts``, the
+    With an implicit ``system``, the continuum's tissue and ``options.implicit_contacts``, the
     bone and lip contacts leave the force kernel and are stepped implicitly after each solve
-    (:mod:`.contacts`)."""
+    (:mod:`.contacts`); with ``options.volume_floor``, the prisms' floor too."""
     p = physics.params
     frame = 1.0 / p.frame_rate
     forces, contacts = physics.forces, ImplicitContacts.empty()
     if system is not None:
-        forces, contacts = implicit_forces(physics)
+        forces, contacts = implicit_forces(physics, options)
     floor = VolumeFloor.empty()
-    if system is not None and p.is_continuum and p.volume_floor > 0.0:
+    if (system is not None and options is not None and p.is_continuum
+            and options.volume_floor > 0.0):
         prisms = physics.forces.prisms
-        floor = VolumeFloor.of(prisms.nodes, prisms.rest_volume, p.volume_floor,
-                               p.volume_floor_modulus)
+        floor = VolumeFloor.of(prisms.nodes, prisms.rest_volume, options.volume_floor,
+                               options.volume_floor_modulus)
     return SolverState(
         forces=forces, contacts=contacts, volume_floor=floor, jaw=jaw_bundle(physics),
         dynamic=physics.dynamic,
@@ -103,82 +129,26 @@ def solver_state(physics: Physics, n_steps: int,
         zeta=float(p.activation_damping))
 
 
-def implicit_forces(physics: Physics) -> tuple[ForceBundles, ImplicitContacts]:
+def implicit_forces(physics: Physics,
+                    options: StepOptions | None) -> tuple[ForceBundles, ImplicitContacts]:
     """The force kernel's bundles of an implicit method and the contacts it steps apart: with
-    the continuum's tissue and ``params.implicit_contacts`` the bone and lip contacts leave the
+    the continuum's tissue and ``options.implicit_contacts`` the bone and lip contacts leave the
     kernel (:func:`.contacts.split_contacts`); otherwise the model's own bundles and none."""
-    p = physics.params
-    if p.is_continuum and p.implicit_contacts:
+    if physics.params.is_continuum and options is not None and options.implicit_contacts:
         return split_contacts(physics.forces)
     return physics.forces, ImplicitContacts.empty()
 
 
-@dataclass(frozen=True, eq=False)
-class FrameStart:
-    """Working copies of a state at a frame's start, the jaw placed (owned by one step).
-
-    Attributes
-    ----------
-    positions, velocities : (nodes, 3) m and m/s -- the jaw nodes in the start pose
-    muscle_force, muscle_force_rate : (muscles,) N and N/s -- the filter of eq. (4)
-    muscle_steady : (muscles,) N -- M_bar of the frame's activity (eq. 3)
-    jaw_start, jaw_rate : (3,) -- the jaw's pose at the start and its rate of change
-        (rad/s, m/s, m/s)
-    anchors : Anchors -- the tied nodes' anchors in the start pose
-    """
-
-    positions: np.ndarray
-    velocities: np.ndarray
-    muscle_force: np.ndarray
-    muscle_force_rate: np.ndarray
-    muscle_steady: np.ndarray
-    jaw_start: np.ndarray
-    jaw_rate: np.ndarray
-    anchors: Anchors
+__all__ = ["Solver", "SolverState", "solver_state", "FrameStart", "FrameTerms", "start_frame",
+           "finish_frame", "place_jaw_into", "filter_exact"]
 
 
 def start_frame(solver_state: SolverState, state: State, controls: Controls) -> FrameStart:
-    """Copies of ``state``'s arrays with the jaw placed in the frame's start pose."""
-    pos = np.array(state.positions)
-    vel = np.array(state.velocities)
-    start = np.array(controls.jaw_start)
-    rate = (np.asarray(controls.jaw_end) - start) / solver_state.frame_duration
-    anchors = place_jaw_into(solver_state.jaw, start + rate * 0.0, rate, pos, vel)
-    return FrameStart(pos, vel, np.array(state.muscle_force), np.array(state.muscle_force_rate),
-                      solver_state.steady_force(controls.activity), start, rate, anchors)
+    """:meth:`FrameTerms.start` of a solver state."""
+    return solver_state.frame.start(state, controls)
 
 
-def place_jaw_into(jaw: JawBundle, pose: np.ndarray, rate: np.ndarray, pos: np.ndarray,
-                   vel: np.ndarray) -> Anchors:
-    """Put the jaw nodes of a step's own working arrays ``pos`` and ``vel`` (nodes, 3) in
-    ``pose`` moving at ``rate`` (3,); return the moved anchors."""
-    jaw_pos, jaw_vel, anchors = place_jaw(jaw, pose, rate)
-    set_jaw_nodes(jaw, jaw_pos, jaw_vel, pos, vel)
-    return anchors
-
-
-def finish_frame(solver_state: SolverState, state: State, controls: Controls, pos: np.ndarray,
-                 vel: np.ndarray, m_force: np.ndarray, m_rate: np.ndarray,
-                 jaw_rate: np.ndarray) -> State:
-    """The state at the frame's end: the jaw nodes set in the end pose (moving at
-    ``jaw_rate``), time one frame on."""
-    target = np.asarray(controls.jaw_end)
-    place_jaw_into(solver_state.jaw, target + jaw_rate * 0.0, jaw_rate, pos, vel)
-    return State(pos, vel, m_force, m_rate, float(target[0]),
-                 state.time + solver_state.frame_duration, target[1:])
-
-
-@nb.njit(cache=True)
-def filter_exact(m_force, m_rate, m_steady, tau, dt, zeta=1.0):
-    """The activation filter of eq. (4) (damping ratio ``zeta``) advanced exactly by ``dt`` s
-    from (M, dM/dt) (muscles,) towards ``m_steady`` (N): new arrays ``(M, dM/dt)``."""
-    force = np.empty_like(m_force)
-    rate = np.empty_like(m_rate)
-    for m in range(m_force.shape[0]):
-        force[m], rate[m] = activation_exact_damped(m_force[m], m_rate[m], m_steady[m], tau,
-                                                       zeta, dt)
-    return force, rate
-
-
-__all__ = ["SolverState", "solver_state", "FrameStart", "start_frame", "finish_frame",
-           "place_jaw_into", "filter_exact"]
+def finish_frame(solver_state: SolverState, state: State, controls: Controls, pos, vel, m_force,
+                 m_rate, jaw_rate) -> State:
+    """:meth:`FrameTerms.finish` of a solver state."""
+    return solver_state.frame.finish(state, controls, pos, vel, m_force, m_rate, jaw_rate)

@@ -34,29 +34,30 @@ import numpy as np
 
 from ..checks import check_value
 from ..errors import InputError
-from ..params import Parameters
-from ..physics.assembly import Physics
+from ..physics.model import Model
+from ..stepping import StepOptions
 from .explicit import ExplicitEuler
 from .implicit import IMPLICIT_STIFFNESS_SHARE, ROS2_GAMMA, LinearImplicitEuler, Rosenbrock2
 from .jaw import jaw_poses
-from .solver_state import SolverState
+from .solver_state import Solver, SolverState
 from .state import Controls, State
 
 #: the integrators' names, as presets and the command line give them, and their solvers
 SOLVERS = {"euler": ExplicitEuler, "implicit": LinearImplicitEuler, "rosenbrock": Rosenbrock2}
 INTEGRATORS = tuple(SOLVERS)
 JAW_DRIVES = ("ramp", "hold")
-Solver = ExplicitEuler | LinearImplicitEuler | Rosenbrock2
 
 
-def solver_from_options(integrator: str | None, params: Parameters, *,
+def solver_from_options(integrator: str | None, steps: StepOptions, frame_rate: float, *,
                         substeps: int | None = None, dt: float | None = None) -> Solver:
     """The solver object an integrator's name and its options stand for.
 
     Parameters
     ----------
     integrator : {"euler", "implicit", "rosenbrock"} or None (the preset's)
-    params : Parameters -- the preset, for the defaults (``dt``, ``substeps``)
+    steps : StepOptions -- the preset's method, for the defaults (``dt``, ``substeps``) and
+        the implicit methods' options
+    frame_rate : Hz, the model's frame rate
     substeps : int, optional
         Steps per frame of the implicit integrators (default: the preset's). An error with
         ``euler``, which takes ``dt``.
@@ -69,7 +70,7 @@ def solver_from_options(integrator: str | None, params: Parameters, *,
     InputError
         An unknown name, or an option the method does not take (``field`` names it).
     """
-    name = params.integrator if integrator is None else integrator
+    name = steps.integrator if integrator is None else integrator
     for option, value in (("substeps", substeps), ("dt", dt)):
         if value is not None:  # the command line's intervals (facemech.checks)
             check_value(option, value)
@@ -80,10 +81,10 @@ def solver_from_options(integrator: str | None, params: Parameters, *,
         if substeps is not None:
             raise InputError("substeps sets the steps per frame of the implicit integrators; "
                              "explicit Euler takes its step from dt", field="substeps")
-        return ExplicitEuler(params.dt if dt is None else dt)
-    solver = SOLVERS[name](params.substeps if substeps is None else substeps)
+        return ExplicitEuler(steps.dt if dt is None else dt)
+    solver = SOLVERS[name](steps.substeps if substeps is None else substeps, steps)
     if dt is not None:
-        h = 1.0 / params.frame_rate / solver.substeps
+        h = 1.0 / frame_rate / solver.substeps
         if not abs(float(dt) - h) <= 1e-9 * h:
             raise InputError(f"dt ({float(dt) * 1e3:.3g} ms) is the explicit Euler step; the "
                              f"{name} integrator takes {solver.substeps} steps per frame "
@@ -96,12 +97,14 @@ class Stepper:
 
     Parameters
     ----------
-    physics : Physics
-    integrator : {"euler", "implicit", "rosenbrock"} or a solver object, optional
-        Default: the preset's (``params.integrator``): ``euler`` for the seeds' presets,
+    model : Model -- the face, its physics and the preset's method
+        (:func:`facemech.physics.model.model`)
+    integrator : {"euler", "implicit", "rosenbrock"} or a :class:`Solver`, optional
+        Default: the preset's (``model.steps.integrator``): ``euler`` for the seeds' presets,
         ``implicit`` for the anatomical one, whose physiological forces and tissue viscosity
         make explicit steps unstable. A solver object (``ExplicitEuler(dt)``,
-        ``LinearImplicitEuler(substeps)``, ``Rosenbrock2(substeps)``) carries its own options.
+        ``LinearImplicitEuler(substeps)``, ``Rosenbrock2(substeps)``, or any object with
+        the protocol's ``name``, ``init`` and ``step``) carries its own options.
     substeps : int, optional
         Steps per frame of the implicit integrators (default: the preset's, 4: h = 4.2 ms); an
         error with ``euler``.
@@ -112,26 +115,28 @@ class Stepper:
 
     Attributes
     ----------
-    solver : ExplicitEuler, LinearImplicitEuler or Rosenbrock2
+    solver : Solver
     solver_state : SolverState -- ``solver.init(physics)``
     integrator : str -- the solver's name
     n_steps : int -- steps per frame
     dt : float, s -- the step taken
     """
 
-    def __init__(self, physics: Physics, *, integrator=None, substeps: int | None = None,
+    def __init__(self, model: Model, *, integrator=None, substeps: int | None = None,
                  dt: float | None = None, jaw_drive: str = "ramp"):
         if jaw_drive not in JAW_DRIVES:
             raise InputError(f"unknown jaw drive {jaw_drive!r} (expected ramp or hold)",
                              field="jaw_drive")
-        if isinstance(integrator, (ExplicitEuler, LinearImplicitEuler, Rosenbrock2)):
+        if isinstance(integrator, Solver):
             for name, value in (("substeps", substeps), ("dt", dt)):
                 if value is not None:
                     raise InputError(f"give {name} to the solver object, not beside it",
                                      field=name)
             solver = integrator
         else:
-            solver = solver_from_options(integrator, physics.params, substeps=substeps, dt=dt)
+            solver = solver_from_options(integrator, model.steps, model.params.frame_rate,
+                                         substeps=substeps, dt=dt)
+        physics = model.physics
         self.physics = physics
         self.solver = solver
         self.solver_state: SolverState = solver.init(physics)

@@ -25,7 +25,7 @@ from .alignment import Alignment, Segment
 
 __all__ = ["ARPABET_APPROXIMATE", "ARPABET_IPA", "ESPEAK_IPA", "ESPEAK_IPA_EN_US",
            "IPA_ARPABET", "LABEL_NOTATIONS", "arpabet_to_ipa", "espeak_to_ipa",
-           "ipa_to_arpabet", "relabel"]
+           "ipa_to_arpabet", "phone_stress", "reads_stress", "relabel"]
 
 #: the notations a command can write its phone labels in (``--phone-labels``)
 LABEL_NOTATIONS = ("ipa", "arpabet", "espeak")
@@ -201,3 +201,22 @@ def relabel(alignment: Alignment, notation: str) -> Alignment:
         if label is not None:
             phones.append(Segment(label, seg.start, seg.end))
     return replace(alignment, phones=tuple(phones), notation=notation)
+
+
+def phone_stress(label: str, notation: str = "espeak") -> str | None:
+    """The stress a label marks: eSpeak's ``'``/``,`` before it, IPA's ``ˈ``/``ˌ`` before
+    it, ARPABET's digit ``1``/``2`` after it; None where it marks none."""
+    t = label.strip()
+    if notation == "arpabet":
+        return {"1": "primary", "2": "secondary"}.get(t[-1:])
+    first, second = ("ˈ", "ˌ") if notation == "ipa" else ("'", ",")
+    return "primary" if t.startswith(first) else "secondary" if t.startswith(second) else None
+
+
+def reads_stress(alignment) -> bool:
+    """Whether an alignment's labels carry stress: always in eSpeak's notation, in IPA and
+    ARPABET where any label marks it (an alignment with no mark at all is read as unmarked,
+    not as wholly unstressed)."""
+    if alignment.notation == "espeak":
+        return True
+    return any(phone_stress(s.label, alignment.notation) is not None for s in alignment.phones)

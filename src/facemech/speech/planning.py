@@ -6,7 +6,7 @@ its middle (:data:`TARGETS`: a bilabial's lips together, a stressed open vowel's
 12 to 17 mm, a rounded phone's lip centres 3 mm forward, a labiodental's lower lip at the upper
 incisors' edge), the utterance a peak lower-lip speed (:data:`SPEED_TARGET`), and iterative
 learning control reaches them: simulate, measure each phone as
-:mod:`facemech.analysis.visible_speech` does, adjust the gestures of the phones that missed
+:mod:`facemech.speech.visible_speech` does, adjust the gestures of the phones that missed
 (:class:`~.coarticulation.Gesture`: scale, jaw offset, dominance, neighbours' rates, ``press``,
 ``shift``; each update the miss times :data:`GAIN`, within :data:`BOUNDS`), simulate again.
 An iteration whose cost (misses beyond the tolerances, :data:`PASS_WEIGHT` times misses past
@@ -72,7 +72,7 @@ PASS_WEIGHT = 4.0
 #: m: the pass lines as the planner's errors (:func:`_measure`) measure them: a
 #: bilabial's gap, an open vowel's shortfall from 12 mm (8 mm open), a rounded phone's from
 #: 3 mm (2 mm forward), a labiodental's distance (1 mm,
-#: :data:`facemech.analysis.visible_speech.CONTACT_MM`)
+#: :data:`facemech.speech.visible_speech.CONTACT_MM`)
 PASS_LINES = {"bilabial": 0.5e-3, "open": 4.0e-3, "rounded": 1.0e-3, "labiodental": 1.0e-3}
 #: m/s, the peak lower-lip speed an utterance is planned for: the slowest of the real lower
 #: lips recorded (115-233 mm/s, docs/visible-speech.md); an utterance whose lower lip stays
@@ -94,7 +94,7 @@ SPEED_COST = 0.02
 TIMING_WINDOW_S = 0.06
 #: m/s, the fastest a plan moves the lower incisor's tip: the jaw is a kinematic drive, and the
 #: planner, left free, sped it to 400-800 mm/s (the fastest jaw of the real recordings moves
-#: at 186, :data:`facemech.analysis.visible_speech.REAL_JAW_PEAK_MM_S`; real lower lips at
+#: at 186, :data:`facemech.speech.visible_speech.REAL_JAW_PEAK_MM_S`; real lower lips at
 #: 115-233). 250 mm/s, the top of the pass range for the lower lip, which rides the jaw: a
 #: faster jaw alone carried the lower lip past it (docs/design-log.md, "The jaw carries the
 #: lips")
@@ -139,7 +139,7 @@ def check_iterations(iterations) -> int:
     return n
 
 
-def plan_controls(alignment: Alignment, model, *, params=None,
+def plan_controls(alignment: Alignment, model, *,
                   strength: float | Articulation = 1.0, iterations: int = PLAN_ITERATIONS,
                   jaw_speed: float | None = JAW_SPEED_MAX,
                   progress: Callable[[int, int], None] | None = None) -> Plan:
@@ -148,8 +148,8 @@ def plan_controls(alignment: Alignment, model, *, params=None,
     Parameters
     ----------
     alignment : the phones (eSpeak, IPA or ARPABET), times in s
-    model : FaceModel, the face simulated
-    params : Parameters (default: the default preset); its frame rate is the controls'
+    model : Model, the face simulated and its parameters (:func:`facemech.physics.model.model`);
+        its frame rate is the controls'
     strength : a global strength or an :class:`~.articulation.Articulation`, as
         :func:`~.coarticulation.controls_from_alignment`; the plan starts from its gestures
     iterations : updates after the first simulation (0: the blend's controls, simulated once)
@@ -169,23 +169,22 @@ def plan_controls(alignment: Alignment, model, *, params=None,
     """
     import time as _time
 
-    from ..analysis.visible_speech import incisor_speed, peak_lower_lip_speed
-    from ..params import preset as load_preset
     from ..solvers.forward import simulate
     from .coarticulation import controls_from_alignment
+    from .visible_speech import incisor_speed, peak_lower_lip_speed
 
     iterations = check_iterations(iterations)
     if jaw_speed is not None and not (np.isfinite(jaw_speed) and jaw_speed > 0):
         raise InputError(f"the jaw's speed limit must be a positive number of m/s, got "
                          f"{jaw_speed!r}", field="jaw_speed")
-    params = load_preset("anatomical") if params is None else params
+    params = model.params
     articulation = as_articulation(strength)
     # the checks of the plain controls (frame rate, strength, duration, labels)
     controls_from_alignment(alignment, frame_rate=params.frame_rate, strength=articulation)
     items = gestures(alignment, articulation)
     phones = _phone_gestures(alignment)
     vowels = _stressed_vowels(alignment)
-    jaw_limit = None if jaw_speed is None else jaw_rate_limit(model, params, jaw_speed)
+    jaw_limit = None if jaw_speed is None else jaw_rate_limit(model.face, params, jaw_speed)
     t0 = _time.perf_counter()
     history, best, turns, step = [], None, {}, 1.0
     for it in range(iterations + 1):
@@ -194,7 +193,7 @@ def plan_controls(alignment: Alignment, model, *, params=None,
                                              strength=articulation.strength)
         if jaw_limit is not None:
             jaw = np.maximum(slew_limited(jaw, jaw_limit / params.frame_rate), 0.0)
-        sim = simulate(model, act, jaw, params=params)
+        sim = simulate(model, act, jaw)
         misses = _measure(alignment, sim, phones)
         speed = peak_lower_lip_speed(sim.time, sim.positions, sim.model)
         summary = _summary(misses, speed)
@@ -316,17 +315,17 @@ def _stressed_vowels(alignment: Alignment) -> tuple[int, ...]:
     """The indices in :func:`gestures` of the vowel gestures of stressed phones (eSpeak's
     ``'`` and ``,``, IPA's ``ˈ ˌ``, ARPABET's ``1 2``; every vowel's in an alignment that marks
     no stress): where a slow utterance's jaw opens further (:func:`_update`)."""
-    from ..analysis.visible_speech import _stress, reads_stress
+    from .phone_labels import phone_stress, reads_stress
     from .phoneclass import VOWEL_CLASSES
 
     marked = reads_stress(alignment)
     return tuple(k + j for seg, k, parts in _phone_parts(alignment)
-                 if not marked or _stress(seg.label, alignment.notation) is not None
+                 if not marked or phone_stress(seg.label, alignment.notation) is not None
                  for j, cls in enumerate(parts) if cls in VOWEL_CLASSES)
 
 
 def _phone_gestures(alignment: Alignment) -> list[list[int]]:
-    """Per phone that :func:`facemech.analysis.visible_speech.measure_phones` measures (those
+    """Per phone that :func:`facemech.speech.visible_speech.measure_phones` measures (those
     with classes other than a pause), the indices of its gestures in :func:`gestures`."""
     return [list(range(k, k + len(parts))) for _, k, parts in _phone_parts(alignment)
             if parts and parts != (PAUSE,)]
@@ -352,12 +351,12 @@ def _measure(alignment: Alignment, sim, phones: list[list[int]]) -> list[_Miss]:
     aperture short of 12 mm (0 up to :data:`TARGETS`'s ``too_wide``, negative beyond), rounded
     forward short of 3 mm, labiodental distance signed (positive: the lip's top above the
     incisors' edge)."""
-    from ..analysis.visible_speech import (
+    from .mouth import mouth_measures
+    from .visible_speech import (
         lower_lip_top,
         measure_phones,
         upper_incisor_edge,
     )
-    from .mouth import mouth_measures
 
     measured = measure_phones(alignment, sim.model, sim.time, sim.positions)
     edge = upper_incisor_edge(sim.model)

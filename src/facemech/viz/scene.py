@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..geometry.builder import vertex_normals
-from ..solvers.jaw import rotation_matrix
+from ..geometry.jaw import rotation_matrix
 from .dentition import bend_tongue, tongue_modes
 from .face_parts import MAX_TEXTURE, eye_parts, mouth_parts, skin_part, textured_fissures
 from .head import SKIRT_DEPTH, closed_head, ear_parts, head_centre, head_shell, skirt_part

@@ -29,10 +29,9 @@ def run_demo(out_dir: str | Path, *, integrator: str | None = None, video: bool 
     defaults to the preset's. ``render`` is a :class:`facemech.viz.video.RenderOptions`
     (default: frontal and profile, 1280x720).
     """
-    from ..geometry.builder import default_face
     from ..io.activity import write_activity
     from ..io.results import array_hash, write_results
-    from ..params import preset as get_preset
+    from ..physics.model import model as face_model
     from ..solvers.forward import simulate
     from ..viz.movie import write_movie, write_snapshot
     from ..viz.plots import activity_figure, kinematics_figure
@@ -46,18 +45,18 @@ def run_demo(out_dir: str | Path, *, integrator: str | None = None, video: bool 
         if progress is not None:
             progress(stage, done, total)
 
-    params = get_preset(preset)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     report("build the face", 0, 1)
-    face = default_face(tissue=params.tissue)
+    model = face_model("default", preset)
+    face, params = model.face, model.params
     report("build the face", 1, 1)
     t, act, jaw = utterance(params.frame_rate)
 
     def step(stage):
         return None if progress is None else (lambda d, n: progress(stage, d, n))
 
-    sim = simulate(face, act, jaw, params=params, integrator=integrator,
+    sim = simulate(model, act, jaw, integrator=integrator,
                    progress=step("simulate"))
     files = {}
     report("write results and figures", 0, 5)

@@ -35,12 +35,11 @@ def _check(output: str | Path | None, preset: str | None, *, folder: bool) -> No
                      folder=folder, field="-o")
 
 
-def _face_and_params(preset: str):
-    from ..geometry.builder import default_face
-    from ..params import preset as get_preset
+def _model(preset: str):
+    """The built-in face under ``preset``: the experiment's one model."""
+    from ..physics.model import model
 
-    params = get_preset(preset)
-    return default_face(tissue=params.tissue), params
+    return model("default", preset)
 
 
 def synthetic(output: str | Path | None = None, *, method: str = "lsq", noise_mm: float = 0.0,
@@ -68,9 +67,9 @@ def synthetic(output: str | Path | None = None, *, method: str = "lsq", noise_mm
     if method not in ("lsq", "powell", "both"):
         raise InputError("method must be lsq, powell or both", field="method")
     _check(output, preset, folder=True)
-    face, params = _face_and_params(preset)
-    res = run_synthetic(face, methods=("lsq", "powell") if method == "both" else (method,),
-                        noise=noise_mm * 1e-3, params=params, dt=dt, progress=progress)
+    res = run_synthetic(_model(preset),
+                        methods=("lsq", "powell") if method == "both" else (method,),
+                        noise=noise_mm * 1e-3, dt=dt, progress=progress)
     if output is not None:
         if figures:
             draw_synthetic(res, output)
@@ -134,8 +133,7 @@ def crosstalker(output: str | Path | None = None, *, frames: int = 120,
     if frames < 8:
         raise InputError("needs at least 8 frames", field="frames")
     _check(output, preset, folder=False)
-    face, params = _face_and_params(preset)
-    res = run_crosstalker(face, frames=frames, params=params, dt=dt, progress=progress)
+    res = run_crosstalker(_model(preset), frames=frames, dt=dt, progress=progress)
     if output is not None:
         write(res, output)
     return res

@@ -41,15 +41,15 @@ class MarkerFile:
 
 def parameters(preset: str | Path = "anatomical", jaw_kinematics: str | None = None,
                dt: float | None = None):
-    """The :class:`~facemech.params.Parameters` of a preset (name or file) with a command's
+    """The :class:`~facemech.params.Preset` of a preset (name or file) with a command's
     overrides: the jaw's kinematics ("hinge" or "glide") and the inversion's explicit Euler
-    step ``dt`` (s; its ``fast_dt``)."""
-    from ..params import preset as load_preset
+    step ``dt`` (s; its method's ``fast_dt``)."""
+    from ..params import Preset, preset_pair
 
-    params = load_preset(preset)
+    params, steps = preset_pair(preset)
     if jaw_kinematics is not None:
         params = params.with_(jaw_kinematics=jaw_kinematics)
-    return params if dt is None else params.with_(fast_dt=dt)
+    return Preset(params, steps if dt is None else steps.with_(fast_dt=dt))
 
 
 def invert_markers(
@@ -76,26 +76,25 @@ def invert_markers(
     face : face file or built-in face name, loaded with the preset's tissue
     map_file : marker,node CSV (default: the closest nodes; articulography's lips: their
         vermilion points)
-    scale_pair, params, method, positive, controls, jaw, noise, options, progress : as
+    params : the preset (:func:`facemech.physics.model.model`'s ``preset``; None: the default)
+    scale_pair, method, positive, controls, jaw, noise, options, progress : as
         :func:`~facemech.inverse.workflow.invert_marker_set`
 
     Returns
     -------
     facemech.inverse.result.Inversion
     """
-    from ..geometry.builder import load_face
     from ..inverse.methods import method_from_options
     from ..inverse.workflow import invert_marker_set
     from ..io.markers import read_markers
     from ..kinematics.mapping import read_mapping
-    from ..params import default_parameters
+    from ..physics.model import model as face_model
 
     method_from_options(method, **(options or {}))  # a bad option before any file is read
-    params = params or default_parameters()
     ms = markers if isinstance(markers, MarkerSet) else read_markers(markers)
-    model = load_face(face, tissue=params.tissue)
-    mapping = None if map_file is None else read_mapping(map_file, ms, model)
-    return invert_marker_set(ms, model, mapping=mapping, scale_pair=scale_pair, params=params,
+    model = face_model(face, params)  # the command's one model (None: the default preset)
+    mapping = None if map_file is None else read_mapping(map_file, ms, model.face)
+    return invert_marker_set(ms, model, mapping=mapping, scale_pair=scale_pair,
                              method=method, positive=positive, controls=controls, jaw=jaw,
                              noise=noise, options=options, progress=progress)
 
@@ -114,8 +113,8 @@ def invert(markers: MarkerFile | str | Path, output: str | Path, *,
         nodes)
     output : results file (.nc), written atomically
     face : the face (file or built-in name)
-    params : the :class:`~facemech.params.Parameters` (:func:`parameters`; default: the
-        default preset)
+    params : the preset: a :class:`~facemech.params.Preset` (:func:`parameters`), a
+        :class:`~facemech.params.Parameters` or a preset's name (None: the default preset)
     method, options : "lsq" or "powell" and its options (``window``, ``tol``, ``bend``,
         ``smooth``, ``effort``, ``max_evaluations``; None: its default; tol in mm, weights in mm
         per unit; ``max_rate`` 1/s; :func:`~facemech.inverse.methods.method_from_options`)

@@ -290,8 +290,10 @@ def export_blendshapes(result: str | Path, output: str | Path, *, face: str | No
     for p in paths:
         check_output(p, [result], field="-o")
     ds = read_results(result)
+    from ..physics.model import model as face_model
+
     model, params = _result_face(ds, face, str(result))
-    basis = arkit_basis(model, params, progress=stage(progress, "gestures"))
+    basis = arkit_basis(face_model(model, params), progress=stage(progress, "gestures"))
     positions = ds["positions"].transpose("time", "node", "axis").values.astype(float)
     fit = fit_weights(basis, positions)
     if progress is not None:

@@ -123,18 +123,19 @@ def _marker_node(model, name: str) -> int:
     return model.markers.get(name, model.landmarks["chin"])
 
 
-def jaw_from_chin(path: str | Path, marker: str, model, params, times: np.ndarray, *,
+def jaw_from_chin(path: str | Path, marker: str, model, times: np.ndarray, *,
                   units: str | None = None) -> np.ndarray:
     """Jaw angles (frames,) rad at ``times`` (s) from the vertical trajectory of a chin marker
     in a marker file (model axes), 33 ms early
     (:func:`facemech.solvers.jaw_drive.jaw_angles_from_marker`); the marker is the face's node of
-    that name, or its chin landmark. The file must cover ``times``."""
+    that name, or its chin landmark (``model``: a :class:`~facemech.physics.model.Model`). The
+    file must cover ``times``."""
     from ..solvers.jaw_drive import jaw_angles_from_marker
     from .markers import trajectories
 
     y = trajectories(path, [marker], units=units, times=times,
                      cover="the chin trajectory")[1][marker][:, 1]
-    return jaw_angles_from_marker(model, params, _marker_node(model, marker), y,
+    return jaw_angles_from_marker(model, _marker_node(model.face, marker), y,
                                   source=str(path))
 
 
@@ -158,7 +159,7 @@ def jaw_from_two_markers(path: str | Path, first: str, second: str, model, times
                                  source=str(path))
 
 
-def jaw_from_bone(path: str | Path, model, params, times: np.ndarray, *,
+def jaw_from_bone(path: str | Path, model, times: np.ndarray, *,
                   incisor: str | None = None, molar: str | None = None,
                   units: str | None = None) -> np.ndarray | None:
     """Jaw poses (frames, 3) (angle rad, shift_y m, shift_z m) at ``times`` from points on the
@@ -180,7 +181,7 @@ def jaw_from_bone(path: str | Path, model, params, times: np.ndarray, *,
                          source=str(path), field="time")
     pts = {n: np.column_stack([np.interp(times, ms.time, ms.marker(n)[:, a]) for a in range(3)])
            for n in (incisor, molar) if n is not None}
-    return jaw_poses_from_bone(pts[incisor], model, params, molar=pts.get(molar),
+    return jaw_poses_from_bone(pts[incisor], model.face, model.params, molar=pts.get(molar),
                                names=(incisor, molar or "molar"), source=str(path))
 
 
@@ -190,8 +191,9 @@ def bite_block(jaw: np.ndarray) -> np.ndarray:
     return np.repeat(jaw[:1], len(jaw), axis=0)
 
 
-def jaw_series(source: JawSource, model, params, times: np.ndarray) -> tuple[np.ndarray, dict]:
-    """The jaw of ``source`` at ``times`` (s) for ``model`` under ``params``.
+def jaw_series(source: JawSource, model, times: np.ndarray) -> tuple[np.ndarray, dict]:
+    """The jaw of ``source`` at ``times`` (s) for ``model`` (a
+    :class:`~facemech.physics.model.Model`).
 
     Returns
     -------
@@ -205,15 +207,15 @@ def jaw_series(source: JawSource, model, params, times: np.ndarray) -> tuple[np.
     chin = source.chin_marker or "R01"
     bone = None
     if source.markers is not None and source.chin_marker is None and source.second_marker is None:
-        bone = jaw_from_bone(source.markers, model, params, times, incisor=source.incisor,
+        bone = jaw_from_bone(source.markers, model, times, incisor=source.incisor,
                              molar=source.molar, units=source.units)
     if bone is not None:
         jaw = bone
     elif source.markers is not None and source.second_marker is not None:
         jaw = jaw_from_two_markers(source.markers, chin, source.second_marker,
-                                   model, times, units=source.units)
+                                   model.face, times, units=source.units)
     elif source.markers is not None:
-        jaw = jaw_from_chin(source.markers, chin, model, params, times, units=source.units)
+        jaw = jaw_from_chin(source.markers, chin, model, times, units=source.units)
     elif source.angles is not None:
         jaw = jaw_from_csv(source.angles, times)
     else:
@@ -276,13 +278,13 @@ def simulate_files(output: str | Path, controls: Controls, jaw: JawSource = JawS
     -------
     SimulationRun
     """
-    from ..geometry.builder import load_face
-    from ..params import preset as get_preset
+    from ..atomic import check_output
+    from ..params import preset_pair
+    from ..physics.model import model as face_model
 
-    params = get_preset(preset)
+    params, steps = preset_pair(preset)
     if jaw_kinematics is not None:
         params = params.with_(jaw_kinematics=jaw_kinematics)
-    from ..atomic import check_output
 
     given = [controls.activity, controls.emg, controls.emg_calibration, jaw.angles, jaw.markers,
              face if Path(str(face)).suffix else None]
@@ -293,14 +295,14 @@ def simulate_files(output: str | Path, controls: Controls, jaw: JawSource = JawS
         movie = check_movie(movie, [*given, output], field="video")
     times, act, inputs = read_controls(controls, params.frame_rate)  # before the slow face
     notes = input_notes(controls, jaw)
-    model = load_face(face, tissue=params.tissue)
-    jaw_angles, jaw_inputs = jaw_series(jaw, model, params, times)
+    model = face_model(face, params, steps=steps)
+    jaw_angles, jaw_inputs = jaw_series(jaw, model, times)
     inputs.update(jaw_inputs)
     src = str(controls.activity if controls.activity is not None else controls.emg)
-    run = simulate_to_file(output, model, act, jaw_angles, inputs=inputs, params=params,
+    run = simulate_to_file(output, model, act, jaw_angles, inputs=inputs,
                            integrator=integrator, substeps=substeps, dt=dt, jaw_drive=jaw_drive,
                            source=src, progress=stage(
-                               progress, f"simulate ({integrator or params.integrator})"))
+                               progress, f"simulate ({integrator or model.steps.integrator})"))
     written = None
     if movie:  # from the file: the whole run in memory (rendering does not stream)
         from .pictures import render_movie
@@ -342,13 +344,14 @@ def simulate_to_file(output: str | Path, model, activity: np.ndarray,
     Parameters
     ----------
     output : results file (``.nc``)
-    model : FaceModel
+    model : Model -- the face, its parameters and physics
+        (:func:`facemech.physics.model.model`)
     activity : (frames, groups) array in [0, 1], columns :data:`~facemech.params.MUSCLE_GROUPS`
     jaw_angle : (frames,) rad or (frames, 3) poses, optional (default: jaw closed)
     inputs : input name -> file hash, for the results' provenance
     block_frames : frames held in memory at a time (default
         :data:`~facemech.solvers.forward.BLOCK_FRAMES`, 600: 10 s, about 30 MB)
-    **options : ``params``, ``integrator``, ``substeps``, ``dt``, ``jaw_drive``,
+    **options : ``integrator``, ``substeps``, ``dt``, ``jaw_drive``,
         ``initial_state``, ``progress``, ``source``, as :func:`~facemech.solvers.forward.
         simulate`
 

@@ -121,11 +121,10 @@ def speak(
     Spoken
     """
     from ..analysis.describe import describe
-    from ..geometry.builder import load_face
     from ..io.activity import write_activity
     from ..io.results import file_hash, to_dataset, with_tongue, write_dataset
-    from ..params import MUSCLE_GROUPS
-    from ..params import preset as load_preset
+    from ..params import MUSCLE_GROUPS, preset_pair
+    from ..physics.model import model as face_model
     from ..solvers.forward import simulate
     from ..speech.alignment_io import read_textgrid
     from ..speech.alive import Liveliness, liveliness
@@ -159,7 +158,7 @@ def speak(
                 Path(given).name in FILES.values():
             raise InputError("an input would be overwritten by an output of the same name",
                              source=str(given), field="output")
-    params = load_preset(preset)
+    params, steps = preset_pair(preset)
     files = {k: out / v for k, v in FILES.items()}
     inputs: dict = {}
     if text is not None:
@@ -184,14 +183,14 @@ def speak(
         inputs["audio"] = file_hash(audio)
         inputs["textgrid"] = file_hash(textgrid)
     written = relabel(alignment, "ipa")  # before anything is written: a label without IPA
-    model = load_face(face, tissue=params.tissue)  # after the inputs are checked: it takes a while
+    model = face_model(face, params, steps=steps)  # after the inputs are checked: it takes a while
     out.mkdir(parents=True, exist_ok=True)
     write_wav(files["audio"], samples, rate)
     record = write_alignment(files, alignment, written)
     if iterations is None:
         t, act, jaw = controls_from_alignment(alignment, frame_rate=params.frame_rate,
                                               strength=articulation)
-        sim = simulate(model, act, jaw, params=params,
+        sim = simulate(model, act, jaw,
                        progress=None if progress is None else
                        (lambda d, n: progress("simulate", d, n)))
         planned = {"planned": False}
@@ -199,7 +198,7 @@ def speak(
         from ..speech.planning import plan_controls
 
         report(progress, "plan", 0, iterations + 1)
-        made = plan_controls(alignment, model, params=params, strength=articulation,
+        made = plan_controls(alignment, model, strength=articulation,
                              iterations=iterations,
                              progress=None if progress is None else
                              (lambda d, n: progress("plan", d, n)))

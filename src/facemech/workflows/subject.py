@@ -480,7 +480,7 @@ def analyse(subject: str | Path, recording: str | Path, output: str | Path, *,
     say("prepare", 0, 1)
     params = invert.parameters(preset)
     ms, notes = prepare(subj, read_markers(recording, units=preparation.units),
-                        max_gap=preparation.max_gap, rate=params.frame_rate, source=src,
+                        max_gap=preparation.max_gap, rate=params.params.frame_rate, source=src,
                         lowpass_hz=preparation.lowpass)
     invert.check_marker_set(ms, src)  # what would stop the inversion: before anything is written
     write_markers(out / "markers.csv", ms, units="mm")

@@ -20,8 +20,9 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from ..geometry.teeth import teeth_depth
-from ..speech.mouth import midline_lip_pair, mouth_measures
-from ..speech.phoneclass import phone_classes
+from .mouth import midline_lip_pair, mouth_measures
+from .phone_labels import phone_stress, reads_stress
+from .phoneclass import phone_classes
 
 __all__ = ["CONTACT_MM", "CRITERIA", "OPEN_EXTRA_LABELS", "ROUNDED_LABELS", "PhoneMeasure",
            "REAL_JAW_PEAK_MM_S", "class_table", "incisor_distance", "incisor_speed",
@@ -98,25 +99,6 @@ class PhoneMeasure:
 
 def _base(label: str) -> str:
     return label.strip().lstrip("',%=")
-
-
-def _stress(label: str, notation: str = "espeak") -> str | None:
-    """The stress a label marks: eSpeak's ``'``/``,`` before it, IPA's ``ˈ``/``ˌ`` before
-    it, ARPABET's digit ``1``/``2`` after it; None where it marks none."""
-    t = label.strip()
-    if notation == "arpabet":
-        return {"1": "primary", "2": "secondary"}.get(t[-1:])
-    first, second = ("ˈ", "ˌ") if notation == "ipa" else ("'", ",")
-    return "primary" if t.startswith(first) else "secondary" if t.startswith(second) else None
-
-
-def reads_stress(alignment) -> bool:
-    """Whether an alignment's labels carry stress: always in eSpeak's notation, in IPA and
-    ARPABET where any label marks it (an alignment with no mark at all is read as unmarked,
-    not as wholly unstressed)."""
-    if alignment.notation == "espeak":
-        return True
-    return any(_stress(s.label, alignment.notation) is not None for s in alignment.phones)
 
 
 def _group(label: str, classes: tuple[str, ...]) -> str | None:
@@ -280,7 +262,7 @@ def measure_phones(alignment, model, time: np.ndarray, positions: np.ndarray, *,
                    and phones[k + 1][0].start <= seg.end + 1e-9)
         out.append(PhoneMeasure(
             label=seg.label, start=float(seg.start), end=float(seg.end), classes=classes,
-            stress=_stress(seg.label, alignment.notation) if marked else None,
+            stress=phone_stress(seg.label, alignment.notation) if marked else None,
             group=group, between_bilabials=bool(between),
             lip_gap_mid=float(np.interp(seg.mid, time, gap)),
             lips_forward_mid=float(np.interp(seg.mid, time, m["lips_forward"])), **extra))
