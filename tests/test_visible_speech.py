@@ -235,3 +235,58 @@ def test_sentences_cover_every_group(spoken_summary):
 ])
 def test_sentences_meet_the_issues_criteria(spoken_summary, group):
     assert spoken_summary[group]["met"], spoken_summary[group]
+
+
+def test_a_bilabials_closure_is_how_long_its_lips_stay_sealed(face):
+    """The seal's run about the most closed frame, its ends interpolated where the gap
+    crosses 0.5 mm: a 1-mm gap everywhere but a sealed 80 ms about the /m/ gives 80 ms; a
+    seal that never reaches 0.5 mm gives 0; summarize counts the share >= 50 ms."""
+    from facemech.analysis.visible_speech import CLOSURE_MIN_S, closure_duration
+
+    t = np.arange(0, 0.6, 0.01)
+    gap = np.full(len(t), 2e-3)
+    gap[(t > 0.26 - 1e-9) & (t < 0.34 + 1e-9)] = 0.0  # sealed from 0.26 to 0.34 s
+    gap[np.isclose(t, 0.25)] = gap[np.isclose(t, 0.35)] = 1e-3
+    # crossings: halfway between 0.25 (1 mm) and 0.26 (0): 0.255; likewise 0.345
+    assert closure_duration(t, gap, 0.27, 0.33) == pytest.approx(0.09, abs=1e-9)
+    assert closure_duration(t, np.full(len(t), 0.6e-3), 0.27, 0.33) == 0.0
+    al = alignment(["'a", "m", "'a"], [0.15, 0.08, 0.15])
+    tt, p = frames(face, al)
+    _, lo, normal = midline_lip_pair(face)
+    mid = 0.1 + 0.15 + 0.04
+    for held, expect in ((0.08, True), (0.03, False)):
+        g = np.where(np.abs(tt - mid) <= held / 2 + 1e-9, 0.0, 3e-3)
+        q = p.copy()
+        q[:, lo] -= g[:, None] * normal
+        ms = measure_phones(al, face, tt, q)
+        bil = [m for m in ms if m.group == "bilabial"][0]
+        n = int(np.sum(g == 0.0))  # sealed frames; each end crosses 0.5 mm 1/6 frame out
+        assert bil.closure == pytest.approx((n - 1 + 2 / 6) / RATE, abs=1e-9)
+        assert summarize(ms)["closure"]["met"] is expect
+        assert (bil.closure >= CLOSURE_MIN_S) is expect
+
+
+def test_a_rounded_openings_shape_is_its_height_over_its_width(face):
+    """The lower lip's twins moved down 6 mm within 6 mm of the midline, tapering to 0 at
+    9 mm: the opening (> 0.5 mm apart) is 2 x 8.5 mm wide, 6 mm high at the middle; sealed
+    lips have no opening; a narrowed mouth's width ratio is its corner distance over rest."""
+    from facemech.speech.mouth import opening_width
+
+    rest = face.rest_positions[: face.n_surface]
+    up, lo = face.lip_pairs.T
+    skin = np.nonzero(up < face.n_surface)[0]
+    x0 = rest[face.landmarks["stomion"], 0]
+    p = rest.copy()
+    assert opening_width(face, p) == 0.0
+    x = np.abs(rest[lo[skin], 0] - x0)
+    depth = 6e-3 * np.clip((9e-3 - x) / 3e-3, 0.0, 1.0)
+    normals = np.asarray(face.lip_normals)[skin]
+    p[lo[skin]] -= depth[:, None] * normals
+    w = opening_width(face, p)
+    assert w == pytest.approx(2 * (9e-3 - 0.5e-3 / 6e-3 * 3e-3), abs=0.6e-3)
+    al = alignment(["u:"], [0.2])
+    t, q = frames(face, al)
+    q[:] = p
+    r = measure_phones(al, face, t, q)[0]
+    assert r.opening_aspect == pytest.approx(6e-3 / w, rel=0.02)
+    assert r.width_ratio == pytest.approx(1.0)

@@ -36,16 +36,24 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from ..geometry.teeth import teeth_depth
-from ..speech.mouth import midline_lip_pair, mouth_measures
+from ..speech.mouth import midline_lip_pair, mouth_measures, opening_width
 from ..speech.phoneclass import phone_classes
 
-__all__ = ["CONTACT_MM", "CRITERIA", "OPEN_EXTRA_LABELS", "ROUNDED_LABELS", "PhoneMeasure",
+__all__ = ["CLOSURE_MIN_S", "CONTACT_MM", "CRITERIA", "ROUND_ASPECT_MIN", "SEAL_MM",
+           "closure_duration", "OPEN_EXTRA_LABELS", "ROUNDED_LABELS", "PhoneMeasure",
            "REAL_JAW_PEAK_MM_S", "class_table", "incisor_distance", "incisor_speed",
            "lower_lip_speed", "lower_lip_top",
            "measure_phones", "peak_lower_lip_speed", "summarize", "upper_incisor_edge"]
 
 #: mm: the lower lip touches the upper incisors when it comes this close to their edge
 CONTACT_MM = 1.0
+#: mm: the lips are sealed where their midline gap is this or less (the bilabials' criterion)
+SEAL_MM = 0.5
+#: s: a bilabial's lips stay sealed at least this long (real bilabial closures last 70-120 ms
+#: in read speech)
+CLOSURE_MIN_S = 0.050
+#: a rounded phone's opening, where the lips part, at least this high for its width
+ROUND_ASPECT_MIN = 0.5
 #: mm/s, the fastest lower incisor of issue 27's real recordings (EMA and X-ray microbeam, a
 #: read sentence and repeated syllables: peak jaw speeds 58-186 mm/s); recorded beside the
 #: lower lip's speed, not a criterion of issue 29
@@ -60,6 +68,8 @@ CRITERIA = {
     "open": {"aperture_min_mm": 8.0, "share": 0.90, "median_min_mm": 10.0},
     "rounded": {"forward_min_mm": 2.0, "share": 0.90},
     "labiodental": {"contact_mm": CONTACT_MM, "share": 0.90},
+    "closure": {"min_ms": 1e3 * CLOSURE_MIN_S, "share": 0.90},
+    "round_opening": {"aspect_min": ROUND_ASPECT_MIN, "share": 0.90},
     "speed": {"peak_min_mm_s": 100.0, "peak_max_mm_s": 250.0},
 }
 
@@ -84,6 +94,12 @@ class PhoneMeasure:
         (rounded phones); ``upper_forward`` and ``lower_forward`` at that frame
     incisor_distance : m, the smallest distance within the phone from the upper incisors'
         edge to the lower lip (labiodentals)
+    closure : s, how long the lips stay sealed (midline gap <= :data:`SEAL_MM`) about the
+        phone's most closed frame (bilabials; :func:`closure_duration`)
+    opening_aspect : the opening's height over its width at the phone's middle (rounded
+        phones whose lips part there; :func:`facemech.speech.mouth.opening_width`), else None
+    width_ratio : the mouth's corner-to-corner width at the phone's middle over its rest
+        width (rounded phones)
     """
 
     label: str
@@ -100,6 +116,9 @@ class PhoneMeasure:
     upper_forward: float | None = None
     lower_forward: float | None = None
     incisor_distance: float | None = None
+    closure: float | None = None
+    opening_aspect: float | None = None
+    width_ratio: float | None = None
 
     def to_dict(self) -> dict:
         """The row in mm (lengths rounded to 0.01 mm), times in s."""
@@ -109,6 +128,8 @@ class PhoneMeasure:
             v = out.pop(k)
             out[f"{k}_mm"] = None if v is None else round(1e3 * v, 2)
         out["classes"] = list(self.classes)
+        out["closure_ms"] = None if out["closure"] is None else round(1e3 * out["closure"], 1)
+        del out["closure"]
         return out
 
 
@@ -232,6 +253,31 @@ def incisor_speed(time: np.ndarray, jaw_pose: np.ndarray, model) -> np.ndarray:
     return np.linalg.norm(np.gradient(p, np.asarray(time, float), axis=0), axis=1)
 
 
+def closure_duration(time: np.ndarray, gap: np.ndarray, start: float, end: float,
+                     seal: float = 1e-3 * SEAL_MM) -> float:
+    """s, how long the lips stay sealed (``gap`` <= ``seal``, m) in the run of frames about the
+    most closed frame within [start, end] (the nearest frame to the middle when none lies
+    there); the run's ends are interpolated to where the gap crosses ``seal``. 0 when the
+    lips do not seal there."""
+    t = np.asarray(time, float)
+    g = np.asarray(gap, float)
+    idx = _window(t, start, end)
+    k = int(idx[np.argmin(g[idx])])
+    if g[k] > seal:
+        return 0.0
+    a = k
+    while a > 0 and g[a - 1] <= seal:
+        a -= 1
+    b = k
+    while b < len(g) - 1 and g[b + 1] <= seal:
+        b += 1
+    ta = t[a] if a == 0 else t[a - 1] + (t[a] - t[a - 1]) * (g[a - 1] - seal) / \
+        (g[a - 1] - g[a])
+    tb = t[b] if b == len(g) - 1 else t[b] + (t[b + 1] - t[b]) * (seal - g[b]) / \
+        (g[b + 1] - g[b])
+    return float(tb - ta)
+
+
 def _window(time: np.ndarray, start: float, end: float) -> np.ndarray:
     """Frames within [start, end]; the nearest frame to the middle when none is."""
     idx = np.nonzero((time >= start) & (time <= end))[0]
@@ -271,6 +317,9 @@ def measure_phones(alignment, model, time: np.ndarray, positions: np.ndarray, *,
     voice = alignment.meta.get("voice") if voice is None else voice
     m = mouth_measures(model, p)
     gap = m["lip_gap"]
+    lm, rest = model.landmarks, model.rest_positions
+    rest_width = float(np.linalg.norm(rest[lm["mouth_corner_left"]]
+                                      - rest[lm["mouth_corner_right"]]))
     incisor_dist = incisor_distance(model, p)
     phones = [(s, phone_classes(s.label, alignment.notation, source=alignment.source,
                                 voice=voice)) for s in alignment.phones]
@@ -290,6 +339,14 @@ def measure_phones(alignment, model, time: np.ndarray, positions: np.ndarray, *,
                          lower_forward=float(m["lower_forward"][j]))
         elif group == "labiodental":
             extra["incisor_distance"] = float(incisor_dist[idx].min())
+        if group == "bilabial":
+            extra["closure"] = closure_duration(time, gap, seg.start, seg.end)
+        elif group == "rounded":
+            j = int(np.argmin(np.abs(time - seg.mid)))
+            w = float(opening_width(model, p[j]))
+            extra["width_ratio"] = 1.0 + float(m["width_change"][j]) / rest_width
+            if gap[j] > 1e-3 * SEAL_MM and w > 0:
+                extra["opening_aspect"] = float(gap[j]) / w
         between = (0 < k < len(phones) - 1 and groups[k - 1] == "bilabial"
                    and groups[k + 1] == "bilabial"
                    and phones[k - 1][0].end >= seg.start - 1e-9
@@ -371,6 +428,30 @@ def summarize(phones: list[PhoneMeasure], peak_speeds: list[float] | None = None
     row["worst"] = _worst(lab, v, max)
     row["met"] = bool(lab) and row["share_passing"] >= c["labiodental"]["share"]
     out["labiodental"] = row
+
+    v = [1e3 * p.closure for p in bil if p.closure is not None]
+    row = {"n": len(v)}
+    ok = [x >= c["closure"]["min_ms"] for x in v]
+    row.update({"share_passing": round(float(np.mean(ok)), 3) if v else None,
+                "median_ms": round(float(np.median(v)), 1) if v else None,
+                "shortest_ms": round(float(min(v)), 1) if v else None,
+                "worst": _worst([p for p in bil if p.closure is not None], v, min)})
+    if row["worst"] is not None:  # the value in ms
+        row["worst"]["value_ms"] = row["worst"].pop("value_mm")
+    row["met"] = bool(v) and row["share_passing"] >= c["closure"]["share"]
+    out["closure"] = row
+
+    seen = [p for p in rnd if p.opening_aspect is not None]
+    ratios = [p.width_ratio for p in rnd if p.width_ratio is not None]
+    v = [p.opening_aspect for p in seen]
+    ok = [x >= c["round_opening"]["aspect_min"] for x in v]
+    out["round_opening"] = {
+        "n": len(v), "sealed": len(rnd) - len(v),
+        "share_passing": round(float(np.mean(ok)), 3) if v else None,
+        "median_aspect": round(float(np.median(v)), 2) if v else None,
+        "median_width_ratio": round(float(np.median(ratios)), 2) if ratios else None,
+        "met": (not v and bool(rnd)) or (bool(v) and float(np.mean(ok))
+                                            >= c["round_opening"]["share"])}
 
     if peak_speeds is not None:
         s = np.asarray(peak_speeds, float) * 1e3

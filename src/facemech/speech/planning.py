@@ -89,10 +89,11 @@ from .articulation import Articulation, as_articulation
 from .coarticulation import Gesture, controls_from_gestures, gestures
 from .phoneclass import PAUSE, phone_classes
 
-__all__ = ["BOUNDS", "GAIN", "JAW_MAX_DEG", "JAW_SPEED_MAX", "MAX_ITERATIONS", "PASS_LINES",
-           "PASS_WEIGHT", "PLAN_ITERATIONS", "SPEED_COST", "SPEED_LINE", "SPEED_TARGET",
-           "SPEED_TOLERANCE", "TARGETS", "Plan", "check_iterations", "jaw_rate_limit",
-           "plan_controls", "slew_limited"]
+__all__ = ["BOUNDS", "CLOSURE_WEIGHT", "GAIN", "JAW_MAX_DEG", "JAW_OPEN_MAX", "JAW_SPEED_MAX",
+           "MAX_ITERATIONS", "PASS_LINES", "PASS_WEIGHT", "PLAN_ITERATIONS", "SPEED_COST",
+           "SPEED_LINE", "SPEED_TARGET", "SPEED_TOLERANCE", "TARGETS", "Plan",
+           "check_iterations", "jaw_open_limit", "jaw_rate_limit", "plan_controls",
+           "slew_limited"]
 
 #: iterations of the planner by default (each one forward simulation after the first)
 PLAN_ITERATIONS = 8
@@ -104,13 +105,19 @@ TARGETS = {
     "open": {"aperture": 12e-3, "tolerance": 1.0e-3, "too_wide": 17e-3},
     "rounded": {"forward": 3e-3, "tolerance": 0.5e-3},
     "labiodental": {"distance": 0.0, "tolerance": 0.5e-3},
+    # a bilabial's seal held 70 ms (real closures: 70-120 ms in read speech), its shortfall
+    # weighed :data:`CLOSURE_WEIGHT` m per s (5 ms of tolerance)
+    "closure": {"duration": 0.070, "tolerance": 0.5e-3},
 }
+#: m of a phone's miss per s that a bilabial's seal falls short of its 70 ms: 10 ms short
+#: weigh as a millimetre
+CLOSURE_WEIGHT = 0.1
 #: bounds of the per-instance adjustments: scale factor, dominance factor, jaw offset (deg),
 #: factor on the dominance's rates, a labiodental's own scale factor, a bilabial's press
 #: (activity added to OOSM and OOIM, :attr:`~.coarticulation.Gesture.press`) and a bilabial's
 #: shift in time (s, :attr:`~.coarticulation.Gesture.shift`; later only, module doc)
 BOUNDS = {"scale": (0.5, 1.6), "dominance": (1.0, 30.0), "jaw_deg": (-4.0, 14.0),
-          "rate": (1.0, 3.0), "labiodental_scale": (0.0, 1.6), "press": (0.0, 0.8),
+          "rate": (0.4, 3.0), "labiodental_scale": (0.0, 1.6), "press": (0.0, 0.8),
           "shift_s": (0.0, 0.04), "jaw_rate": (1.0, 2.5)}
 #: deg, the largest jaw target a plan may ask for (the jaw's range is -5 to 35 deg)
 JAW_MAX_DEG = 24.0
@@ -120,7 +127,8 @@ GAIN = {"open_jaw_deg": 0.8, "open_dominance": 0.1, "bilabial_dominance": 1.0,
         "bilabial_scale": 0.15, "bilabial_press": 0.15, "neighbour_rate": 0.1,
         "rounded_scale": 0.2, "rounded_dominance": 0.5, "labiodental_jaw_deg": 0.5,
         "labiodental_dominance": 0.5, "labiodental_scale": 0.2, "bilabial_timing": 0.7,
-        "rounded_jaw_deg": 0.5, "speed_jaw_rate": 0.025, "speed_jaw_deg": 0.025}
+        "rounded_jaw_deg": 0.5, "speed_jaw_rate": 0.025, "speed_jaw_deg": 0.025,
+        "closure_rate": 0.12, "closure_dominance": 0.3}
 #: what a mm of a miss past the issue's pass line weighs in the plan's cost on top of its mm
 #: past the tolerance (:func:`_summary`: the iteration kept): a bilabial's gap beyond 0.5 mm,
 #: an open vowel's aperture under 8 mm, a rounded phone's lips under 2 mm forward, a
@@ -133,7 +141,8 @@ PASS_WEIGHT = 4.0
 #: bilabial's gap, an open vowel's shortfall from 12 mm (8 mm open), a rounded phone's from
 #: 3 mm (2 mm forward), a labiodental's distance (1 mm,
 #: :data:`facemech.analysis.visible_speech.CONTACT_MM`)
-PASS_LINES = {"bilabial": 0.5e-3, "open": 4.0e-3, "rounded": 1.0e-3, "labiodental": 1.0e-3}
+PASS_LINES = {"bilabial": 0.5e-3, "open": 4.0e-3, "rounded": 1.0e-3, "labiodental": 1.0e-3,
+              "closure": 0.020 * CLOSURE_WEIGHT}
 #: m/s, the peak lower-lip speed an utterance is planned for: the slowest of the real lower
 #: lips of issue 27's recordings (115-233 mm/s); an utterance whose lower lip stays slower gets
 #: a jaw less coarticulated (module doc)
@@ -153,12 +162,13 @@ SPEED_COST = 0.02
 #: s, how far beyond a bilabial's interval its closure is looked for (its timing, :func:`_timing`)
 TIMING_WINDOW_S = 0.06
 #: m/s, the fastest a plan moves the lower incisor's tip: the jaw is a kinematic drive, and the
-#: planner, left free, sped it to 400-800 mm/s (the fastest jaw of issue 27's recordings moves
-#: at 186, :data:`facemech.analysis.visible_speech.REAL_JAW_PEAK_MM_S`; real lower lips at
-#: 115-233). 250 mm/s, the top of issue 29's range for the lower lip, which rides the jaw: a
-#: faster jaw alone carried the lower lip past it (docs/visible-speech.md, "The jaw carries
-#: the lips")
-JAW_SPEED_MAX = 0.25
+#: planner, left free, sped it to 400-800 mm/s. 175 mm/s, under the fastest jaw of issue 27's
+#: recordings (186 mm/s, :data:`facemech.analysis.visible_speech.REAL_JAW_PEAK_MM_S`); the
+#: lips' own muscles carry the visemes' speed
+JAW_SPEED_MAX = 0.175
+#: m, the farthest a plan drops the lower incisor's tip below rest: real jaws open 10-20 mm
+#: in running speech; the angle is read off the face's jaw kinematics (:func:`jaw_open_limit`)
+JAW_OPEN_MAX = 0.018
 
 
 @dataclass(frozen=True)
@@ -246,6 +256,7 @@ def plan_controls(alignment: Alignment, model, *, params=None,
     phones = _phone_gestures(alignment)
     vowels = _stressed_vowels(alignment)
     jaw_limit = None if jaw_speed is None else jaw_rate_limit(model, params, jaw_speed)
+    jaw_top = jaw_open_limit(model, params, JAW_OPEN_MAX)
     t0 = _time.perf_counter()
     history, best, turns, step = [], None, {}, 1.0
     for it in range(iterations + 1):
@@ -253,7 +264,8 @@ def plan_controls(alignment: Alignment, model, *, params=None,
                                              frame_rate=params.frame_rate,
                                              strength=articulation.strength)
         if jaw_limit is not None:
-            jaw = np.maximum(slew_limited(jaw, jaw_limit / params.frame_rate), 0.0)
+            jaw = slew_limited(jaw, jaw_limit / params.frame_rate)
+        jaw = np.clip(jaw, 0.0, jaw_top)
         sim = simulate(model, act, jaw, params=params)
         misses = _measure(alignment, sim, phones)
         speed = peak_lower_lip_speed(sim.time, sim.positions, sim.model)
@@ -302,6 +314,21 @@ def jaw_rate_limit(model, params, speed: float) -> float:
     q = jaw_poses(a, params)
     p = [move_points(tip, pose, model.hinge_point, model.hinge_axis)[0] for pose in q]
     return float(speed * (a[1] - a[0]) / np.linalg.norm(p[1] - p[0]))
+
+
+def jaw_open_limit(model, params, drop: float) -> float:
+    """rad: the jaw angle that drops the lower incisor's tip by ``drop`` (m) below rest on
+    ``model`` under the preset's jaw kinematics (interpolated on a 0.25-degree grid up to
+    the jaw's 35 degrees)."""
+    from ..solvers.jaw import jaw_poses
+    from .mouth import incisor_drop
+
+    a = np.radians(np.arange(0.0, 35.01, 0.25))
+    d = incisor_drop(model, jaw_poses(a, params))
+    k = int(np.argmax(d >= drop)) if np.any(d >= drop) else len(a) - 1
+    if k == 0 or d[k] < drop:
+        return float(a[k])
+    return float(a[k - 1] + (a[k] - a[k - 1]) * (drop - d[k - 1]) / (d[k] - d[k - 1]))
 
 
 def slew_limited(x: np.ndarray, step: float) -> np.ndarray:
@@ -430,6 +457,8 @@ def _measure(alignment: Alignment, sim, phones: list[list[int]]) -> list[_Miss]:
         if m.group == "bilabial":
             err = m.lip_gap_mid - TARGETS["bilabial"]["gap"]
             timing = _timing(sim.time, gap, m.start, m.end)
+            short = CLOSURE_WEIGHT * max(TARGETS["closure"]["duration"] - m.closure, 0.0)
+            out.append(_Miss("closure", float(short), tuple(idx), m.classes))
         elif m.group == "open":
             if m.stress is None and alignment.notation == "espeak":
                 continue
@@ -584,6 +613,17 @@ def _update(items: list[Gesture], misses: list[_Miss], turns: dict,
                             # its lips closed before its middle: its dominance later
                             shift=_bounded(g.shift - step * GAIN["bilabial_timing"]
                                            * m.timing, "shift_s"))
+            elif m.group == "closure":
+                # a seal too short: the bilabial's dominance wider in time (its rates
+                # lower) and larger, so that it holds the lips and the jaw longer
+                g = replace(g, rate=_bounded(g.rate / (1 + GAIN["closure_rate"] * min(mm, 3.0)),
+                                             "rate"),
+                            lips_dominance=_bounded(
+                                g.lips_dominance * (1 + GAIN["closure_dominance"] * min(mm, 3.0)),
+                                "dominance"),
+                            jaw_dominance=_bounded(
+                                g.jaw_dominance * (1 + GAIN["closure_dominance"] * min(mm, 3.0)),
+                                "dominance"))
             elif m.group == "rounded":
                 if m.error < 0:
                     continue
