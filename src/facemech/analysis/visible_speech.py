@@ -43,7 +43,8 @@ __all__ = ["CLOSURE_MIN_S", "CONTACT_MM", "CRITERIA", "ROUND_ASPECT_MIN", "SEAL_
            "closure_duration", "OPEN_EXTRA_LABELS", "ROUNDED_LABELS", "PhoneMeasure",
            "REAL_JAW_PEAK_MM_S", "class_table", "incisor_distance", "incisor_speed",
            "lower_lip_speed", "lower_lip_top",
-           "measure_phones", "peak_lower_lip_speed", "summarize", "upper_incisor_edge"]
+           "measure_phones", "peak_lower_lip_speed", "summarize", "teeth_shown",
+           "upper_incisor_edge"]
 
 #: mm: the lower lip touches the upper incisors when it comes this close to their edge
 CONTACT_MM = 1.0
@@ -100,6 +101,8 @@ class PhoneMeasure:
         phones whose lips part there; :func:`facemech.speech.mouth.opening_width`), else None
     width_ratio : the mouth's corner-to-corner width at the phone's middle over its rest
         width (rounded phones)
+    upper_teeth, lower_teeth : m, how much of the upper and lower incisors shows between the
+        lips at the phone's middle (:func:`teeth_shown`; None without the jaw's poses)
     """
 
     label: str
@@ -119,12 +122,14 @@ class PhoneMeasure:
     closure: float | None = None
     opening_aspect: float | None = None
     width_ratio: float | None = None
+    upper_teeth: float | None = None
+    lower_teeth: float | None = None
 
     def to_dict(self) -> dict:
         """The row in mm (lengths rounded to 0.01 mm), times in s."""
         out = asdict(self)
         for k in ("lip_gap_mid", "lips_forward_mid", "aperture_max", "forward_max", "upper_forward",
-                  "lower_forward", "incisor_distance"):
+                  "lower_forward", "incisor_distance", "upper_teeth", "lower_teeth"):
             v = out.pop(k)
             out[f"{k}_mm"] = None if v is None else round(1e3 * v, 2)
         out["classes"] = list(self.classes)
@@ -223,6 +228,39 @@ def incisor_distance(model, positions: np.ndarray) -> np.ndarray:
     return float(d) if np.ndim(d) == 0 else d
 
 
+def teeth_shown(model, positions: np.ndarray, jaw_pose: np.ndarray) -> tuple[np.ndarray,
+                                                                             np.ndarray]:
+    """How much (m, vertically at the midline) of the upper and of the lower central incisors
+    shows between the lips: the part of each crown's labial face below the upper lip's edge
+    and above the lower lip's edge (the midline contact twins), the lower crown's also below
+    the upper incisors' edge (the overbite hides it behind them); 0 where none shows.
+
+    ``positions`` : (frames, nodes, 3) or (nodes, 3) m; ``jaw_pose`` : (frames, 3) or (3,)
+    (angle rad, shift_y m, shift_z m). Returns (upper, lower), each (frames,) or a float.
+    """
+    from ..geometry.teeth import lower_incisor_point
+    from ..solvers.jaw import move_points
+    from ..viz.dentition import LOWER, UPPER
+
+    p = np.asarray(positions, float)
+    single = p.ndim == 2
+    if single:
+        p = p[None]
+    poses = np.atleast_2d(np.asarray(jaw_pose, float))
+    up, lo, _ = midline_lip_pair(model)
+    top, bottom = p[:, up, 1], p[:, lo, 1]  # the lips' edges
+    edge = upper_incisor_edge(model)[1]
+    tip = lower_incisor_point(model)
+    low = np.array([move_points(tip, q, model.hinge_point, model.hinge_axis)[0, 1]
+                    for q in poses])
+    upper = np.clip(np.minimum(top, edge + UPPER[0].height) - np.maximum(bottom, edge), 0, None)
+    lower = np.clip(np.minimum(np.minimum(top, edge), low)
+                    - np.maximum(bottom, low - LOWER[0].height), 0, None)
+    if single:
+        return float(upper[0]), float(lower[0])
+    return upper, lower
+
+
 def lower_lip_speed(time: np.ndarray, positions: np.ndarray, model) -> np.ndarray:
     """Speed (m/s) of the landmark ``lower_lip_center`` per frame: the norm of its velocity
     by central differences (:func:`numpy.gradient`) over ``time`` (s)."""
@@ -287,7 +325,8 @@ def _window(time: np.ndarray, start: float, end: float) -> np.ndarray:
 
 
 def measure_phones(alignment, model, time: np.ndarray, positions: np.ndarray, *,
-                   voice: str | None = None) -> list[PhoneMeasure]:
+                   voice: str | None = None, jaw_pose: np.ndarray | None = None
+                   ) -> list[PhoneMeasure]:
     """Measure every phone of an alignment on a simulated face.
 
     Parameters
@@ -306,6 +345,9 @@ def measure_phones(alignment, model, time: np.ndarray, positions: np.ndarray, *,
     voice : str, optional
         The eSpeak voice (default: ``alignment.meta["voice"]``): eSpeak's ``0`` is open in
         en-us only.
+    jaw_pose : (frames, 3), optional
+        The jaw's poses (``sim.jaw_pose``): with them, the teeth shown at each phone's middle
+        (:func:`teeth_shown`).
 
     Returns
     -------
@@ -321,6 +363,7 @@ def measure_phones(alignment, model, time: np.ndarray, positions: np.ndarray, *,
     rest_width = float(np.linalg.norm(rest[lm["mouth_corner_left"]]
                                       - rest[lm["mouth_corner_right"]]))
     incisor_dist = incisor_distance(model, p)
+    shown = None if jaw_pose is None else teeth_shown(model, p, jaw_pose)
     phones = [(s, phone_classes(s.label, alignment.notation, source=alignment.source,
                                 voice=voice)) for s in alignment.phones]
     marked = reads_stress(alignment)
@@ -347,6 +390,9 @@ def measure_phones(alignment, model, time: np.ndarray, positions: np.ndarray, *,
             extra["width_ratio"] = 1.0 + float(m["width_change"][j]) / rest_width
             if gap[j] > 1e-3 * SEAL_MM and w > 0:
                 extra["opening_aspect"] = float(gap[j]) / w
+        if shown is not None:
+            j = int(np.argmin(np.abs(time - seg.mid)))
+            extra.update(upper_teeth=float(shown[0][j]), lower_teeth=float(shown[1][j]))
         between = (0 < k < len(phones) - 1 and groups[k - 1] == "bilabial"
                    and groups[k + 1] == "bilabial"
                    and phones[k - 1][0].end >= seg.start - 1e-9
