@@ -290,3 +290,30 @@ def test_a_rounded_openings_shape_is_its_height_over_its_width(face):
     r = measure_phones(al, face, t, q)[0]
     assert r.opening_aspect == pytest.approx(6e-3 / w, rel=0.02)
     assert r.width_ratio == pytest.approx(1.0)
+
+
+def test_the_teeth_shown_between_the_lips_and_the_lips_edge_at_the_incisors(face):
+    """Closed lips show no teeth and the lower lip's edge stands 3 mm above the upper incisors'
+    edge (at the stomion); its edge moved down 3 mm shows 3 mm of the upper incisors, the lower
+    ones still behind them; the jaw opened 3 degrees and the lip 6 mm down bares the lower
+    incisors under the upper ones."""
+    from facemech.analysis.visible_speech import teeth_shown
+    from facemech.viz.dentition import UPPER_EDGE_BELOW_STOMION
+
+    rest = face.rest_positions[: face.n_surface].copy()
+    assert teeth_shown(face, rest, np.zeros(3)) == (0.0, 0.0)
+    _, lo, _ = midline_lip_pair(face)
+    p = rest.copy()
+    p[lo, 1] -= UPPER_EDGE_BELOW_STOMION
+    up, low = teeth_shown(face, p, np.zeros(3))
+    assert up == pytest.approx(UPPER_EDGE_BELOW_STOMION, abs=1e-9) and low == 0.0
+    p[lo, 1] -= UPPER_EDGE_BELOW_STOMION
+    up, low = teeth_shown(face, p, np.array([np.radians(3.0), 0.0, 0.0]))
+    assert up == pytest.approx(UPPER_EDGE_BELOW_STOMION, abs=1e-9) and low > 1e-3
+    al = alignment(["f"], [0.1])
+    t, q = frames(face, al)
+    m = measure_phones(al, face, t, q, jaw_pose=np.zeros((len(t), 3)))[0]
+    assert m.lip_edge == pytest.approx(UPPER_EDGE_BELOW_STOMION, abs=1e-4)
+    assert m.upper_teeth == 0.0 and m.lower_teeth == 0.0
+    row = summarize([m])["labiodental_front"]
+    assert row["share_passing"] == 0.0 and not row["met"]

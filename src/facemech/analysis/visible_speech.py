@@ -103,6 +103,9 @@ class PhoneMeasure:
         width (rounded phones)
     upper_teeth, lower_teeth : m, how much of the upper and lower incisors shows between the
         lips at the phone's middle (:func:`teeth_shown`; None without the jaw's poses)
+    lip_edge : m, the lower lip's visible edge (its midline contact twin) above the upper
+        incisors' edge, as seen from the front, at the frame within the phone where it comes
+        nearest (labiodentals; negative: below)
     """
 
     label: str
@@ -124,12 +127,13 @@ class PhoneMeasure:
     width_ratio: float | None = None
     upper_teeth: float | None = None
     lower_teeth: float | None = None
+    lip_edge: float | None = None
 
     def to_dict(self) -> dict:
         """The row in mm (lengths rounded to 0.01 mm), times in s."""
         out = asdict(self)
         for k in ("lip_gap_mid", "lips_forward_mid", "aperture_max", "forward_max", "upper_forward",
-                  "lower_forward", "incisor_distance", "upper_teeth", "lower_teeth"):
+                  "lower_forward", "incisor_distance", "upper_teeth", "lower_teeth", "lip_edge"):
             v = out.pop(k)
             out[f"{k}_mm"] = None if v is None else round(1e3 * v, 2)
         out["classes"] = list(self.classes)
@@ -364,6 +368,7 @@ def measure_phones(alignment, model, time: np.ndarray, positions: np.ndarray, *,
                                       - rest[lm["mouth_corner_right"]]))
     incisor_dist = incisor_distance(model, p)
     shown = None if jaw_pose is None else teeth_shown(model, p, jaw_pose)
+    lip_edge = lower_lip_top(model, p)[0][:, 1] - upper_incisor_edge(model)[1]
     phones = [(s, phone_classes(s.label, alignment.notation, source=alignment.source,
                                 voice=voice)) for s in alignment.phones]
     marked = reads_stress(alignment)
@@ -382,6 +387,8 @@ def measure_phones(alignment, model, time: np.ndarray, positions: np.ndarray, *,
                          lower_forward=float(m["lower_forward"][j]))
         elif group == "labiodental":
             extra["incisor_distance"] = float(incisor_dist[idx].min())
+            dy = lip_edge[idx]
+            extra["lip_edge"] = float(dy[np.argmin(np.abs(dy))])
         if group == "bilabial":
             extra["closure"] = closure_duration(time, gap, seg.start, seg.end)
         elif group == "rounded":
@@ -486,6 +493,18 @@ def summarize(phones: list[PhoneMeasure], peak_speeds: list[float] | None = None
         row["worst"]["value_ms"] = row["worst"].pop("value_mm")
     row["met"] = bool(v) and row["share_passing"] >= c["closure"]["share"]
     out["closure"] = row
+
+    front = [p for p in lab if p.lip_edge is not None]
+    v = [1e3 * abs(p.lip_edge) for p in front]
+    ok = [x <= c["labiodental"]["contact_mm"] and (p.lower_teeth is None or
+                                                    1e3 * p.lower_teeth <= SEAL_MM)
+          for x, p in zip(v, front, strict=True)]
+    row = _stats(v, ok)
+    row["worst"] = _worst(front, v, max)
+    row["lower_teeth_hidden"] = sum(1 for p in front if p.lower_teeth is not None
+                                    and 1e3 * p.lower_teeth <= SEAL_MM)
+    row["met"] = bool(front) and row["share_passing"] >= c["labiodental"]["share"]
+    out["labiodental_front"] = row
 
     seen = [p for p in rnd if p.opening_aspect is not None]
     ratios = [p.width_ratio for p in rnd if p.width_ratio is not None]

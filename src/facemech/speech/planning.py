@@ -117,7 +117,7 @@ CLOSURE_WEIGHT = 0.1
 #: (activity added to OOSM and OOIM, :attr:`~.coarticulation.Gesture.press`) and a bilabial's
 #: shift in time (s, :attr:`~.coarticulation.Gesture.shift`; later only, module doc)
 BOUNDS = {"scale": (0.5, 1.6), "dominance": (1.0, 30.0), "jaw_deg": (-4.0, 14.0),
-          "rate": (0.4, 3.0), "labiodental_scale": (0.0, 1.6), "press": (0.0, 0.8),
+          "rate": (0.4, 3.0), "labiodental_scale": (0.0, 2.5), "press": (0.0, 0.8),
           "shift_s": (0.0, 0.04), "jaw_rate": (1.0, 2.5)}
 #: deg, the largest jaw target a plan may ask for (the jaw's range is -5 to 35 deg)
 JAW_MAX_DEG = 24.0
@@ -257,6 +257,7 @@ def plan_controls(alignment: Alignment, model, *, params=None,
     vowels = _stressed_vowels(alignment)
     jaw_limit = None if jaw_speed is None else jaw_rate_limit(model, params, jaw_speed)
     jaw_top = jaw_open_limit(model, params, JAW_OPEN_MAX)
+    labiodental_jaw = jaw_open_limit(model, params, overbite(model))
     t0 = _time.perf_counter()
     history, best, turns, step = [], None, {}, 1.0
     for it in range(iterations + 1):
@@ -286,7 +287,8 @@ def plan_controls(alignment: Alignment, model, *, params=None,
                 step *= 0.5
                 misses = best[7]
             items = _update(best[6], misses, turns, step,
-                            speed_short=best[0]["speed_short_mm_s"], vowels=vowels)
+                            speed_short=best[0]["speed_short_mm_s"], vowels=vowels,
+                            labiodental_jaw=labiodental_jaw)
     if progress is not None and len(history) < iterations + 1:
         progress(iterations + 1, iterations + 1)  # stopped early: done
     summary, kept, t, act, jaw, sim, items, _ = best
@@ -314,6 +316,16 @@ def jaw_rate_limit(model, params, speed: float) -> float:
     q = jaw_poses(a, params)
     p = [move_points(tip, pose, model.hinge_point, model.hinge_axis)[0] for pose in q]
     return float(speed * (a[1] - a[0]) / np.linalg.norm(p[1] - p[0]))
+
+
+def overbite(model) -> float:
+    """m, how far the lower incisors' edge stands above the upper incisors' edge at rest (as
+    the renderer draws them): the jaw may drop the lower edge this far at a labiodental and
+    keep the lower incisors hidden behind the upper ones."""
+    from ..analysis.visible_speech import upper_incisor_edge
+    from ..geometry.teeth import lower_incisor_point
+
+    return float(max(lower_incisor_point(model)[1] - upper_incisor_edge(model)[1], 0.0))
 
 
 def jaw_open_limit(model, params, drop: float) -> float:
@@ -470,9 +482,13 @@ def _measure(alignment: Alignment, sim, phones: list[list[int]]) -> list[_Miss]:
         elif m.group == "rounded":
             err = TARGETS["rounded"]["forward"] - m.forward_max
         elif m.group == "labiodental":
-            k = (sim.time >= m.start) & (sim.time <= m.end)
-            above = float(np.median(front[k, 1])) > edge[1] if k.any() else True
-            err = m.incisor_distance if above else -m.incisor_distance
+            # the lower lip's visible edge at the incisors' edge, as seen from the front: the
+            # frame within the phone where it comes nearest, signed (positive: above)
+            k = np.nonzero((sim.time >= m.start) & (sim.time <= m.end))[0]
+            if k.size == 0:
+                k = np.array([int(np.argmin(np.abs(sim.time - 0.5 * (m.start + m.end))))])
+            dy = front[k, 1] - edge[1]
+            err = float(dy[np.argmin(np.abs(dy))])
         else:
             continue
         out.append(_Miss(m.group, float(err), tuple(idx), m.classes, m.stress is not None,
@@ -562,7 +578,8 @@ def _sharpen(items: list[Gesture], k: int, own: tuple[int, ...], mm: float,
 
 def _update(items: list[Gesture], misses: list[_Miss], turns: dict,
             step: float = 1.0, speed_short: float = 0.0,
-            vowels: tuple[int, ...] = ()) -> list[Gesture]:
+            vowels: tuple[int, ...] = (), labiodental_jaw: float | None = None
+            ) -> list[Gesture]:
     """The gestures after one step of learning from the misses (module doc), the gains times
     ``step`` (halved after an iteration that did worse than the best). A labiodental's jaw
     and own gesture move in the direction its error's sign says (the lip's top above the
@@ -572,7 +589,8 @@ def _update(items: list[Gesture], misses: list[_Miss], turns: dict,
     tolerance) makes every gesture's jaw less coarticulated, its jaw's dominance rates growing
     by ``GAIN["speed_jaw_rate"]`` per mm/s (:attr:`~.coarticulation.Gesture.jaw_rate`), and
     opens the jaw targets of the gestures ``vowels`` (the stressed vowels',
-    :func:`_stressed_vowels`) by ``GAIN["speed_jaw_deg"]`` degrees per mm/s."""
+    :func:`_stressed_vowels`) by ``GAIN["speed_jaw_deg"]`` degrees per mm/s. A labiodental's
+    jaw target stays at or under ``labiodental_jaw`` (rad; None: free)."""
     out = list(items)
     if speed_short > 0.0:
         factor = 1.0 + step * GAIN["speed_jaw_rate"] * speed_short
@@ -647,8 +665,12 @@ def _update(items: list[Gesture], misses: list[_Miss], turns: dict,
                 # while the lip's top is above the edge and shrinks while below; its lips'
                 # dominance grows, so that its neighbours' lips give way
                 lip = 1.0 + sign * share * GAIN["labiodental_scale"] * min(mm, 4.0)
-                g = replace(g, jaw=_jaw_offset(g, sign * share * GAIN["labiodental_jaw_deg"]
-                                               * mm),
+                jaw = _jaw_offset(g, sign * share * GAIN["labiodental_jaw_deg"] * mm)
+                if labiodental_jaw is not None:  # the lower incisors stay behind the upper
+                    from .visemes import VISEMES
+
+                    jaw = min(jaw, labiodental_jaw - VISEMES[g.cls].jaw * g.scale)
+                g = replace(g, jaw=jaw,
                             jaw_dominance=_bounded(g.jaw_dominance * grow, "dominance"),
                             lips_dominance=_bounded(g.lips_dominance * grow, "dominance"),
                             scale=_bounded(g.scale * max(lip, 0.1), "labiodental_scale"))
