@@ -104,8 +104,8 @@ class PhoneMeasure:
     upper_teeth, lower_teeth : m, how much of the upper and lower incisors shows between the
         lips at the phone's middle (:func:`teeth_shown`; None without the jaw's poses)
     lip_edge : m, the lower lip's visible edge (its midline contact twin) above the upper
-        incisors' edge, as seen from the front, at the frame within the phone where it comes
-        nearest (labiodentals; negative: below)
+        incisors' edge, as seen from the front, at the phone's middle (labiodentals;
+        negative: below)
     """
 
     label: str
@@ -387,8 +387,7 @@ def measure_phones(alignment, model, time: np.ndarray, positions: np.ndarray, *,
                          lower_forward=float(m["lower_forward"][j]))
         elif group == "labiodental":
             extra["incisor_distance"] = float(incisor_dist[idx].min())
-            dy = lip_edge[idx]
-            extra["lip_edge"] = float(dy[np.argmin(np.abs(dy))])
+            extra["lip_edge"] = float(np.interp(seg.mid, time, lip_edge))
         if group == "bilabial":
             extra["closure"] = closure_duration(time, gap, seg.start, seg.end)
         elif group == "rounded":

@@ -128,7 +128,7 @@ GAIN = {"open_jaw_deg": 0.8, "open_dominance": 0.1, "bilabial_dominance": 1.0,
         "rounded_scale": 0.2, "rounded_dominance": 0.5, "labiodental_jaw_deg": 0.5,
         "labiodental_dominance": 0.5, "labiodental_scale": 0.2, "bilabial_timing": 0.7,
         "rounded_jaw_deg": 0.5, "speed_jaw_rate": 0.025, "speed_jaw_deg": 0.025,
-        "closure_rate": 0.12, "closure_dominance": 0.3}
+        "closure_rate": 0.12, "closure_dominance": 0.3, "open_scale": 0.05}
 #: what a mm of a miss past the issue's pass line weighs in the plan's cost on top of its mm
 #: past the tolerance (:func:`_summary`: the iteration kept): a bilabial's gap beyond 0.5 mm,
 #: an open vowel's aperture under 8 mm, a rounded phone's lips under 2 mm forward, a
@@ -482,13 +482,9 @@ def _measure(alignment: Alignment, sim, phones: list[list[int]]) -> list[_Miss]:
         elif m.group == "rounded":
             err = TARGETS["rounded"]["forward"] - m.forward_max
         elif m.group == "labiodental":
-            # the lower lip's visible edge at the incisors' edge, as seen from the front: the
-            # frame within the phone where it comes nearest, signed (positive: above)
-            k = np.nonzero((sim.time >= m.start) & (sim.time <= m.end))[0]
-            if k.size == 0:
-                k = np.array([int(np.argmin(np.abs(sim.time - 0.5 * (m.start + m.end))))])
-            dy = front[k, 1] - edge[1]
-            err = float(dy[np.argmin(np.abs(dy))])
+            # the lower lip's visible edge at the incisors' edge, as seen from the front, at
+            # the phone's middle, signed (positive: above)
+            err = float(np.interp(0.5 * (m.start + m.end), sim.time, front[:, 1]) - edge[1])
         else:
             continue
         out.append(_Miss(m.group, float(err), tuple(idx), m.classes, m.stress is not None,
@@ -615,6 +611,9 @@ def _update(items: list[Gesture], misses: list[_Miss], turns: dict,
                     g = replace(g, lips_dominance=_bounded(g.lips_dominance * grow, "dominance"),
                                 jaw_dominance=_bounded(g.jaw_dominance * grow, "dominance"))
                     g = replace(g, jaw=_jaw_offset(g, GAIN["open_jaw_deg"] * mm))
+                    # the lips' own opening too, where the jaw is held to its limits
+                    g = replace(g, scale=_bounded(g.scale * (1 + GAIN["open_scale"]
+                                                             * min(mm, 4.0)), "scale"))
                 else:
                     g = replace(g, jaw=_jaw_offset(g, -0.5 * GAIN["open_jaw_deg"] * mm))
             elif m.group == "bilabial":
