@@ -23,7 +23,9 @@ from facemech.speech.coarticulation import (
 from facemech.speech.phoneclass import phone_classes
 from facemech.speech.planning import (
     BOUNDS,
+    CLOSURE_WEIGHT,
     GAIN,
+    JAW_OPEN_MAX,
     JAW_SPEED_MAX,
     PASS_LINES,
     PASS_WEIGHT,
@@ -36,7 +38,9 @@ from facemech.speech.planning import (
     _timing,
     _update,
     check_iterations,
+    jaw_open_limit,
     jaw_rate_limit,
+    overbite,
     plan_controls,
     slew_limited,
 )
@@ -382,7 +386,7 @@ def test_the_plans_cost_weighs_the_misses_past_the_pass_lines():
     the issue's pass line (a bilabial 0.5 mm apart, an open vowel 8 mm open, a rounded phone
     2 mm forward, a labiodental 1 mm from the incisors); ``cost_mm`` keeps the plain sum."""
     assert PASS_LINES == {"bilabial": 0.5e-3, "open": 4.0e-3, "rounded": 1.0e-3,
-                          "labiodental": 1.0e-3}
+                          "labiodental": 1.0e-3, "closure": 0.020 * CLOSURE_WEIGHT}
     got = _summary([_Miss("bilabial", 1.0e-3, (0,), ("bilabial",)),  # 0.8 beyond, 0.5 past
                     _Miss("open", 6.0e-3, (1,), ("open",)),  # 6 mm open: 5 beyond, 2 past
                     _Miss("open", -2.0e-3, (2,), ("open",)),  # 19 mm: 1 beyond, none past
@@ -414,3 +418,45 @@ def test_the_command_lines_default_is_the_planners():
 
     assert GROUPS["articulation"]["plan_iterations"] == (int, PLAN_ITERATIONS)
     assert GROUPS["articulation"]["plan"] == (bool, True)
+
+
+def test_a_short_closure_widens_and_raises_its_bilabials_dominance():
+    """A bilabial sealed for 40 ms (30 short of the 70 asked: 3 mm of miss at 0.1 mm per ms,
+    2.5 beyond the tolerance) gets lower dominance rates (wider in time) and larger
+    magnitudes, lips and jaw; its neighbours are left as they are; one sealed 68 ms is left
+    alone."""
+    items = [Gesture("open", 0.2, 0.3), Gesture("bilabial", 0.3, 0.36), Gesture("open", 0.36, 0.5)]
+    miss = _Miss("closure", CLOSURE_WEIGHT * 0.030, (1,), ("bilabial",))
+    a, b, c = _update(items, [miss], {}, 1.0)
+    assert b.rate == pytest.approx(1.0 / (1 + GAIN["closure_rate"] * 2.5))
+    assert b.lips_dominance == pytest.approx(1 + GAIN["closure_dominance"] * 2.5)
+    assert b.jaw_dominance == b.lips_dominance
+    assert (a, c) == (items[0], items[2])
+    assert _update(items, [_Miss("closure", CLOSURE_WEIGHT * 0.002, (1,), ("bilabial",))],
+                   {}, 1.0) == items
+    assert BOUNDS["rate"][0] < 1.0  # a bilabial's own rates may go below the table's
+
+
+def test_the_jaws_limits_are_read_off_the_face(coarse):
+    """The opening limit is the angle that drops the lower incisor by JAW_OPEN_MAX (18 mm)
+    under the preset's jaw kinematics; a labiodental's jaw is held within the overbite (3.5 mm
+    as the renderer draws the teeth), and the plan's jaw target never passes either limit."""
+    from facemech.params import preset
+    from facemech.solvers.jaw import jaw_poses
+    from facemech.speech.mouth import incisor_drop
+
+    params = preset("anatomical")
+    top = jaw_open_limit(coarse, params, JAW_OPEN_MAX)
+    assert 8.0 < np.degrees(top) < 20.0
+    assert incisor_drop(coarse, jaw_poses(np.array([top]), params))[0] == pytest.approx(
+        JAW_OPEN_MAX, abs=0.05e-3)
+    assert overbite(coarse) == pytest.approx(3.5e-3, abs=1e-6)
+    lab = jaw_open_limit(coarse, params, overbite(coarse))
+    assert 1.0 < np.degrees(lab) < 3.0
+    items = [Gesture("labiodental", 0.3, 0.4)]
+    far = _Miss("labiodental", 5e-3, (0,), ("labiodental",))  # the lip's edge 5 mm above
+    g = items
+    for _ in range(5):
+        g = _update(g, [far], {}, 1.0, labiodental_jaw=lab)
+    assert VISEMES["labiodental"].jaw * g[0].scale + g[0].jaw <= lab + 1e-12
+    assert g[0].scale > 1.0  # the lip's own gesture grows instead
