@@ -34,6 +34,7 @@ from facemech.speech.planning import (
     SPEED_TARGET,
     SPEED_TOLERANCE,
     _Miss,
+    _settled,
     _summary,
     _timing,
     _update,
@@ -460,3 +461,17 @@ def test_the_jaws_limits_are_read_off_the_face(coarse):
         g = _update(g, [far], {}, 1.0, labiodental_jaw=lab)
     assert VISEMES["labiodental"].jaw * g[0].scale + g[0].jaw <= lab + 1e-12
     assert g[0].scale > 1.0  # the lip's own gesture grows instead
+
+
+def test_the_plan_stops_once_settled():
+    """Every phone past its pass line and the last two iterations cutting the best cost by
+    less than a tenth: stop; a phone short of its line, or a large gain, or fewer than three
+    simulations: go on."""
+    def h(cost, past=0.0, short=0.0):
+        return {"cost": cost, "past_mm": past, "speed_short_mm_s": short}
+
+    assert _settled([h(10), h(5), h(4.8), h(4.7)], h(4.7))
+    assert not _settled([h(10), h(5), h(3)], h(3))
+    assert not _settled([h(10), h(5), h(4.8), h(4.7, past=0.2)], h(4.7, past=0.2))
+    assert not _settled([h(10), h(9.9)], h(9.9))
+    assert not _settled([h(10), h(5), h(4.8), h(4.7, short=3.0)], h(4.7, short=3.0))

@@ -159,6 +159,9 @@ SPEED_LINE = 0.100
 #: phone's pass line is not traded for a little speed (a bilabial 1 mm apart costs
 #: 0.8 + 4 x 0.5 = 2.8 mm)
 SPEED_COST = 0.02
+#: the plan stops once every phone meets its pass line and the last two iterations cut the
+#: best cost by less than this share (each iteration is one forward simulation)
+SETTLED_GAIN = 0.10
 #: s, how far beyond a bilabial's interval its closure is looked for (its timing, :func:`_timing`)
 TIMING_WINDOW_S = 0.06
 #: m/s, the fastest a plan moves the lower incisor's tip: the jaw is a kinematic drive, and the
@@ -282,6 +285,8 @@ def plan_controls(alignment: Alignment, model, *, params=None,
             progress(it + 1, iterations + 1)
         if summary["cost"] == 0.0:
             break  # every phone within its tolerance: nothing to learn
+        if _settled(history, best[0]):
+            break  # every phone past its pass line, and the last steps gained little
         if it < iterations:
             if not better:  # overshot: back to the best controls, half the step
                 step *= 0.5
@@ -392,6 +397,16 @@ def _slew_window(x: np.ndarray, step: float) -> np.ndarray:
     hi = np.full(n, step)
     lo[0], hi[0] = -np.inf, np.inf
     return a @ lsq_linear(a, x, bounds=(lo, hi), method="bvls").x
+
+
+def _settled(history: list[dict], best: dict) -> bool:
+    """The plan has settled: the best iteration leaves no phone short of its pass line
+    (:data:`PASS_LINES`) and the lip fast enough, and the best cost of the last two
+    iterations is within :data:`SETTLED_GAIN` of the best cost two iterations before."""
+    if best["past_mm"] > 0.0 or best["speed_short_mm_s"] > 0.0 or len(history) < 3:
+        return False
+    before = min(h["cost"] for h in history[:-2])
+    return best["cost"] >= (1.0 - SETTLED_GAIN) * before
 
 
 def _adjusted(g: Gesture) -> bool:
@@ -542,6 +557,7 @@ def _summary(misses: list[_Miss], speed: float | None = None) -> dict:
     below = 0.0 if speed is None else max(1e3 * (SPEED_LINE - speed), 0.0)
     out["speed_short_mm_s"] = round(short, 1)
     out["cost_mm"] = round(cost, 3)
+    out["past_mm"] = round(past + below, 3)
     out["cost"] = round(cost + PASS_WEIGHT * past + SPEED_COST * (short + PASS_WEIGHT * below),
                         3)
     return out
