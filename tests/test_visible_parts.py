@@ -43,3 +43,21 @@ def test_closed_lips_hide_the_inside_and_an_open_mouth_shows_teeth_and_tongue(fa
     open_ = part_pixels(mouth_renderer, p, np.radians(10.0))
     assert open_["upper_teeth"] > 50 and open_["tongue"] > 50, open_
     assert sum(open_.values()) == pytest.approx(120 * 160, rel=0.01)  # every pixel once
+
+
+def test_the_gum_stays_behind_a_chin_pressed_in(face, mouth_renderer):
+    """The mentalis presses the skin under the lower lip in (2.5 mm here, over the middle 30
+    mm): the lower gum stays behind it (its fold into the lip once showed through as pink
+    specks)."""
+    from facemech.viz.visible_parts import part_pixels
+
+    rest = face.rest_positions[: face.n_surface]
+    st = rest[face.landmarks["stomion"]]
+    depth = st[1] - rest[:, 1]
+    x = np.abs(rest[:, 0] - st[0])
+    push = 2.5e-3 * np.clip((15e-3 - x) / 8e-3, 0.0, 1.0) * np.clip((depth - 0.006) / 0.004,
+                                                                      0.0, 1.0) \
+        * np.clip((0.035 - depth) / 0.01, 0.0, 1.0)
+    p = rest.copy()
+    p[:, 2] -= push
+    assert part_pixels(mouth_renderer, p).get("lower_gum", 0.0) == 0.0

@@ -215,6 +215,9 @@ def _gingiva(slots, frame, edge_y: float, sign: float, upper: bool) -> Part:
     # fold into the lip (the vestibule), turning outwards to meet the lip's inside
     heights = [0.0, 0.0004, 0.0012, 0.003, 0.008, 0.012, 0.015]
     outward = [-0.0002, 0.0004, 0.0007, 0.0008, 0.0006, 0.0016, 0.0045]
+    if not upper:  # the chin's skin presses in over it (the mentalis): no fold outwards,
+        # which showed as pink specks through the skin under the lower lip
+        outward = [-0.0002, 0.0004, 0.0007, 0.0008, 0.0004, 0.0, -0.0005]
     p = _at(cols, s, pts)
     n = _at(cols, s, nrm)
     n /= np.linalg.norm(n, axis=1, keepdims=True)
