@@ -165,10 +165,11 @@ SETTLED_GAIN = 0.10
 #: s, how far beyond a bilabial's interval its closure is looked for (its timing, :func:`_timing`)
 TIMING_WINDOW_S = 0.06
 #: m/s, the fastest a plan moves the lower incisor's tip: the jaw is a kinematic drive, and the
-#: planner, left free, sped it to 400-800 mm/s. 175 mm/s, under the fastest jaw of issue 27's
-#: recordings (186 mm/s, :data:`facemech.analysis.visible_speech.REAL_JAW_PEAK_MM_S`); the
-#: lips' own muscles carry the visemes' speed
-JAW_SPEED_MAX = 0.175
+#: planner, left free, sped it to 400-800 mm/s. 180 mm/s: with the 2 % that central
+#: differences of the slew-limited series add, under the fastest jaw of issue 27's recordings
+#: (186 mm/s, :data:`facemech.analysis.visible_speech.REAL_JAW_PEAK_MM_S`); the lips' own
+#: muscles carry the visemes' speed
+JAW_SPEED_MAX = 0.180
 #: m, the farthest a plan drops the lower incisor's tip below rest: real jaws open 10-20 mm
 #: in running speech; the angle is read off the face's jaw kinematics (:func:`jaw_open_limit`)
 JAW_OPEN_MAX = 0.018

@@ -91,7 +91,10 @@ VISEMES: MappingProxyType = MappingProxyType({
     "close_front_lax": _v(4.25, 4.5, 1.75, 12.0, 15.0, ZYG=0.3, RIS=0.3, LAO=0.075,
                           LLS=0.1, DLI=0.11),
     "close_back_rounded": _v(2.5, 24.0, 1.5, 15.0, 15.0, OOS=0.9, OOI=1.0, MEN=0.5),
-    "open": _v(12.0, 4.0, 8.0, 12.0, 15.0, DLI=0.3),
+    # /ɑ æ a/: the lips' own opening (DLI, LLS) beside the jaw's, so that a short open vowel
+    # under the jaw's speed limit still opens and shows the upper incisors (held: 21 mm
+    # open, 5.7 mm of the upper incisors showing; with DLI 0.3 alone 15.7 and 1.8 mm)
+    "open": _v(12.0, 4.0, 8.0, 12.0, 15.0, DLI=0.4, LLS=0.2),
     "open_rounded": _v(11.0, 4.0, 8.0, 12.0, 15.0, OOS=0.25, OOI=0.25),
     "mid": _v(6.0, 1.0, 2.0, 12.0, 15.0, DLI=0.1),
     "mid_rounded": _v(6.5, 2.0, 2.0, 12.0, 15.0, OOS=0.45, OOI=0.45),
