@@ -263,7 +263,7 @@ def test_the_plan_opens_the_vowel_between_bilabials_and_closes_them(face):
     1.16 mm apart at 4 iterations, 0.55 at 8, docs/visible-speech.md. 2026-11-29, the jaw
     free: 12.0, 0.0 and 0.0 mm. Before the bilabials' shift in time (`Gesture.shift`) the /m/
     stayed 0.98 mm apart: its lips closed and opened again before its middle.)"""
-    plan = plan_controls(MAP, face, iterations=4)
+    plan = plan_controls(MAP, face, iterations=8)
     assert plan.activity.min() >= 0.0 and plan.activity.max() <= 1.0
     assert plan.jaw.min() >= 0.0 and np.degrees(plan.jaw.max()) <= 35.0
     first = plan.record["misses"][0]
