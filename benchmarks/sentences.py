@@ -14,6 +14,11 @@ Prints JSON: the settings; ``criteria`` (the issue's); ``summary``
 the worst phone, whether the criterion is met; the sentences' peak lower-lip speeds;
 ``incisor_speed``: the sentences' peak lower-incisor speeds, the jaw's, and how many exceed the
 fastest jaw of issue 27's real recordings, 186 mm/s);
+``incisor_opening``: the sentences' largest lower-incisor drops against a real jaw's 20 mm;
+the summary's ``closure``, ``labiodental_front`` and ``round_opening`` rows: the bilabials'
+seals, the lower lip's visible edge at the upper incisors with the lower incisors hidden, the
+rounded openings' shape (the teeth shown measured with the jaw's poses); each sentence's
+phones also go to stderr as a JSON line as it is done;
 ``classes`` (:func:`~facemech.analysis.visible_speech.class_table`: lip gap and protrusion at
 the phones' middles per articulatory class); ``sentences`` (per sentence: the duration, the
 peak lower-lip and lower-incisor speeds, the wall time, the plan's simulations and kept
