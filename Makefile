@@ -78,8 +78,8 @@ test-lowest: $(LOW_STAMP) chromium
 # results must not hang on the last bit of the BLAS (docs/reproducibility.md)
 PORTABLE_TESTS := $(addprefix tests/inverse/test_,inverse.py inversion_rolls.py inversion_steps.py \
 	inversion_trust.py calibrate.py control_pick.py jaw_bone.py) \
-	$(addprefix tests/analysis/test_,regions.py realism.py visible_speech.py) \
-	$(addprefix tests/speech/test_,speak.py visemes.py planning.py) \
+	$(addprefix tests/analysis/test_,regions.py realism.py) \
+	$(addprefix tests/speech/test_,speak.py visemes.py planning.py visible_speech.py) \
 	tests/workflows/test_subject.py tests/docs/test_docs_tables.py tests/physics/test_lip_reach.py \
 	tests/solvers/test_contacts.py
 CORETYPE ?= Prescott

@@ -14,6 +14,11 @@ Prints JSON: the settings; ``criteria`` (the issue's); ``summary``
 the worst phone, whether the criterion is met; the sentences' peak lower-lip speeds;
 ``incisor_speed``: the sentences' peak lower-incisor speeds, the jaw's, and how many exceed the
 fastest jaw of issue 27's real recordings, 186 mm/s);
+``incisor_opening``: the sentences' largest lower-incisor drops against a real jaw's 20 mm;
+the summary's ``closure``, ``labiodental_front`` and ``round_opening`` rows: the bilabials'
+seals, the lower lip's visible edge at the upper incisors with the lower incisors hidden, the
+rounded openings' shape (the teeth shown measured with the jaw's poses); each sentence's
+phones also go to stderr as a JSON line as it is done;
 ``classes`` (:func:`~facemech.speech.visible_speech.class_table`: lip gap and protrusion at
 the phones' middles per articulatory class); ``sentences`` (per sentence: the duration, the
 peak lower-lip and lower-incisor speeds, the wall time, the plan's simulations and kept
@@ -144,6 +149,7 @@ def spoken_phones(text: str, *, voice: str = "en-us", rate_wpm: int = ESPEAK_DEF
     ``plan``, the lower incisor's peak speed m/s). ``plan``: as
     :func:`~facemech.workflows.speak.speak`'s."""
     from facemech.speech.alive import Liveliness
+    from facemech.speech.mouth import incisor_drop
     from facemech.speech.visible_speech import (
         incisor_speed,
         measure_phones,
@@ -155,10 +161,13 @@ def spoken_phones(text: str, *, voice: str = "en-us", rate_wpm: int = ESPEAK_DEF
         sp = speak(tmp, text, voice=voice, rate_wpm=rate_wpm, face=face, plan=plan,
                    video=False, alive=Liveliness.off(), preset=preset)
     sim = sp.simulation
-    phones = measure_phones(sp.alignment, sim.model, sim.time, sim.positions, voice=voice)
+    phones = measure_phones(sp.alignment, sim.model, sim.time, sim.positions, voice=voice,
+                            jaw_pose=sim.jaw_pose)
     jaw = float(incisor_speed(sim.time, sim.jaw_pose, sim.model).max())
+    planned = {**sp.manifest["plan"],
+               "incisor_opening_m": float(incisor_drop(sim.model, sim.jaw_pose).max())}
     return phones, peak_lower_lip_speed(sim.time, sim.positions, sim.model), \
-        float(sp.alignment.duration), sp.manifest["plan"], jaw
+        float(sp.alignment.duration), planned, jaw
 
 
 def _jaw_row(peaks, real_mm_s: float) -> dict:
@@ -168,6 +177,20 @@ def _jaw_row(peaks, real_mm_s: float) -> dict:
     return {"n": int(v.size), "min_mm_s": round(float(v.min()), 1),
             "median_mm_s": round(float(np.median(v)), 1), "max_mm_s": round(float(v.max()), 1),
             "real_peak_mm_s": real_mm_s, "faster_than_real": int((v > real_mm_s).sum())}
+
+
+#: mm, the farthest a real jaw drops the lower incisor in running speech (issue 53: <= 20 mm in
+#: >= 90 % of sentences)
+REAL_JAW_OPENING_MM = 20.0
+
+
+def _opening_row(openings) -> dict:
+    """The utterances' largest lower-incisor drops (m) in mm: min, median, max and the share
+    within :data:`REAL_JAW_OPENING_MM`."""
+    v = 1e3 * np.asarray(openings, float)
+    return {"n": int(v.size), "min_mm": round(float(v.min()), 1),
+            "median_mm": round(float(np.median(v)), 1), "max_mm": round(float(v.max()), 1),
+            "share_within": round(float(np.mean(v <= REAL_JAW_OPENING_MM)), 3)}
 
 
 def main(argv=None) -> int:
@@ -214,11 +237,14 @@ def main(argv=None) -> int:
         rows.append({"text": text, "duration_s": round(dur, 3), "phones": len(ph),
                      "peak_lower_lip_speed_mm_s": round(1e3 * peak, 1),
                      "peak_incisor_speed_mm_s": round(1e3 * jaw, 1),
+                     "incisor_opening_mm": round(1e3 * planned["incisor_opening_m"], 1),
                      "wall_s": round(wall, 1),
                      "plan_simulations": planned.get("simulations"),
                      "plan_kept_iteration": planned.get("kept_iteration")})
         print(f"[{k}/{len(texts)}] {wall:5.1f} s  peak {1e3 * peak:5.1f} mm/s  "
               f"incisor {1e3 * jaw:5.1f} mm/s  {text}", file=sys.stderr, flush=True)
+        print(json.dumps({"text": text, "phones": [p.to_dict() for p in ph], **rows[-1]}),
+              file=sys.stderr, flush=True)  # each sentence's rows as it is done
     out = {"voice": args.voice, "rate_wpm": args.rate, "face": args.face, "plan": plan,
            "sentences_set": "Harvard lists 3-4 (held out)" if args.held_out else
            "Harvard lists 5-6 (held out)" if args.held_out_2 else "Harvard lists 1-2",
@@ -226,6 +252,8 @@ def main(argv=None) -> int:
            "criteria": CRITERIA, "summary": summarize(phones, speeds),
            "classes": class_table(phones), "sentences": rows}
     out["summary"]["incisor_speed"] = _jaw_row(jaws, REAL_JAW_PEAK_MM_S)
+    out["summary"]["incisor_opening"] = _opening_row([r["incisor_opening_mm"] / 1e3
+                                                      for r in rows])
     if not args.no_carrier:
         between, flanking, word_jaws = [], [], []
         for k, word in enumerate(BETWEEN_BILABIALS, 1):

@@ -43,6 +43,7 @@ def main(argv=None) -> int:
     out = {"text": args.text, "size": args.size, "view": args.view,
            "utterance_s": round(float(res.alignment.duration), 3),
            "frames": int(len(res.dataset["time"])), "wall_s": round(wall, 2),
+           "plan_simulations": res.manifest["plan"].get("simulations"),
            "stages_s": {k: round(b - a, 2) for k, (a, b) in stages.items()}}
     out["rest_s"] = round(wall - sum(out["stages_s"].values()), 2)
     print(json.dumps(out, indent=1))

@@ -89,7 +89,7 @@ right: marker on the right
 scale: KIND:KEY=FACTOR (repeatable), e.g. word:balloon=1.5, class:open=0.8, phone:u:=1.2
 scale_pair: A,B: scale the markers per axis
 series: with --json: the per-frame mouth measures
-seed: seed of the blinks, gaze shifts and head motion
+seed: seed of the blinks, gaze shifts and head motion (default: from the item)
 size: frame size WIDTHxHEIGHT, pixels
 smooth: see --bend
 source: input marker file
@@ -256,7 +256,7 @@ GROUPS: dict[str, dict[str, tuple]] = {
     "articulation": {"strength": (float, 1.0), "scale": (list[str] | None, None),
                      "plan": (bool, True), "plan_iterations": (int, 8)},
     "alive": {"blinks": (bool, True), "gaze": (bool, True), "head_motion": (bool, True),
-              "seed": (int, 0)},
+              "seed": (int | None, None)},
 }
 
 #: parameter -> the interval its value must lie in, for the numbers that are options of a

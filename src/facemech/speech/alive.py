@@ -24,12 +24,12 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from ..checks import check_fields
+from ..checks import check_fields, check_value
 from ..errors import InputError
 from .pitch import PRAAT_AC, intensity_db, track_f0
 
 __all__ = ["Alive", "Liveliness", "blink_closure", "blink_schedule", "gaze_schedule",
-           "gaze_series", "head_motion", "laws", "liveliness"]
+           "gaze_series", "head_motion", "item_seed", "laws", "liveliness"]
 
 #: blinks per minute during conversation (Bentivoglio et al. 1997: 26.0 mean)
 BLINK_RATE_PER_MIN = 26.0
@@ -46,16 +46,18 @@ GAZE_SD_RAD = (np.radians(2.0), np.radians(1.5))
 GAZE_MAX_RAD = np.radians(5.0)
 #: s and s/rad, the saccade's main sequence: duration = intercept + slope * amplitude
 SACCADE_INTERCEPT_S, SACCADE_SLOPE_S_PER_RAD = 0.021, 0.0022 * np.degrees(1.0)
-#: rad of head pitch (up) per semitone of F0 above the median (0.4 deg)
-HEAD_PITCH_PER_SEMITONE_RAD = np.radians(0.4)
+#: rad of head pitch (up) per semitone of F0 above the median (0.8 deg): a sentence's F0
+#: spans some 4-8 semitones, so the head nods over 3-6 degrees, the few degrees of rotation
+#: that accompany read speech (Yehia et al. 2002; Munhall et al. 2004; Hadar et al. 1983)
+HEAD_PITCH_PER_SEMITONE_RAD = np.radians(0.8)
 #: rad, the head pitch's bound either way (6 deg)
 HEAD_MAX_RAD = np.radians(6.0)
 #: s, the head pitch leads F0 by this much
 HEAD_LEAD_S = 0.1
 #: s, the SD of the Gaussian that smooths the head's drive
 HEAD_SMOOTH_S = 0.08
-#: rad, SD of the yaw and the roll at full voice (1.0, 0.6 deg), s their noise's smoothing
-HEAD_YAW_RAD, HEAD_ROLL_RAD, HEAD_WANDER_SD_S = np.radians(1.0), np.radians(0.6), 0.4
+#: rad, SD of the yaw and the roll at full voice (1.6, 0.9 deg), s their noise's smoothing
+HEAD_YAW_RAD, HEAD_ROLL_RAD, HEAD_WANDER_SD_S = np.radians(1.6), np.radians(0.9), 0.4
 #: dB, the range below the loudest frame over which the intensity scales the wander (0..1)
 HEAD_LEVEL_RANGE_DB = 30.0
 
@@ -67,25 +69,40 @@ class Liveliness:
     Attributes
     ----------
     blinks, gaze, head : blinks, gaze shifts, head motion (driven by the voice)
-    seed : the random generator's seed (``numpy.random.default_rng``)
+    seed : the random generator's seed (``numpy.random.default_rng``); None: derived from the
+        item (:func:`item_seed` of its audio), so that each item blinks, looks and moves in
+        its own way and says it again the same way
     blink_rate_per_min : blinks per minute, (0, 60] (default: in conversation, Bentivoglio 1997)
     """
 
     blinks: bool = True
     gaze: bool = True
     head: bool = True
-    seed: int = 0
+    seed: int | None = None
     blink_rate_per_min: float = BLINK_RATE_PER_MIN
 
     def __post_init__(self):
-        check_fields(self)  # seed and blink rate: the intervals of facemech.checks
-        object.__setattr__(self, "seed", int(self.seed))
+        if self.seed is None:
+            check_value("blink_rate_per_min", self.blink_rate_per_min)
+        else:
+            check_fields(self)  # seed and blink rate: the intervals of facemech.checks
+            object.__setattr__(self, "seed", int(self.seed))
         object.__setattr__(self, "blink_rate_per_min", float(self.blink_rate_per_min))
 
     @classmethod
     def off(cls) -> Liveliness:
         """Nothing moves but the speech."""
         return cls(blinks=False, gaze=False, head=False)
+
+
+def item_seed(samples, sample_rate: float) -> int:
+    """A seed in [0, 2**32) derived from an item's audio (its samples as 16-bit PCM, and the
+    rate): the same item gets the same seed, two items almost surely different ones."""
+    import hashlib
+
+    pcm = np.round(np.clip(np.asarray(samples, float), -1.0, 1.0) * 32767).astype("<i2")
+    h = hashlib.sha256(pcm.tobytes() + str(int(sample_rate)).encode())
+    return int.from_bytes(h.digest()[:4], "little")
 
 
 def _blink_length() -> float:
@@ -117,6 +134,7 @@ def laws(alive: Liveliness) -> dict:
                         "Carpenter 1988 Movements of the Eyes",
                         "Yehia, Kuratate & Vatikiotis-Bateson 2002 J Phonetics 30:555",
                         "Munhall et al. 2004 Psychol Sci 15:133",
+                        "Hadar et al. 1983 Lang Speech 26:117",
                         "Boersma 1993 Proc Inst Phonetic Sci Amsterdam 17:97"]}
 
 
@@ -274,7 +292,8 @@ class Alive:
     blinks : (B, 2) s, each blink's onset and duration
     gaze_shifts : (S, 3) onset s, target yaw and pitch rad
     head_summary : dict (:func:`head_motion`)
-    settings : the :class:`Liveliness`
+    settings : the :class:`Liveliness`, its seed the one used
+    seed_derived : the seed was derived from the item (:func:`item_seed`), not given
     """
 
     time: np.ndarray
@@ -285,11 +304,15 @@ class Alive:
     gaze_shifts: np.ndarray
     head_summary: dict
     settings: Liveliness
+    seed_derived: bool = False
 
     def record(self) -> dict:
         """What the manifest records: the settings and laws, blink times, gaze shifts and the
         head motion's summary and series (SI)."""
         return {"laws": laws(self.settings),
+                "seed": {"value": self.settings.seed,
+                         "source": "derived from the item's audio" if self.seed_derived
+                         else "given"},
                 "blinks": [{"onset_s": float(a), "duration_s": float(d)} for a, d in self.blinks],
                 "gaze_shifts": [{"onset_s": float(a), "yaw_rad": float(y), "pitch_rad": float(p)}
                                 for a, y, p in self.gaze_shifts],
@@ -307,13 +330,21 @@ def liveliness(time, samples, sample_rate: float, alive: Liveliness | None = Non
     time : (T,) s, evenly spaced frame times (the simulation's)
     samples : (n,) float, the utterance's audio (full scale 1), starting at time 0
     sample_rate : Hz
-    alive : switches, seed and blink rate (default: everything on, seed 0)
+    alive : switches, seed and blink rate (default: everything on, the seed derived from
+        ``samples``, :func:`item_seed`)
 
     Returns
     -------
     Alive; a switched-off part's series are zeros and its events empty
     """
     alive = alive or Liveliness()
+    if alive.seed is None:
+        from dataclasses import replace
+
+        alive = replace(alive, seed=item_seed(samples, sample_rate))
+        derived = True
+    else:
+        derived = False
     t = np.asarray(time, float)
     if t.ndim != 1 or len(t) == 0 or not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
         raise InputError("frame times must be a finite, increasing (T,) series", field="time")
@@ -334,4 +365,4 @@ def liveliness(time, samples, sample_rate: float, alive: Liveliness | None = Non
                  blinks=np.column_stack([onsets, np.full(len(onsets), _blink_length())])
                  .reshape(-1, 2),
                  gaze_shifts=np.column_stack([shifts, targets]).reshape(-1, 3),
-                 head_summary=summary, settings=alive)
+                 head_summary=summary, settings=alive, seed_derived=derived)

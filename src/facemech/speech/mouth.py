@@ -82,3 +82,44 @@ def incisor_drop(model, jaw_pose) -> np.ndarray:
     drop = np.array([tip[1] - move_points(tip, p, model.hinge_point, model.hinge_axis)[0, 1]
                      for p in poses])
     return float(drop[0]) if np.ndim(jaw_pose) == 1 else drop
+
+
+#: m: the lips count as apart where their contact twins are this far from each other (the
+#: bilabials' seal, :data:`facemech.speech.visible_speech.CRITERIA`)
+APART_M = 0.5e-3
+
+
+def opening_width(model, positions: np.ndarray, apart: float = APART_M) -> np.ndarray:
+    """Width (m) of the opening between the lips: the extent across the face (x) of the lip
+    contact pairs of the epidermis that are more than ``apart`` apart along their contact
+    normals, the ends interpolated to where the separation crosses ``apart``; 0 with the
+    lips sealed.
+
+    ``positions`` : (frames, n_surface, 3) or (n_surface, 3) m; returns (frames,) or a float.
+    """
+    p = np.asarray(positions, float)
+    single = p.ndim == 2
+    if single:
+        p = p[None]
+    up, lo = model.lip_pairs.T
+    skin = np.nonzero(up < model.n_surface)[0]
+    rest = model.rest_positions
+    x = rest[up[skin], 0]
+    order = np.argsort(x)
+    skin, x = skin[order], x[order]
+    normals = np.asarray(model.lip_normals, float)[skin]
+    sep = np.einsum("fkj,kj->fk", p[:, up[skin]] - p[:, lo[skin]], normals) - \
+        np.einsum("kj,kj->k", rest[up[skin]] - rest[lo[skin]], normals)
+    out = np.zeros(len(p))
+    for f, s in enumerate(sep):
+        k = np.nonzero(s > apart)[0]
+        if k.size == 0:
+            continue
+        a, b = k[0], k[-1]
+        xa, xb = x[a], x[b]
+        if a > 0:  # where the separation crosses ``apart`` between a - 1 and a
+            xa = x[a - 1] + (x[a] - x[a - 1]) * (apart - s[a - 1]) / (s[a] - s[a - 1])
+        if b < len(x) - 1:
+            xb = x[b] + (x[b + 1] - x[b]) * (s[b] - apart) / (s[b] - s[b + 1])
+        out[f] = xb - xa
+    return float(out[0]) if single else out

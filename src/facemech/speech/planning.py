@@ -29,10 +29,11 @@ from .articulation import Articulation, as_articulation
 from .coarticulation import Gesture, controls_from_gestures, gestures
 from .phoneclass import PAUSE, phone_classes
 
-__all__ = ["BOUNDS", "GAIN", "JAW_MAX_DEG", "JAW_SPEED_MAX", "MAX_ITERATIONS", "PASS_LINES",
-           "PASS_WEIGHT", "PLAN_ITERATIONS", "SPEED_COST", "SPEED_LINE", "SPEED_TARGET",
-           "SPEED_TOLERANCE", "TARGETS", "Plan", "check_iterations", "jaw_rate_limit",
-           "plan_controls", "slew_limited"]
+__all__ = ["BOUNDS", "CLOSURE_WEIGHT", "GAIN", "JAW_MAX_DEG", "JAW_OPEN_MAX", "JAW_SPEED_MAX",
+           "MAX_ITERATIONS", "PASS_LINES", "PASS_WEIGHT", "PLAN_ITERATIONS", "SPEED_COST",
+           "SPEED_LINE", "SPEED_TARGET", "SPEED_TOLERANCE", "TARGETS", "Plan",
+           "check_iterations", "jaw_open_limit", "jaw_rate_limit", "plan_controls",
+           "slew_limited"]
 
 #: iterations of the planner by default (each one forward simulation after the first)
 PLAN_ITERATIONS = 8
@@ -44,13 +45,20 @@ TARGETS = {
     "open": {"aperture": 12e-3, "tolerance": 1.0e-3, "too_wide": 17e-3},
     "rounded": {"forward": 3e-3, "tolerance": 0.5e-3},
     "labiodental": {"distance": 0.0, "tolerance": 0.5e-3},
+    # a bilabial's seal held 70 ms (real closures: 70-120 ms in read speech; the pass line
+    # 50 ms), its shortfall weighed :data:`CLOSURE_WEIGHT` m per s (5 ms of tolerance); at
+    # 60 ms, two test sentences' seals of "map" came out shorter (40-50 ms against 43-53)
+    "closure": {"duration": 0.070, "tolerance": 0.5e-3},
 }
+#: m of a phone's miss per s that a bilabial's seal falls short of its 70 ms: 10 ms short
+#: weigh as a millimetre
+CLOSURE_WEIGHT = 0.1
 #: bounds of the per-instance adjustments: scale factor, dominance factor, jaw offset (deg),
 #: factor on the dominance's rates, a labiodental's own scale factor, a bilabial's press
 #: (activity added to OOSM and OOIM, :attr:`~.coarticulation.Gesture.press`) and a bilabial's
 #: shift in time (s, :attr:`~.coarticulation.Gesture.shift`; later only, docs/stimuli.md)
 BOUNDS = {"scale": (0.5, 1.6), "dominance": (1.0, 30.0), "jaw_deg": (-4.0, 14.0),
-          "rate": (1.0, 3.0), "labiodental_scale": (0.0, 1.6), "press": (0.0, 0.8),
+          "rate": (0.4, 3.0), "labiodental_scale": (0.0, 2.5), "press": (0.0, 0.8),
           "shift_s": (0.0, 0.04), "jaw_rate": (1.0, 2.5)}
 #: deg, the largest jaw target a plan may ask for (the jaw's range is -5 to 35 deg)
 JAW_MAX_DEG = 24.0
@@ -60,8 +68,9 @@ GAIN = {"open_jaw_deg": 0.8, "open_dominance": 0.1, "bilabial_dominance": 1.0,
         "bilabial_scale": 0.15, "bilabial_press": 0.15, "neighbour_rate": 0.1,
         "rounded_scale": 0.2, "rounded_dominance": 0.5, "labiodental_jaw_deg": 0.5,
         "labiodental_dominance": 0.5, "labiodental_scale": 0.2, "bilabial_timing": 0.7,
-        "rounded_jaw_deg": 0.5, "speed_jaw_rate": 0.025, "speed_jaw_deg": 0.025}
-#: what a mm of a miss past the pass line weighs in the plan's cost on top of its mm
+        "rounded_jaw_deg": 0.5, "speed_jaw_rate": 0.025, "speed_jaw_deg": 0.025,
+        "closure_rate": 0.12, "closure_dominance": 0.3, "open_scale": 0.05}
+#: what a mm of a miss past the issue's pass line weighs in the plan's cost on top of its mm
 #: past the tolerance (:func:`_summary`: the iteration kept): a bilabial's gap beyond 0.5 mm,
 #: an open vowel's aperture under 8 mm, a rounded phone's lips under 2 mm forward, a
 #: labiodental's lip farther than 1 mm from the incisors (:data:`PASS_LINES`). Without it a
@@ -73,7 +82,8 @@ PASS_WEIGHT = 4.0
 #: bilabial's gap, an open vowel's shortfall from 12 mm (8 mm open), a rounded phone's from
 #: 3 mm (2 mm forward), a labiodental's distance (1 mm,
 #: :data:`facemech.speech.visible_speech.CONTACT_MM`)
-PASS_LINES = {"bilabial": 0.5e-3, "open": 4.0e-3, "rounded": 1.0e-3, "labiodental": 1.0e-3}
+PASS_LINES = {"bilabial": 0.5e-3, "open": 4.0e-3, "rounded": 1.0e-3, "labiodental": 1.0e-3,
+              "closure": 0.020 * CLOSURE_WEIGHT}
 #: m/s, the peak lower-lip speed an utterance is planned for: the slowest of the real lower
 #: lips recorded (115-233 mm/s, docs/visible-speech.md); an utterance whose lower lip stays
 #: slower gets a jaw less coarticulated (docs/stimuli.md)
@@ -90,15 +100,20 @@ SPEED_LINE = 0.100
 #: phone's pass line is not traded for a little speed (a bilabial 1 mm apart costs
 #: 0.8 + 4 x 0.5 = 2.8 mm)
 SPEED_COST = 0.02
+#: the plan stops once every phone meets its pass line and the last two iterations cut the
+#: best cost by less than this share (each iteration is one forward simulation)
+SETTLED_GAIN = 0.10
 #: s, how far beyond a bilabial's interval its closure is looked for (its timing, :func:`_timing`)
 TIMING_WINDOW_S = 0.06
 #: m/s, the fastest a plan moves the lower incisor's tip: the jaw is a kinematic drive, and the
-#: planner, left free, sped it to 400-800 mm/s (the fastest jaw of the real recordings moves
-#: at 186, :data:`facemech.speech.visible_speech.REAL_JAW_PEAK_MM_S`; real lower lips at
-#: 115-233). 250 mm/s, the top of the pass range for the lower lip, which rides the jaw: a
-#: faster jaw alone carried the lower lip past it (docs/design-log.md, "The jaw carries the
-#: lips")
-JAW_SPEED_MAX = 0.25
+#: planner, left free, sped it to 400-800 mm/s. 180 mm/s: with the 2 % that central
+#: differences of the slew-limited series add, under the fastest jaw of the real recordings
+#: (186 mm/s, :data:`facemech.speech.visible_speech.REAL_JAW_PEAK_MM_S`); the lips' own
+#: muscles carry the visemes' speed
+JAW_SPEED_MAX = 0.180
+#: m, the farthest a plan drops the lower incisor's tip below rest: real jaws open 10-20 mm
+#: in running speech; the angle is read off the face's jaw kinematics (:func:`jaw_open_limit`)
+JAW_OPEN_MAX = 0.018
 
 
 @dataclass(frozen=True)
@@ -185,6 +200,8 @@ def plan_controls(alignment: Alignment, model, *,
     phones = _phone_gestures(alignment)
     vowels = _stressed_vowels(alignment)
     jaw_limit = None if jaw_speed is None else jaw_rate_limit(model.face, params, jaw_speed)
+    jaw_top = jaw_open_limit(model.face, params, JAW_OPEN_MAX)
+    labiodental_jaw = jaw_open_limit(model.face, params, overbite(model.face))
     t0 = _time.perf_counter()
     history, best, turns, step = [], None, {}, 1.0
     for it in range(iterations + 1):
@@ -192,7 +209,8 @@ def plan_controls(alignment: Alignment, model, *,
                                              frame_rate=params.frame_rate,
                                              strength=articulation.strength)
         if jaw_limit is not None:
-            jaw = np.maximum(slew_limited(jaw, jaw_limit / params.frame_rate), 0.0)
+            jaw = slew_limited(jaw, jaw_limit / params.frame_rate)
+        jaw = np.clip(jaw, 0.0, jaw_top)
         sim = simulate(model, act, jaw)
         misses = _measure(alignment, sim, phones)
         speed = peak_lower_lip_speed(sim.time, sim.positions, sim.model)
@@ -208,12 +226,15 @@ def plan_controls(alignment: Alignment, model, *,
             progress(it + 1, iterations + 1)
         if summary["cost"] == 0.0:
             break  # every phone within its tolerance: nothing to learn
+        if _settled(history, best[0]):
+            break  # every phone past its pass line, and the last steps gained little
         if it < iterations:
             if not better:  # overshot: back to the best controls, half the step
                 step *= 0.5
                 misses = best[7]
             items = _update(best[6], misses, turns, step,
-                            speed_short=best[0]["speed_short_mm_s"], vowels=vowels)
+                            speed_short=best[0]["speed_short_mm_s"], vowels=vowels,
+                            labiodental_jaw=labiodental_jaw)
     if progress is not None and len(history) < iterations + 1:
         progress(iterations + 1, iterations + 1)  # stopped early: done
     summary, kept, t, act, jaw, sim, items, _ = best
@@ -241,6 +262,31 @@ def jaw_rate_limit(model, params, speed: float) -> float:
     q = jaw_poses(a, params)
     p = [move_points(tip, pose, model.hinge_point, model.hinge_axis)[0] for pose in q]
     return float(speed * (a[1] - a[0]) / np.linalg.norm(p[1] - p[0]))
+
+
+def overbite(model) -> float:
+    """m, how far the lower incisors' edge stands above the upper incisors' edge at rest (as
+    the renderer draws them): the jaw may drop the lower edge this far at a labiodental and
+    keep the lower incisors hidden behind the upper ones."""
+    from ..geometry.teeth import lower_incisor_point
+    from .visible_speech import upper_incisor_edge
+
+    return float(max(lower_incisor_point(model)[1] - upper_incisor_edge(model)[1], 0.0))
+
+
+def jaw_open_limit(model, params, drop: float) -> float:
+    """rad: the jaw angle that drops the lower incisor's tip by ``drop`` (m) below rest on
+    ``model`` under the preset's jaw kinematics (interpolated on a 0.25-degree grid up to
+    the jaw's 35 degrees)."""
+    from ..solvers.jaw import jaw_poses
+    from .mouth import incisor_drop
+
+    a = np.radians(np.arange(0.0, 35.01, 0.25))
+    d = incisor_drop(model, jaw_poses(a, params))
+    k = int(np.argmax(d >= drop)) if np.any(d >= drop) else len(a) - 1
+    if k == 0 or d[k] < drop:
+        return float(a[k])
+    return float(a[k - 1] + (a[k] - a[k - 1]) * (drop - d[k - 1]) / (d[k] - d[k - 1]))
 
 
 def slew_limited(x: np.ndarray, step: float) -> np.ndarray:
@@ -292,6 +338,16 @@ def _slew_window(x: np.ndarray, step: float) -> np.ndarray:
     hi = np.full(n, step)
     lo[0], hi[0] = -np.inf, np.inf
     return a @ lsq_linear(a, x, bounds=(lo, hi), method="bvls").x
+
+
+def _settled(history: list[dict], best: dict) -> bool:
+    """The plan has settled: the best iteration leaves no phone short of its pass line
+    (:data:`PASS_LINES`) and the lip fast enough, and the best cost of the last two
+    iterations is within :data:`SETTLED_GAIN` of the best cost two iterations before."""
+    if best["past_mm"] > 0.0 or best["speed_short_mm_s"] > 0.0 or len(history) < 3:
+        return False
+    before = min(h["cost"] for h in history[:-2])
+    return best["cost"] >= (1.0 - SETTLED_GAIN) * before
 
 
 def _adjusted(g: Gesture) -> bool:
@@ -369,6 +425,8 @@ def _measure(alignment: Alignment, sim, phones: list[list[int]]) -> list[_Miss]:
         if m.group == "bilabial":
             err = m.lip_gap_mid - TARGETS["bilabial"]["gap"]
             timing = _timing(sim.time, gap, m.start, m.end)
+            short = CLOSURE_WEIGHT * max(TARGETS["closure"]["duration"] - m.closure, 0.0)
+            out.append(_Miss("closure", float(short), tuple(idx), m.classes))
         elif m.group == "open":
             if m.stress is None and alignment.notation == "espeak":
                 continue
@@ -380,9 +438,9 @@ def _measure(alignment: Alignment, sim, phones: list[list[int]]) -> list[_Miss]:
         elif m.group == "rounded":
             err = TARGETS["rounded"]["forward"] - m.forward_max
         elif m.group == "labiodental":
-            k = (sim.time >= m.start) & (sim.time <= m.end)
-            above = float(np.median(front[k, 1])) > edge[1] if k.any() else True
-            err = m.incisor_distance if above else -m.incisor_distance
+            # the lower lip's visible edge at the incisors' edge, as seen from the front, at
+            # the phone's middle, signed (positive: above)
+            err = float(np.interp(0.5 * (m.start + m.end), sim.time, front[:, 1]) - edge[1])
         else:
             continue
         out.append(_Miss(m.group, float(err), tuple(idx), m.classes, m.stress is not None,
@@ -440,6 +498,7 @@ def _summary(misses: list[_Miss], speed: float | None = None) -> dict:
     below = 0.0 if speed is None else max(1e3 * (SPEED_LINE - speed), 0.0)
     out["speed_short_mm_s"] = round(short, 1)
     out["cost_mm"] = round(cost, 3)
+    out["past_mm"] = round(past + below, 3)
     out["cost"] = round(cost + PASS_WEIGHT * past + SPEED_COST * (short + PASS_WEIGHT * below),
                         3)
     return out
@@ -472,7 +531,8 @@ def _sharpen(items: list[Gesture], k: int, own: tuple[int, ...], mm: float,
 
 def _update(items: list[Gesture], misses: list[_Miss], turns: dict,
             step: float = 1.0, speed_short: float = 0.0,
-            vowels: tuple[int, ...] = ()) -> list[Gesture]:
+            vowels: tuple[int, ...] = (), labiodental_jaw: float | None = None
+            ) -> list[Gesture]:
     """The gestures after one step of learning from the misses (module doc), the gains times
     ``step`` (halved after an iteration that did worse than the best). A labiodental's jaw
     and own gesture move in the direction its error's sign says (the lip's top above the
@@ -482,7 +542,8 @@ def _update(items: list[Gesture], misses: list[_Miss], turns: dict,
     tolerance) makes every gesture's jaw less coarticulated, its jaw's dominance rates growing
     by ``GAIN["speed_jaw_rate"]`` per mm/s (:attr:`~.coarticulation.Gesture.jaw_rate`), and
     opens the jaw targets of the gestures ``vowels`` (the stressed vowels',
-    :func:`_stressed_vowels`) by ``GAIN["speed_jaw_deg"]`` degrees per mm/s."""
+    :func:`_stressed_vowels`) by ``GAIN["speed_jaw_deg"]`` degrees per mm/s. A labiodental's
+    jaw target stays at or under ``labiodental_jaw`` (rad; None: free)."""
     out = list(items)
     if speed_short > 0.0:
         factor = 1.0 + step * GAIN["speed_jaw_rate"] * speed_short
@@ -507,6 +568,9 @@ def _update(items: list[Gesture], misses: list[_Miss], turns: dict,
                     g = replace(g, lips_dominance=_bounded(g.lips_dominance * grow, "dominance"),
                                 jaw_dominance=_bounded(g.jaw_dominance * grow, "dominance"))
                     g = replace(g, jaw=_jaw_offset(g, GAIN["open_jaw_deg"] * mm))
+                    # the lips' own opening too, where the jaw is held to its limits
+                    g = replace(g, scale=_bounded(g.scale * (1 + GAIN["open_scale"]
+                                                             * min(mm, 4.0)), "scale"))
                 else:
                     g = replace(g, jaw=_jaw_offset(g, -0.5 * GAIN["open_jaw_deg"] * mm))
             elif m.group == "bilabial":
@@ -523,6 +587,17 @@ def _update(items: list[Gesture], misses: list[_Miss], turns: dict,
                             # its lips closed before its middle: its dominance later
                             shift=_bounded(g.shift - step * GAIN["bilabial_timing"]
                                            * m.timing, "shift_s"))
+            elif m.group == "closure":
+                # a seal too short: the bilabial's dominance wider in time (its rates
+                # lower) and larger, so that it holds the lips and the jaw longer
+                g = replace(g, rate=_bounded(g.rate / (1 + GAIN["closure_rate"] * min(mm, 3.0)),
+                                             "rate"),
+                            lips_dominance=_bounded(
+                                g.lips_dominance * (1 + GAIN["closure_dominance"] * min(mm, 3.0)),
+                                "dominance"),
+                            jaw_dominance=_bounded(
+                                g.jaw_dominance * (1 + GAIN["closure_dominance"] * min(mm, 3.0)),
+                                "dominance"))
             elif m.group == "rounded":
                 if m.error < 0:
                     continue
@@ -546,8 +621,12 @@ def _update(items: list[Gesture], misses: list[_Miss], turns: dict,
                 # while the lip's top is above the edge and shrinks while below; its lips'
                 # dominance grows, so that its neighbours' lips give way
                 lip = 1.0 + sign * share * GAIN["labiodental_scale"] * min(mm, 4.0)
-                g = replace(g, jaw=_jaw_offset(g, sign * share * GAIN["labiodental_jaw_deg"]
-                                               * mm),
+                jaw = _jaw_offset(g, sign * share * GAIN["labiodental_jaw_deg"] * mm)
+                if labiodental_jaw is not None:  # the lower incisors stay behind the upper
+                    from .visemes import VISEMES
+
+                    jaw = min(jaw, labiodental_jaw - VISEMES[g.cls].jaw * g.scale)
+                g = replace(g, jaw=jaw,
                             jaw_dominance=_bounded(g.jaw_dominance * grow, "dominance"),
                             lips_dominance=_bounded(g.lips_dominance * grow, "dominance"),
                             scale=_bounded(g.scale * max(lip, 0.1), "labiodental_scale"))

@@ -63,7 +63,13 @@ def _v(jaw_deg: float, lips: float, jaw_dom: float, ant: float, carry: float, **
 VISEMES: MappingProxyType = MappingProxyType({
     # consonants                 jaw deg, lips alpha, jaw alpha, theta ant, theta carry (1/s)
     "bilabial": _v(-2.0, 60.0, 60.0, 30.0, 40.0, MEN=0.8),
-    "labiodental": _v(2.5, 25.0, 40.0, 40.0, 45.0, DLI=0.18, OOI=0.15, DAO=0.1, OOIM=0.3),
+    # /f v/: the jaw nearly closed, the lower lip drawn down and back to the upper incisors'
+    # edge by its own muscles (Ladefoged & Maddieson 1996; the jaw high for /f/, Keating et
+    # al. 1994). Held on the default face: the lip's edge 0.75 mm above the upper incisors'
+    # edge, 2.1 mm of them showing, the lower incisors hidden (a jaw of 2.5 degrees with DLI
+    # 0.18, DAO 0.1 and OOIM 0.3 left the lip's edge 1.7 mm under the edge, the lower
+    # incisors bared)
+    "labiodental": _v(1.0, 25.0, 40.0, 40.0, 45.0, DLI=0.12, OOI=0.3, OOIM=0.4),
     "dental": _v(1.5, 1.0, 4.0, 20.0, 25.0, LLS=0.1),
     "alveolar": _v(1.5, 0.4, 4.0, 20.0, 25.0),
     "postalveolar": _v(1.5, 4.0, 4.0, 20.0, 25.0, OOS=0.4, OOI=0.4),
@@ -85,7 +91,10 @@ VISEMES: MappingProxyType = MappingProxyType({
     "close_front_lax": _v(4.25, 4.5, 1.75, 12.0, 15.0, ZYG=0.3, RIS=0.3, LAO=0.075,
                           LLS=0.1, DLI=0.11),
     "close_back_rounded": _v(2.5, 24.0, 1.5, 15.0, 15.0, OOS=0.9, OOI=1.0, MEN=0.5),
-    "open": _v(12.0, 4.0, 8.0, 12.0, 15.0, DLI=0.3),
+    # /ɑ æ a/: the lips' own opening (DLI, LLS) beside the jaw's, so that a short open vowel
+    # under the jaw's speed limit still opens and shows the upper incisors (held: 21 mm
+    # open, 5.7 mm of the upper incisors showing; with DLI 0.3 alone 15.7 and 1.8 mm)
+    "open": _v(12.0, 4.0, 8.0, 12.0, 15.0, DLI=0.4, LLS=0.2),
     "open_rounded": _v(11.0, 4.0, 8.0, 12.0, 15.0, OOS=0.25, OOI=0.25),
     "mid": _v(6.0, 1.0, 2.0, 12.0, 15.0, DLI=0.1),
     "mid_rounded": _v(6.5, 2.0, 2.0, 12.0, 15.0, OOS=0.45, OOI=0.45),

@@ -20,20 +20,29 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from ..geometry.teeth import teeth_depth
-from .mouth import midline_lip_pair, mouth_measures
+from .mouth import midline_lip_pair, mouth_measures, opening_width
 from .phone_labels import phone_stress, reads_stress
 from .phoneclass import phone_classes
 
-__all__ = ["CONTACT_MM", "CRITERIA", "OPEN_EXTRA_LABELS", "ROUNDED_LABELS", "PhoneMeasure",
+__all__ = ["CLOSURE_MIN_S", "CONTACT_MM", "CRITERIA", "ROUND_ASPECT_MIN", "SEAL_MM",
+           "closure_duration", "OPEN_EXTRA_LABELS", "ROUNDED_LABELS", "PhoneMeasure",
            "REAL_JAW_PEAK_MM_S", "class_table", "incisor_distance", "incisor_speed",
            "lower_lip_speed", "lower_lip_top",
-           "measure_phones", "peak_lower_lip_speed", "summarize", "upper_incisor_edge"]
+           "measure_phones", "peak_lower_lip_speed", "summarize", "teeth_shown",
+           "upper_incisor_edge"]
 
 #: mm: the lower lip touches the upper incisors when it comes this close to their edge
 CONTACT_MM = 1.0
-#: mm/s, the fastest lower incisor of the real recordings (EMA and X-ray microbeam, a read
-#: sentence and repeated syllables: peak jaw speeds 58-186 mm/s); recorded beside the lower
-#: lip's speed, not a criterion
+#: mm: the lips are sealed where their midline gap is this or less (the bilabials' criterion)
+SEAL_MM = 0.5
+#: s: a bilabial's lips stay sealed at least this long (real bilabial closures last 70-120 ms
+#: in read speech)
+CLOSURE_MIN_S = 0.050
+#: a rounded phone's opening, where the lips part, at least this high for its width
+ROUND_ASPECT_MIN = 0.5
+#: mm/s, the fastest lower incisor of the real recordings (EMA and X-ray microbeam, a
+#: read sentence and repeated syllables: peak jaw speeds 58-186 mm/s); recorded beside the
+#: lower lip's speed, not a criterion
 REAL_JAW_PEAK_MM_S = 186.0
 #: eSpeak labels of /ɔ/ (counted open; phoneclass's class ``open_rounded``)
 OPEN_EXTRA_LABELS = frozenset({"O:", "O", "O2"})
@@ -45,6 +54,8 @@ CRITERIA = {
     "open": {"aperture_min_mm": 8.0, "share": 0.90, "median_min_mm": 10.0},
     "rounded": {"forward_min_mm": 2.0, "share": 0.90},
     "labiodental": {"contact_mm": CONTACT_MM, "share": 0.90},
+    "closure": {"min_ms": 1e3 * CLOSURE_MIN_S, "share": 0.90},
+    "round_opening": {"aspect_min": ROUND_ASPECT_MIN, "share": 0.90},
     "speed": {"peak_min_mm_s": 100.0, "peak_max_mm_s": 250.0},
 }
 
@@ -69,6 +80,17 @@ class PhoneMeasure:
         (rounded phones); ``upper_forward`` and ``lower_forward`` at that frame
     incisor_distance : m, the smallest distance within the phone from the upper incisors'
         edge to the lower lip (labiodentals)
+    closure : s, how long the lips stay sealed (midline gap <= :data:`SEAL_MM`) about the
+        phone's most closed frame (bilabials; :func:`closure_duration`)
+    opening_aspect : the opening's height over its width at the phone's middle (rounded
+        phones whose lips part there; :func:`facemech.speech.mouth.opening_width`), else None
+    width_ratio : the mouth's corner-to-corner width at the phone's middle over its rest
+        width (rounded phones)
+    upper_teeth, lower_teeth : m, how much of the upper and lower incisors shows between the
+        lips at the phone's middle (:func:`teeth_shown`; None without the jaw's poses)
+    lip_edge : m, the lower lip's visible edge (its midline contact twin) above the upper
+        incisors' edge, as seen from the front, at the phone's middle (labiodentals;
+        negative: below)
     """
 
     label: str
@@ -85,15 +107,23 @@ class PhoneMeasure:
     upper_forward: float | None = None
     lower_forward: float | None = None
     incisor_distance: float | None = None
+    closure: float | None = None
+    opening_aspect: float | None = None
+    width_ratio: float | None = None
+    upper_teeth: float | None = None
+    lower_teeth: float | None = None
+    lip_edge: float | None = None
 
     def to_dict(self) -> dict:
         """The row in mm (lengths rounded to 0.01 mm), times in s."""
         out = asdict(self)
         for k in ("lip_gap_mid", "lips_forward_mid", "aperture_max", "forward_max", "upper_forward",
-                  "lower_forward", "incisor_distance"):
+                  "lower_forward", "incisor_distance", "upper_teeth", "lower_teeth", "lip_edge"):
             v = out.pop(k)
             out[f"{k}_mm"] = None if v is None else round(1e3 * v, 2)
         out["classes"] = list(self.classes)
+        out["closure_ms"] = None if out["closure"] is None else round(1e3 * out["closure"], 1)
+        del out["closure"]
         return out
 
 
@@ -168,6 +198,39 @@ def incisor_distance(model, positions: np.ndarray) -> np.ndarray:
     return float(d) if np.ndim(d) == 0 else d
 
 
+def teeth_shown(model, positions: np.ndarray, jaw_pose: np.ndarray) -> tuple[np.ndarray,
+                                                                             np.ndarray]:
+    """How much (m, vertically at the midline) of the upper and of the lower central incisors
+    shows between the lips: the part of each crown's labial face below the upper lip's edge
+    and above the lower lip's edge (the midline contact twins), the lower crown's also below
+    the upper incisors' edge (the overbite hides it behind them); 0 where none shows.
+
+    ``positions`` : (frames, nodes, 3) or (nodes, 3) m; ``jaw_pose`` : (frames, 3) or (3,)
+    (angle rad, shift_y m, shift_z m). Returns (upper, lower), each (frames,) or a float.
+    """
+    from ..geometry.teeth import lower_incisor_point
+    from ..solvers.jaw import move_points
+    from ..viz.dentition import LOWER, UPPER
+
+    p = np.asarray(positions, float)
+    single = p.ndim == 2
+    if single:
+        p = p[None]
+    poses = np.atleast_2d(np.asarray(jaw_pose, float))
+    up, lo, _ = midline_lip_pair(model)
+    top, bottom = p[:, up, 1], p[:, lo, 1]  # the lips' edges
+    edge = upper_incisor_edge(model)[1]
+    tip = lower_incisor_point(model)
+    low = np.array([move_points(tip, q, model.hinge_point, model.hinge_axis)[0, 1]
+                    for q in poses])
+    upper = np.clip(np.minimum(top, edge + UPPER[0].height) - np.maximum(bottom, edge), 0, None)
+    lower = np.clip(np.minimum(np.minimum(top, edge), low)
+                    - np.maximum(bottom, low - LOWER[0].height), 0, None)
+    if single:
+        return float(upper[0]), float(lower[0])
+    return upper, lower
+
+
 def lower_lip_speed(time: np.ndarray, positions: np.ndarray, model) -> np.ndarray:
     """Speed (m/s) of the landmark ``lower_lip_center`` per frame: the norm of its velocity
     by central differences (:func:`numpy.gradient`) over ``time`` (s)."""
@@ -198,6 +261,31 @@ def incisor_speed(time: np.ndarray, jaw_pose: np.ndarray, model) -> np.ndarray:
     return np.linalg.norm(np.gradient(p, np.asarray(time, float), axis=0), axis=1)
 
 
+def closure_duration(time: np.ndarray, gap: np.ndarray, start: float, end: float,
+                     seal: float = 1e-3 * SEAL_MM) -> float:
+    """s, how long the lips stay sealed (``gap`` <= ``seal``, m) in the run of frames about the
+    most closed frame within [start, end] (the nearest frame to the middle when none lies
+    there); the run's ends are interpolated to where the gap crosses ``seal``. 0 when the
+    lips do not seal there."""
+    t = np.asarray(time, float)
+    g = np.asarray(gap, float)
+    idx = _window(t, start, end)
+    k = int(idx[np.argmin(g[idx])])
+    if g[k] > seal:
+        return 0.0
+    a = k
+    while a > 0 and g[a - 1] <= seal:
+        a -= 1
+    b = k
+    while b < len(g) - 1 and g[b + 1] <= seal:
+        b += 1
+    ta = t[a] if a == 0 else t[a - 1] + (t[a] - t[a - 1]) * (g[a - 1] - seal) / \
+        (g[a - 1] - g[a])
+    tb = t[b] if b == len(g) - 1 else t[b] + (t[b + 1] - t[b]) * (seal - g[b]) / \
+        (g[b + 1] - g[b])
+    return float(tb - ta)
+
+
 def _window(time: np.ndarray, start: float, end: float) -> np.ndarray:
     """Frames within [start, end]; the nearest frame to the middle when none is."""
     idx = np.nonzero((time >= start) & (time <= end))[0]
@@ -207,7 +295,8 @@ def _window(time: np.ndarray, start: float, end: float) -> np.ndarray:
 
 
 def measure_phones(alignment, model, time: np.ndarray, positions: np.ndarray, *,
-                   voice: str | None = None) -> list[PhoneMeasure]:
+                   voice: str | None = None, jaw_pose: np.ndarray | None = None
+                   ) -> list[PhoneMeasure]:
     """Measure every phone of an alignment on a simulated face.
 
     Parameters
@@ -226,6 +315,9 @@ def measure_phones(alignment, model, time: np.ndarray, positions: np.ndarray, *,
     voice : str, optional
         The eSpeak voice (default: ``alignment.meta["voice"]``): eSpeak's ``0`` is open in
         en-us only.
+    jaw_pose : (frames, 3), optional
+        The jaw's poses (``sim.jaw_pose``): with them, the teeth shown at each phone's middle
+        (:func:`teeth_shown`).
 
     Returns
     -------
@@ -237,7 +329,12 @@ def measure_phones(alignment, model, time: np.ndarray, positions: np.ndarray, *,
     voice = alignment.meta.get("voice") if voice is None else voice
     m = mouth_measures(model, p)
     gap = m["lip_gap"]
+    lm, rest = model.landmarks, model.rest_positions
+    rest_width = float(np.linalg.norm(rest[lm["mouth_corner_left"]]
+                                      - rest[lm["mouth_corner_right"]]))
     incisor_dist = incisor_distance(model, p)
+    shown = None if jaw_pose is None else teeth_shown(model, p, jaw_pose)
+    lip_edge = lower_lip_top(model, p)[0][:, 1] - upper_incisor_edge(model)[1]
     phones = [(s, phone_classes(s.label, alignment.notation, source=alignment.source,
                                 voice=voice)) for s in alignment.phones]
     marked = reads_stress(alignment)
@@ -256,6 +353,18 @@ def measure_phones(alignment, model, time: np.ndarray, positions: np.ndarray, *,
                          lower_forward=float(m["lower_forward"][j]))
         elif group == "labiodental":
             extra["incisor_distance"] = float(incisor_dist[idx].min())
+            extra["lip_edge"] = float(np.interp(seg.mid, time, lip_edge))
+        if group == "bilabial":
+            extra["closure"] = closure_duration(time, gap, seg.start, seg.end)
+        elif group == "rounded":
+            j = int(np.argmin(np.abs(time - seg.mid)))
+            w = float(opening_width(model, p[j]))
+            extra["width_ratio"] = 1.0 + float(m["width_change"][j]) / rest_width
+            if gap[j] > 1e-3 * SEAL_MM and w > 0:
+                extra["opening_aspect"] = float(gap[j]) / w
+        if shown is not None:
+            j = int(np.argmin(np.abs(time - seg.mid)))
+            extra.update(upper_teeth=float(shown[0][j]), lower_teeth=float(shown[1][j]))
         between = (0 < k < len(phones) - 1 and groups[k - 1] == "bilabial"
                    and groups[k + 1] == "bilabial"
                    and phones[k - 1][0].end >= seg.start - 1e-9
@@ -337,6 +446,42 @@ def summarize(phones: list[PhoneMeasure], peak_speeds: list[float] | None = None
     row["worst"] = _worst(lab, v, max)
     row["met"] = bool(lab) and row["share_passing"] >= c["labiodental"]["share"]
     out["labiodental"] = row
+
+    v = [1e3 * p.closure for p in bil if p.closure is not None]
+    row = {"n": len(v)}
+    ok = [x >= c["closure"]["min_ms"] for x in v]
+    row.update({"share_passing": round(float(np.mean(ok)), 3) if v else None,
+                "median_ms": round(float(np.median(v)), 1) if v else None,
+                "shortest_ms": round(float(min(v)), 1) if v else None,
+                "worst": _worst([p for p in bil if p.closure is not None], v, min)})
+    if row["worst"] is not None:  # the value in ms
+        row["worst"]["value_ms"] = row["worst"].pop("value_mm")
+    row["met"] = bool(v) and row["share_passing"] >= c["closure"]["share"]
+    out["closure"] = row
+
+    front = [p for p in lab if p.lip_edge is not None]
+    v = [1e3 * abs(p.lip_edge) for p in front]
+    ok = [x <= c["labiodental"]["contact_mm"] and (p.lower_teeth is None or
+                                                    1e3 * p.lower_teeth <= SEAL_MM)
+          for x, p in zip(v, front, strict=True)]
+    row = _stats(v, ok)
+    row["worst"] = _worst(front, v, max)
+    row["lower_teeth_hidden"] = sum(1 for p in front if p.lower_teeth is not None
+                                    and 1e3 * p.lower_teeth <= SEAL_MM)
+    row["met"] = bool(front) and row["share_passing"] >= c["labiodental"]["share"]
+    out["labiodental_front"] = row
+
+    seen = [p for p in rnd if p.opening_aspect is not None]
+    ratios = [p.width_ratio for p in rnd if p.width_ratio is not None]
+    v = [p.opening_aspect for p in seen]
+    ok = [x >= c["round_opening"]["aspect_min"] for x in v]
+    out["round_opening"] = {
+        "n": len(v), "sealed": len(rnd) - len(v),
+        "share_passing": round(float(np.mean(ok)), 3) if v else None,
+        "median_aspect": round(float(np.median(v)), 2) if v else None,
+        "median_width_ratio": round(float(np.median(ratios)), 2) if ratios else None,
+        "met": (not v and bool(rnd)) or (bool(v) and float(np.mean(ok))
+                                            >= c["round_opening"]["share"])}
 
     if peak_speeds is not None:
         s = np.asarray(peak_speeds, float) * 1e3

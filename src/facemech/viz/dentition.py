@@ -34,6 +34,7 @@ GAP = 0.00035  #: m of each crown's place on the arch left empty (half on each s
 UPPER_EDGE_BELOW_STOMION = 0.003  #: m, the upper incisors' edge below the stomion
 TONGUE_TIP_SETBACK = 0.0045  #: m, the resting tongue tip behind the lower incisors' labial face
 TONGUE_TIP_BELOW_STOMION = 0.0085  #: m, the resting tongue tip under the stomion
+TONGUE_DOME = 0.006  #: m, how far the dorsum's top rises from the blade to its highest point
 #: m, how far each kind's edge or cusp tip stands back from the incisal plane, upper arch (the
 #: lower's 1.6 times as far)
 STEP = {"incisor": 0.0, "canine": 0.0004, "premolar": 0.0008, "molar": 0.0010}
@@ -214,6 +215,9 @@ def _gingiva(slots, frame, edge_y: float, sign: float, upper: bool) -> Part:
     # fold into the lip (the vestibule), turning outwards to meet the lip's inside
     heights = [0.0, 0.0004, 0.0012, 0.003, 0.008, 0.012, 0.015]
     outward = [-0.0002, 0.0004, 0.0007, 0.0008, 0.0006, 0.0016, 0.0045]
+    if not upper:  # the chin's skin presses in over it (the mentalis): no fold outwards,
+        # which showed as pink specks through the skin under the lower lip
+        outward = [-0.0002, 0.0004, 0.0007, 0.0008, 0.0004, 0.0, -0.0005]
     p = _at(cols, s, pts)
     n = _at(cols, s, nrm)
     n /= np.linalg.norm(n, axis=1, keepdims=True)
@@ -246,6 +250,11 @@ def tongue(look: FaceLook) -> Part:
     fwd = np.clip(unit[:, 2], 0, 1)
     x = unit[:, 0] * half[0] * (1.0 - 0.45 * fwd ** 2)  # narrowing to the tip
     y = unit[:, 1] * half[1] * np.where(unit[:, 1] > 0, 1.0, 1.3)
+    # the dorsum rises from the blade to its highest point about two thirds back (the
+    # tongue's body under the palate), so that an open mouth shows its top behind the teeth
+    along = 0.5 * (1.0 - unit[:, 2])  # 0 at the tip, 1 at the back
+    y += np.where(unit[:, 1] > 0, 1.0, 0.3) * TONGUE_DOME * np.sin(
+        np.pi * np.clip(along / 0.7, 0.0, 1.0) * 0.5) ** 2
     # the median sulcus: a shallow groove along the dorsum's middle
     y -= 0.0012 * np.exp(-0.5 * (x / 0.003) ** 2) * (unit[:, 1] > 0.3)
     z = unit[:, 2] * half[2]

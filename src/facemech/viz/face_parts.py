@@ -14,7 +14,7 @@ from .lids import lid_mesh, lid_of, lower_lid_of, margin_mesh
 from .look import FaceLook
 from .mesh import Part, fit_inside, skin_depth, sphere
 
-CAVITY = np.array([0.20, 0.07, 0.07])
+CAVITY = np.array([0.50, 0.20, 0.20])  #: sRGB, the mouth's lining where it is lit
 SOCKET = np.array([0.55, 0.30, 0.28])
 EYE_RADIUS = 0.012  #: m
 
@@ -207,7 +207,11 @@ def mouth_parts(look: FaceLook) -> list[Part]:
     centre = np.array([st[0], st[1] - 0.006, front_z - 0.014])
     cav = fit_inside(centre, unit, np.array([half_w + 0.009, 0.030, 0.030]),
                       skin_depth(look), 0.001)
-    cavity = Part("cavity", cav, faces[:, ::-1], np.tile(CAVITY, (len(cav), 1)), (0.0, 1.0),
+    # the oral mucosa: lit near the opening, darker deep in the mouth and up under the palate
+    deep = np.clip((front_z - cav[:, 2]) / 0.04, 0.0, 1.0)
+    high = np.clip((cav[:, 1] - st[1]) / 0.02, 0.0, 1.0)
+    shade = 1.0 - 0.55 * deep - 0.25 * high
+    cavity = Part("cavity", cav, faces[:, ::-1], CAVITY * shade[:, None], (0.05, 8.0),
                   "skull", inward=True)
     upper_teeth, upper_gum = dentition.arch(look, True)
     lower_teeth, lower_gum = dentition.arch(look, False)

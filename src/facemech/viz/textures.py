@@ -125,8 +125,9 @@ def skin_texture(landmarks: dict, bounds: tuple[float, float, float, float], hai
                                     "upper_lip_center", "lower_lip_center")):
         m = vermilion_mask(x, y, landmarks)[..., None]
         rgb = rgb * (1 - m) + m * VERMILION * (1.0 + 0.03 * rng.standard_normal((h, w, 1)))
-        _, hl, _ = _lip_frame(x, y, landmarks)  # the line where the lips meet, darker
-        rgb *= (1.0 - 0.35 * m * np.exp(-0.5 * (hl / 3.5e-4) ** 2)[..., None])
+        _, hl, _ = _lip_frame(x, y, landmarks)  # the line where the lips meet, a shade
+        # darker (not dark: sealed lips showed a black hairline)
+        rgb *= (1.0 - 0.10 * m * np.exp(-0.5 * (hl / 3.0e-4) ** 2)[..., None])
     hairs = _brow_hairs(h, w, rng)
     for side, eye_name, brow_name in ((1, "eye_left", "brow_left"),
                                       (-1, "eye_right", "brow_right")):

