@@ -48,7 +48,7 @@ def main() -> int:
                 try:
                     found = photo.one_per_face(det.faces(small))
                 finally:
-                    photo.UPSAMPLE_BELOW = 200
+                    photo.UPSAMPLE_BELOW = 150
                 if not found:
                     rows[w]["missing"] += way == "enlarged"
                     continue

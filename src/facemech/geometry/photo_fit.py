@@ -107,7 +107,7 @@ SMILE = 0.06
 #: the least share of the generic face's lip heights (each lip point's height over or under the
 #: mouth's middle line) a fitted face keeps: thin lips in a photo would squeeze the generic
 #: face's lips until its tissue folds
-LIP_FLOOR = 0.7
+LIP_FLOOR = 0.5
 #: the generic mesh the photo face is made from: (rows, columns) of :func:`generic.make_surface`,
 #: the built-in face's (about 2 mm between nodes at the lips)
 PHOTO_RESOLUTION = (48, 41)
@@ -240,19 +240,26 @@ def eye_centres(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return p[RIGHT_EYE].mean(axis=0), p[LEFT_EYE].mean(axis=0)
 
 
-def closed_mouth(points: np.ndarray) -> tuple[np.ndarray, float]:
+def closed_mouth(points: np.ndarray, closed: np.ndarray | None = None
+                 ) -> tuple[np.ndarray, float]:
     """The image points (68, 2) px (y down) with an open mouth closed, and its gap, px.
 
-    The inner lips' gap is the mean distance of the upper inner lip (iBUG 61-63) above the
-    lower (67-65). Over :data:`OPEN_MOUTH` of the mouth's width, each upper lip point moves down
-    by half its column's gap and each lower one up by as much (the outer lips' ends 49, 53, 59,
-    55 by a quarter), and the chin (iBUG 6-10; 5 and 11 half as much) up by half the gap: the
-    lips meet on the middle line, as at rest. Under it the points are returned as they are.
+    The inner lips' gap is the distance of each upper inner lip point (iBUG 61-63) above its
+    lower partner (67-65), less the gap the detector leaves on a closed mouth: ``closed``
+    (68, 2 or 3) are the detector's points on a closed mouth (y up; None: no gap). Where its
+    mean passes :data:`OPEN_MOUTH` of the mouth's width, each upper lip point moves down by half
+    its column's gap and each lower one up by as much (the outer lips' ends 49, 53, 59, 55 by
+    a quarter), and the chin (iBUG 6-10; 5 and 11 half as much) up by half the mean gap: the
+    lips meet as at rest. Under it the points are returned as they are.
     """
     p = np.array(points, float)
     upper, lower = np.array([61, 62, 63]), np.array([67, 66, 65])
-    gaps = p[lower, 1] - p[upper, 1]
     width = float(np.linalg.norm(p[54] - p[48]))
+    rest = np.zeros(3)
+    if closed is not None:
+        c = np.asarray(closed, float)
+        rest = (c[upper, 1] - c[lower, 1]) / float(np.linalg.norm(c[54, :2] - c[48, :2]))
+    gaps = p[lower, 1] - p[upper, 1] - rest * width
     gap = float(gaps.mean())
     if gap <= OPEN_MOUTH * width:
         return p, 0.0
@@ -352,11 +359,11 @@ def fit_frontal(points: np.ndarray, size: tuple[int, int], *, ipd: float | None 
     if not 0.3 <= distance <= 20.0:
         raise InputError(f"camera distance {distance:g} m is outside 0.3-20 m", field="distance")
     photo_pts = pts
-    gap_px = 0.0
-    if close_mouth:
-        pts, gap_px = closed_mouth(pts)
     own = generic_ibug68()
     gen = own if offsets is None else _detector_points(offsets)
+    gap_px = 0.0
+    if close_mouth:
+        pts, gap_px = closed_mouth(pts, gen)
     v_gen, faces = _generic_grid()
     ipd_m = IPD_NORM if ipd is None else float(ipd)
     own_ipd = float(np.linalg.norm(np.subtract(*eye_centres(own))))

@@ -31,7 +31,7 @@ MIN_FACE_PX = 40
 #: a face under this many pixels across is found again in its region enlarged to
 #: :data:`UPSAMPLE_TO` px across (Lanczos): the predictor places its points on the enlarged
 #: face, as on a larger photo
-UPSAMPLE_BELOW = 200
+UPSAMPLE_BELOW = 150
 UPSAMPLE_TO = 260
 #: two detections are one face when their boxes overlap by this share of the smaller box
 OVERLAP = 0.3
