@@ -117,7 +117,7 @@ def anatomical_layers(mouth: MouthCut, generic_xy: np.ndarray, opt: BuildOptions
     v = mouth.vertices
     gx, gy = generic_xy[:, 0], generic_xy[:, 1]
     offset, depth, notes = _offsets(v, mouth, generic_xy, opt)
-    if not notes and _folded(v, mouth, offset, depth, opt).any():
+    if _folded(v, mouth, offset, depth, opt).any():
         v, offset, depth, notes = _smoothed(mouth, generic_xy, opt)
     fascia = v - (opt.fascia_fraction * depth)[:, None] * offset
     skull = v - depth[:, None] * offset
@@ -139,15 +139,17 @@ def _offsets(v: np.ndarray, mouth: MouthCut, generic_xy: np.ndarray, opt: BuildO
 
 
 def _folded(v, mouth, offset, depth, opt) -> np.ndarray:
-    """(f,) bool: the triangles whose prisms have no volume."""
-    from .thinning import prism_quality
+    """(f,) bool: the triangles whose prisms keep less than :data:`thinning.FOLDING` of a flat
+    slab's volume after :func:`thinning.relieve_folds` (as good as folded: a simulation blows
+    up there)."""
+    from .thinning import FOLDING, prism_quality
 
-    return prism_quality(v, mouth.faces, offset, depth, opt.fascia_fraction) <= 0
+    return prism_quality(v, mouth.faces, offset, depth, opt.fascia_fraction) < FOLDING
 
 
 def _smoothed(mouth: MouthCut, generic_xy: np.ndarray, opt: BuildOptions):
     """Skin nodes, offsets, depths and notes with the skin smoothed where no tissue fits
-    (:mod:`skin_smoothing`): the region of the folded prisms' nodes and two rings round them,
+    (:mod:`skin_smoothing`): the (as good as) folded prisms' nodes and two rings round them,
     more steps and rings in turn; the skin as it is (and no note) if that does not mend it."""
     from . import skin_smoothing as sm
 
@@ -157,8 +159,11 @@ def _smoothed(mouth: MouthCut, generic_xy: np.ndarray, opt: BuildOptions):
     bad[mouth.faces[_folded(v0, mouth, offset, depth, opt)]] = True
     adj = sm._neighbours(mouth.faces, len(v0))
     v = v0
-    for rings, steps in sm.TRIES:
-        v = sm.smooth_region(v0, mouth.faces, sm.grow(adj, bad, rings), mouth.pairs, steps)
+    for rings, steps, curve in sm.TRIES:
+        v = sm.smooth_region(v0, mouth.faces, sm.grow(adj, bad, rings), mouth.pairs, steps,
+                             curve)
+        if v is None:
+            continue
         offset, depth, notes = _offsets(v, mouth, generic_xy, opt)
         if not _folded(v, mouth, offset, depth, opt).any():
             return v, offset, depth, [*notes, sm.note(v0, v, generic_xy)]

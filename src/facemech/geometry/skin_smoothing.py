@@ -15,20 +15,28 @@ import numpy as np
 
 #: Taubin's weights (a shrinking step, then an inflating one)
 LAMBDA, MU = 0.5, -0.53
-#: (rings of nodes round the folded prisms', lambda-mu pairs) tried in turn; on the menpo3d
-#: head scan (tests/data/scans) 10 pairs leave 5 of 9 folded triangles, 40 pairs none
-TRIES = ((2, 10), (2, 20), (2, 40), (4, 40), (2, 80), (4, 80), (6, 160))
+#: (rings of nodes round the folded prisms, lambda-mu pairs, the border smoothed as a curve)
+#: tried in turn; the menpo3d head scan (tests/data/scans) folds at its border, which only
+#: smoothing it with the surface mends
+TRIES = tuple((r, k, c) for c in (True, False) for r, k in ((2, 10), (2, 40), (4, 40),
+                                                          (4, 160)))
 STEPS = 10
 
 
-def _neighbours(faces: np.ndarray, n: int):
-    """The node-adjacency matrix (n, n), sparse, of the triangles' edges."""
+def _neighbours(faces: np.ndarray, n: int, border_as_curve: bool = True):
+    """The node-adjacency matrix (n, n), sparse, of the triangles' edges; with
+    ``border_as_curve`` a node on the surface's border has only its two neighbours along the
+    border (the border is smoothed as a curve and does not shrink inward)."""
     from scipy.sparse import coo_matrix
 
-    e = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
-    e = np.unique(np.sort(e, axis=1), axis=0)
-    a = coo_matrix((np.ones(2 * len(e)), (np.r_[e[:, 0], e[:, 1]], np.r_[e[:, 1], e[:, 0]])),
-                   shape=(n, n)).tocsr()
+    e = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
+    e, count = np.unique(e, axis=0, return_counts=True)
+    border = np.zeros(n, bool)
+    border[e[count == 1].ravel()] = True
+    rows, cols = np.r_[e[:, 0], e[:, 1]], np.r_[e[:, 1], e[:, 0]]
+    on_border = np.r_[count, count] == 1
+    keep = ~border[rows] | on_border | (not border_as_curve)
+    a = coo_matrix((np.ones(int(keep.sum())), (rows[keep], cols[keep])), shape=(n, n)).tocsr()
     a.data[:] = 1.0
     return a
 
@@ -41,12 +49,18 @@ def grow(adjacency, region: np.ndarray, rings: int) -> np.ndarray:
     return out
 
 
+#: a smoothing that shortens an edge to less than this share of its length is not taken
+SHORTEST = 0.25
+
+
 def smooth_region(vertices: np.ndarray, faces: np.ndarray, region: np.ndarray,
-                  twins: np.ndarray | None = None, steps: int = STEPS) -> np.ndarray:
+                  twins: np.ndarray | None = None, steps: int = STEPS,
+                  border_as_curve: bool = True) -> np.ndarray | None:
     """The vertices (n, 3) m with the nodes of ``region`` (n,) bool smoothed (Taubin's
     lambda-mu, ``steps`` pairs); the others stay. ``twins`` (q, 2): node pairs that move as
-    one (the mouth slit's)."""
-    adj = _neighbours(faces, len(vertices))
+    one (the mouth slit's). None where an edge would shrink under :data:`SHORTEST` of its
+    length (a triangle collapsing)."""
+    adj = _neighbours(faces, len(vertices), border_as_curve)
     deg = np.maximum(np.asarray(adj.sum(axis=1)).ravel(), 1.0)
     v = np.array(vertices, float)
     for _ in range(steps):
@@ -55,6 +69,11 @@ def smooth_region(vertices: np.ndarray, faces: np.ndarray, region: np.ndarray,
             v[region] += w * lap[region]
             if twins is not None and len(twins):
                 v[twins[:, 1]] = v[twins[:, 0]]
+    e = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
+    before = np.linalg.norm(vertices[e[:, 0]] - vertices[e[:, 1]], axis=1)
+    after = np.linalg.norm(v[e[:, 0]] - v[e[:, 1]], axis=1)
+    if np.any(after < SHORTEST * before):
+        return None
     return v
 
 
