@@ -128,9 +128,12 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     ident = Identity()
     for path in sorted(PORTRAITS.glob("*.jpg")):
-        if args.only and args.only not in path.stem:
+        if args.only and args.only != path.stem:
             continue
-        print(json.dumps(one(path, ident, args.sheets)), flush=True)
+        try:
+            print(json.dumps(one(path, ident, args.sheets)), flush=True)
+        except Exception as exc:  # a portrait that fails is reported, the others go on
+            print(json.dumps({"portrait": path.name, "error": str(exc)}), flush=True)
     return 0
 
 

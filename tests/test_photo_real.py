@@ -135,3 +135,19 @@ def test_the_lips_take_the_photo_lip_colour(smiling):
     lips, skin = made.texture.lips.astype(float), made.texture.skin.astype(float)
     assert lips[0] / lips[1] > skin[0] / skin[1] + 0.1
     assert lips.sum() < 0.85 * skin.sum()
+
+
+def test_the_texture_meets_the_head_without_a_seam(smiling):
+    """The texture's border (towards the ears, the throat and the hairline), where the head's
+    closure takes its colour, is the one skin tone (within 8 sRGB levels; measured 5, at the
+    throat under the chin); between the photo
+    and it the colour changes smoothly (no step over 6 levels, measured 5, between texels
+    where the photo covers under a tenth of a texel)."""
+    _, made = smiling
+    image = made.texture.appearance.image.astype(int)
+    skin = made.texture.skin.astype(int)
+    border = np.concatenate([image[:, 0], image[:, -1], image[0], image[-1]])
+    assert np.abs(border - skin).max() <= 8
+    unseen = made.texture.coverage < 0.1
+    step = np.abs(np.diff(image, axis=1)).max(axis=-1)
+    assert step[unseen[:, 1:] & unseen[:, :-1]].max() <= 6

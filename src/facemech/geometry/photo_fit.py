@@ -107,7 +107,7 @@ SMILE = 0.06
 #: the least share of the generic face's lip heights (each lip point's height over or under the
 #: mouth's middle line) a fitted face keeps: thin lips in a photo would squeeze the generic
 #: face's lips until its tissue folds
-LIP_FLOOR = 0.5
+LIP_FLOOR = 0.8
 #: the generic mesh the photo face is made from: (rows, columns) of :func:`generic.make_surface`,
 #: the built-in face's (about 2 mm between nodes at the lips)
 PHOTO_RESOLUTION = (48, 41)

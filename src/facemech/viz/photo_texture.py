@@ -39,6 +39,9 @@ SKIN_GLOSS = (0.10, 16.0)
 FEATHER = 0.04
 #: the weakest renderer light a texel is divided by (deep shadow would blow the colour up)
 MIN_LIGHT = 0.3
+#: texels, the Gaussian over which the photo's skin is carried out beyond what it sees, and the
+#: share of seen texels in it under which it fades into the one skin tone of the whole head
+FILL_SIGMA, FILL_FADE = 48.0, 0.35
 
 
 @dataclass(frozen=True)
@@ -51,15 +54,14 @@ class BakedTexture:
         triangles and the baked image
     coverage : (h, w) float in [0, 1], how much of each texel is the photo (the rest is skin)
     skin : (3,) uint8, the skin tone the unseen parts are painted with (sRGB)
-    lips : (3,) uint8, the lip colour painted on the fitted lips (sRGB)
-    hair : (3,) uint8, the photo's hair colour above the face (sRGB), or None where none shows
+    lips : (3,) uint8, the lip colour painted on the fitted lips (sRGB), or None where the
+        photo's lips are not seen
     """
 
     appearance: Appearance
     coverage: np.ndarray
     skin: np.ndarray
     lips: np.ndarray | None = None
-    hair: np.ndarray | None = None
 
 
 def grid_uv(fit: PhotoFit) -> np.ndarray:
@@ -129,7 +131,8 @@ def bake_photo_texture(fit: PhotoFit, photo: np.ndarray, *, delight: bool = True
     skin = _skin_tone(colour, weight, pts, fit)
     weight = weight * _hair_free(colour, skin, pts, fit)
     colour, lips = _neutral_mouth(colour, weight, px, fit, (photo_h, photo_w))
-    out = weight[:, None] * colour + (1 - weight[:, None]) * skin
+    fill = _skin_fill(colour, weight, skin, (th, tw))
+    out = weight[:, None] * colour + (1 - weight[:, None]) * fill
     image = np.round(_linear_to_srgb(out) * 255).astype(np.uint8).reshape(th, tw, 3)
     corner_uv = uv[fit.faces].astype(np.float32)
     app = Appearance(uv=corner_uv, image=image, source=source)
@@ -137,8 +140,7 @@ def bake_photo_texture(fit: PhotoFit, photo: np.ndarray, *, delight: bool = True
     def srgb(c):
         return None if c is None else np.round(_linear_to_srgb(c) * 255).astype(np.uint8)
 
-    hair = _hair_colour(lin, fit, skin)
-    return BakedTexture(app, weight.reshape(th, tw), srgb(skin), srgb(lips), srgb(hair))
+    return BakedTexture(app, weight.reshape(th, tw), srgb(skin), srgb(lips))
 
 
 #: share of the mouth's width around the photo's outer lip line that is repainted (the lips'
@@ -216,31 +218,24 @@ def _hair_free(colour: np.ndarray, skin: np.ndarray, pts: np.ndarray,
     return np.where(above, np.minimum(dark, off_hue), 1.0)
 
 
-def _hair_colour(lin: np.ndarray, fit: PhotoFit, skin: np.ndarray) -> np.ndarray | None:
-    """The photo's hair colour (linear RGB, (3,)): the median of the pixels above the brows and
-    beside the temples that differ from both the skin and the photo's border (the background);
-    None where under 50 such pixels show."""
-    pts = np.asarray(fit.image_points, float)
-    h, w = lin.shape[:2]
-    jaw_w = float(pts[16, 0] - pts[0, 0])
-    brow_y = float(pts[17:27, 1].min())
-    x0, x1 = int(max(pts[0, 0] - 0.1 * jaw_w, 0)), int(min(pts[16, 0] + 0.1 * jaw_w, w))
-    y0, y1 = int(max(brow_y - 0.7 * jaw_w, 0)), int(max(brow_y - 0.05 * jaw_w, 1))
-    block = lin[y0:y1, x0:x1].reshape(-1, 3)
-    if len(block) < 50:
-        return None
-    border = np.concatenate([lin[0], lin[:, 0], lin[:, -1]])
-    bg = np.median(border, axis=0)
+def _skin_fill(colour: np.ndarray, weight: np.ndarray, skin: np.ndarray,
+                size: tuple[int, int]) -> np.ndarray:
+    """What the texels (n, 3) linear the photo does not see are painted with: the photo's own
+    skin carried outward (its Gaussian mean over :data:`FILL_SIGMA` texels, weighted by how
+    much of each texel is the photo), fading into the skin tone ``skin`` (3,) where few seen
+    texels are near (:data:`FILL_FADE`), so that the texture meets the head's one colour
+    without a seam."""
+    from scipy.ndimage import gaussian_filter
 
-    def far(c, ref, k):
-        return np.linalg.norm(c - ref, axis=1) > k * max(float(np.linalg.norm(ref)), 0.05)
-
-    keep = far(block, bg, 0.35) & far(block, skin, 0.35)
-    luma = block @ np.array([0.2126, 0.7152, 0.0722])
-    keep &= luma < float(skin @ np.array([0.2126, 0.7152, 0.0722]))
-    if keep.sum() < 50:
-        return None
-    return np.median(block[keep], axis=0)
+    th, tw = size
+    w = weight.reshape(th, tw)
+    near = gaussian_filter(w, FILL_SIGMA, mode="nearest")
+    mean = np.stack([gaussian_filter((colour[:, c] * weight).reshape(th, tw), FILL_SIGMA,
+                                     mode="nearest") for c in range(3)], axis=-1)
+    local = mean / np.maximum(near, 1e-6)[..., None]
+    t = np.clip(near / FILL_FADE, 0.0, 1.0)[..., None]
+    t = t * t * (3 - 2 * t)
+    return (t * local + (1 - t) * skin).reshape(-1, 3)
 
 
 def _outline_weight(points: np.ndarray, size: tuple[int, int], px: np.ndarray,
