@@ -100,6 +100,9 @@ def build_face(
     lm = {k: np.asarray(v, float) for k, v in landmarks.items()}
     mouth = cut_mouth(vertices, faces, lm, source)
     layers, topology, bone_weight = tissue_geometry(mouth, lm, opt, source)
+    skin = layers.rest[:len(mouth.vertices)]
+    if not np.array_equal(skin, mouth.vertices):  # smoothed where no tissue fitted
+        mouth = replace(mouth, vertices=skin.copy())
     if notes is not None:
         notes.extend(layers.notes)
     jaw = attach_jaw(bone_weight, layers.slides, lm, opt)

@@ -116,11 +116,9 @@ def anatomical_layers(mouth: MouthCut, generic_xy: np.ndarray, opt: BuildOptions
     """
     v = mouth.vertices
     gx, gy = generic_xy[:, 0], generic_xy[:, 1]
-    depth = tissue.tissue_depth_mm(gx, gy) * 1e-3
-    offset = smoothed_normals(v, mouth.faces, opt.normal_smoothing)
-    offset[mouth.pairs[:, 1]] = offset[mouth.pairs[:, 0]]  # the slit's twins stay together
-    offset, depth, notes = relieve_folds(v, mouth.faces, offset, depth, opt.fascia_fraction,
-                                         generic_xy=generic_xy, twins=mouth.pairs)
+    offset, depth, notes = _offsets(v, mouth, generic_xy, opt)
+    if _folded(v, mouth, offset, depth, opt).any():
+        v, offset, depth, notes = _smoothed(mouth, generic_xy, opt)
     fascia = v - (opt.fascia_fraction * depth)[:, None] * offset
     skull = v - depth[:, None] * offset
     slides = tissue.sliding_region(gx, gy)
@@ -129,3 +127,44 @@ def anatomical_layers(mouth: MouthCut, generic_xy: np.ndarray, opt: BuildOptions
                   lip_region=tissue.lip_ellipse(gx, gy), free=slides, slides=slides,
                   sliding_tether=tissue.tether_weight(gx[slides], gy[slides]),
                   notes=tuple(notes))
+
+
+def _offsets(v: np.ndarray, mouth: MouthCut, generic_xy: np.ndarray, opt: BuildOptions):
+    """The layers' offsets (n, 3), depths (n,) m and notes of skin nodes ``v`` (n, 3) m."""
+    depth = tissue.tissue_depth_mm(generic_xy[:, 0], generic_xy[:, 1]) * 1e-3
+    offset = smoothed_normals(v, mouth.faces, opt.normal_smoothing)
+    offset[mouth.pairs[:, 1]] = offset[mouth.pairs[:, 0]]  # the slit's twins stay together
+    return relieve_folds(v, mouth.faces, offset, depth, opt.fascia_fraction,
+                         generic_xy=generic_xy, twins=mouth.pairs)
+
+
+def _folded(v, mouth, offset, depth, opt) -> np.ndarray:
+    """(f,) bool: the triangles whose prisms keep less than :data:`thinning.FOLDING` of a flat
+    slab's volume after :func:`thinning.relieve_folds` (as good as folded: a simulation blows
+    up there)."""
+    from .thinning import FOLDING, prism_quality
+
+    return prism_quality(v, mouth.faces, offset, depth, opt.fascia_fraction) < FOLDING
+
+
+def _smoothed(mouth: MouthCut, generic_xy: np.ndarray, opt: BuildOptions):
+    """Skin nodes, offsets, depths and notes with the skin smoothed where no tissue fits
+    (:mod:`skin_smoothing`): the (as good as) folded prisms' nodes and two rings round them,
+    more steps and rings in turn; the skin as it is (and no note) if that does not mend it."""
+    from . import skin_smoothing as sm
+
+    v0 = mouth.vertices
+    offset, depth, notes = _offsets(v0, mouth, generic_xy, opt)
+    bad = np.zeros(len(v0), bool)
+    bad[mouth.faces[_folded(v0, mouth, offset, depth, opt)]] = True
+    adj = sm._neighbours(mouth.faces, len(v0))
+    v = v0
+    for rings, steps, curve in sm.TRIES:
+        v = sm.smooth_region(v0, mouth.faces, sm.grow(adj, bad, rings), mouth.pairs, steps,
+                             curve)
+        if v is None:
+            continue
+        offset, depth, notes = _offsets(v, mouth, generic_xy, opt)
+        if not _folded(v, mouth, offset, depth, opt).any():
+            return v, offset, depth, [*notes, sm.note(v0, v, generic_xy)]
+    return v0, *_offsets(v0, mouth, generic_xy, opt)

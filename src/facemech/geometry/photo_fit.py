@@ -83,6 +83,15 @@ YAW_MIN = float(np.radians(3.0))
 #: rad, the turns :func:`estimate_yaw` tries (0.25-degree steps; photos turned more than 20
 #: degrees are refused before, :func:`facemech.io.photo.frontal_landmarks`)
 YAW_SEARCH = np.radians(np.arange(-25.0, 25.0 + 1e-9, 0.25))
+#: a mouth whose inner lips lie further apart than this share of its width (corner to corner)
+#: is open: :func:`closed_mouth` closes it for the talker's rest
+OPEN_MOUTH = 0.05
+#: a mouth whose corners lie above its inner lips' middle by this share of its width smiles
+SMILE = 0.06
+#: the least share of the generic face's lip heights (each lip point's height over or under the
+#: mouth's middle line) a fitted face keeps: thin lips in a photo would squeeze the generic
+#: face's lips until its tissue folds
+LIP_FLOOR = 0.8
 #: the generic mesh the photo face is made from: (rows, columns) of :func:`generic.make_surface`,
 #: the built-in face's (about 2 mm between nodes at the lips)
 PHOTO_RESOLUTION = (48, 41)
@@ -188,20 +197,89 @@ class PhotoFit:
     scale_source: str
     size_factor: float
     profile_correction: np.ndarray | None = None
+    mouth_gap: float = 0.0
+    smiling: bool = False
 
     def note(self) -> str:
-        """One line: the scale and where it came from."""
+        """One line: the scale and where it came from; whether the photo's mouth was open or
+        smiling (closed and neutral for the talker's rest)."""
         turn = (f"; turned {abs(np.degrees(self.camera.yaw)):.1f} degrees to its "
                 f"{'left' if self.camera.yaw > 0 else 'right'}, taken out"
                 if self.camera.yaw else "")
+        mouth = []
+        if self.mouth_gap:
+            mouth.append(f"open {self.mouth_gap * 1e3:.0f} mm")
+        if self.smiling:
+            mouth.append("smiling")
+        warn = (f"; the photo's mouth is {' and '.join(mouth)}: the talker rests with it closed "
+                "and neutral, its lips in the photo's lip colour (a neutral photo with the "
+                "mouth closed makes the best talker)" if mouth else "")
         return (f"scale: interpupillary distance {self.ipd * 1e3:.1f} mm ({self.scale_source}); "
-                f"face {self.size_factor:.3f} x the generic face{turn}")
+                f"face {self.size_factor:.3f} x the generic face{turn}{warn}")
 
 
 def eye_centres(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The centres of the subject's right and left eyes (means of their six iBUG points)."""
     p = np.asarray(points, float)
     return p[RIGHT_EYE].mean(axis=0), p[LEFT_EYE].mean(axis=0)
+
+
+def closed_mouth(points: np.ndarray, closed: np.ndarray | None = None
+                 ) -> tuple[np.ndarray, float]:
+    """The image points (68, 2) px (y down) with an open mouth closed, and its gap, px.
+
+    The inner lips' gap is the distance of each upper inner lip point (iBUG 61-63) above its
+    lower partner (67-65), less the gap the detector leaves on a closed mouth: ``closed``
+    (68, 2 or 3) are the detector's points on a closed mouth (y up; None: no gap). Where its
+    mean passes :data:`OPEN_MOUTH` of the mouth's width, each upper lip point moves down by half
+    its column's gap and each lower one up by as much (the outer lips' ends 49, 53, 59, 55 by
+    a quarter), and the chin (iBUG 6-10; 5 and 11 half as much) up by half the mean gap: the
+    lips meet as at rest. Under it the points are returned as they are.
+    """
+    p = np.array(points, float)
+    upper, lower = np.array([61, 62, 63]), np.array([67, 66, 65])
+    width = float(np.linalg.norm(p[54] - p[48]))
+    rest = np.zeros(3)
+    if closed is not None:
+        c = np.asarray(closed, float)
+        rest = (c[upper, 1] - c[lower, 1]) / float(np.linalg.norm(c[54, :2] - c[48, :2]))
+    gaps = p[lower, 1] - p[upper, 1] - rest * width
+    gap = float(gaps.mean())
+    if gap <= OPEN_MOUTH * width:
+        return p, 0.0
+    half = 0.5 * np.clip(gaps, 0.0, None)
+    p[upper, 1] += half
+    p[[50, 51, 52], 1] += half
+    p[[49, 53], 1] += 0.5 * half[[0, 2]]
+    p[lower, 1] -= half
+    p[[58, 57, 56], 1] -= half
+    p[[59, 55], 1] -= 0.5 * half[[0, 2]]
+    p[6:11, 1] -= 0.5 * gap
+    p[[5, 11], 1] -= 0.25 * gap
+    return p, gap
+
+
+def _lip_floor(fitted: np.ndarray, generic_points: np.ndarray) -> np.ndarray:
+    """The fitted points (68, 3) m with each lip point (iBUG 48-67) at least :data:`LIP_FLOOR`
+    of the generic face's (``generic_points``, (68, 3) m, scaled) height over or under the
+    mouth's middle line (the inner lips' mean height)."""
+    out = np.array(fitted, float)
+    lips = np.arange(48, 68)
+    mid_f, mid_g = out[60:68, 1].mean(), generic_points[60:68, 1].mean()
+    d_f, d_g = out[lips, 1] - mid_f, generic_points[lips, 1] - mid_g
+    floor = LIP_FLOOR * np.abs(d_g)
+    thin = (np.abs(d_f) < floor) | (np.sign(d_f) != np.sign(d_g))
+    out[lips[thin], 1] = mid_f + np.sign(d_g[thin]) * floor[thin]
+    return out
+
+
+def smiling(points: np.ndarray) -> bool:
+    """Whether the mouth's corners (iBUG 48, 54) lie above the inner lips' middle (the mean of
+    61-63 and 65-67) by :data:`SMILE` of the mouth's width (image points (68, 2) px, y down)."""
+    p = np.asarray(points, float)
+    width = float(np.linalg.norm(p[54] - p[48]))
+    middle = p[[61, 62, 63, 65, 66, 67], 1].mean()
+    return bool(middle - p[[48, 54], 1].mean() > SMILE * width)
 
 
 def _generic_grid() -> tuple[np.ndarray, np.ndarray]:
@@ -213,7 +291,7 @@ def fit_frontal(points: np.ndarray, size: tuple[int, int], *, ipd: float | None 
                 distance: float = 1.0, profile: ProfileSilhouette | None = None,
                 offsets: np.ndarray | None = DLIB_OFFSETS_MM,
                 loose_jaw: bool | None = None, yaw: float | None = None,
-                source: str | None = None) -> PhotoFit:
+                close_mouth: bool = True, source: str | None = None) -> PhotoFit:
     """Fit the generic face to the 68 iBUG points of a frontal photo.
 
     A face turned a little from the camera (at least :data:`YAW_MIN`) is turned back first: its
@@ -240,6 +318,8 @@ def fit_frontal(points: np.ndarray, size: tuple[int, int], *, ipd: float | None 
         ``offsets`` are given (a detector's points), not for points in facemech's placement
     yaw : rad, the face's turn to its left (positive) to take out; None reads it from the points
         (:func:`estimate_yaw`, none under :data:`YAW_MIN`); 0 fits the points as frontal
+    close_mouth : fit an open mouth closed (:func:`closed_mouth`): the talker rests with its
+        lips together whatever the photo's expression
     source : the photo's name, for errors
 
     Returns
@@ -262,8 +342,12 @@ def fit_frontal(points: np.ndarray, size: tuple[int, int], *, ipd: float | None 
                          f"{IPD_RANGE[0] * 1e3:.0f}-{IPD_RANGE[1] * 1e3:.0f} mm", field="ipd")
     if not 0.3 <= distance <= 20.0:
         raise InputError(f"camera distance {distance:g} m is outside 0.3-20 m", field="distance")
+    photo_pts = pts
     own = generic_ibug68()
     gen = own if offsets is None else _detector_points(offsets)
+    gap_px = 0.0
+    if close_mouth:
+        pts, gap_px = closed_mouth(pts, gen)
     v_gen, faces = _generic_grid()
     ipd_m = IPD_NORM if ipd is None else float(ipd)
     own_ipd = float(np.linalg.norm(np.subtract(*eye_centres(own))))
@@ -283,6 +367,7 @@ def fit_frontal(points: np.ndarray, size: tuple[int, int], *, ipd: float | None 
                                         distance, source)
     fitted = cam.back_project(used, z)
     _check_order(fitted, source)
+    fitted = _lip_floor(fitted, scaled)
     smooth_x, smooth_y = np.zeros(len(SPLINE_POINTS)), np.zeros(len(SPLINE_POINTS))
     if offsets is not None if loose_jaw is None else loose_jaw:
         fitted = symmetric_jaw(fitted)
@@ -308,9 +393,10 @@ def fit_frontal(points: np.ndarray, size: tuple[int, int], *, ipd: float | None 
     lm = ibug_to_landmarks(ibug, verts, faces)
     if turn:
         cam = replace(cam, yaw=float(turn))
-    return PhotoFit(verts, faces, v_gen, ibug, lm, cam, pts.copy(), ipd_m,
+    return PhotoFit(verts, faces, v_gen, ibug, lm, cam, photo_pts.copy(), ipd_m,
                     "given" if ipd is not None else "adult norm, Dodgson 2004",
-                    float(size_factor), None if correction is None else correction.values)
+                    float(size_factor), None if correction is None else correction.values,
+                    mouth_gap=float(gap_px * cam.metres_per_px), smiling=smiling(photo_pts))
 
 
 def _frontal_camera(pts: np.ndarray, gen: np.ndarray, size, ipd_m: float, own_ipd: float,

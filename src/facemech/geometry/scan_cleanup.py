@@ -137,9 +137,74 @@ def crop_to_face(vertices: np.ndarray, faces: np.ndarray, landmarks: dict,
     area = triangle_areas(vertices, faces)
     share = 100 * float(area[~keep].sum() / area.sum())
     v, f, look = keep_triangles(vertices, faces, appearance, keep)
+    v, f, look, fins = trim_fins(v, f, look)
     return v, f, look, (f"cropped to the face (75 mm above the brows, 25 mm under the menton, "
                         f"45 mm behind the jaw angles): {int(np.sum(~keep))} triangles, "
-                        f"{share:.0f} % of the area, dropped")
+                        f"{share:.0f} % of the area, dropped"
+                        + (f"; {fins} triangles on the cut's ragged border (spikes and flaps "
+                           "folded back) trimmed" if fins else ""))
+
+
+#: a border triangle whose normal lies more than 90 degrees from a neighbour's is a flap folded
+#: back; rounds of trimming at most
+FIN_ROUNDS = 10
+#: a triangle with two edges on the border meeting at under this angle is a spike (a grid's
+#: corner, 90 degrees, is not)
+SPIKE_DEG = 45.0
+
+
+def _spikes(vertices: np.ndarray, faces: np.ndarray, on_border: np.ndarray) -> np.ndarray:
+    """(f,) bool: triangles with three edges on the border, or two meeting at under
+    :data:`SPIKE_DEG` (``on_border`` (f, 3): edge k runs from corner k to corner k + 1)."""
+    two = on_border.sum(axis=1) == 2
+    out = on_border.sum(axis=1) == 3
+    for k in range(3):  # the corner between border edges k - 1 and k is corner k
+        both = two & on_border[:, k] & on_border[:, k - 1]
+        if not both.any():
+            continue
+        f = faces[both]
+        p, a, b = vertices[f[:, k]], vertices[f[:, (k + 1) % 3]], vertices[f[:, k - 1]]
+        u, w = a - p, b - p
+        cos = np.einsum("ij,ij->i", u, w) / np.maximum(
+            np.linalg.norm(u, axis=1) * np.linalg.norm(w, axis=1), 1e-30)
+        out[np.flatnonzero(both)[cos > np.cos(np.radians(SPIKE_DEG))]] = True
+    return out
+
+
+def trim_fins(vertices: np.ndarray, faces: np.ndarray, appearance: Appearance | None = None):
+    """Trim a cut surface's ragged border: spikes (:func:`_spikes`) and border triangles
+    folded back against a neighbour (their normals more than 90 degrees apart), round by
+    round; of what is left, the largest piece. Returns (vertices, faces, appearance, the
+    number of triangles trimmed)."""
+    trimmed = 0
+    for _ in range(FIN_ROUNDS):
+        e = np.sort(np.stack([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]], axis=1),
+                    axis=2).reshape(-1, 2)
+        key = e[:, 0].astype(np.int64) * len(vertices) + e[:, 1]
+        _, inverse, count = np.unique(key, return_inverse=True, return_counts=True)
+        on_border = (count[inverse] == 1).reshape(-1, 3)
+        a, b, c = (vertices[faces[:, k]] for k in range(3))
+        normal = np.cross(b - a, c - a)
+        normal /= np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), 1e-30)
+        # each interior edge's two triangles: sorted by edge, the pairs lie side by side
+        order = np.argsort(inverse, kind="stable")
+        starts = np.searchsorted(inverse[order], np.flatnonzero(count == 2))
+        t1, t2 = order[starts] // 3, order[starts + 1] // 3
+        back = np.einsum("ij,ij->i", normal[t1], normal[t2]) < 0
+        folded = np.zeros(len(faces), bool)
+        folded[t1[back]] = True
+        folded[t2[back]] = True
+        drop = _spikes(vertices, faces, on_border) | (folded & on_border.any(axis=1))
+        if not drop.any():
+            break
+        trimmed += int(drop.sum())
+        vertices, faces, appearance = keep_triangles(vertices, faces, appearance, ~drop)
+    if trimmed:
+        piece = surface_pieces(len(vertices), faces)
+        keep = piece == np.argmax(np.bincount(piece))
+        trimmed += int((~keep).sum())
+        vertices, faces, appearance = keep_triangles(vertices, faces, appearance, keep)
+    return vertices, faces, appearance, trimmed
 
 
 def check_open(faces: np.ndarray, *, source: str | None = None) -> None:

@@ -8,9 +8,13 @@ surface; :func:`bake_photo_texture` looks it up in the photo through the fitted 
 blends it into a skin tone taken from the photo where the photo sees the skin at a grazing
 angle or not at all (the sides towards the ears, under the chin).
 
-The renderer lights the texture (:func:`facemech.viz.raster.vertex_light`); a photo is already
-lit. With ``delight`` the photo is divided by the renderer's own light at each texel's normal
-(seen from the front), so that a frontal re-render gives the photo's colours back.
+The photo's expression is not the talker's skin: its lips, teeth and mouth interior are not
+painted on it (:func:`_neutral_mouth`). Texels on the fitted (closed) lips take the photo's lip
+colour, those around them the skin near the mouth; hair over the forehead gives way to the skin
+tone (:func:`_hair_free`). The renderer lights the texture
+(:func:`facemech.viz.raster.vertex_light`); a photo is already lit. With ``delight`` the photo is
+divided by the renderer's own light at each texel's normal (seen from the front), so that a
+frontal re-render gives the photo's colours back.
 """
 
 from __future__ import annotations
@@ -35,6 +39,9 @@ SKIN_GLOSS = (0.10, 16.0)
 FEATHER = 0.04
 #: the weakest renderer light a texel is divided by (deep shadow would blow the colour up)
 MIN_LIGHT = 0.3
+#: texels, the Gaussian over which the photo's skin is carried out beyond what it sees, and the
+#: share of seen texels in it under which it fades into the one skin tone of the whole head
+FILL_SIGMA, FILL_FADE = 48.0, 0.35
 
 
 @dataclass(frozen=True)
@@ -47,11 +54,14 @@ class BakedTexture:
         triangles and the baked image
     coverage : (h, w) float in [0, 1], how much of each texel is the photo (the rest is skin)
     skin : (3,) uint8, the skin tone the unseen parts are painted with (sRGB)
+    lips : (3,) uint8, the lip colour painted on the fitted lips (sRGB), or None where the
+        photo's lips are not seen
     """
 
     appearance: Appearance
     coverage: np.ndarray
     skin: np.ndarray
+    lips: np.ndarray | None = None
 
 
 def grid_uv(fit: PhotoFit) -> np.ndarray:
@@ -119,12 +129,122 @@ def bake_photo_texture(fit: PhotoFit, photo: np.ndarray, *, delight: bool = True
     weight = (t * t * (3 - 2 * t) * inside
               * _outline_weight(fit.image_points, (photo_h, photo_w), px, top))
     skin = _skin_tone(colour, weight, pts, fit)
-    out = weight[:, None] * colour + (1 - weight[:, None]) * skin
+    weight = weight * _hair_free(colour, skin, pts, fit)
+    colour, lips = _neutral_mouth(colour, weight, px, fit, (photo_h, photo_w))
+    fill = _skin_fill(colour, weight, skin, (th, tw))
+    out = weight[:, None] * colour + (1 - weight[:, None]) * fill
     image = np.round(_linear_to_srgb(out) * 255).astype(np.uint8).reshape(th, tw, 3)
     corner_uv = uv[fit.faces].astype(np.float32)
     app = Appearance(uv=corner_uv, image=image, source=source)
-    skin_srgb = np.round(_linear_to_srgb(skin) * 255).astype(np.uint8)
-    return BakedTexture(app, weight.reshape(th, tw), skin_srgb)
+
+    def srgb(c):
+        return None if c is None else np.round(_linear_to_srgb(c) * 255).astype(np.uint8)
+
+    return BakedTexture(app, weight.reshape(th, tw), srgb(skin), srgb(lips))
+
+
+#: share of the mouth's width around the photo's outer lip line that is repainted (the lips'
+#: edge, the smile's folds at the corners)
+MOUTH_MARGIN = 0.12
+#: the blend from the repainted mouth to the photo, a share of the mouth's width
+MOUTH_FEATHER = 0.06
+
+
+def _polygon_depth(poly: np.ndarray, size: tuple[int, int], px: np.ndarray) -> np.ndarray:
+    """Signed distance (px) of image points ``px`` (n, 2) inside the polygon (k, 2) px,
+    negative outside (within the photo of ``size`` (h, w))."""
+    from matplotlib.path import Path as Polygon
+    from scipy.ndimage import distance_transform_edt, map_coordinates
+
+    h, w = size
+    lo = np.floor(np.clip(poly.min(axis=0) - 80, 0, None)).astype(int)
+    hi = np.ceil(np.minimum(poly.max(axis=0) + 80, [w, h])).astype(int)
+    yy, xx = np.mgrid[lo[1]:hi[1], lo[0]:hi[0]]
+    inside = Polygon(poly).contains_points(np.column_stack([xx.ravel() + 0.5,
+                                                            yy.ravel() + 0.5]))
+    inside = inside.reshape(xx.shape)
+    depth = distance_transform_edt(inside) - distance_transform_edt(~inside)
+    return map_coordinates(depth, [px[:, 1] - 0.5 - lo[1], px[:, 0] - 0.5 - lo[0]], order=1,
+                           mode="nearest")
+
+
+def _neutral_mouth(colour: np.ndarray, weight: np.ndarray, px: np.ndarray, fit: PhotoFit,
+                   size: tuple[int, int]) -> tuple[np.ndarray, np.ndarray | None]:
+    """The texels' colours (n, 3) linear with the photo's mouth repainted, and the lip colour.
+
+    Texels that look up the photo within :data:`MOUTH_MARGIN` of its outer lip line (iBUG
+    48-59) are repainted: inside the fitted, closed lips
+    (the fitted face's outer lip line, iBUG 48-59, seen through the photo's camera)
+    with the photo's lip colour (the median of the reddest half of the texels on the photo's
+    lips, between its outer and inner lip lines: teeth and the dark mouth are not), elsewhere
+    with the skin round the mouth (the median of a ring outside the repainted area).
+    """
+    pts = np.asarray(fit.image_points, float)
+    width = float(np.linalg.norm(pts[54] - pts[48]))
+    outer = _polygon_depth(pts[48:60], size, px)
+    inner = _polygon_depth(pts[60:68], size, px)
+    closed = _polygon_depth(fit.camera.project(fit.ibug[48:60]), size, px)
+    on_lips = (outer > 1.0) & (inner < -1.0) & (weight > 0.5)
+    lips = None
+    if on_lips.sum() >= 20:
+        c = colour[on_lips]
+        red = (c[:, 0] - c[:, 1]) / np.maximum(c.sum(axis=1), 1e-6)
+        lips = np.median(c[red >= np.median(red)], axis=0)
+    margin, feather = MOUTH_MARGIN * width, max(MOUTH_FEATHER * width, 1.0)
+    ring = (outer < -(margin + feather)) & (outer > -(margin + 3 * feather)) & (weight > 0.5)
+    if ring.sum() < 20 or lips is None:
+        return colour, lips
+    around = np.median(colour[ring], axis=0)
+    t = np.clip((outer + margin + feather) / feather, 0.0, 1.0)
+    repaint = t * t * (3 - 2 * t)
+    s = np.clip(closed / max(0.02 * width, 0.75) + 0.5, 0.0, 1.0)
+    paint = s[:, None] * lips + (1 - s[:, None]) * around
+    return (1 - repaint[:, None]) * colour + repaint[:, None] * paint, lips
+
+
+def _hair_free(colour: np.ndarray, skin: np.ndarray, pts: np.ndarray,
+               fit: PhotoFit) -> np.ndarray:
+    """Weights (n,) in [0, 1] that let the skin tone replace hair over the forehead: above the
+    brows (iBUG 17-26), texels much darker than the skin (luma under half of its) or far from
+    its hue get weight 0, with a soft step between."""
+    brow = float(fit.ibug[17:27, 1].max())
+    luma = colour @ np.array([0.2126, 0.7152, 0.0722])
+    skin_luma = float(skin @ np.array([0.2126, 0.7152, 0.0722]))
+    dark = np.clip((luma / max(skin_luma, 1e-6) - 0.45) / 0.2, 0.0, 1.0)
+    hue = colour / np.maximum(colour.sum(axis=1, keepdims=True), 1e-6) - skin / max(
+        float(skin.sum()), 1e-6)
+    off_hue = np.clip(1.5 - np.linalg.norm(hue, axis=1) / 0.08, 0.0, 1.0)
+    above = pts[:, 1] > brow + 0.004
+    return np.where(above, np.minimum(dark, off_hue), 1.0)
+
+
+def _skin_fill(colour: np.ndarray, weight: np.ndarray, skin: np.ndarray,
+                size: tuple[int, int]) -> np.ndarray:
+    """What the texels (n, 3) linear the photo does not see are painted with: the photo's own
+    skin carried outward (its Gaussian mean over :data:`FILL_SIGMA` texels, weighted by how
+    much of each texel is the photo), fading into the skin tone ``skin`` (3,) where few seen
+    texels are near (:data:`FILL_FADE`), so that the texture meets the head's one colour
+    without a seam. The means are taken on texels grouped 8 x 8 and interpolated back (the
+    Gaussian is wide)."""
+    from scipy.ndimage import gaussian_filter, zoom
+
+    th, tw = size
+    k = 8
+    hk, wk = th // k, tw // k
+    w = weight.reshape(th, tw)[:hk * k, :wk * k].reshape(hk, k, wk, k).mean(axis=(1, 3))
+    cw = (colour * weight[:, None]).reshape(th, tw, 3)[:hk * k, :wk * k].reshape(
+        hk, k, wk, k, 3).mean(axis=(1, 3))
+    sigma = FILL_SIGMA / k
+    near = gaussian_filter(w, sigma, mode="nearest")
+    mean = np.stack([gaussian_filter(cw[..., c], sigma, mode="nearest") for c in range(3)],
+                    axis=-1)
+    local = mean / np.maximum(near, 1e-6)[..., None]
+    t = np.clip(near / FILL_FADE, 0.0, 1.0)[..., None]
+    t = t * t * (3 - 2 * t)
+    small = t * local + (1 - t) * skin
+    full = np.stack([zoom(small[..., c], (th / hk, tw / wk), order=1, mode="nearest",
+                          grid_mode=True) for c in range(3)], axis=-1)
+    return full.reshape(-1, 3)
 
 
 def _outline_weight(points: np.ndarray, size: tuple[int, int], px: np.ndarray,

@@ -64,7 +64,7 @@ def face_from_photo(front: np.ndarray, *, profile: np.ndarray | None = None,
     Raises
     ------
     InputError
-        A photo without exactly one frontal face of at least 150 px, a profile that is a
+        A photo without exactly one frontal face of at least 40 px, a profile that is a
         frontal photo or shows no face outline, a scale or distance out of range.
     """
     from ..geometry.builder import build_face, tissue_options
