@@ -17,6 +17,9 @@
   elevation: :func:`.dentition.bend_tongue`) (:mod:`.dentition`), and a dark seal across the
   slit between the lips' edges, facing into the mouth (it moves with the skin)
   (:mod:`.face_parts`);
+* **nose and folds** (the built-in face): alae and nostrils carried by the skin
+  (:mod:`.nose`, :mod:`.attach`), and the nasolabial and mentolabial folds pressed into the
+  drawn skin as it is compressed (:mod:`.folds`);
 * **head motion**: the whole head (every part above) turns rigidly about :func:`head_pivot`
   (the top of the neck) by a pose (pitch, yaw, roll) rad (:func:`head_rotation`); the skin's
   positions, from the simulation, stay in the head's frame;
@@ -43,10 +46,12 @@ from ..geometry.builder import vertex_normals
 from ..solvers.jaw import rotation_matrix
 from .dentition import bend_tongue, tongue_modes
 from .face_parts import MAX_TEXTURE, eye_parts, mouth_parts, skin_part, textured_fissures
+from .folds import build_folds
 from .head import SKIRT_DEPTH, closed_head, ear_parts, head_centre, head_shell, skirt_part
 from .lids import gaze_rotation
 from .look import FaceLook, look_from_dataset, look_from_model
 from .mesh import Part, VertexNormals
+from .nose import nose_parts
 from .raster import srgb_to_linear
 
 __all__ = ["FaceLook", "MAX_TEXTURE", "Part", "SKIRT_DEPTH", "Scene", "build_scene",
@@ -76,6 +81,7 @@ class Scene:
     joint_normals: VertexNormals | None = None  # of the joint mesh
     framing: dict = field(default_factory=dict)
     tongue_modes: np.ndarray | None = None  # (n, 2, 3) of the 'tongue' part (.dentition)
+    folds: object | None = None  # the skin's render-only folds (:class:`.folds.Folds`)
 
     def frame(self, skin: np.ndarray, jaw_angle=0.0, blink: float = 0.0,
               gaze=(0.0, 0.0), head=None, tongue=None) -> tuple[np.ndarray, np.ndarray]:
@@ -103,6 +109,8 @@ class Scene:
         moved = angle != 0.0 or shift[1] != 0.0 or shift[2] != 0.0
         rot = rotation_matrix(look.hinge_axis, angle)
         skin = np.asarray(skin, float)
+        if self.folds is not None:  # drawn, not simulated: the folds pressed into the skin
+            skin = self.folds.apply(skin)
         rest_v, rest_n, normals = self._rest()
         verts, norms = rest_v.copy(), rest_n.copy()  # the parts that keep still stay so
         skin_normals = None
@@ -124,6 +132,9 @@ class Scene:
                 n = skin_normals
             elif p.motion == "follow":
                 v, n = cv, closure_normals
+            elif p.motion == "attached":  # render-only shapes carried by the skin (.attach)
+                v = p.follow.place(skin, skin_normals)
+                n = p.follow.shade_normals(normals[k](v), skin_normals)
             elif p.motion == "eye":
                 if not turned:
                     continue
@@ -224,6 +235,8 @@ def build_scene(look: FaceLook, *, eyes: bool = True, mouth: bool = True,
     # a textured face's fissures are cut from its image where its eyes are drawn
     fissures = textured_fissures(look) if eyes else None
     parts = [skin_part(look, painted_hair=closed is None, fissures=fissures)]
+    if head and not look.textured:  # the built-in face: the nose's base (.nose)
+        parts += nose_parts(look, parts[0])
     if eyes and (not look.textured or fissures is not None):
         parts += eye_parts(look, fissures)
     if mouth:
@@ -237,7 +250,10 @@ def build_scene(look: FaceLook, *, eyes: bool = True, mouth: bool = True,
             if skirt is not None:
                 parts.append(skirt)
             parts += ear_parts(look)
-    return _pack(parts, look)
+    scene = _pack(parts, look)
+    if head:
+        object.__setattr__(scene, "folds", build_folds(look))
+    return scene
 
 
 def _pack(parts: list[Part], look: FaceLook) -> Scene:

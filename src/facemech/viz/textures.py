@@ -24,7 +24,8 @@ BROW = np.array([0.27, 0.19, 0.14])
 HAIR = np.array([0.20, 0.14, 0.10])
 LASH = np.array([0.12, 0.08, 0.07])
 LID_CREASE = np.array([0.70, 0.52, 0.45])
-SCLERA = np.array([0.93, 0.91, 0.87])
+SCLERA = np.array([0.90, 0.86, 0.82])  #: a little grey and pink, never white
+SCLERA_CORNER = np.array([0.86, 0.66, 0.62])  #: the injected conjunctiva at the corners
 IRIS = np.array([0.36, 0.25, 0.16])
 
 SKIN_TEXEL = 2.5e-4  #: m per texel of the skin texture
@@ -175,6 +176,20 @@ def _brow_hairs(h: int, w: int, rng) -> np.ndarray:
     return n / max(float(n.std()), 1e-12)
 
 
+def _vessels(x: np.ndarray, y: np.ndarray, rng, count: int = 16) -> np.ndarray:
+    """0..1: thin wavy conjunctival vessels running in from the nasal and temporal sides of
+    the globe towards the limbus, fading out before it (m, at texel centres x, y)."""
+    out = np.zeros(x.shape)
+    r, ang = np.hypot(x, y), np.arctan2(y, np.abs(x))
+    for _ in range(count):
+        a0 = rng.uniform(-0.6, 0.6)
+        wave = 0.06 * np.sin(r / 0.0011 + rng.uniform(0, 6.3))
+        on = np.exp(-((ang - a0 - wave) * r / 6e-5) ** 2)  # about 0.1 mm wide
+        side = (x > 0) if rng.random() < 0.5 else (x < 0)
+        out = np.maximum(out, on * side * np.clip((r - 0.0068) / 0.003, 0.0, 1.0))
+    return out
+
+
 def iris_texture(n: int = 192, colour=IRIS) -> np.ndarray:
     """RGBA front of an eyeball over [-R, R]^2 (R = 12 mm), row 0 at the top; ``colour`` (3,)
     sRGB the iris's mean (its fibres 0.75-1.25 of it, its limbus darker)."""
@@ -186,6 +201,10 @@ def iris_texture(n: int = 192, colour=IRIS) -> np.ndarray:
     rng = np.random.default_rng(3)
     spokes = np.interp(ang, np.linspace(-np.pi, np.pi, 97), rng.random(97))
     rgb = np.broadcast_to(SCLERA, (n, n, 3)).copy()
+    # redder towards the canthi (the conjunctiva's vessels show most there), with vessels
+    corner = np.clip((np.abs(x) - 0.0065) / 0.005, 0.0, 1.0)[..., None] ** 1.5
+    rgb += 0.7 * corner * (SCLERA_CORNER - SCLERA)
+    rgb += 0.45 * _vessels(x, y, rng)[..., None] * (np.array([0.72, 0.30, 0.30]) - rgb)
     rgb *= (1.0 - 0.08 * np.clip(r / r_eye, 0, 1) ** 2)[..., None]
     iris = np.asarray(colour, float) * (0.75 + 0.5 * spokes[..., None])
     limbus = np.clip((r - 0.0052) / 0.0007, 0, 1)[..., None]
