@@ -116,8 +116,8 @@ def test_lid_margins_are_anti_aliased(scene):
     along the fissure's margins (open and half-blinked) is close to the exact area coverage
     (8x8 samples), away from the lashes: the samples lie on a rotated grid, four distinct
     heights per pixel, so a near-horizontal margin passes three intermediate levels, not one.
-    Measured: RMS error 0.101 / 0.090 against 0.106 / 0.127 for the ordered grid; intermediate pixels 68-76 %
-    of the margin's against 65 / 60 %."""
+    Measured: RMS error 0.101 / 0.090 against 0.106 / 0.127 for the ordered grid;
+    intermediate pixels 68-76 % of the margin's against 65 / 60 %."""
     look = scene.look
     names = [p.name for p in scene.parts]
     part_of = np.repeat(np.arange(len(scene.parts)), [len(p.faces) for p in scene.parts])
