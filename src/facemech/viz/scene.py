@@ -17,9 +17,9 @@
   elevation: :func:`.dentition.bend_tongue`) (:mod:`.dentition`), and a dark seal across the
   slit between the lips' edges, facing into the mouth (it moves with the skin)
   (:mod:`.face_parts`);
-* **nose and folds** (the built-in face): alae and nostrils carried by the skin
-  (:mod:`.nose`, :mod:`.attach`), and the nasolabial and mentolabial folds pressed into the
-  drawn skin as it is compressed (:mod:`.folds`);
+* **nose and shape** (the built-in face): alae and nostrils carried by the skin
+  (:mod:`.nose`, :mod:`.attach`); the drawn skin's cheekbones, mouth width and the folds that
+  deepen as it is compressed (:mod:`.shape`, :mod:`.folds`);
 * **head motion**: the whole head (every part above) turns rigidly about :func:`head_pivot`
   (the top of the neck) by a pose (pitch, yaw, roll) rad (:func:`head_rotation`); the skin's
   positions, from the simulation, stay in the head's frame;
@@ -46,13 +46,13 @@ from ..geometry.builder import vertex_normals
 from ..solvers.jaw import rotation_matrix
 from .dentition import bend_tongue, tongue_modes
 from .face_parts import MAX_TEXTURE, eye_parts, mouth_parts, skin_part, textured_fissures
-from .folds import build_folds
 from .head import SKIRT_DEPTH, closed_head, ear_parts, head_centre, head_shell, skirt_part
 from .lids import gaze_rotation
 from .look import FaceLook, look_from_dataset, look_from_model
 from .mesh import Part, VertexNormals
 from .nose import nose_parts
 from .raster import srgb_to_linear
+from .shape import drawn_shape
 
 __all__ = ["FaceLook", "MAX_TEXTURE", "Part", "SKIRT_DEPTH", "Scene", "build_scene",
            "head_pivot", "head_rotation", "look_from_dataset", "look_from_model"]
@@ -81,7 +81,7 @@ class Scene:
     joint_normals: VertexNormals | None = None  # of the joint mesh
     framing: dict = field(default_factory=dict)
     tongue_modes: np.ndarray | None = None  # (n, 2, 3) of the 'tongue' part (.dentition)
-    folds: object | None = None  # the skin's render-only folds (:class:`.folds.Folds`)
+    shape: object | None = None  # the drawn skin's shape (:class:`.shape.DrawnShape`)
 
     def frame(self, skin: np.ndarray, jaw_angle=0.0, blink: float = 0.0,
               gaze=(0.0, 0.0), head=None, tongue=None) -> tuple[np.ndarray, np.ndarray]:
@@ -109,8 +109,8 @@ class Scene:
         moved = angle != 0.0 or shift[1] != 0.0 or shift[2] != 0.0
         rot = rotation_matrix(look.hinge_axis, angle)
         skin = np.asarray(skin, float)
-        if self.folds is not None:  # drawn, not simulated: the folds pressed into the skin
-            skin = self.folds.apply(skin)
+        if self.shape is not None:  # drawn, not simulated: cheekbones, folds (.shape)
+            skin = self.shape.apply(skin)
         rest_v, rest_n, normals = self._rest()
         verts, norms = rest_v.copy(), rest_n.copy()  # the parts that keep still stay so
         skin_normals = None
@@ -252,7 +252,7 @@ def build_scene(look: FaceLook, *, eyes: bool = True, mouth: bool = True,
             parts += ear_parts(look)
     scene = _pack(parts, look)
     if head:
-        object.__setattr__(scene, "folds", build_folds(look))
+        object.__setattr__(scene, "shape", drawn_shape(look))
     return scene
 
 
