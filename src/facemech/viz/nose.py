@@ -1,8 +1,9 @@
 """The nose's base, render-only: a relief patch carried by the skin (:mod:`.attach`).
 
 The physics' skin is a smooth wedge at the nose's base. The renderer lays a fine patch over it
-(0.4-mm grid on the frontal plane, from the subnasale 3 mm down to 14 mm up and 24 mm either
-side), each vertex a height h(x, y) off the skin along its normal:
+(0.5-mm grid on the frontal plane, from the subnasale 3 mm down to 14 mm up and 22 mm either
+side; where it lies flat it is left out), each vertex a height h(x, y) off the skin along
+its normal:
 
 * each ala a lobe 9 x 11 mm rising 2 mm, its centre 13 mm off the midline, so that the
   alar width al-al is about 35 mm (Farkas' adult male mean 34.9, SD 2.1 mm), with the alar
@@ -19,13 +20,14 @@ skin's, so that it meets the skin without a seam.
 from __future__ import annotations
 
 import numpy as np
+from scipy import ndimage
 
 from ..geometry.builder import vertex_normals
 from .attach import closest_on_skin, on_skin
 from .look import FaceLook
 from .mesh import Part, grid_faces, skin_depth
 
-GRID = 0.0004  #: m, the patch's grid step
+GRID = 0.0005  #: m, the patch's grid step
 ALA = (0.013, 0.0045, 0.0055, 0.0020)  #: m: centre off the midline, semi-axes x, y, height
 ALA_ABOVE_SN = 0.0050  #: m, the lobe's centre over the subnasale
 COLUMELLA = (0.002, 0.0010)  #: m: half-width, height
@@ -42,7 +44,7 @@ def nose_parts(look: FaceLook, skin: Part) -> list[Part]:
     if "subnasale" not in lm or "nose_tip" not in lm:
         return []
     sn, tip = np.asarray(lm["subnasale"], float), np.asarray(lm["nose_tip"], float)
-    xs = np.arange(-0.024, 0.024 + 1e-9, GRID)
+    xs = np.arange(-0.022, 0.022 + 1e-9, GRID)
     ys = np.arange(sn[1] - 0.003, sn[1] + 0.014 + 1e-9, GRID)
     X, Y = np.meshgrid(xs, ys)  # rows go up, columns towards +x
     Z = skin_depth(look)(X, Y)
@@ -51,8 +53,14 @@ def nose_parts(look: FaceLook, skin: Part) -> list[Part]:
     h, dark, groove = relief(X, Y, sn, tip)
     pts = np.stack([X, Y, Z], -1).reshape(-1, 3)
     normals = vertex_normals(look.rest, look.triangles)
-    fit = on_skin(pts, look.rest, look.triangles, normals, LIFT)
-    fit.offset[:, 2] += h.ravel()
+    # where the patch lies flat on the skin in the skin's own colour it is left out (the skin
+    # under it shows the same): only its relief, openings and groove are drawn; the drawn
+    # part's rim lies on the skin itself (no lift), so that no sliver opens under its edge at
+    # the skin's silhouette
+    busy = (h > 2e-5) | (dark > 0) | (groove > 0.02)
+    inner = ndimage.binary_erosion(busy, np.ones((3, 3), bool), border_value=0)
+    fit = on_skin(pts, look.rest, look.triangles, normals, 0.0)
+    fit.offset[:, 2] += h.ravel() + LIFT * inner.ravel()
     blend = np.clip(h.ravel() / 0.0004, 0.0, 1.0)
     fit = fit.with_blend(blend)
     base = _skin_colour(pts, look, skin)
@@ -60,6 +68,7 @@ def nose_parts(look: FaceLook, skin: Part) -> list[Part]:
     d = dark.ravel()[:, None]
     albedo = (1 - d) * base * shade + d * NOSTRIL_DARK
     faces = grid_faces(len(ys), len(xs))
+    faces = faces[busy.ravel()[faces].any(axis=1)]
     return [Part("nostrils", pts, faces, np.clip(albedo, 0, 1), (0.08, 14.0), "attached",
                  follow=fit)]
 
@@ -83,7 +92,9 @@ def relief(X, Y, sn: np.ndarray, tip: np.ndarray):
     dark = np.clip((1.0 - q) / 0.5, 0.0, 1.0)
     rim = 0.0006 * np.exp(-((q - 1.1) / 0.18) ** 2)
     under = np.clip((tip[1] - 0.002 - Y) / 0.002, 0.0, 1.0)  # the nasal base, not the tip
-    col = COLUMELLA[1] * np.exp(-(X / COLUMELLA[0]) ** 2) * under
+    # the columella fades into the lip at the subnasale (no step at the patch's lower edge)
+    into_lip = np.clip((Y - sn[1] + 0.001) / 0.003, 0.0, 1.0) ** 2
+    col = COLUMELLA[1] * np.exp(-(X / COLUMELLA[0]) ** 2) * under * into_lip
     h = np.maximum(np.maximum(ala, col), rim * under)
     return h, dark * under, groove * (ala < 0.3 * top)
 
