@@ -23,7 +23,7 @@ import numpy as np
 from .look import FaceLook
 
 REST_DEPTH = 0.0004  #: m, D0: an adult's folds at rest
-GAIN = 0.018  #: m per unit of areal compression, G
+GAIN = 0.03  #: m per unit of areal compression, G
 MAX_COMPRESSION = 0.15  #: C_MAX
 SIGMA = 0.0045  #: m, the fold's half-width
 PROBE = 0.006  #: m, the points either side of a fold whose distance is its width
