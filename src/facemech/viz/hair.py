@@ -120,7 +120,7 @@ def hair_parts(verts: np.ndarray, faces: np.ndarray, centre: np.ndarray,
 
 
 def _clumps(n_lat: int, n_lon: int) -> np.ndarray:
-    """(n_lat, n_lon) factor 0.7-1.3 of the hair's thickness: locks about 10 degrees across,
+    """(n_lat, n_lon) factor 0.8-1.2 of the hair's thickness: locks about 10 degrees across,
     longer down the meridians, so that the silhouette is lumpy, not a shell's."""
     from scipy import ndimage
 
@@ -128,7 +128,7 @@ def _clumps(n_lat: int, n_lon: int) -> np.ndarray:
     n = ndimage.gaussian_filter(rng.standard_normal((n_lat, n_lon)), (3.0, 1.5),
                                 mode=("nearest", "wrap"))
     n[:, -1] = n[:, 0]  # longitude -180 and 180 are one meridian
-    return 1.0 + 0.3 * np.tanh(n / (n.std() + 1e-12))
+    return 1.0 + 0.2 * np.tanh(n / (n.std() + 1e-12))
 
 
 def _wander(lon: np.ndarray) -> np.ndarray:

@@ -63,4 +63,10 @@ def drawn_shape(look: FaceLook) -> DrawnShape | None:
             c = np.asarray(lm[corner], float)[:2]
             w = np.exp(-0.5 * (np.linalg.norm(r[:, :2] - c, axis=1) / MOUTH_SIGMA) ** 2)
             offset[:, 0] += side * MOUTH_WIDENING * w * (side * r[:, 0] > 0)
+    # the skin's outer edge stays where the results have it (the closing head's ring is its
+    # nodes; the folds are drawn far inside it)
+    from .closure import boundary_loops
+
+    offset[np.linalg.norm(offset, axis=1) < 1e-6] = 0.0
+    offset[max(boundary_loops(look.triangles), key=len)] = 0.0
     return DrawnShape(offset, build_folds(look))
