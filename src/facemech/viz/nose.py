@@ -1,7 +1,7 @@
 """The nose's base, render-only: a relief patch carried by the skin (:mod:`.attach`).
 
 The physics' skin is a smooth wedge at the nose's base. The renderer lays a fine patch over it
-(0.5-mm grid on the frontal plane, from the subnasale 3 mm down to 14 mm up and 22 mm either
+(0.65-mm grid on the frontal plane, from the subnasale 3 mm down to 14 mm up and 22 mm either
 side; where it lies flat it is left out), each vertex a height h(x, y) off the skin along
 its normal:
 
@@ -27,7 +27,7 @@ from .attach import closest_on_skin, on_skin
 from .look import FaceLook
 from .mesh import Part, grid_faces, skin_depth
 
-GRID = 0.0005  #: m, the patch's grid step
+GRID = 0.00065  #: m, the patch's grid step
 ALA = (0.013, 0.0045, 0.0055, 0.0020)  #: m: centre off the midline, semi-axes x, y, height
 ALA_ABOVE_SN = 0.0050  #: m, the lobe's centre over the subnasale
 COLUMELLA = (0.002, 0.0010)  #: m: half-width, height
