@@ -31,7 +31,7 @@ def _frontal(scene, size=(720, 1280)):
 
 def test_head_proportions_within_one_sd_of_farkas(scene):
     """Head length, face height, nose and mouth width of the drawn head within one SD of
-    Farkas' adult male norms (measured 196.5, 120.2, 33.8, 53.6 mm; the simulated skin's
+    Farkas' adult male norms (measured 196.5, 120.2, 34.0, 53.6 mm; the simulated skin's
     own mouth is 50.5 mm wide, widened on the render side)."""
     m = head_measures(scene)
     assert set(m) == set(FARKAS)
@@ -41,8 +41,8 @@ def test_head_proportions_within_one_sd_of_farkas(scene):
 
 def test_nostrils_and_lashes_show_in_the_frontal_render(scene):
     """At 720p, frontal, at rest: dark nostril pixels (the nasal base's openings, under 0.4
-    of the skin's median luminance; measured 128) and lash pixels on each eye (measured 181,
-    186); from below (55 degrees) the nostrils are larger (measured 575 at 360 px over 60 mm)."""
+    of the skin's median luminance; measured 124) and lash pixels on each eye (measured 179,
+    184); from below (55 degrees) the nostrils are larger (measured 490 at 360 px over 60 mm)."""
     img, labels, names = _frontal(scene)
     lum = img.mean(axis=-1)
     skin = np.median(lum[labels == names.index("skin")])

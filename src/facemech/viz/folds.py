@@ -23,7 +23,7 @@ import numpy as np
 from .look import FaceLook
 
 REST_DEPTH = 0.0004  #: m, D0: an adult's folds at rest
-GAIN = 0.03  #: m per unit of areal compression, G
+GAIN = 0.03  #: m per unit of compression across the fold, G
 MAX_COMPRESSION = 0.15  #: C_MAX
 SIGMA = 0.0045  #: m, the fold's half-width
 PROBE = 0.006  #: m, the points either side of a fold whose distance is its width
@@ -54,11 +54,6 @@ class Folds:
         c = self.compression(skin)[self.station]
         return -self.line * (REST_DEPTH + GAIN * c) + self.cheek * 0.5 * GAIN * c
 
-    def apply(self, skin: np.ndarray) -> np.ndarray:
-        """A copy of skin nodes (n, 3) m with the folds pressed in (render only)."""
-        out = np.array(skin, float)
-        out[self.nodes] += self.depth(skin)[:, None] * self.normals
-        return out
 
 
 def fold_curves(landmarks: dict) -> list[np.ndarray]:

@@ -1,20 +1,14 @@
 """The nose's base, render-only: a relief patch carried by the skin (:mod:`.attach`).
 
-The physics' skin is a smooth wedge at the nose's base. The renderer lays a fine patch over it
-(0.65-mm grid on the frontal plane, from the subnasale 3 mm down to 14 mm up and 22 mm either
-side; where it lies flat it is left out), each vertex a height h(x, y) off the skin along
-its normal:
-
-* each ala a lobe 9 x 11 mm rising 2 mm, its centre 13 mm off the midline, so that the
-  alar width al-al is about 35 mm (Farkas' adult male mean 34.9, SD 2.1 mm), with the alar
-  groove's shadow round it where it leaves the cheek;
-* the columella a ridge 4 mm wide along the midline of the nasal base;
-* each nostril a dark oval (4.4 mm wide, 9.6 mm long on the base, its long axis converging towards
-  the tip) between them, its rim raised, seen from below and, through the base's upward tilt,
-  from the front.
-
-The patch's colour is the skin texture's under it; where h is near 0 its normals are the
-skin's, so that it meets the skin without a seam.
+Over the physics' smooth wedge at the nose's base the renderer lays a patch (0.65-mm grid on
+the frontal plane, from 3 mm under the subnasale to 14 mm over it, 22 mm either side), each
+vertex a height h(x, y) off the skin along its normal: each ala a lobe 9 x 11 mm rising 2 mm,
+13 mm off the midline (al-al about 35 mm: Farkas' adult male mean 34.9, SD 2.1), with the
+alar groove's shadow round it; the columella a ridge 4 mm wide fading into the lip; each
+nostril a dark oval (4.4 x 9.6 mm on the nasal base, raised rim, long axes converging towards
+the tip) between them, seen from below and, the base tilting up, from the front. The patch
+takes the skin texture's colour under it and, where it is flat, the skin's normals (no seam);
+where it is flat in the skin's colour it is left out.
 """
 
 from __future__ import annotations
