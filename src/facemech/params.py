@@ -69,7 +69,7 @@ ANATOMICAL_AREA_CM2 = MappingProxyType({**AREA_CM2, "ZYG": 0.19, "RIS": 0.15})
 JAW_KINEMATICS = ("hinge", "glide")
 #: m of condyle travel per radian of jaw opening, calibrated on the default face so that its
 #: lower incisor moves 3.6 mm back at a 22-mm drop, as in a real recording of speech (X-ray
-#: microbeam, repeated "sa": 22 mm down, 3.6 mm front to back; issue 15; docs/model.md): the
+#: microbeam, repeated "sa": 22 mm down, 3.6 mm front to back; docs/model.md): the
 #: fit is 28.4 mm/rad, rounded to 28 (3.7 mm)
 GLIDE_RATE = 0.028
 #: rad below the horizontal of the condyle's path: 35 degrees, a typical inclination of the
@@ -134,7 +134,7 @@ class Parameters:
     viscous_time: float = 0.0  # s, tissue viscosity / modulus (stiffness-proportional damping)
     #: continuum: the share of each spring's dashpot on the whole relative velocity of its ends
     #: (1: eq. 8's form); the rest damps the rate of stretch only (a Kelvin-Voigt solid's
-    #: viscosity), which does not resist a rigid turn of the tissue (issue 27: the lower lip
+    #: viscosity), which does not resist a rigid turn of the tissue (the lower lip
     #: everts as a nearly rigid flap, and eq. 8's dashpots made it slow)
     dashpot_isotropy: float = 1.0
     # continuum: strain stiffening, the stiffness of every spring times this beyond

@@ -27,15 +27,7 @@ TIMING = re.compile(
 #: temporary exceptions: modules that the structural step of the same change (the solvers' own
 #: method, the physics-side frame work) splits and rewrites; they are trimmed when it merges.
 #: module -> marks allowed there for now ("doc": its docstring's length)
-PENDING = {
-    "solvers/implicit.py": {"doc"},
-    "solvers/jaw_bone.py": {"doc", "issue"},
-    "solvers/step.py": {"doc"},
-    "solvers/krylov_region.py": {"doc", "timing"},
-    "solvers/volume_floor.py": {"doc"},
-    "solvers/jaw.py": {"issue"},
-    "params.py": {"issue"},
-}
+PENDING: dict = {}
 
 
 def _modules():

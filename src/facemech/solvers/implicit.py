@@ -1,41 +1,19 @@
 """Two fast implicit integrators on one constant, factorised matrix.
 
-:class:`LinearImplicitEuler`
-    linearly implicit (Baraff-Witkin) Euler with a constant matrix ``A = M + h C + h^2 K``
-    (masses M, damping C, a rest stiffness K), factorised once (a sparse Cholesky factor,
-    :mod:`.cholesky`) and reused:
-    ``A dv = h (f(x, v) - h K v)``. The nonlinear forces are evaluated exactly each step, so
-    only the stability, not the consistency, rests on K. The matrix is over the moving nodes;
-    ``K v`` takes in its coupling to the kinematic nodes (the jaw's bone) and to the tethers'
-    anchors moving with it (:meth:`ImplicitSystem.apply_boundary`), so that tissue carried by
-    the jaw meets no drag from a bone taken as still (docs/model.md, "The bone's motion in
-    the step").
-:class:`Rosenbrock2`
-    the two-stage Rosenbrock-W method ROS2 (Verwer et al. 1999), second order for any
-    approximation of the Jacobian, so one constant factorised matrix (gamma h in place of h)
-    serves every step: two force evaluations and two solves per step.
+:class:`LinearImplicitEuler`: linearly implicit (Baraff-Witkin) Euler with a constant matrix
+``A = M + h C + h^2 K`` (masses, damping, a rest stiffness), factorised once (:mod:`.cholesky`):
+``A dv = h (f(x, v) - h K v)``; the forces are evaluated exactly each step, so only stability
+rests on K. ``K v`` includes the coupling to the jaw's kinematic nodes and moving tether anchors
+(:meth:`ImplicitSystem.apply_boundary`). With ``StepOptions.predictor`` the forces are taken at
+the explicit predictor, ``A dv = h f(x + h v, v)``; the matrix must then hold at least 3/4 of each
+stiffness (:data:`facemech.params.PREDICTOR_LEAST_SHARES`).
+:class:`Rosenbrock2`: the two-stage Rosenbrock-W method ROS2 (Verwer et al. 1999), second order
+for any Jacobian approximation, on the same kind of matrix.
 
-With ``StepOptions.predictor`` linear implicit Euler instead evaluates the forces at the
-explicit predictor, ``A dv = h f(x + h v, v)`` (the step linearised about the predictor; the
-same as backward Euler when K is the true stiffness): the matrix then acts only on the change of
-velocity, so it resists no steady rigid turn (the corrected form's drag), but its excess over
-the true stiffness becomes added inertia, and the step is stable only when the matrix holds at
-least 3/4 of each stiffness (:data:`facemech.params.PREDICTOR_LEAST_SHARES`; docs/model.md).
-
-Both integrate the muscle filter of eq. (4) exactly. K and C are isotropic (the same for x, y
-and z) so one factorisation of a nodes x nodes matrix serves the three axes.
-
-For the seeds' constants K is the rest tangent of springs, shape and restoration terms and C
-the damping graph Laplacian. For the continuum tissue (the anatomical preset) C is exact (each
-spring's dashpot acts on the whole relative velocity of its ends), and K holds a share
-(:data:`IMPLICIT_STIFFNESS_SHARE`) of each spring's stiff branch, the volume term (the Gram
-matrix of each prism's volume gradient, within a factor 3 of its true rank-one Hessian) and the
-tethers: with the exact damping in the matrix, the stiffness left explicit is stable for steps
-below 2 b / ((1 - share) k_high) (docs/model.md). Physiological muscle forces make the velocity
-term of the Hill law (eq. 6) and the geometric stiffness of a tension stiff on the insertion
-nodes; both are taken into the implicit solve exactly, through the muscles' beads, by the
-Sherman-Morrison-Woodbury identity on the constant factorisation
-(:class:`~facemech.solvers.muscle_implicit.MuscleJacobian`).
+K and C are isotropic, so one nodes x nodes factorisation serves x, y and z. The muscles' Hill
+velocity term and geometric stiffness enter exactly through the Woodbury identity
+(:class:`~facemech.solvers.muscle_implicit.MuscleJacobian`). The matrix's contents per preset and
+the step's stability bound: docs/model.md, "The step".
 """
 
 from __future__ import annotations

@@ -48,7 +48,7 @@ def condyle_glide(angle, rate: float = GLIDE_RATE, slope: float = GLIDE_SLOPE):
     The defaults (:data:`~facemech.params.GLIDE_RATE` 28 mm/rad along
     :data:`~facemech.params.GLIDE_SLOPE` 35 degrees, a typical inclination of the articular
     eminence) are calibrated on the default face to a real speech recording (X-ray microbeam
-    pellets, repeated "sa", issue 15): a lower incisor drop of 22 mm with 3.6 mm of motion front
+    pellets, repeated "sa"): a lower incisor drop of 22 mm with 3.6 mm of motion front
     to back, a molar point dropping 15 mm. The rate that moves the default face's lower incisor
     (:func:`lower_incisor_point`) 3.6 mm back at a 22-mm drop is 28.4 mm/rad; at 28 it moves
     3.7 mm (3.1 mm at a 20-mm drop, 15.5 degrees of opening; a hinge through the condyles: 13.1

@@ -1,39 +1,17 @@
 """The jaw from points on the bone: a lower-incisor sensor, alone or with a molar pellet.
 
-Articulography (EMA, X-ray microbeam) glues its jaw sensor to the lower incisors, a point of
-the mandible itself: unlike a chin marker on the skin, which slides back over the bone by
-about 0.55 mm per mm of drop (issue 27), it moves exactly as the bone does. Such a point gives
-the jaw's pose directly, and it is never compared with the skin.
+An articulograph's jaw sensor sits on the lower incisors and moves exactly as the mandible does
+(a chin marker slides over the bone). The pose (angle, shift_y, shift_z) splits the shift into
+the glide coupled to the opening (:func:`~facemech.solvers.jaw.condyle_glide`) and a free
+protrusion along the same eminence path (Ostry, Vatikiotis-Bateson & Gribble 1997)::
 
-The mandible moves in the sagittal plane with three degrees of freedom (:mod:`.mandible`): the
-pose (angle, shift_y, shift_z). Here the shift is split into the glide that the preset couples
-to the opening (:func:`~facemech.solvers.jaw.condyle_glide`) and a free **protrusion**: the
-condyles' further travel along the same path, ``glide_slope`` below the horizontal, forward
-(protrusion, > 0) or back (retraction, < 0). Real jaws protrude and retract while they speak
-(in a read sentence the lower incisor comes 2.5 mm forward as the jaw closes, issue 27), and the
-condyle's horizontal translation in speech is controlled apart from the rotation (Ostry,
-Vatikiotis-Bateson & Gribble 1997, J. Speech Lang. Hear. Res. 40, 1341-1351). So::
+    travel = glide_rate * max(angle, 0) + protrusion          (m, along the eminence)
+    shift  = travel * (-sin glide_slope, cos glide_slope)     (y, z)
 
-    travel  = glide_rate * max(angle, 0) + protrusion              (m, along the eminence)
-    shift   = travel * (-sin glide_slope, cos glide_slope)         (y, z)
-
-with ``glide_rate`` 0 under the seeds' hinge (``jaw_kinematics="hinge"``), whose protrusion
-still runs along the preset's ``glide_slope``.
-
-Drives:
-
-- one bone point (the lower incisor, y and z): two equations for the angle and the protrusion
-  (:func:`jaw_poses_from_incisor`), solved in closed form: the coupled glide and the protrusion
-  both move the point along the eminence's direction, so the component of its displacement
-  across that direction fixes the angle alone;
-- two bone points (the incisor and a molar pellet): the planar rigid motion of the pair
-  (:func:`~facemech.solvers.jaw.jaw_poses_from_points`), three free degrees of freedom
-  (:func:`jaw_poses_from_bone`).
-
-The recording's first frame is the jaw's rest, and its incisor is laid on the model's own
-(:func:`~facemech.geometry.teeth.lower_incisor_point`): the model's incisor moves by the sensor's
-displacement. No lead is applied by default: the sensor is on the bone, and the 33-ms lead of
-a skin marker makes up for the skin's delay behind the bone.
+One bone point gives the angle and the protrusion in closed form
+(:func:`jaw_poses_from_incisor`); two points give the planar rigid motion
+(:func:`jaw_poses_from_bone`). The recording's first frame is the jaw's rest and its incisor is
+laid on the model's (:func:`~facemech.geometry.teeth.lower_incisor_point`); no lead is applied.
 """
 
 from __future__ import annotations

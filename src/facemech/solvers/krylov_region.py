@@ -1,30 +1,17 @@
 """The Krylov correction of the predictor's step on a region about the mouth only.
 
-The step about the predictor solved on the forces' true linearisation
-(:func:`facemech.solvers.implicit._krylov_step`, ``Parameters.krylov_iterations``) gives the
-tissue the speed of the converged step, but each GMRES iteration costs one solve of the whole
-face's matrix and one evaluation of the whole face's forces: 0.32-0.43 x real time on one core
-with 4 iterations (docs/model.md). The constant matrix's added inertia matters where the tissue
-turns fast, in the lips, the cheeks beside them and the chin. Here the step is first solved
-with the constant matrix over the whole face, as without the correction, and the GMRES
-correction is then sought over the moving nodes within ``Parameters.krylov_region`` metres of
-the mouth only:
+The step is first solved with the constant matrix over the whole face; the GMRES correction on
+the forces' true linearisation is then sought over the moving nodes within
+``StepOptions.krylov_region`` metres of the mouth:
 
     A_t,RR d = r_R,    r = h f(x + h v, v) - A_t dv0,
 
-``A_t u`` applied by a finite difference of the forces of the springs, prisms and tethers that
-touch the region (and every muscle), the preconditioner the constant matrix's block over the
-region, ``A0,RR`` (its own sparse Cholesky factor, made once), with the muscles' bead-space
-Jacobian joined to it by the Sherman-Morrison-Woodbury identity as on the whole face
-(:mod:`.muscle_implicit`). A node outside the region keeps the constant matrix's step. The
-correction's cost scales with the region's share of the face: on the built-in face an
-iteration (one evaluation of the forces, one solve) costs 0.54 ms within 60 mm (2299 of its
-4333 moving nodes) and 0.31 ms within 35 mm (1373), against 0.93 ms over the whole face (AMD
-EPYC, one core, three muscle groups active).
-
-What the region leaves out, the tissue farther out, keeps the constant matrix's added inertia
-and rings more after a pulse; the wider the region, the closer the step comes to the whole
-face's correction (docs/model.md, "The correction on a region about the mouth").
+``A_t u`` applied by a finite difference of the forces of what touches the region (springs,
+prisms, tethers, every muscle), preconditioned by the constant matrix's block over the region
+(its own Cholesky factor, made once) with the muscles' bead-space Jacobian joined by the
+Woodbury identity (:mod:`.muscle_implicit`). Nodes outside keep the constant matrix's step.
+The cost and the region's effect on the gestures: docs/model.md, "The correction on a region
+about the mouth".
 """
 
 from __future__ import annotations

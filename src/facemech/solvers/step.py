@@ -1,31 +1,16 @@
 """Time stepping: the paper's explicit Euler and two fast implicit integrators.
 
-Each advances an immutable :class:`~facemech.solvers.state.State` through one control frame
-(1/60 s) with the muscle activity held constant, as in Lucero & Munhall (1999). The methods are
-solver objects in the habit of diffrax: a frozen description, ``init(physics)`` returning a
-:class:`~facemech.solvers.solver_state.SolverState`, ``step(solver_state, state, controls)``
-returning the next state:
+Each solver advances an immutable :class:`~facemech.solvers.state.State` through one control
+frame with the activity held (Lucero & Munhall 1999): a frozen description, ``init(physics)``
+returning a :class:`~facemech.solvers.solver_state.SolverState`, and ``step(solver_state, state,
+controls)`` returning the next state. ``ExplicitEuler(dt)`` (``"euler"``, the paper's 0.33 ms,
+:mod:`.explicit`); ``LinearImplicitEuler(substeps)`` (``"implicit"``) and ``Rosenbrock2``
+(``"rosenbrock"``) on a constant factorised matrix (:mod:`.implicit`).
 
-``ExplicitEuler(dt)`` (``"euler"``, the paper's integrator; :mod:`.explicit`)
-    explicit Euler with dt = 0.33 ms, 50 steps per frame (Euler-Cromer ordering).
-``LinearImplicitEuler(substeps)`` (``"implicit"``; :mod:`.implicit`)
-    linearly implicit Euler on a constant factorised matrix, 4 steps per frame by default.
-``Rosenbrock2(substeps)`` (``"rosenbrock"``; :mod:`.implicit`)
-    the two-stage Rosenbrock-W method ROS2 on the same kind of matrix.
-
-:class:`Stepper` is the edge where a preset's or a user's integrator name, ``substeps`` and
-``dt`` become one solver object (:func:`solver_from_options`), once; it also turns a frame's
-activity and jaw target into :class:`~facemech.solvers.state.Controls`.
-
-The jaw (``jaw_drive``): ``"ramp"`` (default) moves the mandible's pose (angle, condyle shift)
-linearly from the state's pose to the frame's over the frame; ``"hold"`` sets the frame's pose at
-the start of the frame and holds it, as the paper does. Each jaw node turns by its jaw weight
-times the angle and moves by its weight times the shift (1 on the mandible; the anatomical
-tissue blends from 1 to 0 lateral to the mouth; :mod:`.mandible`).
-The skull nodes that slide (lips, vestibule, chin pad) rest on the teeth and bone through a
-one-sided penalty against the bone's tangent plane under each (turned with the jaw), part of the
-force evaluation: contacts stay out of the constant matrix, whose isotropic entries would act as
-a viscosity on sliding and lifting off.
+:class:`Stepper` turns a model's method (:class:`~facemech.stepping.StepOptions`) into one solver
+object once, and a frame's activity and jaw target into
+:class:`~facemech.solvers.state.Controls`. The jaw drive ``"ramp"`` (default) moves the pose
+linearly over the frame, ``"hold"`` sets it at the frame's start as the paper does.
 """
 
 from __future__ import annotations

@@ -1,28 +1,15 @@
 """A floor under each prism's volume, stepped implicitly prism by prism after the global solve.
 
-Soft tissue is nearly incompressible (its bulk modulus is that of water, about 2 GPa, against
-shear moduli of kPa), but the anatomical preset gives the continuum a Poisson's ratio of 0.45
-(bulk modulus about 10 times the shear modulus) because a stiffer volume term slows the
-constant-matrix step (docs/model.md). Under a full, held gesture of a lip muscle that volume
-term let a few deep prisms be crushed: under full depressor labii inferioris the prisms under
-the lower lip, over the chin, went from a volume ratio J = V / V0 of 0.57 at 0.17 s to 0.01 at
-1.5 s, and the lip followed them, still moving 4 % of its travel after the gesture had risen
-(docs/model.md, Dynamics: "creep"). No real tissue loses half its volume.
-
-The floor is a one-sided penalty on the volume below ``J_f V0``: energy ``kappa C^2 / 2`` with
-``C = V - J_f V0 < 0`` and ``kappa = K_f / V0`` (``K_f`` a modulus, Pa). Like the contacts
-(:mod:`.contacts`), it is far too stiff for the explicit remainder, so each prism below its
-floor takes the backward-Euler step of its own penalty along its volume gradient ``g_i``
-(m^2, of node i), applied after the solve:
+A one-sided penalty below ``J_f V0`` keeps deep prisms from being crushed under held gestures
+(docs/model.md, "creep"): energy ``kappa C^2 / 2`` with ``C = V - J_f V0 < 0`` and
+``kappa = K_f / V0`` (``K_f`` a modulus, Pa). Each prism below its floor takes the backward-Euler
+step of its own penalty along its volume gradient ``g_i`` after the solve:
 
     mu = -h kappa C* / (1 + h^2 kappa w),   w = sum_i |g_i|^2 / m_i,
     Delta v_i = mu g_i / m_i,               Delta x_i = h Delta v_i,
 
-the exact solution of ``m_i (v_i - v*_i) = -h kappa (C* + h sum_j g_j . (v_j - v*_j)) g_i``
-(the volume linearised about the solve's result). The new deficit is ``C* / (1 + h^2 kappa w)``:
-a contraction for any stiffness, zero at the floor, so the step is stable and continuous. Prisms
-above their floor are left alone: a motion that keeps every prism above it is unchanged to the
-bit. Kinematic nodes (``1 / m = 0``) do not move.
+a contraction of the deficit for any stiffness. Prisms above their floor are untouched (to the
+bit); kinematic nodes (``1 / m = 0``) do not move.
 """
 
 from __future__ import annotations
