@@ -31,7 +31,7 @@ def test_the_menpo3d_head_scan_builds_with_notes_on_what_was_mended(built):
 def test_the_scan_talker_rests_still(built):
     """No activity, the jaw closed: no node moves by more than 0.1 mm over 0.1 s."""
     from facemech.params import MUSCLE_GROUPS
-    from facemech import model as face_model
+    from facemech.physics.model import model as face_model
     from facemech.solvers.forward import simulate
 
     model = built.data
