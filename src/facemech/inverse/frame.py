@@ -215,6 +215,16 @@ class FrameProblem:
             hi[:, :nm] = np.minimum(hi[:, :nm], c + reach)
         return lo, hi
 
+    def _try(self, trial, total):
+        """A trial step's roll: (positions, first state, residual, cost); the cost infinite
+        where the trial collapsed the mesh (a failed step)."""
+        try:
+            pos_t, first_t = self.roll(trial)
+        except SimulationBlowUp:
+            return None, None, None, np.inf
+        r_trial = self.residual_of(pos_t)
+        return pos_t, first_t, r_trial, total(trial, r_trial)
+
     def lsq(self, c_prev, x_prev, method, *, prior=None, jaw_prior=None, lags_prev=None,
             known=(), expected_rms=None):
         """Bounded Gauss-Newton over the window with a chord Jacobian.
@@ -233,12 +243,7 @@ class FrameProblem:
         """
         w, nc = self.horizon, self.nc
         lo, hi = self.window_bounds(c_prev, method)
-        if x_prev is not None and len(x_prev):
-            x = np.vstack([x_prev[1:], x_prev[-1:]])
-            x = np.vstack([x, np.repeat(x[-1:], max(0, w - len(x)), axis=0)])[:w]
-        else:
-            x = np.tile(np.asarray(c_prev, float), (w, 1))
-        x = np.clip(x, lo, hi)
+        x = np.clip(_warm_start(x_prev, c_prev, w), lo, hi)
         a_reg, b_reg = self.regularisation(c_prev, method, prior, jaw_prior)
 
         def total(xv, r):
@@ -277,15 +282,7 @@ class FrameProblem:
                 jm = self.jacobian(lags)
                 continue
             trial = np.clip(flat + scale * step, lo_f, hi_f).reshape(w, nc)
-            try:
-                pos_t, first_t = self.roll(trial)
-            except SimulationBlowUp:  # a wild trial collapsed the mesh: a failed step
-                pos_t = None
-            if pos_t is None:
-                cost_trial = np.inf
-            else:
-                r_trial = self.residual_of(pos_t)
-                cost_trial = total(trial, r_trial)
+            pos_t, first_t, r_trial, cost_trial = self._try(trial, total)
             if cost_trial < cost:
                 gain = (np.sqrt(cost) - np.sqrt(cost_trial)) / np.sqrt(n_markers)
                 x, r, cost, pos, first = trial, r_trial, cost_trial, pos_t, first_t
@@ -303,6 +300,15 @@ class FrameProblem:
         self._last = (x.copy(), first)
         return FrameFit(x=x, state=first, states=states, lags=lags, jm=jm, a_reg=a_reg,
                         rss=float(r @ r), rows=len(r))
+
+
+def _warm_start(x_prev, c_prev, w: int) -> np.ndarray:
+    """The window's first controls (w, c): the previous window's shifted by a frame, its last
+    frame repeated, or else the previous frame's controls throughout."""
+    if x_prev is not None and len(x_prev):
+        x = np.vstack([x_prev[1:], x_prev[-1:]])
+        return np.vstack([x, np.repeat(x[-1:], max(0, w - len(x)), axis=0)])[:w]
+    return np.tile(np.asarray(c_prev, float), (w, 1))
 
 
 class FrameFit:
