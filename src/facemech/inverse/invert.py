@@ -144,18 +144,7 @@ def invert(
     -------
     Inversion
     """
-    if isinstance(method, str):
-        method = method_from_options(method, **options)
-    elif options:
-        raise InputError(f"give the options of a method object when making it (got "
-                         f"{', '.join(options)})", field=next(iter(options)))
-    if not isinstance(method, (LeastSquares, Powell)):
-        raise InputError(f"method must be lsq, powell, LeastSquares or Powell (got "
-                         f"{method!r})", field="method")
-    if noise_mm is not None and not (np.isfinite(noise_mm) and noise_mm > 0):
-        raise InputError(f"noise must be > 0 mm (got {noise_mm})", field="noise")
-    if noise_mm is not None:  # the command line's interval (facemech.checks)
-        check_value("noise_mm", noise_mm)
+    method = _checked_method(method, options, noise_mm)
     face, params, physics = model.face, model.params, model.physics
     dt = model.steps.fast_dt
     src = markers.meta.get("source")
@@ -180,6 +169,8 @@ def invert(
         raise InputError(f"prior must be (frames, {len(cnames)})", field="prior")
     nodes = np.array([mapping[n] for n in names])
     stepper = Stepper(model, dt=dt)
+    problem = _Problem(face, params, stepper, tuple(names), nodes, data, cnames, gmat, jaw,
+                       estimate_jaw, jaw_note, method, positive, noise_mm, src)
     lo = np.full(nc, 0.0 if positive else -1.0)
     hi = np.ones(nc)
     if estimate_jaw:
@@ -197,63 +188,89 @@ def invert(
     muscles.record(0, state)
     run.positions[0] = state.positions[: face.n_surface]
     run.record_error(0, state.positions[nodes], data[0])
+    t0 = time.perf_counter()
+    with single_threaded_blas():
+        _fit_frames(problem, run, muscles, state, (lo, hi), prior, progress)
+    wall = time.perf_counter() - t0
+    if frames > 1:
+        run.controls[-1] = run.controls[-2]
+    return _finish(run, problem, (distance, steps), wall, muscles.series())
+
+
+def _checked_method(method, options: dict, noise_mm):
+    """The inversion's method object from a name and its options, or as given; InputError
+    naming the option, ``method`` or ``noise``."""
+    if isinstance(method, str):
+        method = method_from_options(method, **options)
+    elif options:
+        raise InputError(f"give the options of a method object when making it (got "
+                         f"{', '.join(options)})", field=next(iter(options)))
+    if not isinstance(method, (LeastSquares, Powell)):
+        raise InputError(f"method must be lsq, powell, LeastSquares or Powell (got "
+                         f"{method!r})", field="method")
+    if noise_mm is not None and not (np.isfinite(noise_mm) and noise_mm > 0):
+        raise InputError(f"noise must be > 0 mm (got {noise_mm})", field="noise")
+    if noise_mm is not None:  # the command line's interval (facemech.checks)
+        check_value("noise_mm", noise_mm)
+    return method
+
+
+def _fit_frames(problem, run, muscles, state, bounds, prior, progress) -> None:
+    """The frame loop: each frame's controls fitted (Powell, or least squares over a receding
+    window), recorded into ``run`` and ``muscles`` as it goes."""
+    p = problem
+    method, data, jaw, nodes, estimate_jaw = p.method, p.data, p.jaw, p.nodes, p.estimate_jaw
+    lo, hi = bounds
+    nc = len(lo)
+    frames = len(data)
     c_prev = np.zeros(nc)
     if estimate_jaw and jaw is not None:
         c_prev[-1] = jaw[0] / JAW_UNIT
     fit_prev = None
     x_prev = None
     states_prev: list = []
-    t0 = time.perf_counter()
-    with single_threaded_blas():
-        for k in range(frames - 1):
-            ok = np.all(np.isfinite(data[k + 1]), axis=1)
-            if 3 * ok.sum() < nc:
-                raise InputError(f"frame {k + 1}: {int(ok.sum())} usable markers for {nc} "
-                                 "controls", source=src, field="markers")
-            run.gaps += int((~ok).sum())
-            w = method.window if isinstance(method, LeastSquares) else 1
-            frame = FrameProblem(stepper, state, gmat, nodes, data, jaw, k, w,
-                                 estimate_jaw=estimate_jaw, lo=lo, hi=hi)
-            if isinstance(method, Powell):
-                c = frame.powell(c_prev, positive, method)
-                state = frame.state_after(c)
-                pos = frame.roll(c[None])[0]
-                resid = frame.residual_of(pos)
-                jm = frame.jacobian(frame.lag_responses(c[None], pos))
-                run.record_fit(k, jm, np.zeros((0, nc)), nc, float(resid @ resid),
-                               len(resid) - nc)
-            elif frame.horizon < w and x_prev is not None and len(x_prev) > 1:
-                # the data end inside the window: the last full window already fitted every
-                # frame left, so its controls are kept rather than refitted on ever fewer frames
-                c = x_prev[1].copy()
-                x_prev = x_prev[1:]
-                state = states_prev[1]  # simulated in that window's accepted roll
-                states_prev = states_prev[1:]
-                run.repeat_fit(k)
-            else:
-                fit = frame.lsq(c_prev, x_prev, method, prior=prior,
-                                jaw_prior=jaw if estimate_jaw else None,
-                                lags_prev=None if fit_prev is None else fit_prev.lags,
-                                known=states_prev[1:], expected_rms=run.rms[k] * 1e3)
-                c, state, x_prev, states_prev = fit.x[0].copy(), fit.state, fit.x, fit.states
-                fit_prev = fit
-                run.record_fit(k, fit.jm, fit.a_reg, nc, fit.rss,
-                               fit.rows - fit.x.size)
-            run.controls[k] = c
-            c_prev = c
-            run.on_bound[k + 1] = (c <= lo + 1e-6) | (c >= hi - 1e-6)
-            run.record_error(k + 1, state.positions[nodes], data[k + 1])
-            run.evaluations[k + 1] = frame.counter[0]
-            run.positions[k + 1] = state.positions[: face.n_surface]
-            muscles.record(k + 1, state)
-            if progress is not None:
-                progress(k + 1, frames - 1)
-    wall = time.perf_counter() - t0
-    if frames > 1:
-        run.controls[-1] = run.controls[-2]
-    problem = _Problem(face, params, stepper, tuple(names), nodes, data, cnames, gmat, jaw,
-                       estimate_jaw, jaw_note, method, positive, noise_mm, src)
-    return _finish(run, problem, (distance, steps), wall, muscles.series())
+    for k in range(frames - 1):
+        ok = np.all(np.isfinite(data[k + 1]), axis=1)
+        if 3 * ok.sum() < nc:
+            raise InputError(f"frame {k + 1}: {int(ok.sum())} usable markers for {nc} "
+                             "controls", source=p.src, field="markers")
+        run.gaps += int((~ok).sum())
+        w = method.window if isinstance(method, LeastSquares) else 1
+        frame = FrameProblem(p.stepper, state, p.gmat, nodes, data, jaw, k, w,
+                             estimate_jaw=estimate_jaw, lo=lo, hi=hi)
+        if isinstance(method, Powell):
+            c = frame.powell(c_prev, p.positive, method)
+            state = frame.state_after(c)
+            pos = frame.roll(c[None])[0]
+            resid = frame.residual_of(pos)
+            jm = frame.jacobian(frame.lag_responses(c[None], pos))
+            run.record_fit(k, jm, np.zeros((0, nc)), nc, float(resid @ resid),
+                           len(resid) - nc)
+        elif frame.horizon < w and x_prev is not None and len(x_prev) > 1:
+            # the data end inside the window: the last full window already fitted every
+            # frame left, so its controls are kept rather than refitted on ever fewer frames
+            c = x_prev[1].copy()
+            x_prev = x_prev[1:]
+            state = states_prev[1]  # simulated in that window's accepted roll
+            states_prev = states_prev[1:]
+            run.repeat_fit(k)
+        else:
+            fit = frame.lsq(c_prev, x_prev, method, prior=prior,
+                            jaw_prior=jaw if estimate_jaw else None,
+                            lags_prev=None if fit_prev is None else fit_prev.lags,
+                            known=states_prev[1:], expected_rms=run.rms[k] * 1e3)
+            c, state, x_prev, states_prev = fit.x[0].copy(), fit.state, fit.x, fit.states
+            fit_prev = fit
+            run.record_fit(k, fit.jm, fit.a_reg, nc, fit.rss, fit.rows - fit.x.size)
+        run.controls[k] = c
+        c_prev = c
+        run.on_bound[k + 1] = (c <= lo + 1e-6) | (c >= hi - 1e-6)
+        run.record_error(k + 1, state.positions[nodes], data[k + 1])
+        run.evaluations[k + 1] = frame.counter[0]
+        run.positions[k + 1] = state.positions[: p.face.n_surface]
+        muscles.record(k + 1, state)
+        if progress is not None:
+            progress(k + 1, frames - 1)
 
 
 def _fitted_rows(s, data):
