@@ -4,7 +4,7 @@ face and the map file is the command's wiring: :func:`facemech.workflows.invert.
 
 Markers are skin markers unless they are named (or, from articulography, given the role) of a
 point on the mandible: a lower-incisor sensor and, optionally, a molar pellet. Those drive the
-jaw (:mod:`facemech.solvers.jaw_bone`) and stay out of the skin's cost. Articulography's lip
+jaw (:func:`facemech.jaw.drive.jaw_drive`) and stay out of the skin's cost. Articulography's lip
 sensors are laid on the face's midsagittal vermilion points (:mod:`facemech.kinematics.roles`),
 and midsagittal data are fitted in y and z only.
 """
@@ -12,14 +12,16 @@ and midsagittal data are fitted in y and z only.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..checks import check_value
 from ..errors import InputError
+from ..jaw.drive import SKIN_JAW_LEAD, default_lead, jaw_drive
+from ..jaw.inputs import JawMarkers
 from ..markerset import MarkerSet
+from .options import FitOptions, as_options
 from .result import Inversion
 
 if TYPE_CHECKING:
@@ -27,49 +29,9 @@ if TYPE_CHECKING:
 
 __all__ = ["SKIN_JAW_LEAD", "SIGN_EFFORT", "JawMarkers", "invert_marker_set", "pick_candidates"]
 
-#: frames by which a skin jaw marker's drive is moved earlier by default (33 ms at 60 Hz, the
-#: seeds' lead); a bone point's drive has none
-SKIN_JAW_LEAD = 2
 #: s, the longest interior gap of an articulograph's bone point filled before the jaw's drive
 MAX_BONE_GAP_S = 0.1
 
-
-
-@dataclass(frozen=True)
-class JawMarkers:
-    """The jaw's markers of an inversion (its jaw source), checked when made.
-
-    Attributes
-    ----------
-    chin_marker : a skin jaw marker: its vertical drop gives the jaw angle, ``jaw_lead`` frames
-        early, estimated further with the muscles unless ``jaw_fixed``
-    jaw_second_marker : a second point on the mandible with ``chin_marker``: the two markers'
-        planar rigid motion drives the jaw's three degrees of freedom, held as given
-    jaw_incisor, jaw_molar : a lower-incisor sensor and a molar pellet, points on the bone
-        (default: the sensors of roles ``lower_incisor`` and ``molar``, when there is no
-        ``chin_marker``): they give the jaw's angle, glide and protrusion, held as given, and
-        are not compared with the skin
-    jaw_fixed : hold the recorded jaw as given
-    jaw_lead : frames by which the jaw drive is moved earlier (None: 2 for a skin marker, 0
-        for bone points)
-    """
-
-    chin_marker: str | None = None
-    jaw_second_marker: str | None = None
-    jaw_incisor: str | None = None
-    jaw_molar: str | None = None
-    jaw_fixed: bool = False
-    jaw_lead: int | None = None
-
-    def __post_init__(self):
-        if self.jaw_second_marker is not None and self.chin_marker is None:
-            raise InputError("--jaw-second-marker needs --chin-marker (the first jaw marker)",
-                             field="jaw-second-marker")
-        if self.jaw_lead is not None and self.jaw_lead < 0:
-            raise InputError(f"jaw lead must be >= 0 frames (got {self.jaw_lead})",
-                             field="jaw-lead")
-        if self.jaw_lead is not None:  # the command line's interval (facemech.checks)
-            check_value("jaw_lead", self.jaw_lead)
 
 
 def invert_marker_set(
@@ -83,7 +45,7 @@ def invert_marker_set(
     controls: str | None = None,
     jaw: JawMarkers | None = None,
     noise: float | None = None,
-    options: dict | None = None,
+    options: FitOptions | dict | None = None,
     progress: Callable[[int, int], None] | None = None,
 ) -> Inversion:
     """Invert a marker set on a face (see :func:`facemech.inverse.invert.invert`).
@@ -106,8 +68,8 @@ def invert_marker_set(
     jaw : the jaw's markers (:class:`JawMarkers`; None: none given, the sensors of roles
         ``lower_incisor`` and ``molar`` where the markers have them)
     noise : marker noise for the standard errors, mm (None: from the residuals)
-    options : the method's options (None: not given; an option of the other method is an
-        error)
+    options : the method's options (:class:`~facemech.inverse.options.FitOptions` or a dict;
+        None: not given; an option of the other method is an error)
     progress : callable(done, total)
 
     Returns
@@ -120,10 +82,10 @@ def invert_marker_set(
     from .invert import JawRecording, invert
     from .methods import method_from_options
 
-    solver = method_from_options(method, **(options or {}))
+    options = as_options(options)
+    solver = method_from_options(method, **options)
     jaw = jaw or JawMarkers()
-    chin_marker, jaw_second_marker = jaw.chin_marker, jaw.jaw_second_marker
-    jaw_fixed, jaw_lead = jaw.jaw_fixed, jaw.jaw_lead
+    chin_marker, jaw_fixed = jaw.chin_marker, jaw.jaw_fixed
     params, face = model.params, model.face
     src = ms.meta.get("source")
     incisor, molar, by_role = bone_points(ms, incisor=jaw.jaw_incisor, molar=jaw.jaw_molar,
@@ -140,9 +102,11 @@ def invert_marker_set(
     if scale_pair is not None:
         a, _, b = scale_pair.partition(",")
         skin = scale_adapt(skin, face, mapping, (a.strip(), b.strip())).markers
-    lead = jaw_lead if jaw_lead is not None else (0 if incisor is not None else SKIN_JAW_LEAD)
-    drive, jaw_source = _jaw_drive(ms, model, mapping, src, lead, chin_marker,
-                                   jaw_second_marker, incisor, molar, by_role)
+    names = replace(jaw, jaw_incisor=incisor, jaw_molar=molar)
+    drive, jaw_source = jaw_drive({n: ms.marker(n) for n in ms.names}, model, names,
+                                  lead=default_lead(jaw, incisor is not None),
+                                  chin_node=mapping.get(chin_marker), source=src,
+                                  by_role=by_role)
     estimate = None if drive is None else (not jaw_fixed and drive.ndim == 1)
     ctrl, drive, estimate, jaw_source, pick_note, signed = _controls(
         controls, model, skin, mapping, drive, estimate, jaw_source, midsagittal, None, src)
@@ -246,44 +210,6 @@ def _skin_markers(ms, model, given, bone, midsagittal):
         notes.append("midsagittal data: fitted in y and z only (each marker's x is set to its "
                      "model point's, on the midline of a symmetric face)")
     return skin, mapping, notes
-
-
-def _jaw_drive(ms, model, mapping, src, lead, chin_marker, second, incisor, molar, by_role):
-    """(the jaw series: None, (frames,) angles or (frames, 3) poses; what it is, for the
-    notes) on ``model`` (a :class:`~facemech.physics.model.Model`)."""
-    from ..solvers.jaw import jaw_poses_from_points
-    from ..solvers.jaw_bone import jaw_poses_from_bone, protrusion_of
-    from ..solvers.jaw_drive import jaw_angles_from_marker
-
-    params = model.params
-    if incisor is not None:
-        poses = jaw_poses_from_bone(ms.marker(incisor), model.face, params,
-                                    molar=None if molar is None else ms.marker(molar),
-                                    lead=lead, names=(incisor, molar or "molar"), source=src)
-        pro = protrusion_of(poses, params) * 1e3
-        what = (f"the bone point{'s' if molar else ''} {incisor} (lower incisor"
-                f"{f') and {molar} (molar' if molar else ''}){' by role' if by_role else ''}: "
-                f"angle {np.degrees(poses[:, 0].min()):.1f} to "
-                f"{np.degrees(poses[:, 0].max()):.1f} degrees, protrusion {pro.min():.1f} to "
-                f"{pro.max():.1f} mm; {lead}-frame lead")
-        return poses, what
-    if second is not None:
-        for name in (chin_marker, second):
-            if name not in ms.names:
-                raise InputError("jaw marker not in the file", source=src, field=name)
-        jaw = jaw_poses_from_points(ms.marker(chin_marker), ms.marker(second),
-                                    hinge_point=model.face.hinge_point, lead=lead,
-                                    names=(chin_marker, second), source=src)
-        return jaw, f"jaw markers {chin_marker},{second} ({lead}-frame lead)"
-    if chin_marker is not None:
-        node = mapping.get(chin_marker)
-        if node is None:
-            raise InputError("chin marker has no node (not in the file or not mapped)",
-                             source=src, field=chin_marker)
-        jaw = jaw_angles_from_marker(model, node, ms.marker(chin_marker)[:, 1],
-                                     lead=lead, source=src)
-        return jaw, f"chin marker {chin_marker} ({lead}-frame lead)"
-    return None, None
 
 
 #: mm per unit: the weight of activity (``effort``) when the sign step of a control pick kept

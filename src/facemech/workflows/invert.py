@@ -7,49 +7,26 @@ set on the face is :func:`facemech.inverse.workflow.invert_marker_set`.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import InputError
-from ..inverse.workflow import JawMarkers
+from ..inverse.options import FitOptions
+from ..jaw.inputs import JawMarkers
 from ..markerset import MarkerSet
+from .inputs import MarkerFile, PresetChoice
 
-__all__ = ["JawMarkers", "MarkerFile", "draw", "invert", "invert_markers", "notes",
-           "parameters", "report"]
-
-
-@dataclass(frozen=True)
-class MarkerFile:
-    """The marker file of an inversion and how its markers are laid on the face.
-
-    Attributes
-    ----------
-    path : marker file: motion capture in the model's frame and at its frame rate, or
-        articulography (resampled, its lips laid on the face's vermilion points)
-    units : length unit of a file that carries none
-    map_file : marker,node CSV (default: the closest nodes)
-    scale_pair : "A,B": adapt the markers by per-axis scaling from two markers far apart
-    """
-
-    path: Path
-    units: str | None = None
-    map_file: Path | None = None
-    scale_pair: str | None = None
+__all__ = ["FitOptions", "JawMarkers", "MarkerFile", "PresetChoice", "draw", "invert",
+           "invert_markers", "notes", "parameters", "report"]
 
 
 def parameters(preset: str | Path = "anatomical", jaw_kinematics: str | None = None,
                dt: float | None = None):
     """The :class:`~facemech.params.Preset` of a preset (name or file) with a command's
     overrides: the jaw's kinematics ("hinge" or "glide") and the inversion's explicit Euler
-    step ``dt`` (s; its method's ``fast_dt``)."""
-    from ..params import Preset, preset_pair
-
-    params, steps = preset_pair(preset)
-    if jaw_kinematics is not None:
-        params = params.with_(jaw_kinematics=jaw_kinematics)
-    return Preset(params, steps if dt is None else steps.with_(fast_dt=dt))
+    step ``dt`` (s; its method's ``fast_dt``): :meth:`PresetChoice.resolve`."""
+    return PresetChoice(str(preset), jaw_kinematics, dt).resolve()
 
 
 def invert_markers(
@@ -64,7 +41,7 @@ def invert_markers(
     controls: str | None = None,
     jaw: JawMarkers | None = None,
     noise: float | None = None,
-    options: dict | None = None,
+    options: FitOptions | dict | None = None,
     progress: Callable[[int, int], None] | None = None,
 ):
     """Invert a marker file on a face: the files read, then
@@ -85,12 +62,13 @@ def invert_markers(
     facemech.inverse.result.Inversion
     """
     from ..inverse.methods import method_from_options
+    from ..inverse.options import as_options
     from ..inverse.workflow import invert_marker_set
     from ..io.markers import read_markers
     from ..kinematics.mapping import read_mapping
     from ..physics.model import model as face_model
 
-    method_from_options(method, **(options or {}))  # a bad option before any file is read
+    method_from_options(method, **as_options(options))  # a bad option before any file is read
     ms = markers if isinstance(markers, MarkerSet) else read_markers(markers)
     model = face_model(face, params)  # the command's one model (None: the default preset)
     mapping = None if map_file is None else read_mapping(map_file, ms, model.face)
@@ -101,7 +79,8 @@ def invert_markers(
 
 def invert(markers: MarkerFile | str | Path, output: str | Path, *,
            face: str | Path = "default", params=None, method: str = "lsq",
-           options: dict | None = None, positive: bool = True, controls: str | None = None,
+           options: FitOptions | dict | None = None, positive: bool = True,
+           controls: str | None = None,
            jaw=None, noise: float | None = None, figure: str | Path | None = None,
            progress: Callable[[str, int, int], None] | None = None):
     """Recover muscle activity and the jaw frame by frame from a marker file, write the
@@ -113,11 +92,12 @@ def invert(markers: MarkerFile | str | Path, output: str | Path, *,
         nodes)
     output : results file (.nc), written atomically
     face : the face (file or built-in name)
-    params : the preset: a :class:`~facemech.params.Preset` (:func:`parameters`), a
+    params : the preset: a :class:`PresetChoice`, a :class:`~facemech.params.Preset`, a
         :class:`~facemech.params.Parameters` or a preset's name (None: the default preset)
-    method, options : "lsq" or "powell" and its options (``window``, ``tol``, ``bend``,
-        ``smooth``, ``effort``, ``max_evaluations``; None: its default; tol in mm, weights in mm
-        per unit; ``max_rate`` 1/s; :func:`~facemech.inverse.methods.method_from_options`)
+    method, options : "lsq" or "powell" and its options (:class:`FitOptions`, or a dict of
+        ``window``, ``tol``, ``bend``, ``smooth``, ``effort``, ``max_evaluations``,
+        ``max_rate``; None: its default; tol in mm, weights in mm per unit; ``max_rate`` 1/s;
+        :func:`~facemech.inverse.methods.method_from_options`)
     positive, controls : activity >= 0; "speech", "emg7", "all" or comma-separated groups
         (None: "speech", or the part of it the markers determine)
     jaw : the jaw's markers, on the skin or on the bone
@@ -134,6 +114,7 @@ def invert(markers: MarkerFile | str | Path, output: str | Path, *,
     from ..io.results import file_hash
 
     src = markers if isinstance(markers, MarkerFile) else MarkerFile(Path(markers))
+    params = params.resolve() if isinstance(params, PresetChoice) else params
     inputs = [src.path, src.map_file, face if Path(str(face)).suffix else None]
     check_output(output, inputs, field="-o")  # before the inversion, which takes minutes
     if figure is not None:
