@@ -32,7 +32,8 @@ def _option(fn, p: inspect.Parameter, args: tuple[str, ...], spec=None) -> inspe
         return p.replace(default=typer.Argument(... if p.default is inspect.Parameter.empty
                                                 else p.default, help=help))
     flags = spec.flags if spec else opts.NAMES.get(p.name, ())
-    flags = () if flags == ("--" + p.name.replace("_", "-"),) else flags  # typer's (--no-x too)
+    if spec and flags == ("--" + p.name.replace("_", "-"),):
+        flags = ()  # typer's own (a yes/no option: --x/--no-x)
     return p.replace(default=typer.Option(p.default, *flags, help=help))
 
 def command(group: typer.Typer = app, name: str | None = None, args: tuple[str, ...] = (),
@@ -284,14 +285,13 @@ def experiment_lucero2008(output: Path = Path("lucero2008"), frames: int = 60,
     res = _staged(workflows.experiments.lucero2008, **locals())
     _say(workflows.experiments.lucero2008_report(res, output))
 
-@command(groups=("marker_file", "model", "jaw_markers", "fit"))
-def invert(output: Path = ..., face: str = "default", method: str = "lsq",
-           figure: Path | None = None, positive: bool = True, controls: str | None = None,
-           noise: float | None = None, marker_file=None, model=None, jaw_markers=None, fit=None):
+@command(groups=("marker_file", "model", "jaw_markers", "inversion", "fit"))
+def invert(output: Path = ..., face: str = "default", figure: Path | None = None,
+           marker_file=None, model=None, jaw_markers=None, inversion=None, fit=None):
     """Recover muscle activity and the jaw frame by frame from markers; re-animate the face."""
     res = _staged(workflows.invert.invert, markers=marker_file, output=output, face=face,
-                  params=model, method=method, options=fit, positive=positive,
-                  controls=controls, jaw=jaw_markers, noise=noise, figure=figure)
+                  params=model, jaw=jaw_markers, inversion=inversion, options=fit,
+                  figure=figure)
     _say(workflows.invert.report(res, output, figure))
     _say(workflows.invert.notes(res), True)
 

@@ -12,7 +12,7 @@ from pathlib import Path
 from .checks import RANGES as _RANGES
 from .checks import check_number
 from .inputs import Input, from_keys, inputs_of
-from .inverse.options import FitOptions
+from .inverse.options import FitOptions, InversionOptions
 from .jaw.inputs import JawMarkers, JawSource
 from .workflows.inputs import Controls, MarkerFile, PresetChoice, Stepping
 
@@ -66,7 +66,6 @@ output: the output (file or folder)
 peak: frame of a peak: a muscle group (e.g. OOS), jaw or motion
 phone_labels: phone labels written: ipa, arpabet or espeak (eSpeak's codes)
 phone_tier: the same, phones
-positive: keep activity >= 0
 preset: anatomical, lucero1999, pitermann2001, calibrated or a preset .json
 rate: rate, Hz (default: the frame rate)
 rate_wpm: words per minute
@@ -200,7 +199,7 @@ NAMES: dict[str, tuple[str, ...]] = {
 GROUPS: dict[str, type | dict[str, tuple]] = {
     "controls": Controls, "jaw_source": JawSource, "stepping": Stepping,
     "marker_file": MarkerFile, "model": PresetChoice, "jaw_markers": JawMarkers,
-    "fit": FitOptions,
+    "inversion": InversionOptions, "fit": FitOptions,
     # facemech.io.markers.read_markers' options for formats without times or names, and the
     # bounds of facemech.kinematics.trim.trim
     "reader": {"rate": (float | None, None), "sensors": (str | None, None)},
@@ -245,8 +244,11 @@ RANGES: dict[str, str] = {k: v for k, v in _RANGES.items()
                           or any(k == i.key for g in GROUPS for i in group_inputs(g))}
 
 
-def help_for(command: str, parameter: str, spec: Input | None = None) -> str | None:
+def help_for(command: str, parameter: str, spec=...) -> str | None:
     """The help of ``parameter`` in the command whose function is named ``command``: the
-    command's own line, else the input's declared help (``spec``), else the table's."""
+    command's own line, else the input's declared help (``spec``: the input, None for a plain
+    parameter; not given: the first input group with that key), else the table's."""
+    if spec is ...:
+        spec = next((i for g in GROUPS for i in group_inputs(g) if i.key == parameter), None)
     return HELP.get(f"{command}.{parameter}") or (spec.help if spec else None) or HELP.get(
         parameter)

@@ -11,7 +11,7 @@ from facemech.inputs import REQUIRED, inputs_of
 from facemech.workflows.batch_jobs import JOBS
 
 GROUPED = {"simulate": ("controls", "jaw_source", "stepping"),
-           "invert": ("marker_file", "model", "jaw_markers", "fit")}
+           "invert": ("marker_file", "model", "jaw_markers", "inversion", "fit")}
 
 
 def _command(name):

@@ -1,14 +1,35 @@
-"""The inversion's fitting options as one input group (:mod:`facemech.inputs`): the least-squares
-method's options a command takes, each None when not given (the method's default then;
-:func:`facemech.inverse.methods.method_from_options` checks them against the method)."""
+"""The inversion's options as input groups (:mod:`facemech.inputs`): how it fits
+(:class:`InversionOptions`: the method, the sign of activity, the controls, the marker noise)
+and the method's own options (:class:`FitOptions`, each None when not given: the method's
+default then; :func:`facemech.inverse.methods.method_from_options` checks them against it)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, fields, replace
 
 from ..inputs import option
 
-__all__ = ["FitOptions", "as_options"]
+__all__ = ["FitOptions", "InversionOptions", "as_options", "inversion_options"]
+
+
+@dataclass(frozen=True)
+class InversionOptions:
+    """How an inversion fits: the method (``lsq`` or ``powell``), activity kept >= 0, the
+    controls (``speech``, ``emg7``, ``all`` or comma-separated groups; None: ``speech``, or the
+    part of it the markers determine) and the marker noise for the standard errors (mm; None:
+    from the residuals)."""
+
+    method: str = option("lsq", "lsq (fast) or powell (the seeds')")
+    positive: bool = option(True, "keep activity >= 0")
+    controls: str | None = option(None, "speech, emg7, all, or listed groups (default: "
+                                  "speech, or what the markers determine)")
+    noise: float | None = option(None, "marker noise for the SEs, mm (or fit)", unit="mm")
+
+
+def inversion_options(inversion: InversionOptions | None, given: dict) -> InversionOptions:
+    """``inversion`` (None: the defaults) with the options given one by one as keywords
+    (``method=``, ``positive=``, ``controls=``, ``noise=``)."""
+    return replace(inversion or InversionOptions(), **given)
 
 
 @dataclass(frozen=True)

@@ -21,7 +21,7 @@ from ..errors import InputError
 from ..jaw.drive import SKIN_JAW_LEAD, default_lead, jaw_drive
 from ..jaw.inputs import JawMarkers
 from ..markerset import MarkerSet
-from .options import FitOptions, as_options
+from .options import FitOptions, InversionOptions, as_options, inversion_options
 from .result import Inversion
 
 if TYPE_CHECKING:
@@ -40,13 +40,11 @@ def invert_marker_set(
     *,
     mapping: dict[str, int] | None = None,
     scale_pair: str | None = None,
-    method: str = "lsq",
-    positive: bool = True,
-    controls: str | None = None,
     jaw: JawMarkers | None = None,
-    noise: float | None = None,
+    inversion: InversionOptions | None = None,
     options: FitOptions | dict | None = None,
     progress: Callable[[int, int], None] | None = None,
+    **given,
 ) -> Inversion:
     """Invert a marker set on a face (see :func:`facemech.inverse.invert.invert`).
 
@@ -60,14 +58,14 @@ def invert_marker_set(
     mapping : marker name -> node (:func:`facemech.kinematics.mapping.read_mapping`; None: the
         closest nodes, articulography's lips their vermilion points)
     scale_pair : "A,B": adapt the markers by per-axis scaling from two markers far apart
-    method, positive : "lsq" or "powell"; activity kept >= 0
-    controls : "speech", "emg7", "all" or comma-separated groups, an error if the markers give
-        fewer coordinates than that; None (default): "speech", or the part of it the markers
-        determine when they give fewer coordinates (:mod:`facemech.inverse.control_pick`;
-        when its sign step adds controls, ``effort`` is :data:`SIGN_EFFORT` unless given)
     jaw : the jaw's markers (:class:`JawMarkers`; None: none given, the sensors of roles
         ``lower_incisor`` and ``molar`` where the markers have them)
-    noise : marker noise for the standard errors, mm (None: from the residuals)
+    inversion : the method, ``positive``, ``controls`` and ``noise``
+        (:class:`~facemech.inverse.options.InversionOptions`; None: the defaults; ``given``:
+        any of them as keywords). Controls the markers give fewer coordinates for are an
+        error; None: "speech", or the part of it the markers determine
+        (:mod:`facemech.inverse.control_pick`; when its sign step adds controls, ``effort`` is
+        :data:`SIGN_EFFORT` unless given)
     options : the method's options (:class:`~facemech.inverse.options.FitOptions` or a dict;
         None: not given; an option of the other method is an error)
     progress : callable(done, total)
@@ -78,48 +76,65 @@ def invert_marker_set(
         Its notes also say how articulography roles were used and which controls were held.
     """
     from ..kinematics.mapping import scale_adapt
-    from ..kinematics.roles import bone_points, is_midsagittal
+    from ..kinematics.roles import is_midsagittal
     from .invert import JawRecording, invert
     from .methods import method_from_options
 
-    options = as_options(options)
-    solver = method_from_options(method, **options)
+    inv, options = inversion_options(inversion, given), as_options(options)
+    solver = method_from_options(inv.method, **options)
     jaw = jaw or JawMarkers()
-    chin_marker, jaw_fixed = jaw.chin_marker, jaw.jaw_fixed
-    params, face = model.params, model.face
     src = ms.meta.get("source")
-    incisor, molar, by_role = bone_points(ms, incisor=jaw.jaw_incisor, molar=jaw.jaw_molar,
-                                          skin_jaw=chin_marker)
-    molar, dropped = _usable_molar(ms, molar, by_role)
-    ms, resampled = _at_frame_rate(ms, params.frame_rate)
-    ms, filled = _bone_gaps_filled(ms, (incisor, molar), by_role)
-    if jaw_fixed and chin_marker is None and incisor is None:
-        raise InputError("--jaw-fixed needs a jaw recording (--chin-marker or --jaw-incisor)",
-                         field="jaw-fixed")
+    ms, names, by_role, notes = _jaw_points(ms, jaw, model.params.frame_rate)
+    bone = (names.jaw_incisor, names.jaw_molar)
     midsagittal = is_midsagittal(ms)
-    skin, mapping, notes = _skin_markers(ms, face, mapping, (incisor, molar), midsagittal)
-    notes = resampled + dropped + filled + notes
+    skin, mapping, more = _skin_markers(ms, model.face, mapping, bone, midsagittal)
+    notes += more
     if scale_pair is not None:
         a, _, b = scale_pair.partition(",")
-        skin = scale_adapt(skin, face, mapping, (a.strip(), b.strip())).markers
-    names = replace(jaw, jaw_incisor=incisor, jaw_molar=molar)
+        skin = scale_adapt(skin, model.face, mapping, (a.strip(), b.strip())).markers
     drive, jaw_source = jaw_drive({n: ms.marker(n) for n in ms.names}, model, names,
-                                  lead=default_lead(jaw, incisor is not None),
-                                  chin_node=mapping.get(chin_marker), source=src,
+                                  lead=default_lead(jaw, bone[0] is not None),
+                                  chin_node=mapping.get(jaw.chin_marker), source=src,
                                   by_role=by_role)
-    estimate = None if drive is None else (not jaw_fixed and drive.ndim == 1)
+    estimate = None if drive is None else (not jaw.jaw_fixed and drive.ndim == 1)
     ctrl, drive, estimate, jaw_source, pick_note, signed = _controls(
-        controls, model, skin, mapping, drive, estimate, jaw_source, midsagittal, None, src)
+        inv.controls, model, skin, mapping, drive, estimate, jaw_source, midsagittal, src)
+    solver, pick_note = _picked_fit(solver, options, pick_note, signed)
+    res = invert(model, skin, mapping, method=solver, positive=inv.positive, controls=ctrl,
+                 jaw_angle=JawRecording(drive, estimate, jaw_source), noise_mm=inv.noise,
+                 progress=progress)
+    return replace(res, notes=[*res.notes, *notes, *([pick_note] if pick_note else [])])
+
+
+def _jaw_points(ms, jaw, rate):
+    """(the set at the model's frame ``rate`` with its bone points' short gaps filled, the
+    jaw's markers with its bone points named, whether they were found by role, notes): the
+    bone points named, else found by their articulography roles, a lost molar left out."""
+    from ..kinematics.roles import bone_points
+
+    incisor, molar, by_role = bone_points(ms, incisor=jaw.jaw_incisor, molar=jaw.jaw_molar,
+                                          skin_jaw=jaw.chin_marker)
+    molar, dropped = _usable_molar(ms, molar, by_role)
+    ms, resampled = _at_frame_rate(ms, rate)
+    ms, filled = _bone_gaps_filled(ms, (incisor, molar), by_role)
+    if jaw.jaw_fixed and jaw.chin_marker is None and incisor is None:
+        raise InputError("--jaw-fixed needs a jaw recording (--chin-marker or --jaw-incisor)",
+                         field="jaw-fixed")
+    return (ms, replace(jaw, jaw_incisor=incisor, jaw_molar=molar), by_role,
+            resampled + dropped + filled)
+
+
+def _picked_fit(solver, options, pick_note, signed):
+    """(the method, the pick's note): when controls were picked, the fit is paced and, when
+    the pick's sign step added controls, weighs effort (:func:`_effort_for_sign`,
+    :func:`_pace_for_pick`)."""
     if signed:
         solver, effort_note = _effort_for_sign(solver, options)
         pick_note += effort_note
     if pick_note:
         solver, pace_note = _pace_for_pick(solver, options)
         pick_note += pace_note
-    res = invert(model, skin, mapping, method=solver, positive=positive, controls=ctrl,
-                 jaw_angle=JawRecording(drive, estimate, jaw_source), noise_mm=noise,
-                 progress=progress)
-    return replace(res, notes=[*res.notes, *notes, *([pick_note] if pick_note else [])])
+    return solver, pick_note
 
 
 def _at_frame_rate(ms, rate):
@@ -270,7 +285,7 @@ def pick_candidates(model) -> tuple[str, ...]:
     return SPEECH_CONTROLS + tuple(g for g in MARGINAL_GROUPS if g in present)
 
 
-def _controls(controls, model, skin, mapping, jaw, estimate, jaw_source, midsagittal, dt, src):
+def _controls(controls, model, skin, mapping, jaw, estimate, jaw_source, midsagittal, src):
     """(controls for :func:`invert`, jaw series, estimate the jaw, jaw source, the note of
     controls picked or None, whether the pick's sign step added controls) on ``model`` (a
     :class:`~facemech.physics.model.Model`)."""
@@ -302,7 +317,7 @@ def _controls(controls, model, skin, mapping, jaw, estimate, jaw_source, midsagi
     estimated = estimate in (None, True)
     pick = pick_controls(model, np.array([mapping[n] for n in names]),
                          pick_candidates(model.face), estimate_jaw=estimated, jaw_start=start,
-                         axes=(1, 2) if midsagittal else (0, 1, 2), dt=dt, labels=names)
+                         axes=(1, 2) if midsagittal else (0, 1, 2), labels=names)
     if estimated and not pick.jaw:
         held = np.full(len(skin.positions), start[0]) if jaw is None else jaw
         jaw, estimate = held, False

@@ -31,7 +31,7 @@ from ..batch.manifest import Item
 from ..batch.manifest import read_manifest as read_manifest_of
 from ..errors import FacemechError
 from ..inputs import from_manifest
-from ..inverse.options import FitOptions
+from ..inverse.options import FitOptions, InversionOptions
 from ..jaw.inputs import JawMarkers, JawSource
 from .inputs import Controls, MarkerFile, PresetChoice, Stepping
 
@@ -59,8 +59,9 @@ def _invert(o: dict, folder: Path):
     out = folder / "result.nc"
     res = invert.invert(
         from_manifest(MarkerFile, o), out, params=from_manifest(PresetChoice, o),
-        options=from_manifest(FitOptions, o), jaw=from_manifest(JawMarkers, o), figure=figure,
-        **{k: o[k] for k in ("face", "method", "positive", "controls", "noise") if k in o})
+        jaw=from_manifest(JawMarkers, o), inversion=from_manifest(InversionOptions, o),
+        options=from_manifest(FitOptions, o), figure=figure,
+        **{k: o[k] for k in ("face",) if k in o})
     s = res.error_summary()
     return ({"frames": len(res.time), "median_error_mm": round(float(s["median_mm"]), 4),
              "max_error_mm": round(float(s["max_mm"]), 4), "markers": len(res.marker_names)},
@@ -123,9 +124,8 @@ JOBS: dict[str, Job] = {
     "simulate": job((Controls, JawSource, Stepping), {"face": "file_or_name",
                                                       "preset": "file_or_name"},
                     (("activity", "emg"),), _simulate),
-    "invert": job((MarkerFile, PresetChoice, JawMarkers, FitOptions), {
-        "face": "file_or_name", "method": "str", "positive": "bool", "controls": "str",
-        "noise": "float", "figure": "bool"}, (("markers",),), _invert),
+    "invert": job((MarkerFile, PresetChoice, JawMarkers, InversionOptions, FitOptions), {
+        "face": "file_or_name", "figure": "bool"}, (("markers",),), _invert),
     "speak": Job(
         {"text": "str", "audio": "path", "textgrid": "path", "voice": "str", "rate": "int",
          "word_tier": "str", "phone_tier": "str", "strength": "float", "face": "file_or_name",
