@@ -15,6 +15,7 @@ from . import cli_options as opts
 from . import progress, warmup, workflows
 from ._version import __version__
 from .errors import FacemechError
+from .inputs import REQUIRED
 
 app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_enable=False,
                   help="Physics and kinematics of the speaking face.")
@@ -25,11 +26,15 @@ for _sub, _name in zip(_subs, ("face", "emg", "markers", "experiment"), strict=T
     app.add_typer(_sub, name=_name)
 err, out = Console(stderr=True), Console(soft_wrap=True)
 
-def _option(fn, p: inspect.Parameter, args: tuple[str, ...]) -> inspect.Parameter:
-    help, empty = opts.help_for(fn.__name__, p.name), p.default is inspect.Parameter.empty
-    if empty or p.name in args:
-        return p.replace(default=typer.Argument(... if empty else p.default, help=help))
-    return p.replace(default=typer.Option(p.default, *opts.NAMES.get(p.name, ()), help=help))
+def _option(fn, p: inspect.Parameter, args: tuple[str, ...], spec=None) -> inspect.Parameter:
+    help = opts.help_for(fn.__name__, p.name, spec)
+    if p.default is inspect.Parameter.empty or p.name in args:
+        return p.replace(default=typer.Argument(... if p.default is inspect.Parameter.empty
+                                                else p.default, help=help))
+    flags = spec.flags if spec else opts.NAMES.get(p.name, ())
+    if spec and flags == ("--" + p.name.replace("_", "-"),):
+        flags = ()  # typer's own (a yes/no option: --x/--no-x)
+    return p.replace(default=typer.Option(p.default, *flags, help=help))
 
 def command(group: typer.Typer = app, name: str | None = None, args: tuple[str, ...] = (),
             look: tuple | None = None, groups: tuple[str, ...] = ()):
@@ -37,7 +42,9 @@ def command(group: typer.Typer = app, name: str | None = None, args: tuple[str, 
     (:mod:`facemech.cli_options`; no default or in ``args``: arguments; ``...``: required),
     numbers are checked first, what it returns is printed (``warnings`` on stderr); ``look``:
     defaults of ``--view --size --background --aa``, passed as one ``render``; ``groups``: the
-    parameters that take options of :data:`~facemech.cli_options.GROUPS` as one dict each."""
+    parameters that take an input group of :data:`~facemech.cli_options.GROUPS` (its
+    dataclass, made from its options; a dict for the groups not yet declared as one)."""
+    specs = {i.key: i for g in groups for i in opts.group_inputs(g)}
     def register(fn):
         @functools.wraps(fn)
         def run(**kw):
@@ -45,9 +52,10 @@ def command(group: typer.Typer = app, name: str | None = None, args: tuple[str, 
             set_threads(_threads[0])  # numba's, for this command (--threads, FACEMECH_THREADS)
             for key, value in kw.items():
                 if isinstance(value, int | float) and not isinstance(value, bool):
-                    name = opts.NAMES.get(key, ("--" + key.replace("_", "-"),))[-1]
-                    opts.check_number(name, value, opts.RANGES.get(key))
-            kw.update({g: {k: kw.pop(k) for k in opts.GROUPS[g]} for g in groups})
+                    flags = specs[key].flags if key in specs else opts.NAMES.get(
+                        key, ("--" + key.replace("_", "-"),))
+                    opts.check_number(flags[-1], value, opts.RANGES.get(key))
+            kw.update({g: opts.make_group(g, kw) for g in groups})
             if look:
                 kw["render"] = workflows.pictures.render_options(*(kw.pop(k) for k in LOOK))
             if isinstance(shown := fn(**kw), list):  # lines, or what it wrote and warnings
@@ -58,10 +66,11 @@ def command(group: typer.Typer = app, name: str | None = None, args: tuple[str, 
         sig, key = inspect.signature(fn), inspect.Parameter.KEYWORD_ONLY
         extra = [inspect.Parameter(k, key, default=d, annotation=type(d))
                  for k, d in zip(LOOK, look or (), strict=False)]
-        extra += [inspect.Parameter(k, key, default=d, annotation=a)
-                  for g in groups for k, (a, d) in opts.GROUPS[g].items()]
-        run.__signature__ = sig.replace(parameters=[_option(fn, p, args) for p in (
-            *sig.parameters.values(), *extra) if p.name not in ("render", *groups)])
+        extra += [inspect.Parameter(i.key, key, default=... if i.default is REQUIRED else
+                                    i.default, annotation=i.type) for i in specs.values()]
+        run.__signature__ = sig.replace(parameters=[_option(fn, p, args, specs.get(p.name))
+                                                    for p in (*sig.parameters.values(), *extra)
+                                                    if p.name not in ("render", *groups)])
         return group.command(name)(run)
     return register
 LOOK = ("view", "size", "background", "aa")
@@ -193,17 +202,14 @@ def markers_trim(source: Path, output: Path = ..., units: str | None = None, bou
     """Keep the frames between two times or frame numbers (none: drop the empty ends)."""
     return workflows.markers.trim_file(source, output, units=units, **bounds, **reader)
 @command(look=("frontal+profile", "1280x720", "#2a2c33", 2), groups=(
-    "controls", "jaw_source", "solver"))
+    "controls", "jaw_source", "stepping"))
 def simulate(output: Path = ..., face: str = "default", preset: str = "anatomical",
              video: Path | None = None, audio: Path | None = None, render=None,
-             controls=None, jaw_source=None, solver=None):
+             controls=None, jaw_source=None, stepping=None):
     """Simulate the face driven by muscle activity or EMG and a jaw trajectory."""
-    sim, j = workflows.simulate, jaw_source
-    return _staged(sim.simulate_files, output=output, movie=video and (video, audio, render),
-                   controls=sim.Controls(**controls), jaw=sim.JawSource(
-                       j["jaw_angle"], j["jaw_chin"], j["chin_marker"], j["jaw_second_marker"],
-                       j["units"], j["bite_block"], j["jaw_incisor"], j["jaw_molar"]),
-                   face=face, preset=preset, **solver)
+    return _staged(workflows.simulate.simulate_files, output=output, controls=controls,
+                   jaw=jaw_source, face=face, preset=preset, stepping=stepping,
+                   movie=video and (video, audio, render))
 
 @command(look=("frontal+profile", "1280x720", "#2a2c33", 2))
 def render(result: Path, output: Path = ..., audio: Path | None = None, render=None):
@@ -279,16 +285,13 @@ def experiment_lucero2008(output: Path = Path("lucero2008"), frames: int = 60,
     res = _staged(workflows.experiments.lucero2008, **locals())
     _say(workflows.experiments.lucero2008_report(res, output))
 
-@command(groups=("marker_file", "model", "jaw_markers", "fit"))
-def invert(markers: Path = ..., output: Path = ..., face: str = "default", method: str = "lsq",
-           figure: Path | None = None, positive: bool = True, controls: str | None = None,
-           noise: float | None = None, marker_file=None, model=None, jaw_markers=None, fit=None):
+@command(groups=("marker_file", "model", "jaw_markers", "inversion", "fit"))
+def invert(output: Path = ..., face: str = "default", figure: Path | None = None,
+           marker_file=None, model=None, jaw_markers=None, inversion=None, fit=None):
     """Recover muscle activity and the jaw frame by frame from markers; re-animate the face."""
-    m, wi = marker_file, workflows.invert
-    res = _staged(wi.invert, markers=wi.MarkerFile(markers, m["units"], m["map_file"], m[
-        "scale_pair"]), output=output, face=face, params=wi.parameters(**model), method=method,
-        options=fit, positive=positive, controls=controls, jaw=wi.JawMarkers(**jaw_markers),
-        noise=noise, figure=figure)
+    res = _staged(workflows.invert.invert, markers=marker_file, output=output, face=face,
+                  params=model, jaw=jaw_markers, inversion=inversion, options=fit,
+                  figure=figure)
     _say(workflows.invert.report(res, output, figure))
     _say(workflows.invert.notes(res), True)
 

@@ -1,8 +1,9 @@
 """The command line's options, as data: each option's help (:data:`HELP`), its names where
-they are not ``--the-parameter`` (:data:`NAMES`) and the interval its numbers must lie in
-(:data:`RANGES`, from the one table of :mod:`facemech.checks`), with :func:`check_number`, which
-:mod:`facemech.cli` applies to every number a command is given before it runs. Pure Python:
-importing it costs nothing."""
+they are not ``--the-parameter`` (:data:`NAMES`), the input groups a command takes as one
+parameter (:data:`GROUPS`; their options declared on their dataclasses) and the interval its
+numbers must lie in (:data:`RANGES`, from the one table of :mod:`facemech.checks`), with
+:func:`check_number`, which :mod:`facemech.cli` applies to every number a command is given
+before it runs. Pure Python: importing it costs nothing."""
 
 from __future__ import annotations
 
@@ -10,30 +11,28 @@ from pathlib import Path
 
 from .checks import RANGES as _RANGES
 from .checks import check_number
+from .inputs import Input, from_keys, inputs_of
+from .inverse.options import FitOptions, InversionOptions
+from .jaw.inputs import JawMarkers, JawSource
+from .workflows.inputs import Controls, MarkerFile, PresetChoice, Stepping
 
-__all__ = ["HELP", "NAMES", "RANGES", "check_number", "help_for"]
+__all__ = ["GROUPS", "HELP", "NAMES", "RANGES", "check_number", "group_inputs", "help_for",
+           "make_group"]
 
 _HELP_TABLE = """
 aa: anti-aliasing: samples per pixel and axis
-activity: activity CSV
 as_json: print JSON
 audio: WAV to mux in
 background: '#rrggbb', 'r,g,b' or 'transparent' (PNG)
 baseline: rest interval START,STOP (s)
 blinks: blinks at the rate of conversation (26/min)
-bend: lsq weight, mm/unit: --bend, --smooth (0.3), --effort
-bite_block: hold the jaw at its initial pose
 builtin: refit the built-in targets
 calibration: recording of maximal gestures
 calibration_baseline: its rest interval START,STOP (s)
-chin_marker: a jaw marker: its drop gives the jaw
 controls: speech, emg7, all, or listed groups (default: speech, or what the markers determine)
 design: design table (.csv or .toml)
 dt: Euler step of every evaluation, s (default: the preset's)
-effort: see --bend (0; 0.1 when the control pick adds for sign)
 emg: raw EMG (CSV or C3D), 7 channels
-emg_baseline: EMG rest interval START,STOP (s)
-emg_calibration: EMG of maximal gestures
 eps: data precision, e.g. 0.5mm (default: noise)
 face: face .npz, default, default-coarse or default-fine
 figure: PNG of the controls (+-2 SE) and error
@@ -48,23 +47,12 @@ gestures: maximal gestures, each FILE:GROUPS, e.g. smile.c3d:ZYG,LAO,RIS
 head: comma-separated head markers (at least 3)
 head_motion: head motion driven by the voice's F0 and level
 integrator: euler, implicit or rosenbrock
-jaw_angle: CSV: time, jaw_angle (rad) or jaw_angle_deg
-jaw_chin: marker file with the jaw's markers (chin, or incisor and molar)
-jaw_incisor: lower-incisor sensor: a bone point that drives the jaw, not skin
-jaw_molar: a molar pellet on the mandible, with --jaw-incisor
-jaw_drive: ramp or hold
-jaw_fixed: hold the recorded jaw as given
-jaw_kinematics: hinge or glide (or the preset's)
-jaw_lead: frames the recorded jaw leads the skin (default: skin 2, bone 0)
-jaw_second_marker: another: rotation and glide
 k: independent markers (default: <= 10)
 labels: name the markers
 landmarks: landmark CSV name,x,y,z, or iBUG-68 .pts/.ljson/CSV
 axes: the file's axes for facemech's x,y,z, e.g. --axes=x,z,-y (a z-up scan), --axes=-x,y,z
 left: marker on the left
 map_file: marker,node CSV (default: closest nodes)
-max_evaluations: model steps per frame (400)
-max_rate: lsq: largest change of a muscle per second, 1/s (0: none)
 max_gap: longest gap to fill, s
 measured: measured markers (same names)
 method: lsq (fast) or powell (the seeds')
@@ -78,7 +66,6 @@ output: the output (file or folder)
 peak: frame of a peak: a muscle group (e.g. OOS), jaw or motion
 phone_labels: phone labels written: ipa, arpabet or espeak (eSpeak's codes)
 phone_tier: the same, phones
-positive: keep activity >= 0
 preset: anatomical, lucero1999, pitermann2001, calibrated or a preset .json
 rate: rate, Hz (default: the frame rate)
 rate_wpm: words per minute
@@ -87,30 +74,25 @@ report: write the per-frame residuals (JSON)
 result: results file (.nc)
 right: marker on the right
 scale: KIND:KEY=FACTOR (repeatable), e.g. word:balloon=1.5, class:open=0.8, phone:u:=1.2
-scale_pair: A,B: scale the markers per axis
 series: with --json: the per-frame mouth measures
 seed: seed of the blinks, gaze shifts and head motion (default: from the item)
 size: frame size WIDTHxHEIGHT, pixels
-smooth: see --bend
 source: input marker file
 strength: scale of the visemes' departure from rest
 plan: plan the controls for the face's dynamics (--no-plan: the dominance blend as it is)
 plan_iterations: the planner's iterations, each one more simulation (0-20)
-substeps: steps per frame (implicit)
 test: held-out utterances, e.g. 31-40
 text: what to say (or --audio)
 textgrid: the recording's Praat TextGrid (MFA)
 time: time of the frame, s
 tissue: anatomical or uniform
 title: page title
-tol: lsq: stop at RMS gains below this, mm (0: stop when no step gains)
 train: utterances to fit, e.g. 1-30
 units: length unit if the file has none
 utterances: utterances in the corpus
 video: render the MP4
 view: frontal, profile, three-quarter, mouth, frontal+profile
 voice: eSpeak NG voice, e.g. en-us, en-gb, en-us+f3
-window: lsq: frames fitted per frame (2)
 word_tier: TextGrid tier name (default: found by name)
 calibrate.max_evaluations: gesture sets simulated at most
 calibrate.name: preset name (default: the file's)
@@ -140,7 +122,6 @@ face_from_photo.profile: profile photo on a plain background: depth of nose, lip
 face_from_photo.ipd: interpupillary distance, mm (default: adult norm 63.4, Dodgson 2004)
 face_from_photo.distance: camera to face, m
 face_info.face: face file or built-in face
-invert.markers: mocap in the model's frame and rate, or articulography (.ema .est .txy), resampled
 invert.output: results file (.nc)
 markers_convert.output: the output marker file (or TARGET)
 markers_convert.target: or -o
@@ -165,12 +146,6 @@ plot.output: PNG
 regions.method: qrcp or strong
 regions.output: output folder
 render.output: MP4, or a folder for PNG frames
-simulate.chin_marker: the chin marker (default R01)
-simulate.jaw_incisor: lower-incisor sensor in --jaw-chin (default: its role)
-simulate.jaw_molar: a molar pellet in --jaw-chin, with --jaw-incisor
-simulate.dt: explicit Euler step, s
-simulate.jaw_kinematics: hinge or glide
-simulate.jaw_second_marker: a second mandible marker in the --jaw-chin file
 simulate.output: results file (.nc)
 simulate.video: also render an MP4 (or PNG frames into a folder)
 speak.audio: a recorded voice (WAV) to speak with
@@ -207,7 +182,8 @@ analyse.window: lsq: frames fitted per frame
 analyse.smooth: lsq: smoothness weight, mm/unit
 analyse.video: also render movie.mp4
 """
-#: parameter -> help; ``command.parameter`` (the command function's name) overrides it there
+#: parameter -> help; ``command.parameter`` (the command function's name) overrides it there.
+#: The options of an input group declare their own help (:data:`GROUPS`)
 HELP: dict[str, str] = dict(line.split(": ", 1) for line in _HELP_TABLE.strip().splitlines())
 
 #: parameter -> its option names, where they differ from ``--the-parameter``
@@ -216,35 +192,19 @@ NAMES: dict[str, tuple[str, ...]] = {
     "rate_wpm": ("--rate",), "noise_mm": ("--noise",), "map_file": ("--map",), "k": ("-k",),
     "aa": ("--aa",)}
 
-#: option groups: options that a command takes as one parameter, a dict of them, which it hands
-#: to the object that takes them (group -> option -> (type, default)), so that no command has
-#: more than 12 parameters. The options keep their names, help and order of checks
-_JAW = {k: (str | None, None) for k in ("chin_marker", "jaw_second_marker", "jaw_incisor",
-                                         "jaw_molar")}
-GROUPS: dict[str, dict[str, tuple]] = {
-    # facemech.workflows.simulate.Controls and JawSource, and the solver's options
-    "controls": {"activity": (Path | None, None), "emg": (Path | None, None),
-                 "emg_baseline": (str | None, None), "emg_calibration": (Path | None, None)},
-    "jaw_source": {"jaw_angle": (Path | None, None), "jaw_chin": (Path | None, None), **_JAW,
-                   "bite_block": (bool, False), "units": (str | None, None)},
-    "solver": {"jaw_kinematics": (str | None, None), "integrator": (str | None, None),
-               "substeps": (int | None, None), "dt": (float | None, None),
-               "jaw_drive": (str, "ramp")},
-    # facemech.inverse.workflow.JawMarkers, the method's options, the marker file and preset
-    "jaw_markers": {**_JAW, "jaw_fixed": (bool, False), "jaw_lead": (int | None, None)},
-    "fit": {"window": (int | None, None), "tol": (float | None, None),
-            "bend": (float | None, None), "smooth": (float | None, None),
-            "effort": (float | None, None), "max_evaluations": (int | None, None),
-            "max_rate": (float | None, None)},
-    "marker_file": {"map_file": (Path | None, None), "scale_pair": (str | None, None),
-                    "units": (str | None, None)},
+#: input groups: options that a command takes as one parameter (so that no command has more
+#: than 12), each an input group declared once (a dataclass of :mod:`facemech.inputs`, whose
+#: fields give the options' names, types, defaults and help), or, for the groups not yet
+#: declared as one, a dict option -> (type, default) handed on as a dict
+GROUPS: dict[str, type | dict[str, tuple]] = {
+    "controls": Controls, "jaw_source": JawSource, "stepping": Stepping,
+    "marker_file": MarkerFile, "model": PresetChoice, "jaw_markers": JawMarkers,
+    "inversion": InversionOptions, "fit": FitOptions,
     # facemech.io.markers.read_markers' options for formats without times or names, and the
     # bounds of facemech.kinematics.trim.trim
     "reader": {"rate": (float | None, None), "sensors": (str | None, None)},
     "bounds": {"start": (float | None, None), "stop": (float | None, None),
                "first": (int | None, None), "last": (int | None, None)},
-    "model": {"preset": (str, "anatomical"), "jaw_kinematics": (str | None, None),
-              "dt": (float | None, None)},
     # facemech.workflows.subject.analyse: Preparation and the lsq options
     "preparation": {"units": (str | None, None), "max_gap": (float, 0.1),
                     "lowpass": (float | None, 12.0)},
@@ -259,12 +219,36 @@ GROUPS: dict[str, dict[str, tuple]] = {
               "seed": (int | None, None)},
 }
 
+
+def group_inputs(group: str) -> tuple[Input, ...]:
+    """The options of the input group ``group`` of :data:`GROUPS` (:class:`~.inputs.Input`)."""
+    spec = GROUPS[group]
+    if not isinstance(spec, dict):
+        return inputs_of(spec)
+    return tuple(Input(k, k, a, d, "", None, NAMES.get(k, ("--" + k.replace("_", "-"),)), "")
+                 for k, (a, d) in spec.items())
+
+
+def make_group(group: str, values: dict):
+    """The value of an input group from a command's parameters (popped from ``values``): its
+    dataclass, or a dict."""
+    given = {i.key: values.pop(i.key) for i in group_inputs(group)}
+    spec = GROUPS[group]
+    return given if isinstance(spec, dict) else from_keys(spec, given)
+
+
 #: parameter -> the interval its value must lie in, for the numbers that are options of a
 #: command: the rows of the one table (:mod:`facemech.checks`) that the Python API checks too
 RANGES: dict[str, str] = {k: v for k, v in _RANGES.items()
-                          if k in HELP or any(h.endswith("." + k) for h in HELP)}
+                          if k in HELP or any(h.endswith("." + k) for h in HELP)
+                          or any(k == i.key for g in GROUPS for i in group_inputs(g))}
 
 
-def help_for(command: str, parameter: str) -> str | None:
-    """The help of ``parameter`` in the command whose function is named ``command``."""
-    return HELP.get(f"{command}.{parameter}", HELP.get(parameter))
+def help_for(command: str, parameter: str, spec=...) -> str | None:
+    """The help of ``parameter`` in the command whose function is named ``command``: the
+    command's own line, else the input's declared help (``spec``: the input, None for a plain
+    parameter; not given: the first input group with that key), else the table's."""
+    if spec is ...:
+        spec = next((i for g in GROUPS for i in group_inputs(g) if i.key == parameter), None)
+    return HELP.get(f"{command}.{parameter}") or (spec.help if spec else None) or HELP.get(
+        parameter)

@@ -1,6 +1,8 @@
 """A job kind of a batch manifest: its options (names, value kinds) and the function that runs it.
 
-The kinds themselves, which call the workflows, are given to the runner by the caller
+A job's options are made from the input groups it takes (:func:`job`: the dataclasses of
+:mod:`facemech.inputs`, whose manifest keys and kinds they declare) and a few of its own. The
+kinds themselves, which call the workflows, are given to the runner by the caller
 (:data:`facemech.workflows.batch_jobs.JOBS`): batch/ imports no workflow.
 """
 
@@ -11,8 +13,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..errors import InputError
+from ..inputs import manifest_kinds
 
-__all__ = ["Job", "OPTION_KINDS", "check_kind"]
+__all__ = ["Job", "OPTION_KINDS", "check_kind", "job"]
 
 #: value kinds: a file read (hashed), several files, a file or a built-in name (a value with a
 #: suffix is a file), a marker file or "first", text, numbers and yes/no
@@ -31,12 +34,21 @@ class Job:
         empty) and returns the item's key numbers and the lines its command would print
     more_inputs : more_inputs(options) -> {name: path}: files the job reads that its options
         name only indirectly (a design table's sounds and results), hashed with the others
+    groups : the input groups (dataclasses) among its options: each is made from a row when
+        the manifest is read, so that it checks itself before anything runs
     """
 
     options: dict
     required: tuple
     run: Callable[[dict, Path], tuple[dict, list[str]]]
     more_inputs: Callable[[dict], dict] | None = None
+    groups: tuple = ()
+
+
+def job(groups: tuple[type, ...], own: dict, required: tuple, run, more_inputs=None) -> Job:
+    """A :class:`Job` whose options are its input groups' (by manifest key) and its ``own``
+    (option name -> value kind)."""
+    return Job({**manifest_kinds(*groups), **own}, required, run, more_inputs, tuple(groups))
 
 
 def check_kind(job: str, jobs: dict[str, Job], *, source: str, row: int) -> Job:

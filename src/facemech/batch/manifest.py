@@ -233,6 +233,7 @@ def parse_item(row: dict, jobs: dict[str, Job], *, source: str, base: Path) -> I
         if not any(g in options for g in group):
             raise InputError(f"row {k}: a {kind} job needs {' or '.join(group)}",
                              source=source, field=group[0])
+    _check_groups(job, options, source=source, row=k)
     if job.more_inputs is not None:
         try:
             more = job.more_inputs(options)
@@ -241,6 +242,19 @@ def parse_item(row: dict, jobs: dict[str, Job], *, source: str, base: Path) -> I
                              field=job.required[0][0]) from None
         inputs.update({n: _content_hash(str(p)) for n, p in more.items()})
     return Item(ident, kind, k, options, settings, inputs, item_key(kind, settings, inputs))
+
+
+def _check_groups(job: Job, options: dict, *, source: str, row: int) -> None:
+    """Make each of the job's input groups from the row, which checks it (a conflict of
+    options, a value out of its interval); an error names the row."""
+    from ..inputs import from_manifest
+
+    for group in job.groups:
+        try:
+            from_manifest(group, options)
+        except InputError as exc:
+            raise InputError(f"row {row}: {exc.message}", source=source,
+                             field=exc.field) from None
 
 
 def read_manifest(path: str | Path, jobs: dict[str, Job]) -> list[Item]:

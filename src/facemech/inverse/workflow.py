@@ -4,7 +4,7 @@ face and the map file is the command's wiring: :func:`facemech.workflows.invert.
 
 Markers are skin markers unless they are named (or, from articulography, given the role) of a
 point on the mandible: a lower-incisor sensor and, optionally, a molar pellet. Those drive the
-jaw (:mod:`facemech.solvers.jaw_bone`) and stay out of the skin's cost. Articulography's lip
+jaw (:func:`facemech.jaw.drive.jaw_drive`) and stay out of the skin's cost. Articulography's lip
 sensors are laid on the face's midsagittal vermilion points (:mod:`facemech.kinematics.roles`),
 and midsagittal data are fitted in y and z only.
 """
@@ -12,14 +12,16 @@ and midsagittal data are fitted in y and z only.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..checks import check_value
 from ..errors import InputError
+from ..jaw.drive import SKIN_JAW_LEAD, default_lead, jaw_drive
+from ..jaw.inputs import JawMarkers
 from ..markerset import MarkerSet
+from .options import FitOptions, InversionOptions, as_options, inversion_options
 from .result import Inversion
 
 if TYPE_CHECKING:
@@ -27,49 +29,9 @@ if TYPE_CHECKING:
 
 __all__ = ["SKIN_JAW_LEAD", "SIGN_EFFORT", "JawMarkers", "invert_marker_set", "pick_candidates"]
 
-#: frames by which a skin jaw marker's drive is moved earlier by default (33 ms at 60 Hz, the
-#: seeds' lead); a bone point's drive has none
-SKIN_JAW_LEAD = 2
 #: s, the longest interior gap of an articulograph's bone point filled before the jaw's drive
 MAX_BONE_GAP_S = 0.1
 
-
-
-@dataclass(frozen=True)
-class JawMarkers:
-    """The jaw's markers of an inversion (its jaw source), checked when made.
-
-    Attributes
-    ----------
-    chin_marker : a skin jaw marker: its vertical drop gives the jaw angle, ``jaw_lead`` frames
-        early, estimated further with the muscles unless ``jaw_fixed``
-    jaw_second_marker : a second point on the mandible with ``chin_marker``: the two markers'
-        planar rigid motion drives the jaw's three degrees of freedom, held as given
-    jaw_incisor, jaw_molar : a lower-incisor sensor and a molar pellet, points on the bone
-        (default: the sensors of roles ``lower_incisor`` and ``molar``, when there is no
-        ``chin_marker``): they give the jaw's angle, glide and protrusion, held as given, and
-        are not compared with the skin
-    jaw_fixed : hold the recorded jaw as given
-    jaw_lead : frames by which the jaw drive is moved earlier (None: 2 for a skin marker, 0
-        for bone points)
-    """
-
-    chin_marker: str | None = None
-    jaw_second_marker: str | None = None
-    jaw_incisor: str | None = None
-    jaw_molar: str | None = None
-    jaw_fixed: bool = False
-    jaw_lead: int | None = None
-
-    def __post_init__(self):
-        if self.jaw_second_marker is not None and self.chin_marker is None:
-            raise InputError("--jaw-second-marker needs --chin-marker (the first jaw marker)",
-                             field="jaw-second-marker")
-        if self.jaw_lead is not None and self.jaw_lead < 0:
-            raise InputError(f"jaw lead must be >= 0 frames (got {self.jaw_lead})",
-                             field="jaw-lead")
-        if self.jaw_lead is not None:  # the command line's interval (facemech.checks)
-            check_value("jaw_lead", self.jaw_lead)
 
 
 def invert_marker_set(
@@ -78,13 +40,11 @@ def invert_marker_set(
     *,
     mapping: dict[str, int] | None = None,
     scale_pair: str | None = None,
-    method: str = "lsq",
-    positive: bool = True,
-    controls: str | None = None,
     jaw: JawMarkers | None = None,
-    noise: float | None = None,
-    options: dict | None = None,
+    inversion: InversionOptions | None = None,
+    options: FitOptions | dict | None = None,
     progress: Callable[[int, int], None] | None = None,
+    **given,
 ) -> Inversion:
     """Invert a marker set on a face (see :func:`facemech.inverse.invert.invert`).
 
@@ -98,16 +58,16 @@ def invert_marker_set(
     mapping : marker name -> node (:func:`facemech.kinematics.mapping.read_mapping`; None: the
         closest nodes, articulography's lips their vermilion points)
     scale_pair : "A,B": adapt the markers by per-axis scaling from two markers far apart
-    method, positive : "lsq" or "powell"; activity kept >= 0
-    controls : "speech", "emg7", "all" or comma-separated groups, an error if the markers give
-        fewer coordinates than that; None (default): "speech", or the part of it the markers
-        determine when they give fewer coordinates (:mod:`facemech.inverse.control_pick`;
-        when its sign step adds controls, ``effort`` is :data:`SIGN_EFFORT` unless given)
     jaw : the jaw's markers (:class:`JawMarkers`; None: none given, the sensors of roles
         ``lower_incisor`` and ``molar`` where the markers have them)
-    noise : marker noise for the standard errors, mm (None: from the residuals)
-    options : the method's options (None: not given; an option of the other method is an
-        error)
+    inversion : the method, ``positive``, ``controls`` and ``noise``
+        (:class:`~facemech.inverse.options.InversionOptions`; None: the defaults; ``given``:
+        any of them as keywords). Controls the markers give fewer coordinates for are an
+        error; None: "speech", or the part of it the markers determine
+        (:mod:`facemech.inverse.control_pick`; when its sign step adds controls, ``effort`` is
+        :data:`SIGN_EFFORT` unless given)
+    options : the method's options (:class:`~facemech.inverse.options.FitOptions` or a dict;
+        None: not given; an option of the other method is an error)
     progress : callable(done, total)
 
     Returns
@@ -116,46 +76,65 @@ def invert_marker_set(
         Its notes also say how articulography roles were used and which controls were held.
     """
     from ..kinematics.mapping import scale_adapt
-    from ..kinematics.roles import bone_points, is_midsagittal
+    from ..kinematics.roles import is_midsagittal
     from .invert import JawRecording, invert
     from .methods import method_from_options
 
-    solver = method_from_options(method, **(options or {}))
+    inv, options = inversion_options(inversion, given), as_options(options)
+    solver = method_from_options(inv.method, **options)
     jaw = jaw or JawMarkers()
-    chin_marker, jaw_second_marker = jaw.chin_marker, jaw.jaw_second_marker
-    jaw_fixed, jaw_lead = jaw.jaw_fixed, jaw.jaw_lead
-    params, face = model.params, model.face
     src = ms.meta.get("source")
-    incisor, molar, by_role = bone_points(ms, incisor=jaw.jaw_incisor, molar=jaw.jaw_molar,
-                                          skin_jaw=chin_marker)
-    molar, dropped = _usable_molar(ms, molar, by_role)
-    ms, resampled = _at_frame_rate(ms, params.frame_rate)
-    ms, filled = _bone_gaps_filled(ms, (incisor, molar), by_role)
-    if jaw_fixed and chin_marker is None and incisor is None:
-        raise InputError("--jaw-fixed needs a jaw recording (--chin-marker or --jaw-incisor)",
-                         field="jaw-fixed")
+    ms, names, by_role, notes = _jaw_points(ms, jaw, model.params.frame_rate)
+    bone = (names.jaw_incisor, names.jaw_molar)
     midsagittal = is_midsagittal(ms)
-    skin, mapping, notes = _skin_markers(ms, face, mapping, (incisor, molar), midsagittal)
-    notes = resampled + dropped + filled + notes
+    skin, mapping, more = _skin_markers(ms, model.face, mapping, bone, midsagittal)
+    notes += more
     if scale_pair is not None:
         a, _, b = scale_pair.partition(",")
-        skin = scale_adapt(skin, face, mapping, (a.strip(), b.strip())).markers
-    lead = jaw_lead if jaw_lead is not None else (0 if incisor is not None else SKIN_JAW_LEAD)
-    drive, jaw_source = _jaw_drive(ms, model, mapping, src, lead, chin_marker,
-                                   jaw_second_marker, incisor, molar, by_role)
-    estimate = None if drive is None else (not jaw_fixed and drive.ndim == 1)
+        skin = scale_adapt(skin, model.face, mapping, (a.strip(), b.strip())).markers
+    drive, jaw_source = jaw_drive({n: ms.marker(n) for n in ms.names}, model, names,
+                                  lead=default_lead(jaw, bone[0] is not None),
+                                  chin_node=mapping.get(jaw.chin_marker), source=src,
+                                  by_role=by_role)
+    estimate = None if drive is None else (not jaw.jaw_fixed and drive.ndim == 1)
     ctrl, drive, estimate, jaw_source, pick_note, signed = _controls(
-        controls, model, skin, mapping, drive, estimate, jaw_source, midsagittal, None, src)
+        inv.controls, model, skin, mapping, drive, estimate, jaw_source, midsagittal, src)
+    solver, pick_note = _picked_fit(solver, options, pick_note, signed)
+    res = invert(model, skin, mapping, method=solver, positive=inv.positive, controls=ctrl,
+                 jaw_angle=JawRecording(drive, estimate, jaw_source), noise_mm=inv.noise,
+                 progress=progress)
+    return replace(res, notes=[*res.notes, *notes, *([pick_note] if pick_note else [])])
+
+
+def _jaw_points(ms, jaw, rate):
+    """(the set at the model's frame ``rate`` with its bone points' short gaps filled, the
+    jaw's markers with its bone points named, whether they were found by role, notes): the
+    bone points named, else found by their articulography roles, a lost molar left out."""
+    from ..kinematics.roles import bone_points
+
+    incisor, molar, by_role = bone_points(ms, incisor=jaw.jaw_incisor, molar=jaw.jaw_molar,
+                                          skin_jaw=jaw.chin_marker)
+    molar, dropped = _usable_molar(ms, molar, by_role)
+    ms, resampled = _at_frame_rate(ms, rate)
+    ms, filled = _bone_gaps_filled(ms, (incisor, molar), by_role)
+    if jaw.jaw_fixed and jaw.chin_marker is None and incisor is None:
+        raise InputError("--jaw-fixed needs a jaw recording (--chin-marker or --jaw-incisor)",
+                         field="jaw-fixed")
+    return (ms, replace(jaw, jaw_incisor=incisor, jaw_molar=molar), by_role,
+            resampled + dropped + filled)
+
+
+def _picked_fit(solver, options, pick_note, signed):
+    """(the method, the pick's note): when controls were picked, the fit is paced and, when
+    the pick's sign step added controls, weighs effort (:func:`_effort_for_sign`,
+    :func:`_pace_for_pick`)."""
     if signed:
         solver, effort_note = _effort_for_sign(solver, options)
         pick_note += effort_note
     if pick_note:
         solver, pace_note = _pace_for_pick(solver, options)
         pick_note += pace_note
-    res = invert(model, skin, mapping, method=solver, positive=positive, controls=ctrl,
-                 jaw_angle=JawRecording(drive, estimate, jaw_source), noise_mm=noise,
-                 progress=progress)
-    return replace(res, notes=[*res.notes, *notes, *([pick_note] if pick_note else [])])
+    return solver, pick_note
 
 
 def _at_frame_rate(ms, rate):
@@ -248,44 +227,6 @@ def _skin_markers(ms, model, given, bone, midsagittal):
     return skin, mapping, notes
 
 
-def _jaw_drive(ms, model, mapping, src, lead, chin_marker, second, incisor, molar, by_role):
-    """(the jaw series: None, (frames,) angles or (frames, 3) poses; what it is, for the
-    notes) on ``model`` (a :class:`~facemech.physics.model.Model`)."""
-    from ..solvers.jaw import jaw_poses_from_points
-    from ..solvers.jaw_bone import jaw_poses_from_bone, protrusion_of
-    from ..solvers.jaw_drive import jaw_angles_from_marker
-
-    params = model.params
-    if incisor is not None:
-        poses = jaw_poses_from_bone(ms.marker(incisor), model.face, params,
-                                    molar=None if molar is None else ms.marker(molar),
-                                    lead=lead, names=(incisor, molar or "molar"), source=src)
-        pro = protrusion_of(poses, params) * 1e3
-        what = (f"the bone point{'s' if molar else ''} {incisor} (lower incisor"
-                f"{f') and {molar} (molar' if molar else ''}){' by role' if by_role else ''}: "
-                f"angle {np.degrees(poses[:, 0].min()):.1f} to "
-                f"{np.degrees(poses[:, 0].max()):.1f} degrees, protrusion {pro.min():.1f} to "
-                f"{pro.max():.1f} mm; {lead}-frame lead")
-        return poses, what
-    if second is not None:
-        for name in (chin_marker, second):
-            if name not in ms.names:
-                raise InputError("jaw marker not in the file", source=src, field=name)
-        jaw = jaw_poses_from_points(ms.marker(chin_marker), ms.marker(second),
-                                    hinge_point=model.face.hinge_point, lead=lead,
-                                    names=(chin_marker, second), source=src)
-        return jaw, f"jaw markers {chin_marker},{second} ({lead}-frame lead)"
-    if chin_marker is not None:
-        node = mapping.get(chin_marker)
-        if node is None:
-            raise InputError("chin marker has no node (not in the file or not mapped)",
-                             source=src, field=chin_marker)
-        jaw = jaw_angles_from_marker(model, node, ms.marker(chin_marker)[:, 1],
-                                     lead=lead, source=src)
-        return jaw, f"chin marker {chin_marker} ({lead}-frame lead)"
-    return None, None
-
-
 #: mm per unit: the weight of activity (``effort``) when the sign step of a control pick kept
 #: more controls than the markers determine: an opposing pair (MEN lifting the lower lip, DLI
 #: lowering it) then has a co-contraction the markers barely see, along which the fit would
@@ -344,7 +285,7 @@ def pick_candidates(model) -> tuple[str, ...]:
     return SPEECH_CONTROLS + tuple(g for g in MARGINAL_GROUPS if g in present)
 
 
-def _controls(controls, model, skin, mapping, jaw, estimate, jaw_source, midsagittal, dt, src):
+def _controls(controls, model, skin, mapping, jaw, estimate, jaw_source, midsagittal, src):
     """(controls for :func:`invert`, jaw series, estimate the jaw, jaw source, the note of
     controls picked or None, whether the pick's sign step added controls) on ``model`` (a
     :class:`~facemech.physics.model.Model`)."""
@@ -376,7 +317,7 @@ def _controls(controls, model, skin, mapping, jaw, estimate, jaw_source, midsagi
     estimated = estimate in (None, True)
     pick = pick_controls(model, np.array([mapping[n] for n in names]),
                          pick_candidates(model.face), estimate_jaw=estimated, jaw_start=start,
-                         axes=(1, 2) if midsagittal else (0, 1, 2), dt=dt, labels=names)
+                         axes=(1, 2) if midsagittal else (0, 1, 2), labels=names)
     if estimated and not pick.jaw:
         held = np.full(len(skin.positions), start[0]) if jaw is None else jaw
         jaw, estimate = held, False

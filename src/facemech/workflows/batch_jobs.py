@@ -1,6 +1,8 @@
 """The job kinds of a batch manifest: their options (names, types, which are input files) and
-the workflow each one calls to fill an item's folder. The batch's runner (:mod:`facemech.batch`)
-is given this table (:data:`JOBS`); it imports no workflow.
+the workflow each one calls to fill an item's folder; ``simulate`` and ``invert`` take the
+input groups of their commands (:mod:`facemech.workflows.inputs`, :mod:`facemech.jaw.inputs`,
+:mod:`facemech.inverse.options`), whose keys are the manifest's. The batch's runner
+(:mod:`facemech.batch`) is given this table (:data:`JOBS`); it imports no workflow.
 
 Every option is named as the command's option (``jaw-chin`` or ``jaw_chin``); a job's outputs
 are the files its command writes, under fixed names inside the item's folder:
@@ -24,10 +26,14 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..batch.execute import Outcome, run_item
-from ..batch.job import Job
+from ..batch.job import Job, job
 from ..batch.manifest import Item
 from ..batch.manifest import read_manifest as read_manifest_of
 from ..errors import FacemechError
+from ..inputs import from_manifest
+from ..inverse.options import FitOptions, InversionOptions
+from ..jaw.inputs import JawMarkers, JawSource
+from .inputs import Controls, MarkerFile, PresetChoice, Stepping
 
 __all__ = ["JOBS", "Job", "read_manifest", "run_job"]
 
@@ -35,16 +41,11 @@ _RENDER = {"view": "str", "size": "str", "background": "str", "aa": "int"}
 
 
 def _simulate(o: dict, folder: Path):
-    from .simulate import Controls, JawSource, simulate_files
+    from .simulate import simulate_files
 
-    keys = ("face", "preset", "jaw_kinematics", "integrator", "substeps", "dt", "jaw_drive")
-    run = simulate_files(
-        folder / "result.nc",
-        Controls(o.get("activity"), o.get("emg"), o.get("emg_baseline"), o.get("emg_calibration")),
-        JawSource(o.get("jaw_angle"), o.get("jaw_chin"), o.get("chin_marker"),
-                  o.get("jaw_second_marker"), o.get("units"), o.get("bite_block", False),
-                  o.get("jaw_incisor"), o.get("jaw_molar")),
-        **{k: o[k] for k in keys if k in o})
+    run = simulate_files(folder / "result.nc", from_manifest(Controls, o),
+                         from_manifest(JawSource, o), stepping=from_manifest(Stepping, o),
+                         **{k: o[k] for k in ("face", "preset") if k in o})
     sim = run.simulation
     return ({"frames": len(sim.time), "sim_wall_s": round(float(sim.wall_seconds), 3),
              "real_time_factor": round(float(sim.real_time_factor), 3)},
@@ -56,17 +57,11 @@ def _invert(o: dict, folder: Path):
 
     figure = folder / "inversion.png" if o.get("figure") else None
     out = folder / "result.nc"
-    jaw = ("chin_marker", "jaw_second_marker", "jaw_incisor", "jaw_molar", "jaw_fixed",
-           "jaw_lead")
-    fit = ("window", "tol", "bend", "smooth", "effort", "max_evaluations")
     res = invert.invert(
-        invert.MarkerFile(o["markers"], o.get("units"), o.get("map"), o.get("scale_pair")), out,
-        params=invert.parameters(o.get("preset", "anatomical"), o.get("jaw_kinematics"),
-                                 o.get("dt")),
-        options={k: o.get(k) for k in fit},
-        jaw=invert.JawMarkers(**{k: o[k] for k in jaw if k in o}),
-        figure=figure, **{k: o[k] for k in ("face", "method", "positive", "controls", "noise")
-                          if k in o})
+        from_manifest(MarkerFile, o), out, params=from_manifest(PresetChoice, o),
+        jaw=from_manifest(JawMarkers, o), inversion=from_manifest(InversionOptions, o),
+        options=from_manifest(FitOptions, o), figure=figure,
+        **{k: o[k] for k in ("face",) if k in o})
     s = res.error_summary()
     return ({"frames": len(res.time), "median_error_mm": round(float(s["median_mm"]), 4),
              "max_error_mm": round(float(s["max_mm"]), 4), "markers": len(res.marker_names)},
@@ -126,23 +121,11 @@ def _regions(o: dict, folder: Path):
 
 
 JOBS: dict[str, Job] = {
-    "simulate": Job(
-        {"activity": "path", "emg": "path", "emg_baseline": "str", "emg_calibration": "path",
-         "jaw_chin": "path", "chin_marker": "str", "jaw_second_marker": "str", "jaw_angle": "path",
-         "jaw_incisor": "str", "jaw_molar": "str",
-         "bite_block": "bool", "units": "str", "face": "file_or_name", "preset": "file_or_name",
-         "jaw_kinematics": "str", "integrator": "str", "substeps": "int", "dt": "float",
-         "jaw_drive": "str"},
-        (("activity", "emg"),), _simulate),
-    "invert": Job(
-        {"markers": "path", "face": "file_or_name", "map": "path", "preset": "file_or_name",
-         "method": "str", "positive": "bool", "controls": "str", "chin_marker": "str",
-         "jaw_second_marker": "str", "jaw_incisor": "str", "jaw_molar": "str",
-         "jaw_fixed": "bool", "jaw_lead": "int", "noise": "float",
-         "window": "int", "tol": "float", "bend": "float", "smooth": "float", "effort": "float",
-         "max_evaluations": "int", "scale_pair": "str", "jaw_kinematics": "str", "dt": "float",
-         "units": "str", "figure": "bool"},
-        (("markers",),), _invert),
+    "simulate": job((Controls, JawSource, Stepping), {"face": "file_or_name",
+                                                      "preset": "file_or_name"},
+                    (("activity", "emg"),), _simulate),
+    "invert": job((MarkerFile, PresetChoice, JawMarkers, InversionOptions, FitOptions), {
+        "face": "file_or_name", "figure": "bool"}, (("markers",),), _invert),
     "speak": Job(
         {"text": "str", "audio": "path", "textgrid": "path", "voice": "str", "rate": "int",
          "word_tier": "str", "phone_tier": "str", "strength": "float", "face": "file_or_name",

@@ -7,49 +7,26 @@ set on the face is :func:`facemech.inverse.workflow.invert_marker_set`.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import InputError
-from ..inverse.workflow import JawMarkers
+from ..inverse.options import FitOptions, InversionOptions, inversion_options
+from ..jaw.inputs import JawMarkers
 from ..markerset import MarkerSet
+from .inputs import MarkerFile, PresetChoice
 
-__all__ = ["JawMarkers", "MarkerFile", "draw", "invert", "invert_markers", "notes",
-           "parameters", "report"]
-
-
-@dataclass(frozen=True)
-class MarkerFile:
-    """The marker file of an inversion and how its markers are laid on the face.
-
-    Attributes
-    ----------
-    path : marker file: motion capture in the model's frame and at its frame rate, or
-        articulography (resampled, its lips laid on the face's vermilion points)
-    units : length unit of a file that carries none
-    map_file : marker,node CSV (default: the closest nodes)
-    scale_pair : "A,B": adapt the markers by per-axis scaling from two markers far apart
-    """
-
-    path: Path
-    units: str | None = None
-    map_file: Path | None = None
-    scale_pair: str | None = None
+__all__ = ["FitOptions", "InversionOptions", "JawMarkers", "MarkerFile", "PresetChoice", "draw",
+           "invert", "invert_markers", "notes", "parameters", "report"]
 
 
 def parameters(preset: str | Path = "anatomical", jaw_kinematics: str | None = None,
                dt: float | None = None):
     """The :class:`~facemech.params.Preset` of a preset (name or file) with a command's
     overrides: the jaw's kinematics ("hinge" or "glide") and the inversion's explicit Euler
-    step ``dt`` (s; its method's ``fast_dt``)."""
-    from ..params import Preset, preset_pair
-
-    params, steps = preset_pair(preset)
-    if jaw_kinematics is not None:
-        params = params.with_(jaw_kinematics=jaw_kinematics)
-    return Preset(params, steps if dt is None else steps.with_(fast_dt=dt))
+    step ``dt`` (s; its method's ``fast_dt``): :meth:`PresetChoice.resolve`."""
+    return PresetChoice(str(preset), jaw_kinematics, dt).resolve()
 
 
 def invert_markers(
@@ -59,13 +36,11 @@ def invert_markers(
     map_file: str | Path | None = None,
     scale_pair: str | None = None,
     params=None,
-    method: str = "lsq",
-    positive: bool = True,
-    controls: str | None = None,
     jaw: JawMarkers | None = None,
-    noise: float | None = None,
-    options: dict | None = None,
+    inversion: InversionOptions | None = None,
+    options: FitOptions | dict | None = None,
     progress: Callable[[int, int], None] | None = None,
+    **given,
 ):
     """Invert a marker file on a face: the files read, then
     :func:`facemech.inverse.workflow.invert_marker_set` (its parameters, but these three).
@@ -77,33 +52,35 @@ def invert_markers(
     map_file : marker,node CSV (default: the closest nodes; articulography's lips: their
         vermilion points)
     params : the preset (:func:`facemech.physics.model.model`'s ``preset``; None: the default)
-    scale_pair, method, positive, controls, jaw, noise, options, progress : as
-        :func:`~facemech.inverse.workflow.invert_marker_set`
+    scale_pair, jaw, inversion, options, progress, given : as
+        :func:`~facemech.inverse.workflow.invert_marker_set` (``given``: ``method=``,
+        ``positive=``, ``controls=``, ``noise=``)
 
     Returns
     -------
     facemech.inverse.result.Inversion
     """
     from ..inverse.methods import method_from_options
+    from ..inverse.options import as_options, inversion_options
     from ..inverse.workflow import invert_marker_set
     from ..io.markers import read_markers
     from ..kinematics.mapping import read_mapping
     from ..physics.model import model as face_model
 
-    method_from_options(method, **(options or {}))  # a bad option before any file is read
+    inversion = inversion_options(inversion, given)
+    method_from_options(inversion.method, **as_options(options))  # before any file is read
     ms = markers if isinstance(markers, MarkerSet) else read_markers(markers)
     model = face_model(face, params)  # the command's one model (None: the default preset)
     mapping = None if map_file is None else read_mapping(map_file, ms, model.face)
-    return invert_marker_set(ms, model, mapping=mapping, scale_pair=scale_pair,
-                             method=method, positive=positive, controls=controls, jaw=jaw,
-                             noise=noise, options=options, progress=progress)
+    return invert_marker_set(ms, model, mapping=mapping, scale_pair=scale_pair, jaw=jaw,
+                             inversion=inversion, options=options, progress=progress)
 
 
 def invert(markers: MarkerFile | str | Path, output: str | Path, *,
-           face: str | Path = "default", params=None, method: str = "lsq",
-           options: dict | None = None, positive: bool = True, controls: str | None = None,
-           jaw=None, noise: float | None = None, figure: str | Path | None = None,
-           progress: Callable[[str, int, int], None] | None = None):
+           face: str | Path = "default", params=None, jaw: JawMarkers | None = None,
+           inversion: InversionOptions | None = None, options: FitOptions | dict | None = None,
+           figure: str | Path | None = None,
+           progress: Callable[[str, int, int], None] | None = None, **given):
     """Recover muscle activity and the jaw frame by frame from a marker file, write the
     results file (re-animated face, controls, standard errors) and, if asked, the figure.
 
@@ -113,16 +90,18 @@ def invert(markers: MarkerFile | str | Path, output: str | Path, *,
         nodes)
     output : results file (.nc), written atomically
     face : the face (file or built-in name)
-    params : the preset: a :class:`~facemech.params.Preset` (:func:`parameters`), a
+    params : the preset: a :class:`PresetChoice`, a :class:`~facemech.params.Preset`, a
         :class:`~facemech.params.Parameters` or a preset's name (None: the default preset)
-    method, options : "lsq" or "powell" and its options (``window``, ``tol``, ``bend``,
-        ``smooth``, ``effort``, ``max_evaluations``; None: its default; tol in mm, weights in mm
-        per unit; ``max_rate`` 1/s; :func:`~facemech.inverse.methods.method_from_options`)
-    positive, controls : activity >= 0; "speech", "emg7", "all" or comma-separated groups
-        (None: "speech", or the part of it the markers determine)
     jaw : the jaw's markers, on the skin or on the bone
-        (:class:`facemech.inverse.workflow.JawMarkers`; None: none)
-    noise : marker noise for the standard errors, mm (default: from the residuals)
+        (:class:`~facemech.jaw.inputs.JawMarkers`; None: none)
+    inversion : the method ("lsq" or "powell"), activity >= 0, the controls ("speech", "emg7",
+        "all" or comma-separated groups; None: "speech", or the part of it the markers
+        determine) and the marker noise for the standard errors, mm (None: from the residuals):
+        :class:`InversionOptions` (None: the defaults; ``given``: any of them as keywords)
+    options : the method's options (:class:`FitOptions`, or a dict of ``window``, ``tol``,
+        ``bend``, ``smooth``, ``effort``, ``max_evaluations``, ``max_rate``; None: its default;
+        tol in mm, weights in mm per unit; ``max_rate`` 1/s;
+        :func:`~facemech.inverse.methods.method_from_options`)
     figure : PNG of the inverted controls with +-2 SE bands and the per-frame error
     progress : callable(stage, done, total)
 
@@ -134,6 +113,7 @@ def invert(markers: MarkerFile | str | Path, output: str | Path, *,
     from ..io.results import file_hash
 
     src = markers if isinstance(markers, MarkerFile) else MarkerFile(Path(markers))
+    params = params.resolve() if isinstance(params, PresetChoice) else params
     inputs = [src.path, src.map_file, face if Path(str(face)).suffix else None]
     check_output(output, inputs, field="-o")  # before the inversion, which takes minutes
     if figure is not None:
@@ -142,10 +122,11 @@ def invert(markers: MarkerFile | str | Path, output: str | Path, *,
                              source=str(figure), field="--figure")
         check_output(figure, inputs, field="--figure")
     ms = check_markers(src.path, units=src.units, scale_pair=src.scale_pair)  # before the work
-    label = f"invert ({method})"
+    inversion = inversion_options(inversion, given)
+    label = f"invert ({inversion.method})"
     res = invert_markers(
-        ms, face=face, map_file=src.map_file, scale_pair=src.scale_pair, params=params,
-        method=method, options=options, positive=positive, controls=controls, jaw=jaw, noise=noise,
+        ms, face=face, map_file=src.map_file, scale_pair=src.scale_pair, params=params, jaw=jaw,
+        inversion=inversion, options=options,
         progress=None if progress is None else (lambda d, n: progress(label, d, n)))
     dropped = [n for n in ms.meta.get("notes", []) if n.startswith("dropped")]
     if dropped:  # the reader's: empty leading or trailing frames left out

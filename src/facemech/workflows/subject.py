@@ -469,8 +469,8 @@ def analyse(subject: str | Path, recording: str | Path, output: str | Path, *,
     -------
     Written : ``data`` a dict of the stages' numbers (as ``summary.json``)
     """
-    from ..inverse.workflow import JawMarkers
     from ..io.markers import read_markers, write_markers
+    from ..jaw.inputs import JawMarkers
     from . import compare, invert
 
     out, src = Path(output), str(recording)
@@ -497,10 +497,11 @@ def analyse(subject: str | Path, recording: str | Path, output: str | Path, *,
     if options is None:
         options = ANALYSE_LSQ if method == "lsq" else {}
     res = invert.invert(invert.MarkerFile(out / "markers.csv", "mm", out / "mapping.csv"),
-                        out / "result.nc", face=subj.face, params=params, method=method,
-                        options=options, controls=controls,
+                        out / "result.nc", face=subj.face, params=params,
                         jaw=JawMarkers(chin_marker=jaw[0], jaw_second_marker=jaw[1]),
-                        noise=noise, figure=out / "controls.png", progress=progress)
+                        inversion=invert.InversionOptions(method, controls=controls,
+                                                          noise=noise),
+                        options=options, figure=out / "controls.png", progress=progress)
     cmp = compare.compare_files(out / "result.nc", out / "markers.csv")
     with atomic_path(out / "comparison.json") as tmp:
         tmp.write_text("\n".join(compare.report(cmp, as_json=True)))

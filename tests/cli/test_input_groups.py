@@ -1,0 +1,69 @@
+"""The commands' input groups are declared once: ``simulate``'s and ``invert``'s options, their
+batch jobs' keys and the workflows' objects are the groups' fields (facemech.inputs)."""
+
+from __future__ import annotations
+
+import inspect
+from pathlib import Path
+
+from facemech import cli, cli_options
+from facemech.inputs import REQUIRED, inputs_of
+from facemech.workflows.batch_jobs import JOBS
+
+GROUPED = {"simulate": ("controls", "jaw_source", "stepping"),
+           "invert": ("marker_file", "model", "jaw_markers", "inversion", "fit")}
+
+
+def _command(name):
+    return next(i.callback for i in cli.app.registered_commands
+                if i.callback.__wrapped__.__name__ == name)
+
+
+def test_each_option_of_a_group_is_its_declared_field():
+    for command, groups in GROUPED.items():
+        params = inspect.signature(_command(command)).parameters
+        for group in groups:
+            for i in inputs_of(cli_options.GROUPS[group]):
+                opt = params[i.key].default
+                assert opt.default == (... if i.default is REQUIRED else i.default), i.key
+                assert opt.help == cli_options.help_for(command, i.key, i) and opt.help, i.key
+                assert params[i.key].annotation == i.type, i.key
+
+
+def test_the_batch_jobs_take_the_same_groups_by_the_options_names():
+    for command, groups in GROUPED.items():
+        job = JOBS[command]
+        for group in groups:
+            cls = cli_options.GROUPS[group]
+            assert cls in job.groups
+            for i in inputs_of(cls):
+                assert job.options[i.manifest_key] == i.kind, (command, i.key)
+    # what the manifest had drifted from: invert's --max-rate, --map read as "map"
+    assert JOBS["invert"].options["max_rate"] == "float"
+    assert JOBS["invert"].options["map"] == "path" and "map_file" not in JOBS["invert"].options
+    # the simulate job's keys, as before the groups
+    assert set(JOBS["simulate"].options) == {
+        "activity", "emg", "emg_baseline", "emg_calibration", "jaw_chin", "chin_marker",
+        "jaw_second_marker", "jaw_angle", "jaw_incisor", "jaw_molar", "bite_block", "units",
+        "face", "preset", "jaw_kinematics", "integrator", "substeps", "dt", "jaw_drive"}
+
+
+def test_a_group_is_made_from_the_command_line_and_checks_itself(monkeypatch):
+    from facemech.jaw.inputs import JawSource
+    from facemech.workflows.inputs import Stepping
+
+    seen = {}
+    monkeypatch.setattr("facemech.workflows.simulate.simulate_files",
+                        lambda **kw: seen.update(kw), raising=True)
+    monkeypatch.setattr(cli, "_staged", lambda run, **kw: run(**kw))
+    from typer.testing import CliRunner
+
+    res = CliRunner().invoke(cli.app, ["simulate", "-o", "r.nc", "--activity", "a.csv",
+                                       "--jaw-chin", "m.csv", "--jaw-second-marker", "M2",
+                                       "--substeps", "3"])
+    assert res.exit_code == 0, res.output
+    assert seen["jaw"] == JawSource(markers=Path("m.csv"), second_marker="M2")
+    assert seen["stepping"] == Stepping(substeps=3)
+    res = CliRunner().invoke(cli.app, ["simulate", "-o", "r.nc", "--activity", "a.csv",
+                                       "--jaw-incisor", "LI"])
+    assert res.exit_code != 0 and "--jaw-chin" in str(res.exception)
