@@ -90,10 +90,11 @@ APART_M = 0.5e-3
 
 
 def opening_width(model, positions: np.ndarray, apart: float = APART_M) -> np.ndarray:
-    """Width (m) of the opening between the lips: the extent across the face (x) of the lip
-    contact pairs of the epidermis that are more than ``apart`` apart along their contact
-    normals, the ends interpolated to where the separation crosses ``apart``; 0 with the
-    lips sealed.
+    """Width (m) of the opening between the lips as seen from the front: the extent across the
+    face (x, where the twins are now: the midpoint of each pair) of the lip contact pairs of
+    the epidermis that are more than ``apart`` apart along their contact normals, the ends
+    interpolated to where the separation crosses ``apart``; 0 with the lips sealed. A mouth
+    narrowed by rounding gives the narrowed width, not the rest width.
 
     ``positions`` : (frames, n_surface, 3) or (n_surface, 3) m; returns (frames,) or a float.
     """
@@ -104,14 +105,14 @@ def opening_width(model, positions: np.ndarray, apart: float = APART_M) -> np.nd
     up, lo = model.lip_pairs.T
     skin = np.nonzero(up < model.n_surface)[0]
     rest = model.rest_positions
-    x = rest[up[skin], 0]
-    order = np.argsort(x)
-    skin, x = skin[order], x[order]
+    skin = skin[np.argsort(rest[up[skin], 0])]  # along the lip line, right to left
     normals = np.asarray(model.lip_normals, float)[skin]
     sep = np.einsum("fkj,kj->fk", p[:, up[skin]] - p[:, lo[skin]], normals) - \
         np.einsum("kj,kj->k", rest[up[skin]] - rest[lo[skin]], normals)
+    across = 0.5 * (p[:, up[skin], 0] + p[:, lo[skin], 0])  # (frames, pairs) x now
     out = np.zeros(len(p))
     for f, s in enumerate(sep):
+        x = across[f]
         k = np.nonzero(s > apart)[0]
         if k.size == 0:
             continue
