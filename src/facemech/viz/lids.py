@@ -286,3 +286,59 @@ def margin_colour(d: np.ndarray) -> np.ndarray:
     a = np.clip((d - LID_RIM) / 0.0006, 0.0, 1.0)
     b = np.clip((d - LID_RIM - 0.0008) / 0.0012, 0.0, 1.0)
     return (1 - a) * T.SKIN + a * ((1 - b) * CONJUNCTIVA + b * BULBAR)
+
+
+LASH_LENGTH = 0.0085  #: m, the upper lashes at the middle of the lid (shorter to the corners)
+LASH_ROWS = 4  #: rows of the fringe from root to tip
+LASH_TEXELS = (12, 360)  #: the strand texture's (rows, columns)
+
+
+@dataclass(frozen=True)
+class LashFringe:
+    """The upper lashes: a fringe of strand cards from an upper lid's edge, leaving it
+    outward from the globe and curving up, carried by the lid through blink and gaze."""
+
+    lid: Lid
+    length: np.ndarray  # (COLS,) m, each column's lash length
+
+    def at_rest(self, blink: float, pitch: float) -> bool:
+        return self.lid.at_rest(blink, pitch)
+
+    def place(self, blink: float = 0.0, pitch: float = 0.0) -> np.ndarray:
+        """Vertices (LASH_ROWS * COLS, 3) m: rows from the root (the lid's edge) to the tips."""
+        edge = self.lid.place(blink, pitch).reshape(ROWS, COLS, 3)[-1]
+        out = edge - self.lid.centre
+        out /= np.linalg.norm(out, axis=1, keepdims=True)
+        up = np.array([0.0, 1.0, 0.0])
+        k = np.linspace(0.0, 1.0, LASH_ROWS)[:, None, None]
+        # out first, then up: a quadratic curl, the tip about 30 degrees above the root's
+        path = k * out * 0.9 + k ** 2 * up * 0.35
+        return (edge + 0.0002 * out + path * self.length[None, :, None]).reshape(-1, 3)
+
+
+def lash_fringe(lid: Lid, side: int) -> tuple[LashFringe, np.ndarray, np.ndarray, np.ndarray]:
+    """An upper lid's lashes: (fringe, faces, texel coordinates (f, 3, 2), RGBA strand texture
+    (sRGB, alpha 0 between strands))."""
+    s = np.linspace(-1.15, 1.15, COLS)
+    s = s if side > 0 else s[::-1]  # the lid's columns run towards +x
+    medial = np.where(s < 0, 1.0 - 0.35 * np.clip(-s, 0, 1), 1.0)
+    length = LASH_LENGTH * np.clip(1.0 - np.abs(s) ** 4, 0.0, 1.0) ** 0.5 * medial
+    fringe = LashFringe(lid, np.maximum(length, 1e-4))
+    faces = grid_faces(LASH_ROWS, COLS)
+    th, tw = LASH_TEXELS
+    col = np.tile(np.linspace(0.0, tw, COLS), LASH_ROWS)
+    row = np.repeat(np.linspace(th, 0.0, LASH_ROWS), COLS)
+    uv = np.stack([col, row], -1)[faces]
+    return fringe, faces, uv, lash_texture(th, tw)
+
+
+def lash_texture(rows: int, cols: int, seed: int = 5) -> np.ndarray:
+    """RGBA strands (sRGB): about a third of the columns a lash, each from the root (the last
+    row) to its own random length; alpha 0 between them."""
+    rng = np.random.default_rng(seed)
+    present = rng.random(cols) < 0.3
+    reach = rows * (0.55 + 0.45 * rng.random(cols))  # each strand's length in rows
+    height = np.arange(rows)[::-1][:, None] + 0.5  # rows above the root
+    a = (present[None, :] & (height < reach[None, :])).astype(float)
+    rgb = np.broadcast_to(T.LASH, (rows, cols, 3))
+    return np.concatenate([rgb, a[..., None]], axis=-1)
