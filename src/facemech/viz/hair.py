@@ -31,6 +31,7 @@ FRINGE = 0.006  #: m across the hairline over which the strands' density grows f
 WANDER = 0.002  #: m, the hairline's low-frequency wander
 HAIR_GLOSS = (0.06, 12.0)  #: specular strength and exponent of hair
 SKIN_GLOSS = (0.10, 16.0)  #: of the strip under the fringe (the skin's)
+UNDER_GAP = 0.00003  #: m, the strip under the fringe lies this far under the strands
 
 
 def surface_radius(verts: np.ndarray, faces: np.ndarray, centre: np.ndarray, lat: np.ndarray,
@@ -110,10 +111,12 @@ def hair_parts(verts: np.ndarray, faces: np.ndarray, centre: np.ndarray,
     albedo = np.tile(T.HAIR, (n_lat * n_lon, 1))
     hair = Part("hair", pts.reshape(-1, 3), f, albedo, HAIR_GLOSS, "skull", uv, tex,
                 alpha_test=True)
-    # under the fringe, half way to the scalp, a skin-coloured strip: between the strands one
+    # under the fringe, just under the strands, a skin-coloured strip: between the strands one
     # sees skin, also where the fringe stands against the background at the head's silhouette
+    # (a line of sight grazing the layer passes between them and the strip over a chord of
+    # 2 sqrt(2 r gap): the gap is kept small)
     fringe = f[(above.ravel()[f] < 0.5 * FRINGE + 0.002).any(axis=1)]
-    under = centre + d * (r + 0.5 * LIFT)[..., None]
+    under = centre + d * (r + thick - UNDER_GAP)[..., None]
     strip = Part("hair_under", under.reshape(-1, 3), fringe, np.tile(T.SKIN, (n_lat * n_lon, 1)),
                  SKIN_GLOSS, "skull")
     return [hair, strip]

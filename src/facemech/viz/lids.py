@@ -291,12 +291,17 @@ def margin_colour(d: np.ndarray) -> np.ndarray:
 LASH_LENGTH = 0.0085  #: m, the upper lashes at the middle of the lid (shorter to the corners)
 LASH_ROWS = 4  #: rows of the fringe from root to tip
 LASH_TEXELS = (12, 360)  #: the strand texture's (rows, columns)
+LASH_SPLAY = 0.3  #: of the globe's outward (lateral) direction in the lashes' first direction
+LASH_CURL = 0.45  #: the tips' rise (of a lash's length) over a straight lash
+LASH_DROP = np.radians(2.0)  #: rad, the roots under the lid's edge (its cap top lies this above
+#: the fissure's margin)
 
 
 @dataclass(frozen=True)
 class LashFringe:
-    """The upper lashes: a fringe of strand cards from an upper lid's edge, leaving it
-    outward from the globe and curving up, carried by the lid through blink and gaze."""
+    """The upper lashes: a fringe of strand cards rooted on the upper lid's margin at the
+    skin's front, leaving it forward (splayed a little outward from the globe) and curling
+    up, carried by the lid through blink and gaze."""
 
     lid: Lid
     length: np.ndarray  # (COLS,) m, each column's lash length
@@ -305,15 +310,27 @@ class LashFringe:
         return self.lid.at_rest(blink, pitch)
 
     def place(self, blink: float = 0.0, pitch: float = 0.0) -> np.ndarray:
-        """Vertices (LASH_ROWS * COLS, 3) m: rows from the root (the lid's edge) to the tips."""
-        edge = self.lid.place(blink, pitch).reshape(ROWS, COLS, 3)[-1]
-        out = edge - self.lid.centre
-        out /= np.linalg.norm(out, axis=1, keepdims=True)
+        """Vertices (LASH_ROWS * COLS, 3) m: rows from the root (the lid's margin) to the tips.
+
+        A root is the lid's edge taken down :data:`LASH_DROP` (onto the fissure's margin) and
+        forward by :data:`LID_RIM` (the lid's thickness, to the skin's front); a lash runs
+        along ``(s_x, 0, 1)`` normalised (``s_x``: :data:`LASH_SPLAY` of the globe's outward
+        x) and rises :data:`LASH_CURL` of its length as the square of the way along it."""
+        lid = self.lid
+        edge = lid.edge(blink, pitch) - LASH_DROP
+        d = np.stack([np.cos(edge) * np.sin(lid.azimuth), np.sin(edge),
+                      np.cos(edge) * np.cos(lid.azimuth)], -1)
+        root = lid.centre + d * lid.radii
+        if lid.front is not None:
+            root[:, 2] = soft_max(root[:, 2], quadratic(lid.front, root[:, 0], root[:, 1]),
+                                  BLEND)
+        root[:, 2] += LID_RIM
+        ahead = np.stack([LASH_SPLAY * d[:, 0], np.zeros(len(d)), np.ones(len(d))], -1)
+        ahead /= np.linalg.norm(ahead, axis=1, keepdims=True)
         up = np.array([0.0, 1.0, 0.0])
         k = np.linspace(0.0, 1.0, LASH_ROWS)[:, None, None]
-        # out first, then up: a quadratic curl, the tip about 30 degrees above the root's
-        path = k * out * 0.9 + k ** 2 * up * 0.35
-        return (edge + 0.0002 * out + path * self.length[None, :, None]).reshape(-1, 3)
+        path = k * ahead + k ** 2 * LASH_CURL * up
+        return (root + path * self.length[None, :, None]).reshape(-1, 3)
 
 
 def lash_fringe(lid: Lid, side: int) -> tuple[LashFringe, np.ndarray, np.ndarray, np.ndarray]:
