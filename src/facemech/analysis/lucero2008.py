@@ -163,6 +163,35 @@ class RegionAnalysis:
         return out
 
 
+def _held_out(full, te, names, k_values) -> tuple:
+    """The held-out errors (mm) for each k of ``k_values`` (default 1 .. min(markers - 1,
+    20)); one factorisation serves every k."""
+    ks = list(k_values) if k_values is not None else list(range(1, min(len(names) - 1,
+                                                                         20) + 1))
+    rows = []
+    for kv in ks:
+        e = full.with_k(kv).errors(te)
+        rows.append(HeldOutError(kv, e["mean_abs_error"] * 1e3, e["relative_error"],
+                                 e["pca_mean_abs_error"] * 1e3))
+    return tuple(rows)
+
+
+def _trajectory(model, te, names, first_test: int, neutral, rate, trajectory_marker):
+    """The first held-out utterance's trajectory of a secondary marker (the first of
+    ``trajectory_marker`` found, else the first secondary), predicted from the selected ones."""
+    secondary = [names[i] for i in model.secondary_]
+    wanted = [trajectory_marker] if isinstance(trajectory_marker, str) else list(
+        trajectory_marker or [])
+    name = next((w for w in wanted if w in secondary), secondary[0])
+    j = names.index(name)
+    u = np.asarray(te[0])
+    base = u[0] if isinstance(neutral, str) else neutral
+    pred = model.predict((u - base)[:, model.selected_])[:, j] + base[j]
+    return TrajectoryError(
+        name, first_test + 1, tuple((np.abs(pred - u[:, j]).max(axis=0) * 1e3).tolist()),
+        np.arange(len(u)) / rate, u[:, j] * 1e3, pred * 1e3)
+
+
 def analyse(utterances: Sequence[np.ndarray], names: Sequence[str], *,
             k: int | None = None, eps: float | None = None, method: str = "qrcp",
             train: Sequence[int] | None = None, test: Sequence[int] | None = None,
@@ -209,25 +238,8 @@ def analyse(utterances: Sequence[np.ndarray], names: Sequence[str], *,
     names = list(names)
     held, trajectory, stab = None, None, None
     if te:
-        ks = list(k_values) if k_values is not None else list(range(1, min(len(names) - 1,
-                                                                             20) + 1))
-        rows = []
-        for kv in ks:
-            e = full.with_k(kv).errors(te)  # one factorisation serves every k
-            rows.append(HeldOutError(kv, e["mean_abs_error"] * 1e3, e["relative_error"],
-                                     e["pca_mean_abs_error"] * 1e3))
-        held = tuple(rows)
-        secondary = [names[i] for i in model.secondary_]
-        wanted = [trajectory_marker] if isinstance(trajectory_marker, str) else list(
-            trajectory_marker or [])
-        name = next((w for w in wanted if w in secondary), secondary[0])
-        j = names.index(name)
-        u = np.asarray(te[0])
-        base = u[0] if isinstance(neutral, str) else neutral
-        pred = model.predict((u - base)[:, model.selected_])[:, j] + base[j]
-        trajectory = TrajectoryError(
-            name, test[0] + 1, tuple((np.abs(pred - u[:, j]).max(axis=0) * 1e3).tolist()),
-            np.arange(len(u)) / rate, u[:, j] * 1e3, pred * 1e3)
+        held = _held_out(full, te, names, k_values)
+        trajectory = _trajectory(model, te, names, test[0], neutral, rate, trajectory_marker)
     if stability and len(tr) >= 10:
         counts = list(range(5, len(tr) + 1, 5))
         first = [IndependentMarkers(eps=full.eps_, neutral=neutral).fit(tr[:c]).r_values_[:12]

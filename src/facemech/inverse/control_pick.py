@@ -206,6 +206,38 @@ def cover_signs(s: np.ndarray, kept, *, two_way=(), limit: int | None = None,
     return added, covers, one_way
 
 
+def _rank_pick(s, cols, n_muscles: int, estimate_jaw: bool) -> tuple[list[int], dict]:
+    """The rank step on the step responses ``s`` (coordinates, controls): the jaw first where
+    it moves the markers, then the muscles by QR with column pivoting, each kept while it adds
+    at least :data:`MIN_NEW_MOTION_MM` per unit; (the kept columns, each control's new motion,
+    mm per unit, beyond the kept ones)."""
+    coords = s.shape[0]
+    first: list[int] = []
+    rest = s
+    jaw = n_muscles
+    if estimate_jaw and np.linalg.norm(s[:, jaw]) >= MIN_NEW_MOTION_MM:
+        # the jaw first, whatever the muscles could mimic of it: it moves the face most in
+        # speech, and a jaw held at rest would be a silent error (see inverse.invert)
+        first = [jaw]
+        u = s[:, jaw] / np.linalg.norm(s[:, jaw])
+        rest = s - np.outer(u, u @ s)
+    muscles = np.arange(n_muscles)
+    _, r, perm = sla.qr(rest[:, muscles], mode="economic", pivoting=True)
+    diag = np.abs(np.diag(r))
+    k = int(min(coords - len(first), np.sum(diag >= MIN_NEW_MOTION_MM)))
+    if k + len(first) == 0:
+        raise InputError(f"the markers move less than {MIN_NEW_MOTION_MM:.0f} mm per unit of "
+                         "every control: nothing to invert", field="markers")
+    kept = first + [int(muscles[j]) for j in perm[:k]]
+    new = {cols[j]: float(diag[i]) for i, j in enumerate(kept[len(first):])}
+    if first:
+        new["jaw"] = float(np.linalg.norm(s[:, jaw]))
+    q, _ = np.linalg.qr(s[:, kept])
+    for j in (j for j in range(len(cols)) if j not in kept):
+        new[cols[j]] = float(np.linalg.norm(s[:, j] - q @ (q.T @ s[:, j])))
+    return kept, new
+
+
 def pick_controls(model, nodes, candidates, *, estimate_jaw: bool,
                   jaw_start=(0.0, 0.0, 0.0), axes=(0, 1, 2), dt: float | None = None,
                   responses: np.ndarray | None = None, labels=None) -> ControlPick:
@@ -244,31 +276,10 @@ def pick_controls(model, nodes, candidates, *, estimate_jaw: bool,
                               jaw_start=jaw_start, dt=dt)
          if responses is None else np.asarray(responses, float))
     s = s.reshape(len(nodes), 3, len(cols))[:, list(axes)].reshape(-1, len(cols))
-    coords = s.shape[0]
-    first: list[int] = []
-    rest = s
-    jaw = len(names)
-    if estimate_jaw and np.linalg.norm(s[:, jaw]) >= MIN_NEW_MOTION_MM:
-        # the jaw first, whatever the muscles could mimic of it: it moves the face most in
-        # speech, and a jaw held at rest would be a silent error (see inverse.invert)
-        first = [jaw]
-        u = s[:, jaw] / np.linalg.norm(s[:, jaw])
-        rest = s - np.outer(u, u @ s)
-    muscles = np.arange(len(names))
-    _, r, perm = sla.qr(rest[:, muscles], mode="economic", pivoting=True)
-    diag = np.abs(np.diag(r))
-    k = int(min(coords - len(first), np.sum(diag >= MIN_NEW_MOTION_MM)))
-    if k + len(first) == 0:
-        raise InputError(f"the markers move less than {MIN_NEW_MOTION_MM:.0f} mm per unit of "
-                         "every control: nothing to invert", field="markers")
-    kept = first + [int(muscles[j]) for j in perm[:k]]
-    new = {cols[j]: float(diag[i]) for i, j in enumerate(kept[len(first):])}
-    if first:
-        new["jaw"] = float(np.linalg.norm(s[:, jaw]))
-    q, _ = np.linalg.qr(s[:, kept])
-    for j in (j for j in range(len(cols)) if j not in kept):
-        new[cols[j]] = float(np.linalg.norm(s[:, j] - q @ (q.T @ s[:, j])))
+    kept, new = _rank_pick(s, cols, len(names), estimate_jaw)
     # the sign step: what the rank kept moves some coordinates one way only
+    jaw = len(names)
+    coords = s.shape[0]
     added, covers, one_way = cover_signs(s, kept, two_way=[jaw] if estimate_jaw else [],
                                          limit=3 * len(nodes))
     kept += added

@@ -14,6 +14,7 @@ from scipy.optimize import lsq_linear, minimize
 
 from ..errors import SimulationBlowUp
 from ..solvers.state import State
+from .columns import map_columns
 
 PENALTY = 1e6  #: the positive constraint of Pitermann & Munhall (2001)
 JAW_UNIT = 0.1  #: rad per unit of the jaw control (so that it is scaled like activity)
@@ -123,15 +124,26 @@ class FrameProblem:
         """Forward differences of all marker nodes with respect to the first frame's controls.
 
         Returns H of shape (w, 3 markers, c): ``H[a]`` is the response of frame ``k + 1 + a``
-        to the controls of frame ``k`` (one roll of the window per control).
+        to the controls of frame ``k`` (one roll of the window per control, the rolls shared
+        between the cores, :func:`~facemech.inverse.columns.map_columns`).
         """
         x = self._window(x)
         h_all = np.empty((len(x), pos0[0].size, self.nc))
-        for j in range(self.nc):
-            h = FD_STEP if x[0, j] + FD_STEP <= self.hi[j] else -FD_STEP
+        steps = [FD_STEP if x[0, j] + FD_STEP <= self.hi[j] else -FD_STEP
+                 for j in range(self.nc)]
+
+        def column(j):
             xj = x.copy()
-            xj[0, j] += h
-            h_all[:, :, j] = (self.roll(xj)[0] - pos0).reshape(len(x), -1) / h
+            xj[0, j] += steps[j]
+            return self.roll(xj)[0]
+
+        before, last = self.counter[0], (self._last, self.states)
+        rolls = map_columns(column, self.nc)
+        # the frames the other processes stepped count too; the latest roll stays the caller's
+        self.counter[0] = before + self.nc * len(x)
+        self._last, self.states = last
+        for j, pos in enumerate(rolls):
+            h_all[:, :, j] = (pos - pos0).reshape(len(x), -1) / steps[j]
         return h_all
 
     def jacobian(self, lags) -> np.ndarray:
@@ -203,6 +215,16 @@ class FrameProblem:
             hi[:, :nm] = np.minimum(hi[:, :nm], c + reach)
         return lo, hi
 
+    def _try(self, trial, total):
+        """A trial step's roll: (positions, first state, residual, cost); the cost infinite
+        where the trial collapsed the mesh (a failed step)."""
+        try:
+            pos_t, first_t = self.roll(trial)
+        except SimulationBlowUp:
+            return None, None, None, np.inf
+        r_trial = self.residual_of(pos_t)
+        return pos_t, first_t, r_trial, total(trial, r_trial)
+
     def lsq(self, c_prev, x_prev, method, *, prior=None, jaw_prior=None, lags_prev=None,
             known=(), expected_rms=None):
         """Bounded Gauss-Newton over the window with a chord Jacobian.
@@ -221,12 +243,7 @@ class FrameProblem:
         """
         w, nc = self.horizon, self.nc
         lo, hi = self.window_bounds(c_prev, method)
-        if x_prev is not None and len(x_prev):
-            x = np.vstack([x_prev[1:], x_prev[-1:]])
-            x = np.vstack([x, np.repeat(x[-1:], max(0, w - len(x)), axis=0)])[:w]
-        else:
-            x = np.tile(np.asarray(c_prev, float), (w, 1))
-        x = np.clip(x, lo, hi)
+        x = np.clip(_warm_start(x_prev, c_prev, w), lo, hi)
         a_reg, b_reg = self.regularisation(c_prev, method, prior, jaw_prior)
 
         def total(xv, r):
@@ -265,15 +282,7 @@ class FrameProblem:
                 jm = self.jacobian(lags)
                 continue
             trial = np.clip(flat + scale * step, lo_f, hi_f).reshape(w, nc)
-            try:
-                pos_t, first_t = self.roll(trial)
-            except SimulationBlowUp:  # a wild trial collapsed the mesh: a failed step
-                pos_t = None
-            if pos_t is None:
-                cost_trial = np.inf
-            else:
-                r_trial = self.residual_of(pos_t)
-                cost_trial = total(trial, r_trial)
+            pos_t, first_t, r_trial, cost_trial = self._try(trial, total)
             if cost_trial < cost:
                 gain = (np.sqrt(cost) - np.sqrt(cost_trial)) / np.sqrt(n_markers)
                 x, r, cost, pos, first = trial, r_trial, cost_trial, pos_t, first_t
@@ -291,6 +300,15 @@ class FrameProblem:
         self._last = (x.copy(), first)
         return FrameFit(x=x, state=first, states=states, lags=lags, jm=jm, a_reg=a_reg,
                         rss=float(r @ r), rows=len(r))
+
+
+def _warm_start(x_prev, c_prev, w: int) -> np.ndarray:
+    """The window's first controls (w, c): the previous window's shifted by a frame, its last
+    frame repeated, or else the previous frame's controls throughout."""
+    if x_prev is not None and len(x_prev):
+        x = np.vstack([x_prev[1:], x_prev[-1:]])
+        return np.vstack([x, np.repeat(x[-1:], max(0, w - len(x)), axis=0)])[:w]
+    return np.tile(np.asarray(c_prev, float), (w, 1))
 
 
 class FrameFit:

@@ -25,6 +25,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .columns import map_columns
+
 #: mm: the noise at which identifiability is judged at least (a good motion-capture system)
 NOISE_FLOOR_MM = 0.1
 #: activity units: the largest standard error of an identifiable control
@@ -92,20 +94,23 @@ def step_responses(advance, rest_state, nodes, n_controls, *, frames=STEP_FRAMES
 
     ``advance(state, controls)`` steps the model one frame under a (controls,) vector; each
     control in turn is held at ``size`` for ``frames`` frames from ``rest_state`` and the
-    markers' displacement at the end, divided by ``size``, is its column.
+    markers' displacement at the end, divided by ``size``, is its column. The columns are
+    shared between the cores (:func:`~facemech.inverse.columns.map_columns`).
     """
-    s0 = rest_state
-    for _ in range(frames):
-        s0 = advance(s0, np.zeros(n_controls))
-    base = s0.positions[nodes] * 1e3
-    out = np.empty((base.size, n_controls))
-    for j in range(n_controls):
+    def held(j):  # the markers after ``frames`` frames of control j (-1: none) held
         c = np.zeros(n_controls)
-        c[j] = size
+        if j >= 0:
+            c[j] = size
         s = rest_state
         for _ in range(frames):
             s = advance(s, c)
-        out[:, j] = (s.positions[nodes] * 1e3 - base).reshape(-1) / size
+        return s.positions[nodes] * 1e3
+
+    ends = map_columns(lambda j: held(j - 1), n_controls + 1)
+    base = ends[0]
+    out = np.empty((base.size, n_controls))
+    for j in range(n_controls):
+        out[:, j] = (ends[j + 1] - base).reshape(-1) / size
     return out
 
 

@@ -185,31 +185,38 @@ def read_est_track(path: str | Path) -> EstTrack:
     breaks = "BreaksPresent" in header  # EST reads a break flag whenever the line is there
     width = 1 + int(breaks) + n_channels
     if data_type == "binary":
-        order = header.get("ByteOrder", "").strip().lower()
-        endian = {"01": "<", "10": ">", "littleendian": "<", "bigendian": ">"}.get(order)
-        if endian is None:
-            raise InputError(f"ByteOrder {header.get('ByteOrder')!r} (expected 01 for "
-                             "little-endian or 10 for big-endian)", source=src,
-                             field="ByteOrder")
-        need = n_frames * width * 4
-        if len(body) != need:
-            what = "truncated" if len(body) < need else "longer than the header says"
-            raise InputError(f"binary body {what}: {len(body)} bytes, NumFrames = {n_frames} "
-                             f"frames of {width} float32 need {need}", source=src,
-                             field="NumFrames")
-        table = _binary_table(body, endian, n_frames, width)
-        if not _is_time(table[:, 0]):
-            other = "<" if endian == ">" else ">"
-            if _is_time(_binary_table(body, other, n_frames, width)[:, 0]):
-                said = "big" if endian == ">" else "little"
-                raise InputError(f"ByteOrder {header['ByteOrder']} ({said}-endian) makes the "
-                                 f"times no time series; the data are {_ENDIAN[other]}: the "
-                                 "header's byte order is wrong", source=src, field="ByteOrder")
+        table = _binary_body(body, header, n_frames, width, src)
     else:
         table = _ascii_rows(body, n_frames, width, n_aux, src)
     present = table[:, 1] != 0.0 if breaks else np.ones(n_frames, bool)
     return EstTrack(header, tuple(names), table[:, 0].copy(), present,
                     table[:, 1 + int(breaks):].copy(), data_type == "binary")
+
+
+def _binary_body(body: bytes, header: dict, n_frames: int, width: int, src: str) -> np.ndarray:
+    """The binary body's table (frames, width) in the header's byte order: InputError naming
+    ``ByteOrder`` when it is unknown or makes the times no time series (the other order
+    would), ``NumFrames`` when the body's length is not the header's."""
+    order = header.get("ByteOrder", "").strip().lower()
+    endian = {"01": "<", "10": ">", "littleendian": "<", "bigendian": ">"}.get(order)
+    if endian is None:
+        raise InputError(f"ByteOrder {header.get('ByteOrder')!r} (expected 01 for "
+                         "little-endian or 10 for big-endian)", source=src, field="ByteOrder")
+    need = n_frames * width * 4
+    if len(body) != need:
+        what = "truncated" if len(body) < need else "longer than the header says"
+        raise InputError(f"binary body {what}: {len(body)} bytes, NumFrames = {n_frames} "
+                         f"frames of {width} float32 need {need}", source=src,
+                         field="NumFrames")
+    table = _binary_table(body, endian, n_frames, width)
+    if not _is_time(table[:, 0]):
+        other = "<" if endian == ">" else ">"
+        if _is_time(_binary_table(body, other, n_frames, width)[:, 0]):
+            said = "big" if endian == ">" else "little"
+            raise InputError(f"ByteOrder {header['ByteOrder']} ({said}-endian) makes the "
+                             f"times no time series; the data are {_ENDIAN[other]}: the "
+                             "header's byte order is wrong", source=src, field="ByteOrder")
+    return table
 
 
 _ENDIAN = {"<": "little-endian", ">": "big-endian"}

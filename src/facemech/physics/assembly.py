@@ -85,64 +85,18 @@ class Physics:
                 f"{params.name!r} the {params.tissue} tissue: rebuild the face for the preset "
                 f"(facemech.geometry.builder.for_tissue)", field="face")
         rest = model.rest_positions
-        kind = model.spring_kind
         l0 = np.linalg.norm(rest[model.spring_j] - rest[model.spring_i], axis=1)
-        n = model.n_surface
         vols, rel = rest_geometry(rest, model.prism_nodes, symmetric=params.is_continuum)
         dynamic = model.dynamic_nodes.astype(np.int64)
-        if params.is_continuum:
-            c = continuum_constants(model, params)
-            k_low = c.spring_k
-            # strain stiffening, both ways, of every spring but the mucosa's (skull layer)
-            biphasic = (kind != SpringKind.SKULL) & (params.stiffening != 1.0)
-            k_high = np.where(biphasic, c.spring_k * params.stiffening, c.spring_k)
-            damping = c.spring_damping
-            mass = c.node_mass
-            if np.any(mass[dynamic] <= 0):
-                raise InputError("a moving node belongs to no tissue element", field="face")
-            inv_mass = np.zeros(model.n_nodes)
-            inv_mass[dynamic] = 1.0 / mass[dynamic]
-            bulk = c.prism_bulk
-            contact = c.contact_k
-            tied = np.sort(np.asarray(model.sliding, np.int64))
-            restore_k = c.tether_k
-            bone_k = c.bone_k
-            tied_skull = tied
-            tied_height = np.zeros(len(tied))
-        else:
-            # the seeds' constants, in the order of SEED_SPRING_KINDS (a later kind takes the
-            # muscle layer's)
-            k_ref = np.choose(np.minimum(kind, SEED_SPRING_KINDS[-1]),
-                              [params.k_epidermis, params.k_dermal_low, params.k_fascia,
-                               params.k_muscle_layer])
-            k_low = scaled_stiffness(k_ref, l0, params.spring_ref_length)
-            dermal = kind == SpringKind.DERMAL_FATTY
-            k_high = np.where(dermal,
-                              scaled_stiffness(params.k_dermal_high, l0,
-                                               params.spring_ref_length), k_low)
-            biphasic = dermal
-            damping = np.full(len(l0), params.damping)
-            inv_mass = np.zeros(model.n_nodes)
-            inv_mass[dynamic] = 1.0 / params.node_mass
-            bulk = np.zeros(len(vols))
-            contact = np.full(len(model.lip_pairs), params.k_lip_contact)
-            tied = np.asarray(model.tied_fascia, np.int64)
-            restore_k = np.full(len(tied), params.k_restore)
-            bone_k = np.zeros(len(tied))
-            tied_skull = tied + n
-            tied_height = np.einsum("ka,ka->k", rest[tied] - rest[tied + n],
-                                    model.skull_normals[tied + n])
+        (k_low, k_high, biphasic, damping, inv_mass, bulk, contact, tied, restore_k, bone_k,
+         tied_skull, tied_height) = (_continuum_constants(model, params, dynamic)
+                                     if params.is_continuum else
+                                     _seed_constants(model, params, l0, dynamic))
         jaw = np.zeros(model.n_nodes)
         jaw[model.jaw_nodes] = model.jaw_weight
         jaw[model.sliding] = model.sliding_weight
         groups = [MUSCLE_GROUPS[g] for g in model.muscles.group]
         mus = model.muscles
-        local = mus.beads()
-        counts = np.array([local[mus.ptr[m]:mus.ptr[m + 1]].max() + 1 if mus.ptr[m + 1] > mus.ptr[m]
-                           else 0 for m in range(len(mus))], np.int64)
-        bead_start = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
-        owner = np.repeat(np.arange(len(mus)), np.diff(mus.ptr))
-        muscle_bead = (bead_start[owner] + local).astype(np.int64)
         springs = SpringBundle.make(
             i=model.spring_i.astype(np.int64), j=model.spring_j.astype(np.int64),
             rest_length=l0, k_low=np.asarray(k_low, float), k_high=np.asarray(k_high, float),
@@ -151,13 +105,7 @@ class Physics:
         prisms = PrismBundle(
             nodes=model.prism_nodes.astype(np.int64), rest_volume=vols, rest_rel=rel,
             k_volume=params.k_volume, k_shape=params.k_shape, bulk=np.asarray(bulk, float))
-        muscles = MuscleBundle(
-            kind=mus.kind, origin=mus.origin, offset=mus.offsets(), ptr=mus.ptr,
-            nodes=mus.nodes, weights=mus.weights, bead=muscle_bead, bead_start=bead_start,
-            rest_length=mus.rest_length,
-            k_passive=np.array([params.passive_stiffness(g) for g in groups]),
-            pull=PULL_ALONG_LENGTH if params.is_continuum else PULL_TOWARDS_ORIGIN,
-            f1=params.f1, f2=params.f2, f3=params.f3, f4=muscle_f4(params, mus.rest_length))
+        muscles = _muscle_bundle(mus, params, groups)
         restoration = RestorationBundle(
             nodes=tied, skull=tied_skull, height=tied_height,
             k_restore=np.asarray(restore_k, float), bone_k=np.asarray(bone_k, float),
@@ -656,6 +604,69 @@ def accumulate_forces(forces, pos, vel, muscle_force, anchors, out):
         if fn < 0.0 and height <= tied_height[k] + SKULL_BAND:
             for a in range(3):
                 out[i, a] -= fn * tied_normal[k, a]
+
+
+def _continuum_constants(model: FaceModel, params: Parameters, dynamic: np.ndarray) -> tuple:
+    """The continuum tissue's springs, masses, pressure, contacts and tethers
+    (:func:`continuum_constants`), in :meth:`Physics.build`'s order."""
+    c = continuum_constants(model, params)
+    kind = model.spring_kind
+    # strain stiffening, both ways, of every spring but the mucosa's (skull layer)
+    biphasic = (kind != SpringKind.SKULL) & (params.stiffening != 1.0)
+    k_high = np.where(biphasic, c.spring_k * params.stiffening, c.spring_k)
+    mass = c.node_mass
+    if np.any(mass[dynamic] <= 0):
+        raise InputError("a moving node belongs to no tissue element", field="face")
+    inv_mass = np.zeros(model.n_nodes)
+    inv_mass[dynamic] = 1.0 / mass[dynamic]
+    tied = np.sort(np.asarray(model.sliding, np.int64))
+    return (c.spring_k, k_high, biphasic, c.spring_damping, inv_mass, c.prism_bulk, c.contact_k,
+            tied, c.tether_k, c.bone_k, tied, np.zeros(len(tied)))
+
+
+def _seed_constants(model: FaceModel, params: Parameters, l0: np.ndarray,
+                    dynamic: np.ndarray) -> tuple:
+    """The seeds' springs (eqs. 1-2 scaled to their rest lengths ``l0``), masses, contacts and
+    tied fascia (eqs. 10-11), in :meth:`Physics.build`'s order."""
+    kind = model.spring_kind
+    n = model.n_surface
+    # the seeds' constants, in the order of SEED_SPRING_KINDS (a later kind takes the muscle
+    # layer's)
+    k_ref = np.choose(np.minimum(kind, SEED_SPRING_KINDS[-1]),
+                      [params.k_epidermis, params.k_dermal_low, params.k_fascia,
+                       params.k_muscle_layer])
+    k_low = scaled_stiffness(k_ref, l0, params.spring_ref_length)
+    dermal = kind == SpringKind.DERMAL_FATTY
+    k_high = np.where(dermal, scaled_stiffness(params.k_dermal_high, l0,
+                                               params.spring_ref_length), k_low)
+    inv_mass = np.zeros(model.n_nodes)
+    inv_mass[dynamic] = 1.0 / params.node_mass
+    tied = np.asarray(model.tied_fascia, np.int64)
+    rest = model.rest_positions
+    tied_height = np.einsum("ka,ka->k", rest[tied] - rest[tied + n],
+                            model.skull_normals[tied + n])
+    return (k_low, k_high, dermal, np.full(len(l0), params.damping), inv_mass,
+            np.zeros(len(model.prism_nodes)), np.full(len(model.lip_pairs), params.k_lip_contact),
+            tied, np.full(len(tied), params.k_restore), np.zeros(len(tied)), tied + n,
+            tied_height)
+
+
+def _muscle_bundle(mus, params: Parameters, groups) -> MuscleBundle:
+    """The muscles' kernel bundle: their beads numbered across the muscles, the passive
+    stiffness and the Hill constants of ``params``."""
+    local = mus.beads()
+    counts = np.array([local[mus.ptr[m]:mus.ptr[m + 1]].max() + 1 if mus.ptr[m + 1] > mus.ptr[m]
+                       else 0 for m in range(len(mus))], np.int64)
+    bead_start = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+    owner = np.repeat(np.arange(len(mus)), np.diff(mus.ptr))
+    muscle_bead = (bead_start[owner] + local).astype(np.int64)
+    return MuscleBundle(
+        kind=mus.kind, origin=mus.origin, offset=mus.offsets(), ptr=mus.ptr,
+        nodes=mus.nodes, weights=mus.weights, bead=muscle_bead, bead_start=bead_start,
+        rest_length=mus.rest_length,
+        k_passive=np.array([params.passive_stiffness(g) for g in groups]),
+        pull=PULL_ALONG_LENGTH if params.is_continuum else PULL_TOWARDS_ORIGIN,
+        f1=params.f1, f2=params.f2, f3=params.f3, f4=muscle_f4(params, mus.rest_length))
 
 
 def _with_slabs(forces: ForceBundles, rest: np.ndarray, dynamic: np.ndarray) -> ForceBundles:
