@@ -1,11 +1,13 @@
 """The shape of an adult head and neck where the face surface stops: an implicit solid.
 
-A smooth union of a head ellipsoid (150 x 230 x 190 mm, adult means) about the head's centre
-and a neck: a cylinder of superelliptic section (exponent 3: flatter in front than an
-ellipse), 112 mm wide and 116 mm deep, leaning 15 degrees forward as it goes down (the
-cervical spine's lordosis seen from outside), whose front passes through the throat where the
-face surface stops, cut 300 mm under the head's centre. The head surface that
-closes the skin (:mod:`.closure`) takes its radius from here away from the skin's edge.
+A smooth union of a head ellipsoid (150 x 230 x 214 mm about the head's centre, 88 mm
+behind the nasion: a glabella-opisthocranion length of 197 mm, Farkas' adult male mean) and a
+neck: a cylinder of superelliptic section (exponent 3: flatter in front than an ellipse),
+112 mm wide and 116 mm deep, leaning 15 degrees forward as it goes down, whose front passes
+through the throat where the face surface stops, from 50 mm under the head's centre (so that
+its back stays under the occiput, not behind it) to 300 mm under it.
+The head surface that closes the skin (:mod:`.closure`) takes its radius from here away from
+the skin's edge.
 """
 
 from __future__ import annotations
@@ -14,11 +16,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-HEAD_RADII = np.array([0.075, 0.115, 0.095])  #: m, half-width, half-height, half-depth
+HEAD_RADII = np.array([0.075, 0.115, 0.107])  #: m, half-width, half-height, half-depth
 NECK_RADII = np.array([0.056, 0.058])  #: m, half-width and half-depth of the neck
 NECK_POWER = 3.0  #: superellipse exponent of the neck's section (2: an ellipse; flatter in front)
 NECK_LEAN = np.tan(np.radians(15.0))  #: forward lean of the neck's axis per metre down
 NECK_DROP = 0.30  #: m, the neck's cut under the head's centre
+NECK_TOP = 0.05  #: m, the neck's top under the head's centre
 BLEND = 10.0  #: sharpness of the smooth union (per unit of the normalised distances)
 
 
@@ -45,7 +48,7 @@ class Cranium:
         f_neck = (np.abs((p[..., 0] - c[0]) / NECK_RADII[0]) ** NECK_POWER
                   + np.abs((p[..., 2] - axis_z) / NECK_RADII[1]) ** NECK_POWER
                   ) ** (1.0 / NECK_POWER) - 1.0
-        f_neck = np.maximum(f_neck, (y - c[1]) / 0.05)  # the neck stops inside the head
+        f_neck = np.maximum(f_neck, (y - c[1] + NECK_TOP) / 0.05)  # it stops inside the head
         f_neck = np.maximum(f_neck, (c[1] - NECK_DROP - y) / 0.05)
         k = BLEND
         m = np.minimum(f_head, f_neck)

@@ -131,7 +131,7 @@ def ear_parts(rest: np.ndarray, normals: np.ndarray, nasion: np.ndarray) -> list
                                                           rest[:, 2] - q[2]) < 0.006)
             lateral[j] = (side * rest[ring, 0].max() - side * a[0]) if ring.any() else 0.0
         # smoothed along the rim: the largest of a few vertices jumps from one line to the next
-        lateral = gaussian_filter1d(lateral, 1.5, mode="nearest")
+        lateral = gaussian_filter1d(lateral, 4.0, mode="nearest")
         shift = lateral[None, :] / max(abs(out[0]), 0.5)
         pts = (a + 1e-3 * (x_mm[..., None] * back + (y_mm - 2.0)[..., None] * up
                            + h[..., None] * out) + shift[..., None] * out)

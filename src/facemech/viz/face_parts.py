@@ -10,7 +10,7 @@ from . import dentition
 from . import textures as T
 from .fissures import Fissures, can_cut, cut_fissures
 from .head import HAIR, hair_on_skin
-from .lids import lid_mesh, lid_of, lower_lid_of, margin_mesh
+from .lids import lash_fringe, lid_mesh, lid_of, lower_lid_of, margin_mesh
 from .look import FaceLook
 from .mesh import Part, fit_inside, skin_depth, sphere
 
@@ -179,6 +179,12 @@ def eye_parts(look: FaceLook, fissures: Fissures | None = None) -> list[Part]:
         lv, lf, lalb = lid_mesh(lid)
         parts.append(Part(name.replace("eye", "lid"), lv, lf, np.clip(lalb * tint, 0, 1),
                           (0.10, 16.0), "lid", follow=lid, pivot=centre))
+        fringe, ff, fuv, ftex = lash_fringe(lid, side)
+        fv = fringe.place()
+        parts.append(Part(name.replace("eye", "lashes"), fv, ff, np.tile(T.LASH, (len(fv), 1)),
+                          (0.15, 20.0), "lid", fuv, ftex, True, follow=fringe,
+                          two_sided=np.ones(len(ff), bool), pivot=centre))
+        parts.append(caruncle(e, side, depth))
         lower = lower_lid_of(lid)
         lv, lf, lalb = lid_mesh(lower)
         parts.append(Part(name.replace("eye", "lower_lid"), lv, lf, np.clip(lalb * tint, 0, 1),
@@ -192,6 +198,22 @@ def eye_parts(look: FaceLook, fissures: Fissures | None = None) -> list[Part]:
         parts.append(Part(name + "_socket", lining, faces[:, ::-1],
                           np.tile(SOCKET, (len(v), 1)), (0.1, 20.0), "skull", inward=True))
     return parts
+
+
+CARUNCLE = np.array([0.82, 0.56, 0.53])  #: sRGB, the caruncle's moist pink
+CARUNCLE_RADII = np.array([0.0011, 0.0010, 0.0007])  #: m
+
+
+def caruncle(eye: np.ndarray, side: int, depth) -> Part:
+    """The lacrimal caruncle: a moist pink mound in the medial canthus, 2.2 mm behind the
+    skin at the fissure's medial end (seen through the cut, in front of the globe)."""
+    x = eye[0] - side * 0.92 * T.FISSURE_HALF_LENGTH
+    y = eye[1] - 0.0014
+    z = float(depth(np.array([x]), np.array([y]))[0]) - 0.0022
+    unit, faces = sphere(10, 16)
+    v = np.array([x, y, z]) + unit * CARUNCLE_RADII
+    name = "caruncle_left" if side > 0 else "caruncle_right"
+    return Part(name, v, faces, np.tile(CARUNCLE, (len(v), 1)), (0.5, 60.0), "skull")
 
 
 def mouth_parts(look: FaceLook) -> list[Part]:

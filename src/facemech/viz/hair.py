@@ -29,8 +29,9 @@ LIFT = 0.0002  #: m, the hair's thickness at the hairline
 RAMP = 0.025  #: m above the hairline over which the thickness grows
 FRINGE = 0.006  #: m across the hairline over which the strands' density grows from 0 to 1
 WANDER = 0.002  #: m, the hairline's low-frequency wander
-HAIR_GLOSS = (0.12, 18.0)  #: specular strength and exponent of hair
+HAIR_GLOSS = (0.06, 12.0)  #: specular strength and exponent of hair
 SKIN_GLOSS = (0.10, 16.0)  #: of the strip under the fringe (the skin's)
+UNDER_GAP = 0.00003  #: m, the strip under the fringe lies this far under the strands
 
 
 def surface_radius(verts: np.ndarray, faces: np.ndarray, centre: np.ndarray, lat: np.ndarray,
@@ -85,7 +86,7 @@ def hair_parts(verts: np.ndarray, faces: np.ndarray, centre: np.ndarray,
     # the layer lifts off only above the fringe: where its strands are cut out it lies on the
     # scalp, so that what shows between them is skin, also at the head's silhouette
     s = np.clip((above - 0.5 * FRINGE) / RAMP, 0.0, 1.0)
-    thick = LIFT + (THICKNESS - LIFT) * s * s * (3 - 2 * s)
+    thick = LIFT + (THICKNESS - LIFT) * s * s * (3 - 2 * s) * _clumps(len(lat), len(lon))
     pts = centre + d * (r + thick)[..., None]
     n_lat, n_lon = len(lat), len(lon)
     from .mesh import grid_faces
@@ -110,13 +111,27 @@ def hair_parts(verts: np.ndarray, faces: np.ndarray, centre: np.ndarray,
     albedo = np.tile(T.HAIR, (n_lat * n_lon, 1))
     hair = Part("hair", pts.reshape(-1, 3), f, albedo, HAIR_GLOSS, "skull", uv, tex,
                 alpha_test=True)
-    # under the fringe, half way to the scalp, a skin-coloured strip: between the strands one
+    # under the fringe, just under the strands, a skin-coloured strip: between the strands one
     # sees skin, also where the fringe stands against the background at the head's silhouette
+    # (a line of sight grazing the layer passes between them and the strip over a chord of
+    # 2 sqrt(2 r gap): the gap is kept small)
     fringe = f[(above.ravel()[f] < 0.5 * FRINGE + 0.002).any(axis=1)]
-    under = centre + d * (r + 0.5 * LIFT)[..., None]
+    under = centre + d * (r + thick - UNDER_GAP)[..., None]
     strip = Part("hair_under", under.reshape(-1, 3), fringe, np.tile(T.SKIN, (n_lat * n_lon, 1)),
                  SKIN_GLOSS, "skull")
     return [hair, strip]
+
+
+def _clumps(n_lat: int, n_lon: int) -> np.ndarray:
+    """(n_lat, n_lon) factor 0.8-1.2 of the hair's thickness: locks about 10 degrees across,
+    longer down the meridians, so that the silhouette is lumpy, not a shell's."""
+    from scipy import ndimage
+
+    rng = np.random.default_rng(23)
+    n = ndimage.gaussian_filter(rng.standard_normal((n_lat, n_lon)), (3.0, 1.5),
+                                mode=("nearest", "wrap"))
+    n[:, -1] = n[:, 0]  # longitude -180 and 180 are one meridian
+    return 1.0 + 0.2 * np.tanh(n / (n.std() + 1e-12))
 
 
 def _wander(lon: np.ndarray) -> np.ndarray:
@@ -150,6 +165,10 @@ def _strand_texture(lat: np.ndarray, lon: np.ndarray, above: np.ndarray):
     h = ndimage.map_coordinates(above, [GY, GX], order=1, mode="nearest")
     density = np.clip(h / FRINGE + 0.5, 0.0, 1.0)  # one half on the hairline
     alpha = (rank < density).astype(float)
-    shade = 0.70 + 0.55 * rank[..., None]  # strands light and dark
+    # strands light and dark, in locks a few degrees across
+    lock = ndimage.gaussian_filter(rng.standard_normal((th, tw)), (12.0, 4.0),
+                                   mode=("nearest", "wrap"))
+    lock = np.tanh(lock / (lock.std() + 1e-12))
+    shade = 0.62 + 0.5 * rank[..., None] + 0.18 * lock[..., None]
     rgb = np.clip(T.HAIR * shade, 0, 1)
     return np.concatenate([rgb, alpha[..., None]], axis=-1), density

@@ -145,7 +145,7 @@ def hairline(lon_deg: np.ndarray, top: float, nasion_y: float) -> np.ndarray:
     """Height (m) of the hairline at longitude ``lon_deg`` about the head centre (0: front)."""
     return np.interp(np.abs(lon_deg), [0, 35, 60, 88, 112, 135, 180],
                      [top - 0.009, top - 0.013, top - 0.024, top - 0.036,
-                      top - 0.042, nasion_y - 0.020, nasion_y - 0.070])
+                      top - 0.042, nasion_y - 0.020, nasion_y - 0.052])
 
 
 def hair_on_skin(look: FaceLook):

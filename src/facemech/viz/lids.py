@@ -286,3 +286,76 @@ def margin_colour(d: np.ndarray) -> np.ndarray:
     a = np.clip((d - LID_RIM) / 0.0006, 0.0, 1.0)
     b = np.clip((d - LID_RIM - 0.0008) / 0.0012, 0.0, 1.0)
     return (1 - a) * T.SKIN + a * ((1 - b) * CONJUNCTIVA + b * BULBAR)
+
+
+LASH_LENGTH = 0.0085  #: m, the upper lashes at the middle of the lid (shorter to the corners)
+LASH_ROWS = 4  #: rows of the fringe from root to tip
+LASH_TEXELS = (12, 360)  #: the strand texture's (rows, columns)
+LASH_SPLAY = 0.3  #: of the globe's outward (lateral) direction in the lashes' first direction
+LASH_CURL = 0.45  #: the tips' rise (of a lash's length) over a straight lash
+LASH_DROP = np.radians(2.0)  #: rad, the roots under the lid's edge (its cap top lies this above
+#: the fissure's margin)
+
+
+@dataclass(frozen=True)
+class LashFringe:
+    """The upper lashes: a fringe of strand cards rooted on the upper lid's margin at the
+    skin's front, leaving it forward (splayed a little outward from the globe) and curling
+    up, carried by the lid through blink and gaze."""
+
+    lid: Lid
+    length: np.ndarray  # (COLS,) m, each column's lash length
+
+    def at_rest(self, blink: float, pitch: float) -> bool:
+        return self.lid.at_rest(blink, pitch)
+
+    def place(self, blink: float = 0.0, pitch: float = 0.0) -> np.ndarray:
+        """Vertices (LASH_ROWS * COLS, 3) m: rows from the root (the lid's margin) to the tips.
+
+        A root is the lid's edge taken down :data:`LASH_DROP` (onto the fissure's margin) and
+        forward by :data:`LID_RIM` (the lid's thickness, to the skin's front); a lash runs
+        along ``(s_x, 0, 1)`` normalised (``s_x``: :data:`LASH_SPLAY` of the globe's outward
+        x) and rises :data:`LASH_CURL` of its length as the square of the way along it."""
+        lid = self.lid
+        edge = lid.edge(blink, pitch) - LASH_DROP
+        d = np.stack([np.cos(edge) * np.sin(lid.azimuth), np.sin(edge),
+                      np.cos(edge) * np.cos(lid.azimuth)], -1)
+        root = lid.centre + d * lid.radii
+        if lid.front is not None:
+            root[:, 2] = soft_max(root[:, 2], quadratic(lid.front, root[:, 0], root[:, 1]),
+                                  BLEND)
+        root[:, 2] += LID_RIM
+        ahead = np.stack([LASH_SPLAY * d[:, 0], np.zeros(len(d)), np.ones(len(d))], -1)
+        ahead /= np.linalg.norm(ahead, axis=1, keepdims=True)
+        up = np.array([0.0, 1.0, 0.0])
+        k = np.linspace(0.0, 1.0, LASH_ROWS)[:, None, None]
+        path = k * ahead + k ** 2 * LASH_CURL * up
+        return (root + path * self.length[None, :, None]).reshape(-1, 3)
+
+
+def lash_fringe(lid: Lid, side: int) -> tuple[LashFringe, np.ndarray, np.ndarray, np.ndarray]:
+    """An upper lid's lashes: (fringe, faces, texel coordinates (f, 3, 2), RGBA strand texture
+    (sRGB, alpha 0 between strands))."""
+    s = np.linspace(-1.15, 1.15, COLS)
+    s = s if side > 0 else s[::-1]  # the lid's columns run towards +x
+    medial = np.where(s < 0, 1.0 - 0.35 * np.clip(-s, 0, 1), 1.0)
+    length = LASH_LENGTH * np.clip(1.0 - np.abs(s) ** 4, 0.0, 1.0) ** 0.5 * medial
+    fringe = LashFringe(lid, np.maximum(length, 1e-4))
+    faces = grid_faces(LASH_ROWS, COLS)
+    th, tw = LASH_TEXELS
+    col = np.tile(np.linspace(0.0, tw, COLS), LASH_ROWS)
+    row = np.repeat(np.linspace(th, 0.0, LASH_ROWS), COLS)
+    uv = np.stack([col, row], -1)[faces]
+    return fringe, faces, uv, lash_texture(th, tw)
+
+
+def lash_texture(rows: int, cols: int, seed: int = 5) -> np.ndarray:
+    """RGBA strands (sRGB): about a third of the columns a lash, each from the root (the last
+    row) to its own random length; alpha 0 between them."""
+    rng = np.random.default_rng(seed)
+    present = rng.random(cols) < 0.3
+    reach = rows * (0.55 + 0.45 * rng.random(cols))  # each strand's length in rows
+    height = np.arange(rows)[::-1][:, None] + 0.5  # rows above the root
+    a = (present[None, :] & (height < reach[None, :])).astype(float)
+    rgb = np.broadcast_to(T.LASH, (rows, cols, 3))
+    return np.concatenate([rgb, a[..., None]], axis=-1)

@@ -14,7 +14,8 @@ from .look import FaceLook
 class Part:
     """A mesh of the scene. ``motion``: 'skin' (the results' nodes), 'skull', 'jaw',
     'skirt' (from the skin's edge inwards), 'follow' (the head closing the skin, its edge
-    ring the skin's edge nodes), 'eye' (turns with the gaze) or 'lid' (closes with the blink)."""
+    ring the skin's edge nodes), 'eye' (turns with the gaze), 'lid' (closes with the blink)
+    or 'attached' (carried by the skin: ``follow`` is an :class:`.attach.Attachment`)."""
 
     name: str
     rest: np.ndarray  # (n, 3) m

@@ -86,6 +86,41 @@ def render_panel(scene: Scene, verts: np.ndarray, norms: np.ndarray, camera: Cam
     return img
 
 
+def part_labels(scene: Scene, verts: np.ndarray, camera: Camera,
+                supersample: int = 1) -> np.ndarray:
+    """(h * s, w * s) int32: per sample, the index into ``scene.parts`` of the part seen
+    there (-1: background, ``len(scene.parts)``: the inner side of a surface), for placed
+    vertices (N, 3) m (:meth:`.scene.Scene.frame`) through ``camera``."""
+    h, w = camera.size
+    s = int(supersample)
+    p = camera.project(verts, s)
+    zbuf = np.full((h * s, w * s), -np.inf, np.float32)
+    tid = np.full((h * s, w * s), -1, np.int32)
+    bary = np.empty((h * s, w * s, 2), np.float32)
+    rasterise_grid(p[:, 0], p[:, 1], p[:, 2], scene.tris, scene.uv, scene.tex,
+                   scene.alpha_test, scene.two_sided, scene.atlas, (zbuf, tid, bary), s)
+    nt = len(scene.tris)
+    part_of = np.repeat(np.arange(len(scene.parts), dtype=np.int32),
+                        [len(q.faces) for q in scene.parts])
+    return np.where(tid < 0, -1, np.where(tid >= nt, len(scene.parts),
+                                          part_of[np.clip(tid, 0, nt - 1)]))
+
+
+def class_pixels(scene: Scene, skin: np.ndarray, view: str = "frontal",
+                 size: tuple[int, int] = (720, 1280), jaw_angle=0.0,
+                 blink: float = 0.0) -> dict[str, int]:
+    """Pixels (one sample each) per part name in a frame of skin nodes (n, 3) m through a
+    single named view: what the renderer shows of each part (``'inside'``: inner sides)."""
+    verts, _ = scene.frame(skin, jaw_angle, blink)
+    labels = part_labels(scene, verts, view_camera(view, scene.framing, size))
+    counts = np.bincount(labels[labels >= 0].ravel(), minlength=len(scene.parts) + 1)
+    names = [p.name for p in scene.parts] + ["inside"]
+    out: dict[str, int] = {}
+    for name, c in zip(names, counts, strict=True):
+        out[name] = out.get(name, 0) + int(c)
+    return out
+
+
 def _buffers(scratch: dict | None, bh: int, bw: int):
     """Empty visibility buffers (depth -inf, triangle -1, weights unset) of bh x bw samples:
     new ones, or views of ``scratch``'s, grown when too small."""

@@ -7,6 +7,9 @@
 * **mouth**: a dark cavity, the upper teeth on the skull, the lower teeth and the tongue moving
   with the mandible (jaw angle about the hinge, plus its shift; the tongue tip bent by its pose,
   :mod:`.dentition`), and a dark seal across the slit between the lips;
+* **nose and shape** (the built-in face): alae and nostrils carried by the skin (:mod:`.nose`,
+  :mod:`.attach`); the drawn skin's cheekbones, mouth width and folds (:mod:`.shape`,
+  :mod:`.folds`);
 * **head motion**: every part turns rigidly about :func:`head_pivot` by a pose (pitch, yaw,
   roll) rad (:func:`head_rotation`); the skin's simulated positions stay in the head's frame;
 * **head**: a closure from the skin's edge round the back of the head (:mod:`.closure`,
@@ -32,7 +35,9 @@ from .head import SKIRT_DEPTH, closed_head, ear_parts, head_centre, head_shell, 
 from .lids import gaze_rotation
 from .look import FaceLook, look_from_dataset, look_from_model
 from .mesh import Part, VertexNormals
+from .nose import nose_parts
 from .raster import srgb_to_linear
+from .shape import drawn_shape
 
 __all__ = ["FaceLook", "MAX_TEXTURE", "Part", "SKIRT_DEPTH", "Scene", "build_scene",
            "head_pivot", "head_rotation", "look_from_dataset", "look_from_model"]
@@ -61,6 +66,7 @@ class Scene:
     joint_normals: VertexNormals | None = None  # of the joint mesh
     framing: dict = field(default_factory=dict)
     tongue_modes: np.ndarray | None = None  # (n, 2, 3) of the 'tongue' part (.dentition)
+    shape: object | None = None  # the drawn skin's shape (:class:`.shape.DrawnShape`)
 
     def frame(self, skin: np.ndarray, jaw_angle=0.0, blink: float = 0.0,
               gaze=(0.0, 0.0), head=None, tongue=None) -> tuple[np.ndarray, np.ndarray]:
@@ -88,6 +94,8 @@ class Scene:
         moved = angle != 0.0 or shift[1] != 0.0 or shift[2] != 0.0
         rot = rotation_matrix(look.hinge_axis, angle)
         skin = np.asarray(skin, float)
+        if self.shape is not None:  # drawn, not simulated: cheekbones, folds (.shape)
+            skin = self.shape.apply(skin)
         rest_v, rest_n, normals = self._rest()
         verts, norms = rest_v.copy(), rest_n.copy()  # the parts that keep still stay so
         skin_normals = None
@@ -109,6 +117,9 @@ class Scene:
                 n = skin_normals
             elif p.motion == "follow":
                 v, n = cv, closure_normals
+            elif p.motion == "attached":  # render-only shapes carried by the skin (.attach)
+                v = p.follow.place(skin, skin_normals)
+                n = p.follow.shade_normals(normals[k](v), skin_normals)
             elif p.motion == "eye":
                 if not turned:
                     continue
@@ -209,6 +220,8 @@ def build_scene(look: FaceLook, *, eyes: bool = True, mouth: bool = True,
     # a textured face's fissures are cut from its image where its eyes are drawn
     fissures = textured_fissures(look) if eyes else None
     parts = [skin_part(look, painted_hair=closed is None, fissures=fissures)]
+    if head and not look.textured:  # the built-in face: the nose's base (.nose)
+        parts += nose_parts(look, parts[0])
     if eyes and (not look.textured or fissures is not None):
         parts += eye_parts(look, fissures)
     if mouth:
@@ -222,7 +235,10 @@ def build_scene(look: FaceLook, *, eyes: bool = True, mouth: bool = True,
             if skirt is not None:
                 parts.append(skirt)
             parts += ear_parts(look)
-    return _pack(parts, look)
+    scene = _pack(parts, look)
+    if head:
+        object.__setattr__(scene, "shape", drawn_shape(look))
+    return scene
 
 
 def _pack(parts: list[Part], look: FaceLook) -> Scene:

@@ -24,7 +24,8 @@ BROW = np.array([0.27, 0.19, 0.14])
 HAIR = np.array([0.20, 0.14, 0.10])
 LASH = np.array([0.12, 0.08, 0.07])
 LID_CREASE = np.array([0.70, 0.52, 0.45])
-SCLERA = np.array([0.93, 0.91, 0.87])
+SCLERA = np.array([0.90, 0.86, 0.82])  #: a little grey and pink, never white
+SCLERA_CORNER = np.array([0.86, 0.66, 0.62])  #: the injected conjunctiva at the corners
 IRIS = np.array([0.36, 0.25, 0.16])
 
 SKIN_TEXEL = 2.5e-4  #: m per texel of the skin texture
@@ -82,7 +83,7 @@ def vermilion_mask(x: np.ndarray, y: np.ndarray, lm: dict) -> np.ndarray:
     lower = hl * np.clip(1.0 - a ** 2.0, 0.0, 1.0) ** 0.7
     d = np.minimum(upper - h, h + lower)
     d = np.where(np.abs(t) < 1.0, d, -1.0)
-    return _smooth(d, 5e-4)
+    return _smooth(d, 1.1e-3)  # a soft border: the vermilion fades into the skin over 1 mm
 
 
 def skin_texture(landmarks: dict, bounds: tuple[float, float, float, float], hair=None,
@@ -114,6 +115,14 @@ def skin_texture(landmarks: dict, bounds: tuple[float, float, float, float], hai
     # pores and mottling, fading out towards the sides, where the frontal mapping stretches
     fade = np.clip(1.0 - (np.abs(x - 0.5 * (x0 + x1)) - 0.04) / 0.015, 0.0, 1.0)
     rgb *= 1.0 + 0.018 * (fade * rng.standard_normal((h, w)))[..., None]
+    rgb *= (1.0 - 0.07 * fade * _pores(h, w, rng))[..., None]
+    # blood under the skin: redder round the nose's tip and alae and on the chin
+    for name, sx, sy, k in (("nose_tip", 0.012, 0.010, 0.35), ("subnasale", 0.016, 0.006, 0.25),
+                            ("chin", 0.014, 0.010, 0.22)):
+        if name in landmarks:
+            c = landmarks[name]
+            g = k * np.exp(-0.5 * (((x - c[0]) / sx) ** 2 + ((y - c[1]) / sy) ** 2))
+            rgb += g[..., None] * (CHEEK - SKIN)
     for name in ("cheek_left", "cheek_right"):
         if name in landmarks:
             c = landmarks[name]
@@ -166,6 +175,17 @@ def skin_texture(landmarks: dict, bounds: tuple[float, float, float, float], hai
     return image, (x0, y1)
 
 
+def _pores(h: int, w: int, rng) -> np.ndarray:
+    """0..1: sparse pores (about 0.2 mm, one in 25 texels) over a faint blotchy variation
+    (about 3 mm), the fine grain of skin at 720p and up."""
+    from scipy import ndimage
+
+    pores = ndimage.gaussian_filter((rng.random((h, w)) < 0.04).astype(float), 0.6)
+    blotch = ndimage.gaussian_filter(rng.standard_normal((h, w)), 6.0)
+    blotch = 0.5 + 0.5 * np.tanh(blotch / (blotch.std() + 1e-12))
+    return np.clip(pores / (pores.max() + 1e-12) + 0.3 * blotch, 0.0, 1.0)
+
+
 def _brow_hairs(h: int, w: int, rng) -> np.ndarray:
     """Unit-variance noise (h, w) drawn out into hairs: 1.5 mm along x, 0.15 mm across, at the
     skin texture's texel (:data:`SKIN_TEXEL`); the brows are these strokes, not a smooth
@@ -174,6 +194,20 @@ def _brow_hairs(h: int, w: int, rng) -> np.ndarray:
 
     n = gaussian_filter(rng.standard_normal((h, w)), (0.6, 6.0))
     return n / max(float(n.std()), 1e-12)
+
+
+def _vessels(x: np.ndarray, y: np.ndarray, rng, count: int = 16) -> np.ndarray:
+    """0..1: thin wavy conjunctival vessels running in from the nasal and temporal sides of
+    the globe towards the limbus, fading out before it (m, at texel centres x, y)."""
+    out = np.zeros(x.shape)
+    r, ang = np.hypot(x, y), np.arctan2(y, np.abs(x))
+    for _ in range(count):
+        a0 = rng.uniform(-0.6, 0.6)
+        wave = 0.06 * np.sin(r / 0.0011 + rng.uniform(0, 6.3))
+        on = np.exp(-((ang - a0 - wave) * r / 6e-5) ** 2)  # about 0.1 mm wide
+        side = (x > 0) if rng.random() < 0.5 else (x < 0)
+        out = np.maximum(out, on * side * np.clip((r - 0.0068) / 0.003, 0.0, 1.0))
+    return out
 
 
 def iris_texture(n: int = 192, colour=IRIS) -> np.ndarray:
@@ -187,6 +221,10 @@ def iris_texture(n: int = 192, colour=IRIS) -> np.ndarray:
     rng = np.random.default_rng(3)
     spokes = np.interp(ang, np.linspace(-np.pi, np.pi, 97), rng.random(97))
     rgb = np.broadcast_to(SCLERA, (n, n, 3)).copy()
+    # redder towards the canthi (the conjunctiva's vessels show most there), with vessels
+    corner = np.clip((np.abs(x) - 0.0065) / 0.005, 0.0, 1.0)[..., None] ** 1.5
+    rgb += 0.7 * corner * (SCLERA_CORNER - SCLERA)
+    rgb += 0.45 * _vessels(x, y, rng)[..., None] * (np.array([0.72, 0.30, 0.30]) - rgb)
     rgb *= (1.0 - 0.08 * np.clip(r / r_eye, 0, 1) ** 2)[..., None]
     iris = np.asarray(colour, float) * (0.75 + 0.5 * spokes[..., None])
     limbus = np.clip((r - 0.0052) / 0.0007, 0, 1)[..., None]
