@@ -1,4 +1,4 @@
-"""An inversion's finite-difference columns shared between processes: the same numbers as one
+"""An inversion's step-response columns shared between processes: the same numbers as one
 process, whatever the count; a column's error reaches the caller; the count's setting."""
 
 import numpy as np
@@ -6,7 +6,6 @@ import pytest
 
 from facemech import InputError
 from facemech.inverse.columns import column_workers, map_columns
-from facemech.inverse.frame import FrameProblem
 from facemech.inverse.invert import control_matrix
 from facemech.inverse.uncertainty import step_responses
 from facemech.params import Parameters
@@ -60,30 +59,3 @@ def test_step_responses_the_same_on_one_and_two_processes(seeds_face, monkeypatc
     np.testing.assert_array_equal(got["1"], got["2"])
     # every column moves the lips (mm per unit, after 3 ms: 0.01-0.04)
     assert np.all(np.abs(got["1"]).max(axis=0) > 5e-3)
-
-
-def frame_problem(face, frames, horizon):
-    """One frame's problem of three controls on the lips' landmarks, held at rest."""
-    st = Stepper(face_model(face, Parameters()), integrator="euler", dt=1e-3)
-    _, g = control_matrix(["DLI", "OOS", "LLS"])
-    s0 = State.at_rest(face.rest_positions, st.physics.n_muscles)
-    nodes = np.array([face.landmarks[n] for n in ("lower_lip_center", "upper_lip_center",
-                                                   "mouth_corner_left")])
-    data = np.repeat(face.rest_positions[nodes][None], frames, axis=0)
-    return FrameProblem(st, s0, g, nodes, data, np.zeros(frames), 0, horizon)
-
-
-def test_lag_responses_the_same_on_one_and_two_processes(seeds_face, monkeypatch):
-    x = np.array([[0.42, 0.31, 0.2], [0.44, 0.32, 0.2]])
-    got, counts = {}, {}
-    for w in ("1", "2"):
-        monkeypatch.setenv("FACEMECH_WORKERS", w)
-        fp = frame_problem(seeds_face, 4, 2)
-        pos0 = fp.roll(x)[0]
-        first = fp.counter[0]
-        got[w] = fp.lag_responses(x, pos0)
-        counts[w] = fp.counter[0] - first
-        # the latest roll is still the caller's: its first state for the unchanged controls
-        assert np.array_equal(fp._last[0], x)
-    np.testing.assert_array_equal(got["1"], got["2"])
-    assert counts["1"] == counts["2"] == 3 * 2  # every column's frames counted

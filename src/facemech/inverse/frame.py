@@ -14,7 +14,6 @@ from scipy.optimize import lsq_linear, minimize
 
 from ..errors import SimulationBlowUp
 from ..solvers.state import State
-from .columns import map_columns
 
 PENALTY = 1e6  #: the positive constraint of Pitermann & Munhall (2001)
 JAW_UNIT = 0.1  #: rad per unit of the jaw control (so that it is scaled like activity)
@@ -124,26 +123,15 @@ class FrameProblem:
         """Forward differences of all marker nodes with respect to the first frame's controls.
 
         Returns H of shape (w, 3 markers, c): ``H[a]`` is the response of frame ``k + 1 + a``
-        to the controls of frame ``k`` (one roll of the window per control, the rolls shared
-        between the cores, :func:`~facemech.inverse.columns.map_columns`).
+        to the controls of frame ``k`` (one roll of the window per control).
         """
         x = self._window(x)
         h_all = np.empty((len(x), pos0[0].size, self.nc))
-        steps = [FD_STEP if x[0, j] + FD_STEP <= self.hi[j] else -FD_STEP
-                 for j in range(self.nc)]
-
-        def column(j):
+        for j in range(self.nc):
+            h = FD_STEP if x[0, j] + FD_STEP <= self.hi[j] else -FD_STEP
             xj = x.copy()
-            xj[0, j] += steps[j]
-            return self.roll(xj)[0]
-
-        before, last = self.counter[0], (self._last, self.states)
-        rolls = map_columns(column, self.nc)
-        # the frames the other processes stepped count too; the latest roll stays the caller's
-        self.counter[0] = before + self.nc * len(x)
-        self._last, self.states = last
-        for j, pos in enumerate(rolls):
-            h_all[:, :, j] = (pos - pos0).reshape(len(x), -1) / steps[j]
+            xj[0, j] += h
+            h_all[:, :, j] = (self.roll(xj)[0] - pos0).reshape(len(x), -1) / h
         return h_all
 
     def jacobian(self, lags) -> np.ndarray:
