@@ -119,8 +119,7 @@ def bake_photo_texture(fit: PhotoFit, photo: np.ndarray, *, delight: bool = True
     colour[seen] = _photo_colour(photo, px[seen], nrm[seen] if delight else None)
     skin = _skin_tone(colour, weight, pts, fit)
     weight[seen] *= _hair_free(colour[seen], skin, pts[seen], fit)
-    colour[seen], lips = _neutral_mouth(colour[seen], weight[seen], px[seen], fit,
-                                        (photo_h, photo_w))
+    colour[seen], lips = _neutral_mouth(colour[seen], weight[seen], px[seen], fit)
     fill = _skin_fill(colour, weight, skin, (th, tw))
     out = weight[:, None] * colour + (1 - weight[:, None]) * fill
     image = _linear_to_srgb8(out).reshape(th, tw, 3)
@@ -171,26 +170,23 @@ MOUTH_MARGIN = 0.12
 MOUTH_FEATHER = 0.06
 
 
-def _polygon_depth(poly: np.ndarray, size: tuple[int, int], px: np.ndarray) -> np.ndarray:
-    """Signed distance (px) of image points ``px`` (n, 2) inside the polygon (k, 2) px,
-    negative outside (within the photo of ``size`` (h, w))."""
+def _polygon_depth(poly: np.ndarray, px: np.ndarray) -> np.ndarray:
+    """Signed distance (px) of image points ``px`` (n, 2) to the outline of the polygon
+    (k, 2) px: positive inside, negative outside."""
     from matplotlib.path import Path as Polygon
-    from scipy.ndimage import distance_transform_edt, map_coordinates
 
-    h, w = size
-    lo = np.floor(np.clip(poly.min(axis=0) - 80, 0, None)).astype(int)
-    hi = np.ceil(np.minimum(poly.max(axis=0) + 80, [w, h])).astype(int)
-    yy, xx = np.mgrid[lo[1]:hi[1], lo[0]:hi[0]]
-    inside = Polygon(poly).contains_points(np.column_stack([xx.ravel() + 0.5,
-                                                            yy.ravel() + 0.5]))
-    inside = inside.reshape(xx.shape)
-    depth = distance_transform_edt(inside) - distance_transform_edt(~inside)
-    return map_coordinates(depth, [px[:, 1] - 0.5 - lo[1], px[:, 0] - 0.5 - lo[0]], order=1,
-                           mode="nearest")
+    px = np.asarray(px, float)
+    poly = np.asarray(poly, float)
+    nearest = np.full(len(px), np.inf)
+    for a, b in zip(poly, np.roll(poly, -1, axis=0), strict=True):
+        ab = b - a
+        t = np.clip((px - a) @ ab / max(float(ab @ ab), 1e-12), 0.0, 1.0)
+        nearest = np.minimum(nearest, np.hypot(*(px - a - t[:, None] * ab).T))
+    return np.where(Polygon(poly).contains_points(px), nearest, -nearest)
 
 
-def _neutral_mouth(colour: np.ndarray, weight: np.ndarray, px: np.ndarray, fit: PhotoFit,
-                   size: tuple[int, int]) -> tuple[np.ndarray, np.ndarray | None]:
+def _neutral_mouth(colour: np.ndarray, weight: np.ndarray, px: np.ndarray,
+                   fit: PhotoFit) -> tuple[np.ndarray, np.ndarray | None]:
     """The texels' colours (n, 3) linear with the photo's mouth repainted, and the lip colour.
 
     Texels that look up the photo within :data:`MOUTH_MARGIN` of its outer lip line (iBUG
@@ -203,11 +199,11 @@ def _neutral_mouth(colour: np.ndarray, weight: np.ndarray, px: np.ndarray, fit: 
     pts = np.asarray(fit.image_points, float)
     width = float(np.linalg.norm(pts[54] - pts[48]))
     margin, feather = MOUTH_MARGIN * width, max(MOUTH_FEATHER * width, 1.0)
-    outer = _polygon_depth(pts[48:60], size, px)
+    outer = _polygon_depth(pts[48:60], px)
     near = np.flatnonzero(outer > -(margin + 3 * feather))  # the rest keeps the photo
     inner, closed = np.full(len(px), -np.inf), np.full(len(px), -np.inf)
-    inner[near] = _polygon_depth(pts[60:68], size, px[near])
-    closed[near] = _polygon_depth(fit.camera.project(fit.ibug[48:60]), size, px[near])
+    inner[near] = _polygon_depth(pts[60:68], px[near])
+    closed[near] = _polygon_depth(fit.camera.project(fit.ibug[48:60]), px[near])
     on_lips = (outer > 1.0) & (inner < -1.0) & (weight > 0.5)
     lips = None
     if on_lips.sum() >= 20:
