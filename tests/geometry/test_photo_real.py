@@ -100,6 +100,24 @@ def smiling(detector):
     return image, face_from_photo(image, detector=detector, source="obama.jpg")
 
 
+def _rerender(made, size) -> np.ndarray:
+    """The talker at rest rendered through the photo's fitted camera (frontal), (h, w, 3)."""
+    from facemech.viz.camera import Camera
+    from facemech.viz.look import look_from_model
+    from facemech.viz.render import parse_background, render_panel
+    from facemech.viz.scene import build_scene
+
+    h, w = size
+    look = look_from_model(made.model)
+    scene = build_scene(look)
+    c = made.fit.camera
+    target = c.back_project(np.array([[w / 2, h / 2]]), np.array([c.plane_z]))[0]
+    cam = Camera(np.eye(3), target, c.metres_per_px * h / 2, (h, w), c.distance)
+    verts, norms = scene.frame(look.rest, 0.0)
+    return render_panel(scene, verts, norms, cam, background=parse_background("#8a9099"))[
+        ..., :3]
+
+
 def _tooth_coloured(rgb: np.ndarray) -> np.ndarray:
     """Bright and nearly grey (teeth), (...,) bool, of sRGB uint8."""
     c = rgb.astype(float) / 255.0
@@ -113,8 +131,6 @@ def test_the_smile_is_not_the_rest_mouth(smiling):
     tooth-coloured (in the photo, about a third of the same region is teeth); the note warns."""
     from matplotlib.path import Path as Polygon
 
-    from test_photo import _rerender
-
     image, made = smiling
     assert made.fit.mouth_gap > 0.004 and "mouth is open" in made.fit.note()
     lips = made.fit.camera.project(made.fit.ibug[48:60])
@@ -123,8 +139,7 @@ def test_the_smile_is_not_the_rest_mouth(smiling):
     inside = Polygon(lips).contains_points(np.column_stack([xx.ravel() + 0.5,
                                                             yy.ravel() + 0.5])).reshape(h, w)
     assert _tooth_coloured(image[inside]).mean() > 0.2
-    render = _rerender(made.__class__(made.model, made.fit, made.texture, made.points),
-                       size=(h, w))
+    render = _rerender(made, (h, w))
     assert _tooth_coloured(render[inside]).mean() < 0.01
 
 
@@ -183,3 +198,65 @@ def test_the_talker_at_rest_is_the_person_of_the_photo(smiling):
 
     assert np.linalg.norm(_descriptor(rest(made.model)) - photo) < 0.6
     assert np.linalg.norm(_descriptor(rest(default_face())) - photo) > 0.65
+
+
+def test_the_lips_part_along_the_model_lip_line(smiling):
+    """The talker from the smiling portrait, its jaw opened 0.2 rad, seen close up (the mouth
+    view, 240 px): every pixel where the mouth's inside shows and the skin meets it lies within
+    1 px of the skin's cut edge at the mouth (the model's lip line; measured at most 1.0 px
+    on the four portraits); and no pixel of the skin round the opening (within 20 px) more
+    than 1 px from it looks like the mouth's inside: dark (under 0.6 of the lip colour's
+    luma; the photo's open mouth) or tooth-coloured (the photo's teeth) (measured: none)."""
+    from scipy.ndimage import binary_dilation, distance_transform_edt
+
+    from conftest import seen_triangles
+    from facemech.params import MUSCLE_GROUPS
+    from facemech.physics.model import model as face_model
+    from facemech.solvers.forward import simulate
+    from facemech.viz.look import look_from_model
+    from facemech.viz.render import Renderer
+    from facemech.viz.scene import build_scene
+
+    _, made = smiling
+    model = made.model
+    jaw = np.minimum(np.arange(15) / 8, 1.0) * 0.2
+    pos = simulate(face_model(model), np.zeros((15, len(MUSCLE_GROUPS))), jaw).positions[-1]
+    scene = build_scene(look_from_model(model))
+    render = Renderer(scene, "mouth", (240, 240), supersample=1)
+    image = render(pos, jaw[-1])[..., :3]
+    verts, _ = scene.frame(pos, jaw[-1])
+    _, tid = seen_triangles(scene, verts, render.cameras[0])
+    starts = np.cumsum([0] + [len(p.faces) for p in scene.parts])
+    names = np.array([p.name for p in scene.parts] + ["none"])
+    part = names[np.where(tid < 0, -1, np.searchsorted(starts, tid, side="right") - 1)]
+    skin = part == "skin"
+    inside = np.isin(part, ["cavity", "upper_teeth", "lower_teeth", "tongue", "upper_gum",
+                            "lower_gum", "mouth_seal"])
+    assert inside.sum() > 1000  # the mouth is open
+
+    # the skin's border edges round the mouth (the cut), seen through the camera
+    tri = model.faces
+    edges = np.sort(np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]), axis=1)
+    edges, count = np.unique(edges, axis=0, return_counts=True)
+    rest = model.rest_positions
+    lm = model.landmarks
+    width = np.linalg.norm(rest[lm["mouth_corner_left"]] - rest[lm["mouth_corner_right"]])
+    cut = edges[(count == 1) & (np.linalg.norm(rest[edges].mean(axis=1) - rest[lm["stomion"]],
+                                               axis=1) < 0.7 * width)]
+    px = render.cameras[0].project(pos, 1)[:, :2]
+    a, b = px[cut[:, 0]], px[cut[:, 1]]
+    yy, xx = np.nonzero(inside & binary_dilation(skin))
+    q = np.column_stack([xx + 0.5, yy + 0.5])
+    ab = b - a
+    t = np.clip(((q[:, None] - a[None]) * ab[None]).sum(-1)
+                / np.maximum((ab * ab).sum(-1), 1e-12)[None], 0.0, 1.0)
+    off = np.linalg.norm(q[:, None] - (a[None] + t[..., None] * ab[None]), axis=-1).min(axis=1)
+    assert len(off) > 100 and off.max() <= 1.0 + 1e-3
+
+    away = distance_transform_edt(~inside)
+    near = skin & (away > 1.0) & (away <= 20.0)
+    c = image.astype(float) / 255.0
+    luma = c @ np.array([0.2126, 0.7152, 0.0722])
+    lips = (made.texture.lips.astype(float) / 255.0) @ np.array([0.2126, 0.7152, 0.0722])
+    assert not (near & (luma < 0.6 * lips)).any()
+    assert not (near & _tooth_coloured(image)).any()

@@ -131,14 +131,16 @@ class DlibDetector:
     def __init__(self):
         try:
             import dlib
-            import face_recognition_models as models
         except ImportError:
+            dlib = None
+        models = _models_folder()
+        if dlib is None or models is None:
             raise InputError("finding a face in a photo needs dlib and its models: "
                              "pip install 'facemech[photo]'", field="photo") from None
         self._dlib = dlib
         self._models = models
         self._detector = dlib.get_frontal_face_detector()
-        self._predictor = dlib.shape_predictor(models.pose_predictor_model_location())
+        self._predictor = dlib.shape_predictor(str(models / PREDICTOR_FILE))
         self._cnn = None
 
     def faces(self, image: np.ndarray, *, upsample: int = 1,
@@ -202,13 +204,26 @@ class DlibDetector:
     def any_face(self, image: np.ndarray) -> bool:
         """Whether the convolutional detector finds a face (in any pose, profiles too)."""
         if self._cnn is None:
-            from pathlib import Path as _P
-
-            folder = _P(self._models.pose_predictor_model_location()).parent
             self._cnn = self._dlib.cnn_face_detection_model_v1(
-                str(folder / "mmod_human_face_detector.dat"))
+                str(self._models / "mmod_human_face_detector.dat"))
         small, _ = _reduced(image, 480)
         return len(self._cnn(small, 0)) > 0
+
+
+#: the 68-point shape predictor's file in ``face_recognition_models``' models folder
+PREDICTOR_FILE = "shape_predictor_68_face_landmarks.dat"
+
+
+def _models_folder() -> Path | None:
+    """The models folder of the ``face_recognition_models`` package, found without importing
+    it (its import loads ``pkg_resources``, slow to start); None when not installed."""
+    from importlib.util import find_spec
+
+    spec = find_spec("face_recognition_models")
+    if spec is None or not spec.submodule_search_locations:
+        return None
+    folder = Path(next(iter(spec.submodule_search_locations))) / "models"
+    return folder if (folder / PREDICTOR_FILE).is_file() else None
 
 
 def _enlarged_region(image: np.ndarray, box: tuple, factor: float):

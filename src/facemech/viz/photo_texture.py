@@ -93,54 +93,74 @@ def bake_photo_texture(fit: PhotoFit, photo: np.ndarray, *, delight: bool = True
     -------
     BakedTexture
     """
-    from scipy.interpolate import RegularGridInterpolator
-    from scipy.ndimage import map_coordinates
-
     uv = grid_uv(fit)
     rows, cols = _grid_shape(uv)
     th, tw = size
-    us = uv[:cols, 0]
-    vs = uv[::cols, 1]
-    order = np.argsort(vs)
+    order = np.argsort(uv[::cols, 1])
     normals = vertex_normals(fit.vertices, fit.faces)
     field = np.concatenate([fit.vertices, normals], axis=1).reshape(rows, cols, 6)[order]
-    interp = RegularGridInterpolator((vs[order], us), field, bounds_error=False, fill_value=None)
     tu = (np.arange(tw) + 0.5) / tw
     tv = 1.0 - (np.arange(th) + 0.5) / th  # row 0 at the top of the image
-    V, U = np.meshgrid(tv, tu, indexing="ij")
-    vals = interp(np.column_stack([V.ravel(), U.ravel()]))
-    pts, nrm = vals[:, :3], vals[:, 3:]
+    field = _lerp_axis(_lerp_axis(field, uv[:cols, 0], tu, 1), uv[::cols, 1][order], tv, 0)
+    pts, nrm = field[..., :3].reshape(-1, 3), field[..., 3:].reshape(-1, 3)
     nrm /= np.maximum(np.linalg.norm(nrm, axis=1, keepdims=True), 1e-12)
     cosine = np.einsum("ij,ij->i", nrm, fit.camera.view_direction(pts))
     px = fit.camera.project(pts)
     photo_h, photo_w = photo.shape[:2]
-    inside = ((px[:, 0] >= 0.5) & (px[:, 0] <= photo_w - 0.5) & (px[:, 1] >= 0.5)
-              & (px[:, 1] <= photo_h - 0.5))
-    lin = _srgb_to_linear(np.asarray(photo[..., :3], float) / 255.0)
-    colour = np.stack([map_coordinates(lin[..., c], [px[:, 1] - 0.5, px[:, 0] - 0.5], order=1,
-                                       mode="nearest") for c in range(3)], axis=1)
-    if delight:
-        diffuse, spec = _renderer_light(nrm)
-        colour = np.clip((colour - spec[:, None]) / np.maximum(diffuse, MIN_LIGHT)[:, None],
-                         0.0, 1.0)
     lo, hi = GRAZING
     t = np.clip((cosine - lo) / (hi - lo), 0.0, 1.0)
+    weight = (t * t * (3 - 2 * t) * ((px[:, 0] >= 0.5) & (px[:, 0] <= photo_w - 0.5)
+                                     & (px[:, 1] >= 0.5) & (px[:, 1] <= photo_h - 0.5)))
+    seen = np.flatnonzero(weight > 0)  # the photo is looked up only where it is used
     top = float(fit.camera.project(fit.vertices)[:, 1].min())
-    weight = (t * t * (3 - 2 * t) * inside
-              * _outline_weight(fit.image_points, (photo_h, photo_w), px, top))
+    weight[seen] *= _outline_weight(fit.image_points, (photo_h, photo_w), px[seen], top)
+    seen = seen[weight[seen] > 0]
+    colour = np.zeros((len(pts), 3))
+    colour[seen] = _photo_colour(photo, px[seen], nrm[seen] if delight else None)
     skin = _skin_tone(colour, weight, pts, fit)
-    weight = weight * _hair_free(colour, skin, pts, fit)
-    colour, lips = _neutral_mouth(colour, weight, px, fit, (photo_h, photo_w))
+    weight[seen] *= _hair_free(colour[seen], skin, pts[seen], fit)
+    colour[seen], lips = _neutral_mouth(colour[seen], weight[seen], px[seen], fit)
     fill = _skin_fill(colour, weight, skin, (th, tw))
     out = weight[:, None] * colour + (1 - weight[:, None]) * fill
-    image = np.round(_linear_to_srgb(out) * 255).astype(np.uint8).reshape(th, tw, 3)
+    image = _linear_to_srgb8(out).reshape(th, tw, 3)
     corner_uv = uv[fit.faces].astype(np.float32)
     app = Appearance(uv=corner_uv, image=image, source=source)
 
-    def srgb(c):
-        return None if c is None else np.round(_linear_to_srgb(c) * 255).astype(np.uint8)
+    return BakedTexture(app, weight.reshape(th, tw), _linear_to_srgb8(skin),
+                        None if lips is None else _linear_to_srgb8(lips))
 
-    return BakedTexture(app, weight.reshape(th, tw), srgb(skin), srgb(lips))
+
+def _lerp_axis(values: np.ndarray, at: np.ndarray, to: np.ndarray, axis: int) -> np.ndarray:
+    """``values`` sampled at the increasing coordinates ``at`` along ``axis``, interpolated
+    (linearly, extrapolated beyond the ends) to the coordinates ``to``."""
+    i = np.clip(np.searchsorted(at, to) - 1, 0, len(at) - 2)
+    f = (to - at[i]) / (at[i + 1] - at[i])
+    shape = [1] * values.ndim
+    shape[axis] = len(to)
+    f = f.reshape(shape)
+    return (np.take(values, i, axis=axis) * (1 - f) + np.take(values, i + 1, axis=axis) * f)
+
+
+def _photo_colour(photo: np.ndarray, px: np.ndarray, normals: np.ndarray | None) -> np.ndarray:
+    """Linear colours (n, 3) of the photo at image points ``px`` (n, 2) px (bilinear); with
+    ``normals`` (n, 3), divided by the renderer's light there (the module's docstring)."""
+    h, w = photo.shape[:2]
+    x = np.clip(px[:, 0] - 0.5, 0.0, w - 1.0)
+    y = np.clip(px[:, 1] - 0.5, 0.0, h - 1.0)
+    x0 = np.minimum(x.astype(int), max(w - 2, 0))
+    y0 = np.minimum(y.astype(int), max(h - 2, 0))
+    fx, fy = (x - x0)[:, None], (y - y0)[:, None]
+    rgb = np.asarray(photo)[..., :3]
+
+    def at(dy, dx):
+        return _SRGB_TO_LINEAR[rgb[y0 + dy, x0 + dx]]
+
+    colour = ((1 - fy) * ((1 - fx) * at(0, 0) + fx * at(0, 1))
+              + fy * ((1 - fx) * at(1, 0) + fx * at(1, 1)))
+    if normals is None:
+        return colour
+    diffuse, spec = _renderer_light(normals)
+    return np.clip((colour - spec[:, None]) / np.maximum(diffuse, MIN_LIGHT)[:, None], 0.0, 1.0)
 
 
 #: share of the mouth's width around the photo's outer lip line that is repainted (the lips'
@@ -150,26 +170,23 @@ MOUTH_MARGIN = 0.12
 MOUTH_FEATHER = 0.06
 
 
-def _polygon_depth(poly: np.ndarray, size: tuple[int, int], px: np.ndarray) -> np.ndarray:
-    """Signed distance (px) of image points ``px`` (n, 2) inside the polygon (k, 2) px,
-    negative outside (within the photo of ``size`` (h, w))."""
+def _polygon_depth(poly: np.ndarray, px: np.ndarray) -> np.ndarray:
+    """Signed distance (px) of image points ``px`` (n, 2) to the outline of the polygon
+    (k, 2) px: positive inside, negative outside."""
     from matplotlib.path import Path as Polygon
-    from scipy.ndimage import distance_transform_edt, map_coordinates
 
-    h, w = size
-    lo = np.floor(np.clip(poly.min(axis=0) - 80, 0, None)).astype(int)
-    hi = np.ceil(np.minimum(poly.max(axis=0) + 80, [w, h])).astype(int)
-    yy, xx = np.mgrid[lo[1]:hi[1], lo[0]:hi[0]]
-    inside = Polygon(poly).contains_points(np.column_stack([xx.ravel() + 0.5,
-                                                            yy.ravel() + 0.5]))
-    inside = inside.reshape(xx.shape)
-    depth = distance_transform_edt(inside) - distance_transform_edt(~inside)
-    return map_coordinates(depth, [px[:, 1] - 0.5 - lo[1], px[:, 0] - 0.5 - lo[0]], order=1,
-                           mode="nearest")
+    px = np.asarray(px, float)
+    poly = np.asarray(poly, float)
+    nearest = np.full(len(px), np.inf)
+    for a, b in zip(poly, np.roll(poly, -1, axis=0), strict=True):
+        ab = b - a
+        t = np.clip((px - a) @ ab / max(float(ab @ ab), 1e-12), 0.0, 1.0)
+        nearest = np.minimum(nearest, np.hypot(*(px - a - t[:, None] * ab).T))
+    return np.where(Polygon(poly).contains_points(px), nearest, -nearest)
 
 
-def _neutral_mouth(colour: np.ndarray, weight: np.ndarray, px: np.ndarray, fit: PhotoFit,
-                   size: tuple[int, int]) -> tuple[np.ndarray, np.ndarray | None]:
+def _neutral_mouth(colour: np.ndarray, weight: np.ndarray, px: np.ndarray,
+                   fit: PhotoFit) -> tuple[np.ndarray, np.ndarray | None]:
     """The texels' colours (n, 3) linear with the photo's mouth repainted, and the lip colour.
 
     Texels that look up the photo within :data:`MOUTH_MARGIN` of its outer lip line (iBUG
@@ -181,16 +198,18 @@ def _neutral_mouth(colour: np.ndarray, weight: np.ndarray, px: np.ndarray, fit: 
     """
     pts = np.asarray(fit.image_points, float)
     width = float(np.linalg.norm(pts[54] - pts[48]))
-    outer = _polygon_depth(pts[48:60], size, px)
-    inner = _polygon_depth(pts[60:68], size, px)
-    closed = _polygon_depth(fit.camera.project(fit.ibug[48:60]), size, px)
+    margin, feather = MOUTH_MARGIN * width, max(MOUTH_FEATHER * width, 1.0)
+    outer = _polygon_depth(pts[48:60], px)
+    near = np.flatnonzero(outer > -(margin + 3 * feather))  # the rest keeps the photo
+    inner, closed = np.full(len(px), -np.inf), np.full(len(px), -np.inf)
+    inner[near] = _polygon_depth(pts[60:68], px[near])
+    closed[near] = _polygon_depth(fit.camera.project(fit.ibug[48:60]), px[near])
     on_lips = (outer > 1.0) & (inner < -1.0) & (weight > 0.5)
     lips = None
     if on_lips.sum() >= 20:
         c = colour[on_lips]
         red = (c[:, 0] - c[:, 1]) / np.maximum(c.sum(axis=1), 1e-6)
         lips = np.median(c[red >= np.median(red)], axis=0)
-    margin, feather = MOUTH_MARGIN * width, max(MOUTH_FEATHER * width, 1.0)
     ring = (outer < -(margin + feather)) & (outer > -(margin + 3 * feather)) & (weight > 0.5)
     if ring.sum() < 20 or lips is None:
         return colour, lips
@@ -270,12 +289,15 @@ def _outline_weight(points: np.ndarray, size: tuple[int, int], px: np.ndarray,
     cap = np.column_stack([centre[0] + half * np.sign(c) * np.sqrt(np.abs(c)),
                            centre[1] - rise * np.sqrt(s)])
     poly = np.concatenate([jaw, cap])
-    yy, xx = np.mgrid[0:h, 0:w]
+    lo = np.floor(np.clip(poly.min(axis=0) - 2, 0, None)).astype(int)
+    hi = np.ceil(np.minimum(poly.max(axis=0) + 2, [w, h])).astype(int)
+    yy, xx = np.mgrid[lo[1]:hi[1], lo[0]:hi[0]]
     inside = Polygon(poly).contains_points(np.column_stack([xx.ravel() + 0.5,
-                                                            yy.ravel() + 0.5])).reshape(h, w)
+                                                            yy.ravel() + 0.5])).reshape(xx.shape)
     depth = distance_transform_edt(inside)
     feather = max(FEATHER * float(np.ptp(jaw[:, 0])), 1.0)
-    d = map_coordinates(depth, [px[:, 1] - 0.5, px[:, 0] - 0.5], order=1, mode="constant")
+    d = map_coordinates(depth, [px[:, 1] - 0.5 - lo[1], px[:, 0] - 0.5 - lo[0]], order=1,
+                        mode="constant")
     t = np.clip(d / feather, 0.0, 1.0)
     return t * t * (3 - 2 * t)
 
@@ -329,7 +351,12 @@ def _srgb_to_linear(c: np.ndarray) -> np.ndarray:
     return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
 
 
-def _linear_to_srgb(c: np.ndarray) -> np.ndarray:
-    """Linear light in [0, 1] to sRGB (IEC 61966-2-1)."""
-    c = np.clip(c, 0.0, 1.0)
-    return np.where(c <= 0.0031308, 12.92 * c, 1.055 * c ** (1 / 2.4) - 0.055)
+#: linear light of each sRGB level 0-255
+_SRGB_TO_LINEAR = _srgb_to_linear(np.arange(256) / 255.0)
+#: the linear light at which the nearest sRGB level goes from k - 1 to k (k = 1..255)
+_SRGB_STEPS = _srgb_to_linear((np.arange(1, 256) - 0.5) / 255.0)
+
+
+def _linear_to_srgb8(c: np.ndarray) -> np.ndarray:
+    """Linear light to the nearest sRGB level, uint8 (as ``round(255 * sRGB(c))``)."""
+    return np.searchsorted(_SRGB_STEPS, np.asarray(c, float), side="right").astype(np.uint8)
