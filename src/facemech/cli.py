@@ -244,11 +244,9 @@ def view(result: Path, output: Path = ..., units: str | None = None,
     return workflows.pictures.view_file(result, output, markers=markers, units=units, title=title)
 
 @command(args=("text",), look=("frontal+profile", "1280x720", "#2a2c33", 2),
-         groups=("recording", "articulation", "alive"))
-def speak(text: str | None = None, output: Path = Path("speak-output"), voice: str = "en-us",
-          rate_wpm: int = 160, face: str = "default", preset: str = "anatomical",
-          video: bool = True, render=None, recording=None, articulation=None, alive=None,
-          phone_labels: str = "ipa"):
+         groups=("speaking", "recording", "alive"))
+def speak(text: str | None = None, output: Path = Path("speak-output"), face: str = "default",
+          preset: str = "anatomical", render=None, speaking=None, recording=None, alive=None):
     """Make the face say TEXT (eSpeak NG) or speak with a recorded voice (docs/stimuli.md)."""
     _say(workflows.speech.speak_report(_staged(workflows.speech.speak, **locals()), output))
 

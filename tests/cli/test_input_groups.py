@@ -1,4 +1,5 @@
-"""The commands' input groups are declared once: ``simulate``'s and ``invert``'s options, their
+"""The commands' input groups are declared once: ``simulate``'s, ``invert``'s and ``speak``'s
+options, their
 batch jobs' keys and the workflows' objects are the groups' fields (facemech.inputs)."""
 
 from __future__ import annotations
@@ -11,7 +12,8 @@ from facemech.inputs import REQUIRED, inputs_of
 from facemech.workflows.batch_jobs import JOBS
 
 GROUPED = {"simulate": ("controls", "jaw_source", "stepping"),
-           "invert": ("marker_file", "model", "jaw_markers", "inversion", "fit")}
+           "invert": ("marker_file", "model", "jaw_markers", "inversion", "fit"),
+           "speak": ("speaking", "recording", "alive")}
 
 
 def _command(name):
@@ -46,6 +48,11 @@ def test_the_batch_jobs_take_the_same_groups_by_the_options_names():
         "activity", "emg", "emg_baseline", "emg_calibration", "jaw_chin", "chin_marker",
         "jaw_second_marker", "jaw_angle", "jaw_incisor", "jaw_molar", "bite_block", "units",
         "face", "preset", "jaw_kinematics", "integrator", "substeps", "dt", "jaw_drive"}
+    # the speak job's keys: those before the groups, and the command's four it lacked
+    assert set(JOBS["speak"].options) == {
+        "text", "audio", "textgrid", "voice", "rate", "word_tier", "phone_tier", "strength",
+        "face", "preset", "video", "blinks", "gaze", "head_motion", "seed", "view", "size",
+        "background", "aa", "scale", "plan", "plan_iterations", "phone_labels"}
 
 
 def test_a_group_is_made_from_the_command_line_and_checks_itself(monkeypatch):
@@ -67,3 +74,47 @@ def test_a_group_is_made_from_the_command_line_and_checks_itself(monkeypatch):
     res = CliRunner().invoke(cli.app, ["simulate", "-o", "r.nc", "--activity", "a.csv",
                                        "--jaw-incisor", "LI"])
     assert res.exit_code != 0 and "--jaw-chin" in str(res.exception)
+
+
+def test_speak_takes_its_groups_from_the_command_line(monkeypatch):
+    from typer.testing import CliRunner
+
+    from facemech.workflows.inputs import Alive, Recording, Speaking
+
+    seen = {}
+    monkeypatch.setattr("facemech.workflows.speech.speak", lambda *a, **kw: seen.update(kw))
+    monkeypatch.setattr("facemech.workflows.speech.speak_report", lambda res, out: [])
+    monkeypatch.setattr(cli, "_staged", lambda run, **kw: run(**kw))
+    res = CliRunner().invoke(cli.app, ["speak", "hello", "-o", "s", "--rate", "200", "--no-plan",
+                                       "--scale", "word:hello=1.5", "--scale", "class:open=0.8",
+                                       "--no-video", "--no-gaze", "--seed", "7"])
+    assert res.exit_code == 0, res.output
+    assert seen["speaking"] == Speaking(rate_wpm=200, plan=False, video=False,
+                                        scale=["word:hello=1.5", "class:open=0.8"])
+    assert seen["recording"] == Recording() and seen["alive"] == Alive(gaze=False, seed=7)
+    assert seen["text"] == "hello" and seen["face"] == "default"
+
+
+def test_speaks_older_keywords_make_the_same_groups():
+    from facemech.speech.alive import Liveliness
+    from facemech.speech.planning import PLAN_ITERATIONS
+    from facemech.workflows.inputs import Alive, Recording, Speaking
+    from facemech.workflows.speech import _older_forms
+
+    assert Speaking().plan_iterations == PLAN_ITERATIONS  # plan=True: the planner's default
+    assert Speaking.from_keywords(plan=3, voice="en-gb").iterations() == 3
+    assert Speaking.from_keywords(plan=True).iterations() == PLAN_ITERATIONS
+    assert Speaking.from_keywords(plan=0).iterations() == 0
+    assert Speaking.from_keywords(plan=False).iterations() is False
+    assert Speaking.from_keywords(Speaking(voice="en-gb"), rate_wpm=120) == Speaking(
+        voice="en-gb", rate_wpm=120)
+    art = Speaking(strength=1.2, scale="word:balloon=1.5;class:open=0.8").articulation()
+    assert art.strength == 1.2 and [str(r) for r in art.rules] == [
+        "word:balloon=1.5", "class:open=0.8"]
+    assert Alive(head_motion=False, seed=3).liveliness() == Liveliness(head=False, seed=3)
+    rec, alive, rest = _older_forms({"audio": "a.wav", "textgrid": None}, {"blinks": False}, {
+        "textgrid": "a.TextGrid", "tiers": ("words", "phones"), "face": "f.npz",
+        "articulation": {"strength": 0.5, "plan": False}})
+    assert rec == Recording("a.wav", "a.TextGrid", "words", "phones")
+    assert alive == Alive(blinks=False)
+    assert rest == {"face": "f.npz", "strength": 0.5, "plan": False}
