@@ -109,22 +109,12 @@ face_info.face: face file or built-in face
 invert.output: results file (.nc)
 markers_convert.output: the output marker file (or TARGET)
 markers_convert.target: or -o
-markers_convert.rate: Hz, for files without times (AG500 .pos: 200; MOCHA 20-column text: 500)
-markers_convert.sensors: sensor names in channel order, e.g. ul,ll,li (.pos, NDI Wave)
-markers_info.rate: Hz, for files without times (AG500 .pos: 200; MOCHA 20-column text: 500)
-markers_info.sensors: sensor names in channel order, e.g. ul,ll,li (.pos, NDI Wave)
 markers_fill_gaps.output: the output marker file (.c3d, .trc or .csv)
 markers_frame.output: the output marker file (.c3d, .trc or .csv)
 markers_frame.reference: frame the axes are taken from
 markers_head_correct.output: the output marker file (.c3d, .trc or .csv)
 markers_resample.output: the output marker file (.c3d, .trc or .csv)
 markers_trim.output: the output marker file (.c3d, .trc or .csv; a CSV keeps the roles)
-markers_trim.start: keep from this time, s (the file's times)
-markers_trim.stop: keep up to this time, s
-markers_trim.rate: Hz, for files without times (AG500 .pos: 200; MOCHA 20-column text: 500)
-markers_trim.sensors: sensor names in channel order, e.g. ul,ll,li (.pos, NDI Wave)
-markers_trim.first: keep from this frame (from 0, as markers info shows)
-markers_trim.last: keep up to this frame
 plot.markers: comma-separated marker names
 plot.output: PNG
 regions.method: qrcp or strong
@@ -157,13 +147,9 @@ subject.jaw_second_marker: another jaw marker: rotation and glide
 analyse.subject: a subject folder (facemech subject)
 recording: a recording of the subject's markers (C3D, TRC, CSV), any rate
 analyse.output: the results folder
-lowpass: low-pass cut-off of the recording, Hz (0: none)
 tracker: mesh (MediaPipe's face mesh) or dlib (68 points)
 lipread.size: the frames' WIDTHxHEIGHT, px
 lipread.output: CSV of the series per frame (time, aperture, inner-lip distance)
-analyse.window: lsq: frames fitted per frame
-analyse.smooth: lsq: smoothness weight, mm/unit
-analyse.video: also render movie.mp4
 """
 #: parameter -> help; ``command.parameter`` (the command function's name) overrides it there.
 #: The options of an input group declare their own help (:data:`GROUPS`)
@@ -177,40 +163,26 @@ NAMES: dict[str, tuple[str, ...]] = {
 
 #: input groups: options that a command takes as one parameter (so that no command has more
 #: than 12), each an input group declared once (a dataclass of :mod:`facemech.inputs`, whose
-#: fields give the options' names, types, defaults and help), or, for the groups not yet
-#: declared as one, a dict option -> (type, default) handed on as a dict
-GROUPS: dict[str, type | dict[str, tuple]] = {
+#: fields give the options' names, types, defaults and help)
+GROUPS: dict[str, type] = {
     "controls": _groups.Controls, "jaw_source": JawSource, "stepping": _groups.Stepping,
     "marker_file": _groups.MarkerFile, "model": _groups.PresetChoice, "jaw_markers": JawMarkers,
     "inversion": InversionOptions, "fit": FitOptions,
-    # facemech.io.markers.read_markers' options for formats without times or names, and the
-    # bounds of facemech.kinematics.trim.trim
-    "reader": {"rate": (float | None, None), "sensors": (str | None, None)},
-    "bounds": {"start": (float | None, None), "stop": (float | None, None),
-               "first": (int | None, None), "last": (int | None, None)},
-    # facemech.workflows.subject.analyse: Preparation and the lsq options
-    "preparation": {"units": (str | None, None), "max_gap": (float, 0.1),
-                    "lowpass": (float | None, 12.0)},
-    "lsq": {"window": (int | None, 3), "smooth": (float | None, 1.0)},
+    "reader": _groups.MarkerReading, "bounds": _groups.Bounds,
+    "analysis": _groups.Analysis, "preparation": _groups.Preparation,
     "speaking": _groups.Speaking, "recording": _groups.Recording, "alive": _groups.Alive,
 }
 
 
 def group_inputs(group: str) -> tuple[Input, ...]:
     """The options of the input group ``group`` of :data:`GROUPS` (:class:`~.inputs.Input`)."""
-    spec = GROUPS[group]
-    if not isinstance(spec, dict):
-        return inputs_of(spec)
-    return tuple(Input(k, k, a, d, "", None, NAMES.get(k, ("--" + k.replace("_", "-"),)), "")
-                 for k, (a, d) in spec.items())
+    return inputs_of(GROUPS[group])
 
 
 def make_group(group: str, values: dict):
-    """The value of an input group from a command's parameters (popped from ``values``): its
-    dataclass, or a dict."""
-    given = {i.key: values.pop(i.key) for i in group_inputs(group)}
-    spec = GROUPS[group]
-    return given if isinstance(spec, dict) else from_keys(spec, given)
+    """The input group ``group`` (its dataclass) made from a command's parameters (popped from
+    ``values``)."""
+    return from_keys(GROUPS[group], {i.key: values.pop(i.key) for i in group_inputs(group)})
 
 
 #: parameter -> the interval its value must lie in, for the numbers that are options of a

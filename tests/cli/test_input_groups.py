@@ -1,5 +1,5 @@
-"""The commands' input groups are declared once: ``simulate``'s, ``invert``'s and ``speak``'s
-options, their
+"""The commands' input groups are declared once: ``simulate``'s, ``invert``'s, ``speak``'s,
+``analyse``'s and the ``markers`` commands' options, their
 batch jobs' keys and the workflows' objects are the groups' fields (facemech.inputs)."""
 
 from __future__ import annotations
@@ -13,11 +13,14 @@ from facemech.workflows.batch_jobs import JOBS
 
 GROUPED = {"simulate": ("controls", "jaw_source", "stepping"),
            "invert": ("marker_file", "model", "jaw_markers", "inversion", "fit"),
-           "speak": ("speaking", "recording", "alive")}
+           "speak": ("speaking", "recording", "alive"),
+           "analyse": ("analysis", "preparation"), "markers_info": ("reader",),
+           "markers_convert": ("reader",), "markers_trim": ("bounds", "reader")}
 
 
 def _command(name):
-    return next(i.callback for i in cli.app.registered_commands
+    return next(i.callback for i in (*cli.app.registered_commands,
+                                     *cli.markers_app.registered_commands)
                 if i.callback.__wrapped__.__name__ == name)
 
 
@@ -34,6 +37,8 @@ def test_each_option_of_a_group_is_its_declared_field():
 
 def test_the_batch_jobs_take_the_same_groups_by_the_options_names():
     for command, groups in GROUPED.items():
+        if command not in JOBS:
+            continue
         job = JOBS[command]
         for group in groups:
             cls = cli_options.GROUPS[group]
@@ -118,3 +123,44 @@ def test_speaks_older_keywords_make_the_same_groups():
     assert rec == Recording("a.wav", "a.TextGrid", "words", "phones")
     assert alive == Alive(blinks=False)
     assert rest == {"face": "f.npz", "strength": 0.5, "plan": False}
+
+
+def test_analyse_takes_its_groups_and_its_older_keywords(monkeypatch):
+    from typer.testing import CliRunner
+
+    from facemech.workflows import subject
+    from facemech.workflows.inputs import Analysis, Preparation
+
+    seen = {}
+    monkeypatch.setattr(subject, "analyse", lambda *a, **kw: seen.update(kw))
+    monkeypatch.setattr(cli, "_staged", lambda run, **kw: run(**kw))
+    res = CliRunner().invoke(cli.app, ["analyse", "s", "r.c3d", "-o", "o", "--method", "powell",
+                                       "--window", "5", "--lowpass", "0", "--video"])
+    assert res.exit_code == 0, res.output
+    assert seen["analysis"] == Analysis("powell", window=5, video=True)
+    assert seen["preparation"] == Preparation(lowpass=0.0)
+    assert seen["analysis"].fit_options() == {}  # powell: no lsq options
+    assert subject.ANALYSE_LSQ == {"window": 3, "smooth": 1.0} == Analysis().fit_options()
+    inv = Analysis(controls="all", noise=0.2).inversion()
+    assert (inv.method, inv.controls, inv.noise, inv.positive) == ("lsq", "all", 0.2, True)
+
+
+def test_markers_trim_takes_its_bounds_as_a_group_or_as_keywords(tmp_path, monkeypatch):
+    from typer.testing import CliRunner
+
+    from facemech.io.markers import read_markers
+    from facemech.workflows.inputs import Bounds, MarkerReading
+    from facemech.workflows.markers import trim_file
+
+    src = tmp_path / "m.csv"
+    src.write_text("time,A_x,A_y,A_z\n" + "".join(f"{i / 100},{i},0,0\n" for i in range(10)))
+    a = trim_file(src, tmp_path / "a.csv", bounds=Bounds(first=2, last=5), units="mm").data
+    b = trim_file(src, tmp_path / "b.csv", first=2, last=5, units="mm").data
+    assert a.n_frames == b.n_frames == 4 and (a.positions == b.positions).all()
+    assert read_markers(tmp_path / "a.csv").n_frames == 4
+    seen = {}
+    monkeypatch.setattr("facemech.workflows.markers.trim_file", lambda *a, **kw: seen.update(kw))
+    res = CliRunner().invoke(cli.app, ["markers", "trim", str(src), "-o", "t.csv", "--start",
+                                       "0.02", "--rate", "100"])
+    assert res.exit_code == 0, res.output
+    assert seen["bounds"] == Bounds(start=0.02) and seen["reader"] == MarkerReading(rate=100.0)

@@ -1,6 +1,6 @@
-"""The input groups of ``simulate``, ``invert`` and ``speak``, each declared once
-(:mod:`facemech.inputs`): the command line's options, the batch manifest's keys and the
-workflows' Python signatures are made from these dataclasses (the jaw's groups:
+"""The input groups of ``simulate``, ``invert``, ``speak``, ``analyse`` and ``markers``, each
+declared once (:mod:`facemech.inputs`): the command line's options, the batch manifest's keys
+and the workflows' Python signatures are made from these dataclasses (the jaw's groups:
 :mod:`facemech.jaw.inputs`; the fit's: :mod:`facemech.inverse.options`). Pure Python: the
 command line imports it for ``--help``."""
 
@@ -9,11 +9,16 @@ from __future__ import annotations
 from dataclasses import dataclass, fields
 from pathlib import Path
 
+from ..checks import check_value
 from ..errors import InputError
 from ..inputs import REQUIRED, option
 
-__all__ = ["Alive", "Controls", "MarkerFile", "PresetChoice", "Recording", "Speaking",
-           "Stepping"]
+__all__ = ["LOWPASS_HZ", "Alive", "Analysis", "Bounds", "Controls", "MarkerFile",
+           "MarkerReading", "Preparation", "PresetChoice", "Recording", "Speaking", "Stepping"]
+
+#: Hz, the default low-pass of a recording: speech movements lie below it (lip and jaw
+#: kinematics have little energy above 10 Hz; a 12-15 Hz cut-off is usual for marker data)
+LOWPASS_HZ = 12.0
 
 
 @dataclass(frozen=True)
@@ -194,3 +199,76 @@ class Alive:
 
         return Liveliness(blinks=self.blinks, gaze=self.gaze, head=self.head_motion,
                           seed=self.seed)
+
+
+@dataclass(frozen=True)
+class Preparation:
+    """How ``analyse`` prepares a recording: the length unit of a recording that carries
+    none, the longest gap filled (s) and the low-pass cut-off (Hz; None or 0: none)."""
+
+    units: str | None = option(None, "length unit if the file has none")
+    max_gap: float = option(0.1, "longest gap to fill, s", unit="s")
+    lowpass: float | None = option(LOWPASS_HZ, "low-pass cut-off of the recording, Hz (0: "
+                                   "none)", unit="Hz")
+
+    def __post_init__(self):  # the command line's intervals (facemech.checks)
+        check_value("max_gap", self.max_gap)
+        if self.lowpass is not None:
+            check_value("lowpass", self.lowpass)
+
+
+@dataclass(frozen=True)
+class Analysis:
+    """How ``analyse`` inverts a recording: the method (``lsq`` or ``powell``), the controls
+    (``speech``, ``emg7``, ``all`` or listed groups), the marker noise of the standard errors
+    (mm; None: from the residuals), the lsq fit's window (frames) and smoothness weight
+    (mm/unit), longer and stronger than the method's own (2, 0.3) as a recording is noisy
+    (docs/recordings.md), and the movie."""
+
+    method: str = option("lsq", "lsq (fast) or powell (the seeds')")
+    controls: str = option("speech", "speech, emg7, all, or listed groups (default: speech, "
+                           "or what the markers determine)")
+    noise: float | None = option(None, "marker noise for the SEs, mm (or fit)", unit="mm")
+    window: int | None = option(3, "lsq: frames fitted per frame", unit="frames")
+    smooth: float | None = option(1.0, "lsq: smoothness weight, mm/unit", unit="mm")
+    video: bool = option(False, "also render movie.mp4")
+
+    def inversion(self):
+        """The :class:`~facemech.inverse.options.InversionOptions` of the inversion."""
+        from ..inverse.options import InversionOptions
+
+        return InversionOptions(self.method, controls=self.controls, noise=self.noise)
+
+    def fit_options(self) -> dict:
+        """The method's options: lsq's window and smoothness, none for powell."""
+        return {"window": self.window, "smooth": self.smooth} if self.method == "lsq" else {}
+
+
+@dataclass(frozen=True)
+class MarkerReading:
+    """How a marker file that does not say them is read: its rate (Hz) and its sensors' names
+    in channel order, comma-separated (:func:`facemech.io.markers.read_markers`)."""
+
+    rate: float | None = option(None, "Hz, for files without times (AG500 .pos: 200; MOCHA "
+                                "20-column text: 500)", unit="Hz")
+    sensors: str | None = option(None, "sensor names in channel order, e.g. ul,ll,li (.pos, "
+                                 "NDI Wave)")
+
+    def options(self) -> dict:
+        """The keywords of :func:`facemech.io.markers.read_markers`."""
+        return {"rate": self.rate, "sensors": self.sensors}
+
+
+@dataclass(frozen=True)
+class Bounds:
+    """The frames ``markers trim`` keeps: between two times (s, the file's own) or two frame
+    numbers (from 0, as ``markers info`` shows them); none: the empty ends dropped."""
+
+    start: float | None = option(None, "keep from this time, s (the file's times)", unit="s")
+    stop: float | None = option(None, "keep up to this time, s", unit="s")
+    first: int | None = option(None, "keep from this frame (from 0, as markers info shows)")
+    last: int | None = option(None, "keep up to this frame")
+
+    def given(self) -> bool:
+        """Whether any bound is given."""
+        return any(v is not None for v in (self.start, self.stop, self.first, self.last))
