@@ -365,10 +365,7 @@ def measure_phones(alignment, model, time: np.ndarray, positions: np.ndarray, *,
         if shown is not None:
             j = int(np.argmin(np.abs(time - seg.mid)))
             extra.update(upper_teeth=float(shown[0][j]), lower_teeth=float(shown[1][j]))
-        between = (0 < k < len(phones) - 1 and groups[k - 1] == "bilabial"
-                   and groups[k + 1] == "bilabial"
-                   and phones[k - 1][0].end >= seg.start - 1e-9
-                   and phones[k + 1][0].start <= seg.end + 1e-9)
+        between = _between_bilabials(phones, groups, k)
         out.append(PhoneMeasure(
             label=seg.label, start=float(seg.start), end=float(seg.end), classes=classes,
             stress=phone_stress(seg.label, alignment.notation) if marked else None,
@@ -376,6 +373,15 @@ def measure_phones(alignment, model, time: np.ndarray, positions: np.ndarray, *,
             lip_gap_mid=float(np.interp(seg.mid, time, gap)),
             lips_forward_mid=float(np.interp(seg.mid, time, m["lips_forward"])), **extra))
     return out
+
+
+def _between_bilabials(phones: list, groups: list, k: int) -> bool:
+    """Whether phone ``k`` lies between two bilabials that touch it in time."""
+    seg = phones[k][0]
+    return (0 < k < len(phones) - 1 and groups[k - 1] == "bilabial"
+            and groups[k + 1] == "bilabial"
+            and phones[k - 1][0].end >= seg.start - 1e-9
+            and phones[k + 1][0].start <= seg.end + 1e-9)
 
 
 def _stats(values_mm: list[float], passed: list[bool]) -> dict:
