@@ -148,13 +148,7 @@ def invert(
     face, params, physics = model.face, model.params, model.physics
     dt = model.steps.fast_dt
     src = markers.meta.get("source")
-    if abs(markers.rate - params.frame_rate) > 1e-3 * params.frame_rate:
-        raise InputError(f"markers at {markers.rate:g} Hz, the model runs at "
-                         f"{params.frame_rate:g} Hz: resample first (facemech markers resample)",
-                         source=src, field="rate")
-    names = [n for n in markers.names if n in mapping]
-    if not names:
-        raise InputError("no marker has a node", source=src, field="mapping")
+    names = _mapped_names(markers, mapping, params.frame_rate)
     cnames, gmat = control_matrix(controls, face)
     data = markers.select(names).positions
     frames = len(data)
@@ -186,6 +180,20 @@ def invert(
     if frames > 1:
         run.controls[-1] = run.controls[-2]
     return _finish(run, problem, (distance, steps), wall, muscles.series())
+
+
+def _mapped_names(markers: MarkerSet, mapping: dict, frame_rate: float) -> list[str]:
+    """The markers that have a node, at the model's frame rate; InputError naming ``rate`` or
+    ``mapping``."""
+    src = markers.meta.get("source")
+    if abs(markers.rate - frame_rate) > 1e-3 * frame_rate:
+        raise InputError(f"markers at {markers.rate:g} Hz, the model runs at "
+                         f"{frame_rate:g} Hz: resample first (facemech markers resample)",
+                         source=src, field="rate")
+    names = [n for n in markers.names if n in mapping]
+    if not names:
+        raise InputError("no marker has a node", source=src, field="mapping")
+    return names
 
 
 def _control_bounds(nc: int, positive: bool, estimate_jaw: bool):
