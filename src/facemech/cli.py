@@ -43,7 +43,7 @@ def command(group: typer.Typer = app, name: str | None = None, args: tuple[str, 
     numbers are checked first, what it returns is printed (``warnings`` on stderr); ``look``:
     defaults of ``--view --size --background --aa``, passed as one ``render``; ``groups``: the
     parameters that take an input group of :data:`~facemech.cli_options.GROUPS` (its
-    dataclass, made from its options; a dict for the groups not yet declared as one)."""
+    dataclass, made from its options)."""
     specs = {i.key: i for g in groups for i in opts.group_inputs(g)}
     def register(fn):
         @functools.wraps(fn)
@@ -161,15 +161,15 @@ def emg_process(emg: Path, output: Path = ..., rate: float | None = None,
 @command(markers_app, "info", groups=("reader",))
 def markers_info(source: Path, units: str | None = None, as_json: bool = False, reader=None):
     """Rate, units, markers and gaps of a marker file (.c3d .trc .csv .tsv .ema .txy .pos)."""
-    out.print(workflows.markers.marker_info(source, units=units, **reader).text(as_json),
+    out.print(workflows.markers.marker_info(source, units=units, reader=reader).text(as_json),
               markup=False)
 
 @command(markers_app, "convert", args=("target",), groups=("reader",))
 def markers_convert(source: Path, target: Path | None = None, output: Path | None = None,
                     units: str | None = None, out_units: str | None = None, reader=None):
     """Convert to C3D, TRC or CSV (from any marker file, articulography or results)."""
-    return (workflows.markers.convert_markers(source, output or target, units=units,
-                                         out_units=out_units, **reader))
+    return workflows.markers.convert_markers(source, output or target, units=units,
+                                             out_units=out_units, reader=reader)
 
 @command(markers_app, "head-correct")
 def markers_head_correct(source: Path, output: Path = ..., units: str | None = None,
@@ -200,7 +200,7 @@ def markers_fill_gaps(source: Path, output: Path = ..., units: str | None = None
 def markers_trim(source: Path, output: Path = ..., units: str | None = None, bounds=None,
                  reader=None):
     """Keep the frames between two times or frame numbers (none: drop the empty ends)."""
-    return workflows.markers.trim_file(source, output, units=units, **bounds, **reader)
+    return workflows.markers.trim_file(source, output, units=units, bounds=bounds, reader=reader)
 @command(look=("frontal+profile", "1280x720", "#2a2c33", 2), groups=(
     "controls", "jaw_source", "stepping"))
 def simulate(output: Path = ..., face: str = "default", preset: str = "anatomical",
@@ -244,11 +244,9 @@ def view(result: Path, output: Path = ..., units: str | None = None,
     return workflows.pictures.view_file(result, output, markers=markers, units=units, title=title)
 
 @command(args=("text",), look=("frontal+profile", "1280x720", "#2a2c33", 2),
-         groups=("recording", "articulation", "alive"))
-def speak(text: str | None = None, output: Path = Path("speak-output"), voice: str = "en-us",
-          rate_wpm: int = 160, face: str = "default", preset: str = "anatomical",
-          video: bool = True, render=None, recording=None, articulation=None, alive=None,
-          phone_labels: str = "ipa"):
+         groups=("speaking", "recording", "alive"))
+def speak(text: str | None = None, output: Path = Path("speak-output"), face: str = "default",
+          preset: str = "anatomical", render=None, speaking=None, recording=None, alive=None):
     """Make the face say TEXT (eSpeak NG) or speak with a recorded voice (docs/stimuli.md)."""
     _say(workflows.speech.speak_report(_staged(workflows.speech.speak, **locals()), output))
 
@@ -335,14 +333,11 @@ def subject(face: str, markers: Path = ..., output: Path = ..., head: str | None
     """Make a subject folder: a face (built-in, face file or scan) fitted to rest markers."""
     return _staged(workflows.subject.make_subject, **locals())
 
-@command(groups=("preparation", "lsq"))
-def analyse(subject: Path, recording: Path, output: Path = ..., method: str = "lsq",
-            controls: str = "speech", noise: float | None = None, preset: str = "anatomical",
-            video: bool = False, preparation=None, lsq=None):
+@command(groups=("analysis", "preparation"))
+def analyse(subject: Path, recording: Path, output: Path = ..., preset: str = "anatomical",
+            analysis=None, preparation=None):
     """A recording against a subject: head motion, frame, gaps, inversion, statistics, movie."""
-    kw = dict(locals(), preparation=workflows.subject.Preparation(**preparation), lsq=None,
-              options=lsq if method == "lsq" else {})
-    return _staged(workflows.subject.analyse, **{k: v for k, v in kw.items() if k != "lsq"})
+    return _staged(workflows.subject.analyse, **locals())
 
 @command()
 def batch(manifest: Path, output: Path = ..., workers: int | None = None,

@@ -7,14 +7,12 @@ before it runs. Pure Python: importing it costs nothing."""
 
 from __future__ import annotations
 
-from pathlib import Path
-
 from .checks import RANGES as _RANGES
 from .checks import check_number
 from .inputs import Input, from_keys, inputs_of
 from .inverse.options import FitOptions, InversionOptions
 from .jaw.inputs import JawMarkers, JawSource
-from .workflows.inputs import Controls, MarkerFile, PresetChoice, Stepping
+from .workflows import inputs as _groups
 
 __all__ = ["GROUPS", "HELP", "NAMES", "RANGES", "check_number", "group_inputs", "help_for",
            "make_group"]
@@ -25,7 +23,6 @@ as_json: print JSON
 audio: WAV to mux in
 background: '#rrggbb', 'r,g,b' or 'transparent' (PNG)
 baseline: rest interval START,STOP (s)
-blinks: blinks at the rate of conversation (26/min)
 builtin: refit the built-in targets
 calibration: recording of maximal gestures
 calibration_baseline: its rest interval START,STOP (s)
@@ -42,10 +39,8 @@ fit: scales: force, lips, stiffness, sphincter
 fmt: obj or ply: one mesh per frame in the folder -o
 frames: frames of the gesture sequence
 front: marker in front, on the same plane
-gaze: small gaze shifts, about one a second
 gestures: maximal gestures, each FILE:GROUPS, e.g. smile.c3d:ZYG,LAO,RIS
 head: comma-separated head markers (at least 3)
-head_motion: head motion driven by the voice's F0 and level
 integrator: euler, implicit or rosenbrock
 k: independent markers (default: <= 10)
 labels: name the markers
@@ -64,26 +59,17 @@ origin: origin marker (default: --front)
 out_units: unit of the output (default: the input's)
 output: the output (file or folder)
 peak: frame of a peak: a muscle group (e.g. OOS), jaw or motion
-phone_labels: phone labels written: ipa, arpabet or espeak (eSpeak's codes)
-phone_tier: the same, phones
 preset: anatomical, lucero1999, pitermann2001, calibrated or a preset .json
 rate: rate, Hz (default: the frame rate)
-rate_wpm: words per minute
 reference: reference frame (default: first full)
 report: write the per-frame residuals (JSON)
 result: results file (.nc)
 right: marker on the right
-scale: KIND:KEY=FACTOR (repeatable), e.g. word:balloon=1.5, class:open=0.8, phone:u:=1.2
 series: with --json: the per-frame mouth measures
-seed: seed of the blinks, gaze shifts and head motion (default: from the item)
 size: frame size WIDTHxHEIGHT, pixels
 source: input marker file
-strength: scale of the visemes' departure from rest
-plan: plan the controls for the face's dynamics (--no-plan: the dominance blend as it is)
-plan_iterations: the planner's iterations, each one more simulation (0-20)
 test: held-out utterances, e.g. 31-40
 text: what to say (or --audio)
-textgrid: the recording's Praat TextGrid (MFA)
 time: time of the frame, s
 tissue: anatomical or uniform
 title: page title
@@ -92,8 +78,6 @@ units: length unit if the file has none
 utterances: utterances in the corpus
 video: render the MP4
 view: frontal, profile, three-quarter, mouth, frontal+profile
-voice: eSpeak NG voice, e.g. en-us, en-gb, en-us+f3
-word_tier: TextGrid tier name (default: found by name)
 calibrate.max_evaluations: gesture sets simulated at most
 calibrate.name: preset name (default: the file's)
 calibrate.output: preset file (.json)
@@ -125,22 +109,12 @@ face_info.face: face file or built-in face
 invert.output: results file (.nc)
 markers_convert.output: the output marker file (or TARGET)
 markers_convert.target: or -o
-markers_convert.rate: Hz, for files without times (AG500 .pos: 200; MOCHA 20-column text: 500)
-markers_convert.sensors: sensor names in channel order, e.g. ul,ll,li (.pos, NDI Wave)
-markers_info.rate: Hz, for files without times (AG500 .pos: 200; MOCHA 20-column text: 500)
-markers_info.sensors: sensor names in channel order, e.g. ul,ll,li (.pos, NDI Wave)
 markers_fill_gaps.output: the output marker file (.c3d, .trc or .csv)
 markers_frame.output: the output marker file (.c3d, .trc or .csv)
 markers_frame.reference: frame the axes are taken from
 markers_head_correct.output: the output marker file (.c3d, .trc or .csv)
 markers_resample.output: the output marker file (.c3d, .trc or .csv)
 markers_trim.output: the output marker file (.c3d, .trc or .csv; a CSV keeps the roles)
-markers_trim.start: keep from this time, s (the file's times)
-markers_trim.stop: keep up to this time, s
-markers_trim.rate: Hz, for files without times (AG500 .pos: 200; MOCHA 20-column text: 500)
-markers_trim.sensors: sensor names in channel order, e.g. ul,ll,li (.pos, NDI Wave)
-markers_trim.first: keep from this frame (from 0, as markers info shows)
-markers_trim.last: keep up to this frame
 plot.markers: comma-separated marker names
 plot.output: PNG
 regions.method: qrcp or strong
@@ -148,7 +122,6 @@ regions.output: output folder
 render.output: MP4, or a folder for PNG frames
 simulate.output: results file (.nc)
 simulate.video: also render an MP4 (or PNG frames into a folder)
-speak.audio: a recorded voice (WAV) to speak with
 speak.output: output folder
 still.markers: draw the model's markers
 still.output: PNG or PDF
@@ -174,13 +147,9 @@ subject.jaw_second_marker: another jaw marker: rotation and glide
 analyse.subject: a subject folder (facemech subject)
 recording: a recording of the subject's markers (C3D, TRC, CSV), any rate
 analyse.output: the results folder
-lowpass: low-pass cut-off of the recording, Hz (0: none)
 tracker: mesh (MediaPipe's face mesh) or dlib (68 points)
 lipread.size: the frames' WIDTHxHEIGHT, px
 lipread.output: CSV of the series per frame (time, aperture, inner-lip distance)
-analyse.window: lsq: frames fitted per frame
-analyse.smooth: lsq: smoothness weight, mm/unit
-analyse.video: also render movie.mp4
 """
 #: parameter -> help; ``command.parameter`` (the command function's name) overrides it there.
 #: The options of an input group declare their own help (:data:`GROUPS`)
@@ -189,52 +158,31 @@ HELP: dict[str, str] = dict(line.split(": ", 1) for line in _HELP_TABLE.strip().
 #: parameter -> its option names, where they differ from ``--the-parameter``
 NAMES: dict[str, tuple[str, ...]] = {
     "output": ("-o", "--output"), "as_json": ("--json",), "fmt": ("--format",),
-    "rate_wpm": ("--rate",), "noise_mm": ("--noise",), "map_file": ("--map",), "k": ("-k",),
+    "noise_mm": ("--noise",), "map_file": ("--map",), "k": ("-k",),
     "aa": ("--aa",)}
 
 #: input groups: options that a command takes as one parameter (so that no command has more
 #: than 12), each an input group declared once (a dataclass of :mod:`facemech.inputs`, whose
-#: fields give the options' names, types, defaults and help), or, for the groups not yet
-#: declared as one, a dict option -> (type, default) handed on as a dict
-GROUPS: dict[str, type | dict[str, tuple]] = {
-    "controls": Controls, "jaw_source": JawSource, "stepping": Stepping,
-    "marker_file": MarkerFile, "model": PresetChoice, "jaw_markers": JawMarkers,
+#: fields give the options' names, types, defaults and help)
+GROUPS: dict[str, type] = {
+    "controls": _groups.Controls, "jaw_source": JawSource, "stepping": _groups.Stepping,
+    "marker_file": _groups.MarkerFile, "model": _groups.PresetChoice, "jaw_markers": JawMarkers,
     "inversion": InversionOptions, "fit": FitOptions,
-    # facemech.io.markers.read_markers' options for formats without times or names, and the
-    # bounds of facemech.kinematics.trim.trim
-    "reader": {"rate": (float | None, None), "sensors": (str | None, None)},
-    "bounds": {"start": (float | None, None), "stop": (float | None, None),
-               "first": (int | None, None), "last": (int | None, None)},
-    # facemech.workflows.subject.analyse: Preparation and the lsq options
-    "preparation": {"units": (str | None, None), "max_gap": (float, 0.1),
-                    "lowpass": (float | None, 12.0)},
-    "lsq": {"window": (int | None, 3), "smooth": (float | None, 1.0)},
-    # facemech.workflows.speak's Recording, and facemech.speech.alive.Liveliness
-    "recording": {"audio": (Path | None, None), "textgrid": (Path | None, None),
-                  "word_tier": (str | None, None), "phone_tier": (str | None, None)},
-    # facemech.speech.articulation.Articulation and facemech.speech.planning's plan
-    "articulation": {"strength": (float, 1.0), "scale": (list[str] | None, None),
-                     "plan": (bool, True), "plan_iterations": (int, 8)},
-    "alive": {"blinks": (bool, True), "gaze": (bool, True), "head_motion": (bool, True),
-              "seed": (int | None, None)},
+    "reader": _groups.MarkerReading, "bounds": _groups.Bounds,
+    "analysis": _groups.Analysis, "preparation": _groups.Preparation,
+    "speaking": _groups.Speaking, "recording": _groups.Recording, "alive": _groups.Alive,
 }
 
 
 def group_inputs(group: str) -> tuple[Input, ...]:
     """The options of the input group ``group`` of :data:`GROUPS` (:class:`~.inputs.Input`)."""
-    spec = GROUPS[group]
-    if not isinstance(spec, dict):
-        return inputs_of(spec)
-    return tuple(Input(k, k, a, d, "", None, NAMES.get(k, ("--" + k.replace("_", "-"),)), "")
-                 for k, (a, d) in spec.items())
+    return inputs_of(GROUPS[group])
 
 
 def make_group(group: str, values: dict):
-    """The value of an input group from a command's parameters (popped from ``values``): its
-    dataclass, or a dict."""
-    given = {i.key: values.pop(i.key) for i in group_inputs(group)}
-    spec = GROUPS[group]
-    return given if isinstance(spec, dict) else from_keys(spec, given)
+    """The input group ``group`` (its dataclass) made from a command's parameters (popped from
+    ``values``)."""
+    return from_keys(GROUPS[group], {i.key: values.pop(i.key) for i in group_inputs(group)})
 
 
 #: parameter -> the interval its value must lie in, for the numbers that are options of a

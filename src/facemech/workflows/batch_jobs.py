@@ -1,8 +1,9 @@
 """The job kinds of a batch manifest: their options (names, types, which are input files) and
-the workflow each one calls to fill an item's folder; ``simulate`` and ``invert`` take the
-input groups of their commands (:mod:`facemech.workflows.inputs`, :mod:`facemech.jaw.inputs`,
-:mod:`facemech.inverse.options`), whose keys are the manifest's. The batch's runner
-(:mod:`facemech.batch`) is given this table (:data:`JOBS`); it imports no workflow.
+the workflow each one calls to fill an item's folder; ``simulate``, ``invert`` and ``speak``
+take the input groups of their commands (:mod:`facemech.workflows.inputs`,
+:mod:`facemech.jaw.inputs`, :mod:`facemech.inverse.options`), whose keys are the manifest's.
+The batch's runner (:mod:`facemech.batch`) is given this table (:data:`JOBS`); it imports no
+workflow.
 
 Every option is named as the command's option (``jaw-chin`` or ``jaw_chin``); a job's outputs
 are the files its command writes, under fixed names inside the item's folder:
@@ -33,7 +34,7 @@ from ..errors import FacemechError
 from ..inputs import from_manifest
 from ..inverse.options import FitOptions, InversionOptions
 from ..jaw.inputs import JawMarkers, JawSource
-from .inputs import Controls, MarkerFile, PresetChoice, Stepping
+from .inputs import Alive, Controls, MarkerFile, PresetChoice, Recording, Speaking, Stepping
 
 __all__ = ["JOBS", "Job", "read_manifest", "run_job"]
 
@@ -73,14 +74,10 @@ def _speak(o: dict, folder: Path):
     from .pictures import render_options
     from .speech import speak, speak_report
 
-    keys = ("audio", "textgrid", "voice", "strength", "face", "preset", "video")
-    kw = {k: o[k] for k in keys if k in o}
-    if "rate" in o:
-        kw["rate_wpm"] = o["rate"]
-    alive = {k: o[k] for k in ("blinks", "gaze", "head_motion", "seed") if k in o}
-    res = speak(folder, o.get("text"), tiers=(o.get("word_tier"), o.get("phone_tier")),
-                render=render_options(**{k: o[k] for k in _RENDER if k in o}), alive=alive,
-                **kw)
+    res = speak(folder, o.get("text"), speaking=from_manifest(Speaking, o),
+                recording=from_manifest(Recording, o), alive=from_manifest(Alive, o),
+                render=render_options(**{k: o[k] for k in _RENDER if k in o}),
+                **{k: o[k] for k in ("face", "preset") if k in o})
     return ({"frames": len(res.simulation.time), "phones": len(res.alignment.phones),
              "duration_s": round(float(res.alignment.duration), 3)},
             speak_report(res, folder.name))
@@ -126,12 +123,9 @@ JOBS: dict[str, Job] = {
                     (("activity", "emg"),), _simulate),
     "invert": job((MarkerFile, PresetChoice, JawMarkers, InversionOptions, FitOptions), {
         "face": "file_or_name", "figure": "bool"}, (("markers",),), _invert),
-    "speak": Job(
-        {"text": "str", "audio": "path", "textgrid": "path", "voice": "str", "rate": "int",
-         "word_tier": "str", "phone_tier": "str", "strength": "float", "face": "file_or_name",
-         "preset": "file_or_name", "video": "bool", "blinks": "bool", "gaze": "bool",
-         "head_motion": "bool", "seed": "int", **_RENDER},
-        (("text", "audio"),), _speak),
+    "speak": job((Recording, Speaking, Alive), {"text": "str", "face": "file_or_name",
+                                                "preset": "file_or_name", **_RENDER},
+                 (("text", "audio"),), _speak),
     "stimuli": Job({"design": "path", "video": "bool", **_RENDER}, (("design",),), _stimuli,
                    _design_files),
     "regions": Job(

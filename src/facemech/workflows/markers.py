@@ -12,6 +12,7 @@ from ..atomic import check_output
 from ..checks import check_value
 from ..errors import InputError
 from ..io.trajectories import names_of, on_times, trajectories  # noqa: F401 (re-exported)
+from .inputs import Bounds, MarkerReading
 from .outcome import Written
 
 
@@ -53,31 +54,30 @@ def gap_text(g) -> str:
             + ("" if g.interior else " at an end"))
 
 
-def marker_info(path: str | Path, *, units: str | None = None, rate: float | None = None,
-                sensors: str | None = None) -> MarkerInfo:
+def marker_info(path: str | Path, *, units: str | None = None,
+                reader: MarkerReading | None = None, **keywords) -> MarkerInfo:
     """Read a marker file and find its gaps (``units``: length unit if the file has none;
-    ``rate``, ``sensors``: :func:`facemech.io.markers.read_markers`)."""
+    ``reader``: :class:`~.inputs.MarkerReading`, or its ``rate=`` and ``sensors=``)."""
     from ..io.markers import read_markers
     from ..kinematics.gaps import find_gaps
 
-    ms = read_markers(path, units=units, rate=rate, sensors=sensors)
+    ms = read_markers(path, units=units, **_reading(reader, keywords).options())
     return MarkerInfo(Path(path), ms, find_gaps(ms))
 
 
 def convert_markers(source: str | Path, target: str | Path | None, *, units: str | None = None,
-                    out_units: str | None = None, rate: float | None = None,
-                    sensors: str | None = None):
+                    out_units: str | None = None, reader: MarkerReading | None = None,
+                    **keywords):
     """Copy a marker file (or a results file's model markers) to ``target`` (``.c3d``, ``.trc``
     or ``.csv``; a CSV keeps articulography's roles) in ``out_units`` (default: the input's);
-    ``rate`` and ``sensors`` for formats without times or names
-    (:func:`facemech.io.markers.read_markers`). Returns :class:`Written` with the MarkerSet
-    read."""
+    ``reader`` (:class:`~.inputs.MarkerReading`, or its ``rate=`` and ``sensors=``) for
+    formats without times or names. Returns :class:`Written` with the MarkerSet read."""
     from ..io.markers import read_markers, write_markers
 
     if target is None:
         raise InputError("give the output file (-o)", field="output")
     check_output(target, [source], field="-o")
-    ms = read_markers(source, units=units, rate=rate, sensors=sensors)
+    ms = read_markers(source, units=units, **_reading(reader, keywords).options())
     write_markers(target, ms, units=out_units)
     return Written(Path(target), ms, f"{ms.n_markers} markers, {ms.n_frames} frames -> {target}")
 
@@ -190,33 +190,49 @@ def gap_hint(ms, frame: int, marker: int | None = None) -> str:
             "only gaps with data on both sides)")
 
 
-def trim_file(source: str | Path, output: str | Path, *, start: float | None = None,
-              stop: float | None = None, first: int | None = None, last: int | None = None,
-              units: str | None = None, rate: float | None = None, sensors: str | None = None):
+def trim_file(source: str | Path, output: str | Path, *, bounds: Bounds | None = None,
+              units: str | None = None, reader: MarkerReading | None = None, **keywords):
     """Keep the frames of a marker file between two times (s, the file's own) or two frame
-    numbers (from 0, as ``markers info`` shows them), and write them (``.csv``, ``.trc`` or
+    numbers (from 0, as ``markers info`` shows them): ``bounds`` (:class:`~.inputs.Bounds`, or
+    its ``start=``, ``stop=``, ``first=``, ``last=``), and write them (``.csv``, ``.trc`` or
     ``.c3d``; a CSV keeps articulography's roles). Without bounds, the leading and trailing
     frames where no marker is present are dropped. The input is never overwritten; the output
-    is written atomically. ``rate`` (Hz) and ``sensors`` (comma-separated names) are for the
-    formats that do not say them (:func:`facemech.io.markers.read_markers`).
+    is written atomically. ``reader`` (:class:`~.inputs.MarkerReading`, or its ``rate=`` and
+    ``sensors=``) for the formats that do not say them.
 
     Returns
     -------
     Written : ``data`` the MarkerSet written
     """
+    from dataclasses import asdict, replace
+
     from ..io.markers import read_markers, write_markers
     from ..kinematics.trim import drop_empty_ends, trim
 
+    bounds = replace(bounds or Bounds(), **{k: keywords.pop(k) for k in ("start", "stop",
+                                                                          "first", "last")
+                                             if k in keywords})
     check_output(output, [source], field="-o")
-    ms = read_markers(source, units=units, rate=rate, sensors=sensors)
+    ms = read_markers(source, units=units, **_reading(reader, keywords).options())
     n, t0, t1 = ms.n_frames, ms.time[0], ms.time[-1]
-    if all(v is None for v in (start, stop, first, last)):
+    if not bounds.given():
         res, note = drop_empty_ends(ms)
         how = note or "no frame without markers at either end: all kept"
     else:
-        res = trim(ms, start=start, stop=stop, first=first, last=last)
+        res = trim(ms, **asdict(bounds))
         a, b = res.meta["trimmed"]
         how = (f"kept frames {a}-{b} (t = {res.time[0]:.3f}-{res.time[-1]:.3f} s) of {n} "
                f"({t0:.3f}-{t1:.3f} s)")
     write_markers(output, res)
     return Written(Path(output), res, f"{how}; {res.n_frames} frames -> {output}")
+
+
+def _reading(reader: MarkerReading | None, keywords: dict) -> MarkerReading:
+    """``reader`` (None: the defaults) with its fields given as keywords (``rate=``,
+    ``sensors=``); a TypeError for any other keyword."""
+    from dataclasses import replace
+
+    unknown = sorted(set(keywords) - {"rate", "sensors"})
+    if unknown:
+        raise TypeError(f"unexpected keyword {unknown[0]!r}")
+    return replace(reader or MarkerReading(), **keywords)

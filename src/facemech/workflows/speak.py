@@ -27,9 +27,10 @@ import numpy as np
 
 from ..checks import check_value
 from ..errors import InputError
+from .inputs import Alive, Recording, Speaking
 
-__all__ = ["FILES", "LEAD_IN_S", "TAIL_S", "Recording", "Spoken", "relabel_folder", "speak",
-           "text_items", "write_alignment"]
+__all__ = ["FILES", "LEAD_IN_S", "TAIL_S", "Alive", "Recording", "Speaking", "Spoken",
+           "relabel_folder", "speak", "text_items", "write_alignment"]
 
 #: s of silence put before and after synthesised speech, so that the face starts at rest and
 #: has the time to anticipate the first phone (muscle activity leads the sound by 100 ms and
@@ -41,23 +42,6 @@ TAIL_S = 0.2
 FILES = {"audio": "speech.wav", "textgrid": "alignment.TextGrid", "alignment": "alignment.csv",
          "controls": "controls.csv", "results": "result.nc", "movie": "movie.mp4",
          "manifest": "manifest.json"}
-
-
-@dataclass(frozen=True)
-class Recording:
-    """A recorded voice and its alignment.
-
-    Attributes
-    ----------
-    audio : the WAV
-    textgrid : its Praat TextGrid (e.g. from the Montreal Forced Aligner)
-    word_tier, phone_tier : the TextGrid's tier names (None: found by name, as MFA writes them)
-    """
-
-    audio: str | Path
-    textgrid: str | Path | None = None
-    word_tier: str | None = None
-    phone_tier: str | None = None
 
 
 @dataclass(frozen=True)
@@ -80,15 +64,13 @@ def speak(
     text: str | None = None,
     *,
     recording: Recording | None = None,
-    voice: str = "en-us",
-    rate_wpm: int = 160,
+    speaking: Speaking | None = None,
     face: str | Path = "default",
     preset: str = "anatomical",
-    strength=1.0,
-    plan: bool | int = True,
-    video=True,
+    video=None,
     alive=None,
     progress: Callable[[str, int, int], None] | None = None,
+    **keywords,
 ) -> Spoken:
     """Make the face say ``text`` (eSpeak NG), or speak in sync with a ``recording`` (a WAV
     and the TextGrid that aligns its phones); write everything into ``out_dir``.
@@ -98,22 +80,20 @@ def speak(
     out_dir : the folder (created; files in it are replaced, nothing else is touched)
     text : what to say; or give a ``recording`` instead
     recording : :class:`Recording` (audio, textgrid, tier names)
-    voice, rate_wpm : eSpeak NG voice (e.g. ``en-us``, ``en-gb+f3``) and words per minute
+    speaking : :class:`Speaking`: voice, words per minute, articulation (``strength``,
+        ``scale``), planning (``plan``, ``plan_iterations``; the manifest's ``plan`` records
+        what was done), the phones' labels and ``video``; its fields may also be given as
+        keywords (``voice=``, ``rate_wpm=``, ``strength=``, ``plan=`` True, False or a number
+        of iterations, ...)
     face : a face file or a built-in face name
     preset : the physical preset (default ``anatomical``)
-    strength : scale of every viseme's departure from rest (1 = the table's), or a
-        :class:`facemech.speech.articulation.Articulation` that adds rules scaling one phone,
-        word or viseme class (e.g. ``Articulation.parse(["word:balloon=1.5"])``)
-    plan : plan the controls for the face's dynamics
-        (:func:`facemech.speech.planning.plan_controls`): True (its default iterations), a
-        number of iterations (0 to :data:`~facemech.speech.planning.MAX_ITERATIONS`; each
-        one more forward simulation), or False (the dominance blend's controls as they are);
-        the manifest's ``plan`` records what was done
-    video : render the MP4 (H.264, the audio muxed in as AAC): True (frontal+profile, 720p),
-        a :class:`facemech.viz.video.RenderOptions`, or False
-    alive : :class:`facemech.speech.alive.Liveliness` (None: blinks, gaze and head motion on,
-        the seed derived from the item's audio): shown in the movie, recorded in the manifest
-        (``alive``); the simulation and the stimulus parameters stay in the head's frame
+    video : the MP4 (H.264, the audio muxed in as AAC): a
+        :class:`facemech.viz.video.RenderOptions`, True, False, or None (``speaking.video``,
+        frontal+profile, 720p)
+    alive : :class:`Alive` or :class:`facemech.speech.alive.Liveliness` (None: blinks, gaze
+        and head motion on, the seed derived from the item's audio): shown in the movie,
+        recorded in the manifest (``alive``); the simulation and the stimulus parameters stay
+        in the head's frame
     progress : callable(stage, done, total)
 
     Returns
@@ -128,11 +108,16 @@ def speak(
     from ..solvers.forward import simulate
     from ..speech.alignment_io import read_textgrid
     from ..speech.alive import Liveliness, liveliness
-    from ..speech.articulation import as_articulation
     from ..speech.coarticulation import controls_from_alignment
-    from ..speech.phone_labels import relabel
+    from ..speech.phone_labels import LABEL_NOTATIONS, relabel
     from ..speech.tongue import tongue_tip
     from ..speech.wav import read_wav, write_wav
+
+    speaking = Speaking.from_keywords(speaking, **keywords)
+    render = speaking.video if video is None else video is not False
+    look = None if video is None or isinstance(video, bool) else video
+    alive = alive.liveliness() if isinstance(alive, Alive) else alive
+    video, out = render and (look or True), Path(out_dir)
 
     audio, textgrid = (None, None) if recording is None else \
         (recording.audio, recording.textgrid)
@@ -147,10 +132,13 @@ def speak(
                          field="textgrid")
     if text is not None and not text.strip():
         raise InputError("nothing to say: the text is empty", field="text")
-    articulation = as_articulation(strength)
+    labels = speaking.phone_labels
+    if labels not in LABEL_NOTATIONS:
+        raise InputError(f"unknown phone labels {labels!r} (expected "
+                         f"{', '.join(LABEL_NOTATIONS)})", field="phone_labels")
+    articulation = speaking.articulation()
     check_value("strength", articulation.strength)  # the command line's interval (checks.py)
-    iterations = _plan_iterations(plan)
-    out = Path(out_dir)
+    iterations = _plan_iterations(speaking.iterations())
     if out.exists() and not out.is_dir():
         raise InputError("output must be a folder", source=str(out), field="output")
     for given in (audio, textgrid):
@@ -165,7 +153,7 @@ def speak(
         from ..speech.tts import synthesize
 
         report(progress, "synthesise", 0, 1)
-        speech = synthesize(text, voice=voice, rate_wpm=rate_wpm)
+        speech = synthesize(text, voice=speaking.voice, rate_wpm=speaking.rate_wpm)
         samples, rate, alignment = _padded(speech.audio, speech.sample_rate, speech.alignment,
                                            LEAD_IN_S, TAIL_S)
         inputs["text"] = text
@@ -180,6 +168,10 @@ def speak(
             raise InputError(f"the alignment runs to {alignment.phones[-1].end:.2f} s, the "
                              f"audio lasts {dur:.2f} s: not this recording's TextGrid",
                              source=str(textgrid), field="time")
+        if labels == "espeak" and alignment.notation != "espeak":  # before anything is written
+            raise InputError("the recording's phones cannot be written as eSpeak NG codes "
+                             "(only synthesised speech has them)", source=str(textgrid),
+                             field="phone_labels")
         inputs["audio"] = file_hash(audio)
         inputs["textgrid"] = file_hash(textgrid)
     written = relabel(alignment, "ipa")  # before anything is written: a label without IPA
@@ -224,8 +216,8 @@ def speak(
     manifest = {
         "kind": "facemech speak",
         "text": text,
-        "voice": voice if text is not None else None,
-        "rate_wpm": rate_wpm if text is not None else None,
+        "voice": speaking.voice if text is not None else None,
+        "rate_wpm": speaking.rate_wpm if text is not None else None,
         "face": str(face), "preset": params.name,
         "strength": articulation.strength, "scale": [str(r) for r in articulation.rules],
         "plan": planned,
@@ -241,8 +233,9 @@ def speak(
 
     with atomic_path(files["manifest"]) as tmp:
         tmp.write_text(json.dumps(manifest, indent=2, default=_json_default))
-    return Spoken(files=files, alignment=alignment, simulation=sim, description=desc,
+    made = Spoken(files=files, alignment=alignment, simulation=sim, description=desc,
                   manifest=manifest, dataset=ds, alive=lively)
+    return made if labels == "ipa" else relabel_folder(made, labels)
 
 
 def write_alignment(files: dict, alignment, written) -> dict:

@@ -12,73 +12,59 @@ __all__ = ["describe_file", "describe_report", "describe_text", "speak",
            "speak_report", "stimuli", "stimuli_report"]
 
 
-def speak(output: str | Path, text: str | None = None, *, video: bool = True, render=None,
-          recording: dict | None = None, alive=None, scale=None, articulation=None,
-          **options):
+def speak(output: str | Path, text: str | None = None, *, speaking=None, recording=None,
+          alive=None, render=None, **options):
     """Make the face say ``text``, or speak in sync with a recorded voice, into the folder
-    ``output``: :func:`facemech.workflows.speak.speak` (its keywords: ``voice``, ``rate_wpm``,
-    ``face``, ``preset``, ``strength``, ``plan``, ``plan_iterations``, ``progress``), the MP4
-    with ``video``, drawn with
-    ``render`` (a :class:`facemech.viz.video.RenderOptions`, :func:`.pictures.render_options`;
-    None: frontal+profile, 1280x720).
-
-    The recorded voice: ``recording`` (a dict of ``audio``, ``textgrid``, ``word_tier``,
-    ``phone_tier``), or the keywords ``audio``, ``textgrid`` and ``tiers`` (word, phone).
-    ``alive``: a :class:`facemech.speech.alive.Liveliness`, or a dict of ``blinks``, ``gaze``,
-    ``head_motion`` and ``seed`` (None: all on, the seed derived from the item).
-    ``articulation``: a dict of ``strength``, ``scale``, ``plan`` and ``plan_iterations``
-    (the command line's).
-    ``phone_labels``: the phones of the TextGrid, CSV and manifest in ``ipa`` (default),
-    ``arpabet`` or ``espeak`` (:func:`facemech.workflows.speak.relabel_folder`). Returns its
+    ``output`` (what ``facemech speak`` does): :func:`facemech.workflows.speak.speak` with the
+    command's input groups (:mod:`facemech.workflows.inputs`): ``speaking``
+    (:class:`~.inputs.Speaking`: voice, rate, articulation, plan, phone labels, video),
+    ``recording`` (:class:`~.inputs.Recording`) and ``alive`` (:class:`~.inputs.Alive`, or a
+    :class:`facemech.speech.alive.Liveliness`), the movie drawn with ``render`` (a
+    :class:`facemech.viz.video.RenderOptions`, :func:`.pictures.render_options`; None:
+    frontal+profile, 1280x720). ``options``: ``face``, ``preset``, ``progress`` and the fields
+    of :class:`~.inputs.Speaking` as keywords; the older forms are taken too: ``recording``,
+    ``alive`` or ``articulation`` as dicts, ``audio``, ``textgrid`` and ``tiers`` (word,
+    phone). Checks the output against the inputs first. Returns its
     :class:`~facemech.workflows.speak.Spoken`."""
     from ..atomic import check_output
-    from ..errors import InputError
-    from ..speech.alive import Liveliness
-    from ..speech.phone_labels import LABEL_NOTATIONS
-    from .speak import Recording, relabel_folder
+    from .inputs import Recording, Speaking
     from .speak import speak as run
 
-    labels = options.pop("phone_labels", None) or "ipa"
-    if labels not in LABEL_NOTATIONS:
-        raise InputError(f"unknown phone labels {labels!r} (expected "
-                         f"{', '.join(LABEL_NOTATIONS)})", field="phone_labels")
-
-    for k, v in (articulation or {}).items():  # the CLI's group: strength, scale, plan
-        if k == "scale":
-            scale = v
-        else:
-            options[k] = v
-    if "plan_iterations" in options:  # the command line's two options, one keyword
-        iterations = options.pop("plan_iterations")
-        options["plan"] = iterations if options.get("plan", True) else False
-    rec = {k: v for k, v in (recording or {}).items() if v is not None}
-    rec.update({k: options.pop(k) for k in ("audio", "textgrid") if options.get(k) is not None})
-    if options.get("tiers") is not None:
-        rec["word_tier"], rec["phone_tier"] = options.pop("tiers")
-    options.pop("tiers", None)
-    if isinstance(alive, dict):
-        alive = Liveliness(blinks=alive.get("blinks", True), gaze=alive.get("gaze", True),
-                           head=alive.get("head_motion", True), seed=alive.get("seed"))
+    recording, alive, options = _older_forms(recording, alive, options)
+    keys = {f for f in Speaking.__dataclass_fields__ if f in options}
+    speaking = Speaking.from_keywords(speaking, **{k: options.pop(k) for k in keys})
+    recording = recording or Recording()
     named = [options.get(k) for k in ("face", "preset")]  # built-in names or files
-    check_output(output, [rec.get("audio"), rec.get("textgrid"),
+    check_output(output, [recording.audio, recording.textgrid,
                           *(n for n in named if n and Path(str(n)).suffix)],
                  folder=True, field="-o")
-    if scale:
-        from ..speech.articulation import Articulation
+    return run(output, text, recording=recording if recording.audio is not None else None,
+               speaking=speaking, video=(render or render_options()) if speaking.video
+               else False, alive=alive, **options)
 
-        options["strength"] = Articulation.parse(scale, strength=options.get("strength", 1.0))
-    if labels == "espeak" and rec.get("textgrid") is not None:  # before the run, not after
-        from ..speech.alignment_io import read_textgrid
 
-        if read_textgrid(rec["textgrid"], word_tier=rec.get("word_tier"),
-                         phone_tier=rec.get("phone_tier")).notation != "espeak":
-            raise InputError("the recording's phones cannot be written as eSpeak NG codes "
-                             "(only synthesised speech has them)", source=str(rec["textgrid"]),
-                             field="phone_labels")
-    look = render or render_options()
-    made = run(output, text, recording=Recording(**rec) if "audio" in rec else None,
-               video=look if video else False, alive=alive, **options)
-    return made if labels == "ipa" else relabel_folder(made, labels)
+def _older_forms(recording, alive, options: dict):
+    """``speak``'s older keywords as its input groups: ``recording`` and ``alive`` as dicts,
+    ``audio``, ``textgrid`` and ``tiers``, and ``articulation`` (a dict of ``strength``,
+    ``scale``, ``plan``, ``plan_iterations``) into ``options``."""
+    from .inputs import Alive, Recording
+
+    options = dict(options)
+    options.update(options.pop("articulation", None) or {})
+    rec = {k: v for k, v in (recording or {}).items() if v is not None} \
+        if isinstance(recording, dict) else {}
+    rec.update({k: options.pop(k) for k in ("audio", "textgrid") if k in options
+                and options[k] is not None})
+    options.pop("audio", None), options.pop("textgrid", None)
+    tiers = options.pop("tiers", None)
+    if tiers is not None:
+        rec["word_tier"], rec["phone_tier"] = tiers
+    if isinstance(recording, dict) or rec:
+        recording = Recording(**{**({} if isinstance(recording, dict) or recording is None
+                                    else vars(recording)), **rec})
+    if isinstance(alive, dict):
+        alive = Alive(**alive)
+    return recording, alive, options
 
 
 def speak_report(res, output: str | Path) -> list[str]:

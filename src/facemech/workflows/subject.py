@@ -19,22 +19,20 @@ from __future__ import annotations
 
 import json
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
 from ..atomic import atomic_path, check_output
-from ..checks import check_value
 from ..errors import InputError
+from .inputs import LOWPASS_HZ, Analysis, Preparation
 from .outcome import Written
 
-__all__ = ["Subject", "analyse", "make_subject", "read_subject", "usable_head"]
+__all__ = ["Analysis", "Preparation", "Subject", "analyse", "make_subject", "read_subject",
+           "usable_head"]
 
 SURFACES = (".obj", ".ply", ".stl")
-#: Hz, the default low-pass of a recording: speech movements lie below it (lip and jaw
-#: kinematics have little energy above 10 Hz; a 12-15 Hz cut-off is usual for marker data)
-LOWPASS_HZ = 12.0
 #: Hz, the low-pass of the head markers before the rigid fits: head motion is slower than
 #: speech, and a fit's rotation error grows with the distance from the head markers
 HEAD_LOWPASS_HZ = 4.0
@@ -419,32 +417,17 @@ def prepare(subj: Subject, ms, *, max_gap: float, rate: float, source: str,
     return ms, notes
 
 
-@dataclass(frozen=True)
-class Preparation:
-    """How :func:`analyse` prepares a recording: the length unit of a recording that carries
-    none, the longest gap filled (s) and the low-pass cut-off (Hz; None: none)."""
-
-    units: str | None = None
-    max_gap: float = 0.1
-    lowpass: float | None = LOWPASS_HZ
-
-    def __post_init__(self):  # the command line's intervals (facemech.checks)
-        check_value("max_gap", self.max_gap)
-        if self.lowpass is not None:
-            check_value("lowpass", self.lowpass)
-
-
-#: the lsq inversion's options in :func:`analyse`: longer and stronger than the method's own
-#: defaults (2, 0.3): a recording is noisy (a twin with 0.1 mm of marker noise recovers every
-#: determined muscle with r >= 0.88 with them, RIS and DAO at 0.73 and 0.75 without;
-#: docs/recordings.md)
-ANALYSE_LSQ = {"window": 3, "smooth": 1.0}
+#: the lsq inversion's options in :func:`analyse` (:meth:`Analysis.fit_options`): longer and
+#: stronger than the method's own defaults (2, 0.3): a recording is noisy (a twin with 0.1 mm
+#: of marker noise recovers every determined muscle with r >= 0.88 with them, RIS and DAO at
+#: 0.73 and 0.75 without; docs/recordings.md)
+ANALYSE_LSQ = Analysis().fit_options()
 
 
 def analyse(subject: str | Path, recording: str | Path, output: str | Path, *,
-            preparation: Preparation = Preparation(), method: str = "lsq",
-            options: dict | None = None, controls: str = "speech", noise: float | None = None,
-            preset: str = "anatomical", video: bool = False, progress=None) -> Written:
+            analysis: Analysis | None = None, preparation: Preparation = Preparation(),
+            preset: str = "anatomical", options: dict | None = None, progress=None,
+            **keywords) -> Written:
     """Analyse a recording against a subject folder into the folder ``output``.
 
     Writes ``markers.csv`` (the prepared markers: model frame, mm, the model's rate) and its
@@ -459,10 +442,12 @@ def analyse(subject: str | Path, recording: str | Path, output: str | Path, *,
     subject : a folder made by :func:`make_subject`
     recording : C3D, TRC or CSV of the same markers, in the lab, any rate
     output : the results folder
+    analysis : the method, controls, noise, lsq window and smoothness, and the movie
+        (:class:`Analysis`); its fields may also be given as keywords (``method=``,
+        ``controls=``, ``noise=``, ``video=``, ...)
     preparation : the recording's unit, gaps filled and low-pass (:class:`Preparation`)
-    method, controls, noise, preset : as :func:`facemech.workflows.invert.invert`
-    options : the method's options (None: :data:`ANALYSE_LSQ` for lsq, the defaults for powell)
-    video : render ``movie.mp4``
+    preset : as :func:`facemech.workflows.invert.invert`
+    options : the method's options (None: ``analysis``'s, :data:`ANALYSE_LSQ` by default)
     progress : staged callback: ``prepare``, ``invert (lsq)``, ``render``
 
     Returns
@@ -473,6 +458,7 @@ def analyse(subject: str | Path, recording: str | Path, output: str | Path, *,
     from ..jaw.inputs import JawMarkers
     from . import compare, invert
 
+    analysis = replace(analysis or Analysis(), **keywords)
     out, src = Path(output), str(recording)
     check_output(out, [recording], folder=True, field="-o")
     subj = read_subject(subject)
@@ -495,17 +481,16 @@ def analyse(subject: str | Path, recording: str | Path, output: str | Path, *,
         jaw = [None, None]
     say("prepare", 1, 1)
     if options is None:
-        options = ANALYSE_LSQ if method == "lsq" else {}
+        options = analysis.fit_options()
     res = invert.invert(invert.MarkerFile(out / "markers.csv", "mm", out / "mapping.csv"),
                         out / "result.nc", face=subj.face, params=params,
                         jaw=JawMarkers(chin_marker=jaw[0], jaw_second_marker=jaw[1]),
-                        inversion=invert.InversionOptions(method, controls=controls,
-                                                          noise=noise),
+                        inversion=analysis.inversion(),
                         options=options, figure=out / "controls.png", progress=progress)
     cmp = compare.compare_files(out / "result.nc", out / "markers.csv")
     with atomic_path(out / "comparison.json") as tmp:
         tmp.write_text("\n".join(compare.report(cmp, as_json=True)))
-    if video:
+    if analysis.video:
         from .pictures import render_movie
 
         render_movie(out / "result.nc", (out / "movie.mp4",), progress=progress)
