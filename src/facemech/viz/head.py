@@ -196,7 +196,7 @@ def closed_head(look: FaceLook) -> list[Part] | None:
     n = len(look.rest)
     verts = np.concatenate([look.rest, closure.rest])
     faces = np.concatenate([look.triangles, closure.joint_faces(n)])
-    hair = hair_parts(verts, faces, c, lambda lon: hairline(lon, top, nasion[1]))
+    hair = hair_parts(verts, faces, c, lambda lon: hairline(lon, top, nasion[1]), look.hair)
     if look.textured:
         # the strip under the fringe takes the colour of the skin or head nearest it, as the
         # plain skin's strip has the plain skin's (it shows below the strands' ends)
