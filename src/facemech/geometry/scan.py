@@ -82,7 +82,6 @@ def load_scan(surface: str | Path, landmarks: str | Path, *, units: str | None =
         a tilted scan; the surface in several large pieces, closed, or with degenerate
         triangles.
     """
-    from .ibug import ibug_to_landmarks, is_ibug_file, read_ibug68
     from .landmark_checks import check_landmarks
     from .refine import refine_perioral
     from .scan_cleanup import (
@@ -92,9 +91,9 @@ def load_scan(surface: str | Path, landmarks: str | Path, *, units: str | None =
         crop_to_face,
         drop_fragments,
     )
-    from .scan_frame import axes_text, check_axes, check_unit, detect_axes, parse_axes
+    from .scan_frame import check_unit
     from .scan_order import top_down
-    from .surface_io import read_landmarks, read_surface_with_appearance
+    from .surface_io import read_surface_with_appearance
 
     surface, landmarks = Path(surface), Path(landmarks)
     src, lm_src = str(surface), str(landmarks)
@@ -107,28 +106,8 @@ def load_scan(surface: str | Path, landmarks: str | Path, *, units: str | None =
     vertices, faces, look, note = drop_fragments(vertices, faces, look, source=src)
     if note:
         notes.append(f"{surface.name}: {note}")
-    if is_ibug_file(landmarks):
-        points = read_ibug68(landmarks, units=unit)
-        check_landmark_unit(points, vertices, unit, source=lm_src)
-        lm = ibug_to_landmarks(points, vertices, faces)
-        notes.append(f"{landmarks.name}: 68 iBUG points mapped to facemech's landmarks")
-    else:
-        lm = read_landmarks(landmarks, units=unit)
-        check_landmark_unit(np.array(list(lm.values())), vertices, unit, source=lm_src)
-    if axes is None:
-        turn = detect_axes(lm, source=lm_src)
-        spec = axes_text(turn)
-        if spec != "x,y,z":
-            notes.append(f"{surface.name}: turned to facemech's axes (x left, y up, z forward) "
-                         f"from the landmarks, as --axes {spec}")
-    else:
-        turn = parse_axes(axes)
-        spec = axes_text(turn)
-    if spec != "x,y,z":
-        vertices = vertices @ turn.T
-        lm = {k: turn @ v for k, v in lm.items()}
-    if axes is not None:
-        check_axes(lm, spec=spec, source=lm_src)
+    lm = _read_scan_landmarks(landmarks, vertices, faces, unit, notes)
+    vertices, lm, spec = _turned(vertices, lm, axes, surface.name, lm_src, notes)
     vertices, faces, look, note = crop_to_face(vertices, faces, lm, look)
     if note:
         notes.append(f"{surface.name}: {note}")
@@ -141,6 +120,45 @@ def load_scan(surface: str | Path, landmarks: str | Path, *, units: str | None =
     check_triangles(vertices, faces, lm, source=src)
     vertices, faces, look = top_down(vertices, faces, look)
     return Scan(vertices, faces, lm, look, unit, spec, notes)
+
+
+def _read_scan_landmarks(landmarks: Path, vertices, faces, unit: str, notes: list) -> dict:
+    """A scan's landmarks (name -> (3,) m): facemech's CSV, or 68 iBUG points mapped to
+    facemech's names (said in ``notes``); both checked against the surface's unit."""
+    from .ibug import ibug_to_landmarks, is_ibug_file, read_ibug68
+    from .surface_io import read_landmarks
+
+    lm_src = str(landmarks)
+    if is_ibug_file(landmarks):
+        points = read_ibug68(landmarks, units=unit)
+        check_landmark_unit(points, vertices, unit, source=lm_src)
+        notes.append(f"{landmarks.name}: 68 iBUG points mapped to facemech's landmarks")
+        return ibug_to_landmarks(points, vertices, faces)
+    lm = read_landmarks(landmarks, units=unit)
+    check_landmark_unit(np.array(list(lm.values())), vertices, unit, source=lm_src)
+    return lm
+
+
+def _turned(vertices, lm: dict, axes: str | None, name: str, lm_src: str, notes: list):
+    """The surface and landmarks in facemech's axes, from ``axes`` or detected from the
+    landmarks (said in ``notes``); (vertices, landmarks, the axes' text)."""
+    from .scan_frame import axes_text, check_axes, detect_axes, parse_axes
+
+    if axes is None:
+        turn = detect_axes(lm, source=lm_src)
+        spec = axes_text(turn)
+        if spec != "x,y,z":
+            notes.append(f"{name}: turned to facemech's axes (x left, y up, z forward) "
+                         f"from the landmarks, as --axes {spec}")
+    else:
+        turn = parse_axes(axes)
+        spec = axes_text(turn)
+    if spec != "x,y,z":
+        vertices = vertices @ turn.T
+        lm = {k: turn @ v for k, v in lm.items()}
+    if axes is not None:
+        check_axes(lm, spec=spec, source=lm_src)
+    return vertices, lm, spec
 
 
 def check_landmark_unit(points: np.ndarray, vertices: np.ndarray, unit: str, *,

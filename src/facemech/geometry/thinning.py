@@ -157,16 +157,21 @@ def relieve_folds(vertices: np.ndarray, faces: np.ndarray, offset: np.ndarray,
     if np.any(quality <= 0):
         return o, d, []  # still folded: the caller's check names the place
     notes = fold_notes(vertices, faces, offset, depth, o, d, generic_xy)
+    return o, d, notes + _still_flat(vertices, faces, quality, generic_xy)
+
+
+def _still_flat(vertices, faces, quality, generic_xy) -> list[str]:
+    """A note on the prisms that keep under :data:`FOLDING` after the mending (none: [])."""
     flat = np.nonzero(quality < FOLDING)[0]
-    if len(flat):
-        k = flat[np.argmin(quality[flat])]
-        at = vertices[faces[k, 0]] * 1e3
-        notes.append(f"{len(flat)} prisms at {region_name(*generic_xy[faces[k, 0]])} near "
-                     f"({at[0]:.0f}, {at[1]:.0f}, {at[2]:.0f}) mm keep under "
-                     f"{FOLDING * 100:.0f} % of a flat slab's volume even so (down to "
-                     f"{quality[k] * 100:.0f} %): a simulation may blow up there; smooth the "
-                     "scan there if it does")
-    return o, d, notes
+    if not len(flat):
+        return []
+    k = flat[np.argmin(quality[flat])]
+    at = vertices[faces[k, 0]] * 1e3
+    return [f"{len(flat)} prisms at {region_name(*generic_xy[faces[k, 0]])} near "
+            f"({at[0]:.0f}, {at[1]:.0f}, {at[2]:.0f}) mm keep under "
+            f"{FOLDING * 100:.0f} % of a flat slab's volume even so (down to "
+            f"{quality[k] * 100:.0f} %): a simulation may blow up there; smooth the "
+            "scan there if it does"]
 
 
 def _taper(d: np.ndarray, depth: np.ndarray, edges: np.ndarray,

@@ -148,13 +148,7 @@ def invert(
     face, params, physics = model.face, model.params, model.physics
     dt = model.steps.fast_dt
     src = markers.meta.get("source")
-    if abs(markers.rate - params.frame_rate) > 1e-3 * params.frame_rate:
-        raise InputError(f"markers at {markers.rate:g} Hz, the model runs at "
-                         f"{params.frame_rate:g} Hz: resample first (facemech markers resample)",
-                         source=src, field="rate")
-    names = [n for n in markers.names if n in mapping]
-    if not names:
-        raise InputError("no marker has a node", source=src, field="mapping")
+    names = _mapped_names(markers, mapping, params.frame_rate)
     cnames, gmat = control_matrix(controls, face)
     data = markers.select(names).positions
     frames = len(data)
@@ -171,17 +165,8 @@ def invert(
     stepper = Stepper(model, dt=dt)
     problem = _Problem(face, params, stepper, tuple(names), nodes, data, cnames, gmat, jaw,
                        estimate_jaw, jaw_note, method, positive, noise_mm, src)
-    lo = np.full(nc, 0.0 if positive else -1.0)
-    hi = np.ones(nc)
-    if estimate_jaw:
-        lo[-1], hi[-1] = JAW_CLOSE / JAW_UNIT, MAX_JAW_ANGLE / JAW_UNIT
-    pose0 = (jaw_poses(np.atleast_1d(jaw[0] if jaw is not None else 0.0)[:1], params)[0]
-             if jaw is None or jaw.ndim == 1 else jaw[0])
-    state = State.at_rest(face.rest_positions, physics.n_muscles, float(pose0[0]),
-                          jaw_shift=pose0[1:])
-    steps = _fitted_rows(U.step_responses(
-        _control_stepper(stepper, gmat, estimate_jaw, float(pose0[0]), jaw), state, nodes, nc),
-        data)
+    lo, hi = _control_bounds(nc, positive, estimate_jaw)
+    state, steps = _rest_and_responses(problem, physics.n_muscles, nc)
     distance = U.identifiability(steps)
     run = _Run(frames, nc, face.n_surface)
     muscles = MuscleRecorder(physics, frames)
@@ -195,6 +180,44 @@ def invert(
     if frames > 1:
         run.controls[-1] = run.controls[-2]
     return _finish(run, problem, (distance, steps), wall, muscles.series())
+
+
+def _mapped_names(markers: MarkerSet, mapping: dict, frame_rate: float) -> list[str]:
+    """The markers that have a node, at the model's frame rate; InputError naming ``rate`` or
+    ``mapping``."""
+    src = markers.meta.get("source")
+    if abs(markers.rate - frame_rate) > 1e-3 * frame_rate:
+        raise InputError(f"markers at {markers.rate:g} Hz, the model runs at "
+                         f"{frame_rate:g} Hz: resample first (facemech markers resample)",
+                         source=src, field="rate")
+    names = [n for n in markers.names if n in mapping]
+    if not names:
+        raise InputError("no marker has a node", source=src, field="mapping")
+    return names
+
+
+def _control_bounds(nc: int, positive: bool, estimate_jaw: bool):
+    """(lo, hi) (c,) of the controls: activity in [0, 1] (or [-1, 1] without the positive
+    constraint), the jaw's angle between closed and its widest, in :data:`JAW_UNIT`."""
+    lo = np.full(nc, 0.0 if positive else -1.0)
+    hi = np.ones(nc)
+    if estimate_jaw:
+        lo[-1], hi[-1] = JAW_CLOSE / JAW_UNIT, MAX_JAW_ANGLE / JAW_UNIT
+    return lo, hi
+
+
+def _rest_and_responses(p, n_muscles: int, nc: int):
+    """The state at rest at the jaw's first pose, and the step responses (rows of the axes the
+    data vary along, controls), mm per unit."""
+    jaw = p.jaw
+    pose0 = (jaw_poses(np.atleast_1d(jaw[0] if jaw is not None else 0.0)[:1], p.params)[0]
+             if jaw is None or jaw.ndim == 1 else jaw[0])
+    state = State.at_rest(p.face.rest_positions, n_muscles, float(pose0[0]),
+                          jaw_shift=pose0[1:])
+    steps = _fitted_rows(U.step_responses(
+        _control_stepper(p.stepper, p.gmat, p.estimate_jaw, float(pose0[0]), jaw), state,
+        p.nodes, nc), p.data)
+    return state, steps
 
 
 def _checked_method(method, options: dict, noise_mm):

@@ -115,6 +115,53 @@ def _find_tier(names: list[str], wanted: str | None, defaults: tuple[str, ...],
     return None
 
 
+def _chosen_tiers(tiers: dict, phone_tier, word_tier, src: str) -> tuple[str, str | None]:
+    """The phone tier's and the word tier's names (``word_tier`` False: no word tier), each an
+    interval tier; InputError naming ``phone_tier`` or ``word_tier``."""
+    names = list(tiers)
+    pname = _find_tier(names, phone_tier, PHONE_TIER_NAMES, "phone", src)
+    if pname is None:
+        raise InputError("no phone tier (looked for one named "
+                         f"{'/'.join(PHONE_TIER_NAMES)}; tiers: {', '.join(map(repr, names))})",
+                         source=src, field="phone_tier")
+    wname = None
+    if word_tier is not False:
+        wname = _find_tier(names, word_tier, WORD_TIER_NAMES, "word", src)
+        if wname is None:
+            raise InputError("no word tier (looked for one named "
+                             f"{'/'.join(WORD_TIER_NAMES)}; tiers: "
+                             f"{', '.join(map(repr, names))}; or read phones only)",
+                             source=src, field="word_tier")
+    for kind, name in (("phone", pname), ("word", wname)):
+        if name is not None and tiers[name]["class"] != "IntervalTier":
+            raise InputError(f"tier {name!r} is a point tier, not an interval tier",
+                             source=src, field=f"{kind}_tier")
+    return pname, wname
+
+
+def _tier_segments(entries, name: str, kind: str, note: str | None,
+                   src: str) -> tuple[Segment, ...]:
+    """An interval tier's labelled intervals in time order, pauses (in ``note``'s notation)
+    left out; InputError naming the tier for an interval that is not (start, end, label) with
+    finite, ordered times."""
+    out = []
+    for entry in entries:
+        try:
+            start, end, label = float(entry[0]), float(entry[1]), str(entry[2])
+        except (ValueError, TypeError, IndexError):
+            raise InputError(f"an interval {tuple(entry)!r} is not (start, end, label)",
+                             source=src, field=f"{kind}_tier {name}") from None
+        if not (np.isfinite(start) and np.isfinite(end)):
+            raise InputError(f"interval {label!r} has a time that is not a number",
+                             source=src, field=f"{kind}_tier {name}")
+        if end < start:
+            raise InputError(f"interval {label!r} ends ({end:g} s) before it starts "
+                             f"({start:g} s)", source=src, field=f"{kind}_tier {name}")
+        if not is_pause(label, note):
+            out.append(Segment(label.strip(), start, end))
+    return tuple(sorted(out, key=lambda s: s.start))
+
+
 def read_textgrid(path: str | os.PathLike, *, word_tier: str | None = None,
                   phone_tier: str | None = None, notation: str | None = None,
                   words: bool = True) -> Alignment:
@@ -156,42 +203,10 @@ def read_textgrid(path: str | os.PathLike, *, word_tier: str | None = None,
         raise InputError(f"not a readable TextGrid ({type(exc).__name__}: "
                          f"{str(exc).splitlines()[0] if str(exc) else ''})", source=src) from None
     tiers = {t["name"]: t for t in tg["tiers"]}
-    names = list(tiers)
-    pname = _find_tier(names, phone_tier, PHONE_TIER_NAMES, "phone", src)
-    if pname is None:
-        raise InputError("no phone tier (looked for one named "
-                         f"{'/'.join(PHONE_TIER_NAMES)}; tiers: {', '.join(map(repr, names))})",
-                         source=src, field="phone_tier")
-    wname = None
-    if words:
-        wname = _find_tier(names, word_tier, WORD_TIER_NAMES, "word", src)
-        if wname is None:
-            raise InputError("no word tier (looked for one named "
-                             f"{'/'.join(WORD_TIER_NAMES)}; tiers: "
-                             f"{', '.join(map(repr, names))}; or read phones only)",
-                             source=src, field="word_tier")
-    for kind, name in (("phone", pname), ("word", wname)):
-        if name is not None and tiers[name]["class"] != "IntervalTier":
-            raise InputError(f"tier {name!r} is a point tier, not an interval tier",
-                             source=src, field=f"{kind}_tier")
+    pname, wname = _chosen_tiers(tiers, phone_tier, word_tier if words else False, src)
 
     def segments(name: str, kind: str, note: str | None) -> tuple[Segment, ...]:
-        out = []
-        for entry in tiers[name]["entries"]:
-            try:
-                start, end, label = float(entry[0]), float(entry[1]), str(entry[2])
-            except (ValueError, TypeError, IndexError):
-                raise InputError(f"an interval {tuple(entry)!r} is not (start, end, label)",
-                                 source=src, field=f"{kind}_tier {name}") from None
-            if not (np.isfinite(start) and np.isfinite(end)):
-                raise InputError(f"interval {label!r} has a time that is not a number",
-                                 source=src, field=f"{kind}_tier {name}")
-            if end < start:
-                raise InputError(f"interval {label!r} ends ({end:g} s) before it starts "
-                                 f"({start:g} s)", source=src, field=f"{kind}_tier {name}")
-            if not is_pause(label, note):
-                out.append(Segment(label.strip(), start, end))
-        return tuple(sorted(out, key=lambda s: s.start))
+        return _tier_segments(tiers[name]["entries"], name, kind, note, src)
 
     raw_phones = segments(pname, "phone", None)
     if notation is None:

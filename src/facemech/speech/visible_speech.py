@@ -365,10 +365,7 @@ def measure_phones(alignment, model, time: np.ndarray, positions: np.ndarray, *,
         if shown is not None:
             j = int(np.argmin(np.abs(time - seg.mid)))
             extra.update(upper_teeth=float(shown[0][j]), lower_teeth=float(shown[1][j]))
-        between = (0 < k < len(phones) - 1 and groups[k - 1] == "bilabial"
-                   and groups[k + 1] == "bilabial"
-                   and phones[k - 1][0].end >= seg.start - 1e-9
-                   and phones[k + 1][0].start <= seg.end + 1e-9)
+        between = _between_bilabials(phones, groups, k)
         out.append(PhoneMeasure(
             label=seg.label, start=float(seg.start), end=float(seg.end), classes=classes,
             stress=phone_stress(seg.label, alignment.notation) if marked else None,
@@ -378,6 +375,15 @@ def measure_phones(alignment, model, time: np.ndarray, positions: np.ndarray, *,
     return out
 
 
+def _between_bilabials(phones: list, groups: list, k: int) -> bool:
+    """Whether phone ``k`` lies between two bilabials that touch it in time."""
+    seg = phones[k][0]
+    return (0 < k < len(phones) - 1 and groups[k - 1] == "bilabial"
+            and groups[k + 1] == "bilabial"
+            and phones[k - 1][0].end >= seg.start - 1e-9
+            and phones[k + 1][0].start <= seg.end + 1e-9)
+
+
 def _stats(values_mm: list[float], passed: list[bool]) -> dict:
     v = np.asarray(values_mm, float)
     return {"n": int(v.size),
@@ -385,6 +391,56 @@ def _stats(values_mm: list[float], passed: list[bool]) -> dict:
             "median_mm": round(float(np.median(v)), 2) if v.size else None,
             "min_mm": round(float(v.min()), 2) if v.size else None,
             "max_mm": round(float(v.max()), 2) if v.size else None}
+
+
+def _closure_row(bil: list) -> dict:
+    """The bilabials' closure durations (ms) against :data:`CRITERIA`'s ``closure``."""
+    c = CRITERIA
+    v = [1e3 * p.closure for p in bil if p.closure is not None]
+    row = {"n": len(v)}
+    ok = [x >= c["closure"]["min_ms"] for x in v]
+    row.update({"share_passing": round(float(np.mean(ok)), 3) if v else None,
+                "median_ms": round(float(np.median(v)), 1) if v else None,
+                "shortest_ms": round(float(min(v)), 1) if v else None,
+                "worst": _worst([p for p in bil if p.closure is not None], v, min)})
+    if row["worst"] is not None:  # the value in ms
+        row["worst"]["value_ms"] = row["worst"].pop("value_mm")
+    row["met"] = bool(v) and row["share_passing"] >= c["closure"]["share"]
+    return row
+
+
+def _labiodental_front_row(lab: list) -> dict:
+    """The labiodentals' lip edge at the upper incisors seen from the front (mm), the lower
+    incisors hidden, against :data:`CRITERIA`'s ``labiodental``."""
+    c = CRITERIA
+    front = [p for p in lab if p.lip_edge is not None]
+    v = [1e3 * abs(p.lip_edge) for p in front]
+    ok = [x <= c["labiodental"]["contact_mm"] and (p.lower_teeth is None or
+                                                    1e3 * p.lower_teeth <= SEAL_MM)
+          for x, p in zip(v, front, strict=True)]
+    row = _stats(v, ok)
+    row["worst"] = _worst(front, v, max)
+    row["lower_teeth_hidden"] = sum(1 for p in front if p.lower_teeth is not None
+                                    and 1e3 * p.lower_teeth <= SEAL_MM)
+    row["met"] = bool(front) and row["share_passing"] >= c["labiodental"]["share"]
+    return row
+
+
+def _round_opening_row(rnd: list) -> dict:
+    """The rounded phones' opening (height over width where the lips part) against
+    :data:`CRITERIA`'s ``round_opening``; sealed ones counted apart."""
+    c = CRITERIA
+    seen = [p for p in rnd if p.opening_aspect is not None]
+    ratios = [p.width_ratio for p in rnd if p.width_ratio is not None]
+    v = [p.opening_aspect for p in seen]
+    ok = [x >= c["round_opening"]["aspect_min"] for x in v]
+    return {
+        "n": len(v), "sealed": len(rnd) - len(v),
+        "share_passing": round(float(np.mean(ok)), 3) if v else None,
+        "median_aspect": round(float(np.median(v)), 2) if v else None,
+        "median_width_ratio": round(float(np.median(ratios)), 2) if ratios else None,
+        "met": (not v and bool(rnd)) or (bool(v) and float(np.mean(ok))
+                                            >= c["round_opening"]["share"])}
 
 
 def summarize(phones: list[PhoneMeasure], peak_speeds: list[float] | None = None) -> dict:
@@ -447,41 +503,9 @@ def summarize(phones: list[PhoneMeasure], peak_speeds: list[float] | None = None
     row["met"] = bool(lab) and row["share_passing"] >= c["labiodental"]["share"]
     out["labiodental"] = row
 
-    v = [1e3 * p.closure for p in bil if p.closure is not None]
-    row = {"n": len(v)}
-    ok = [x >= c["closure"]["min_ms"] for x in v]
-    row.update({"share_passing": round(float(np.mean(ok)), 3) if v else None,
-                "median_ms": round(float(np.median(v)), 1) if v else None,
-                "shortest_ms": round(float(min(v)), 1) if v else None,
-                "worst": _worst([p for p in bil if p.closure is not None], v, min)})
-    if row["worst"] is not None:  # the value in ms
-        row["worst"]["value_ms"] = row["worst"].pop("value_mm")
-    row["met"] = bool(v) and row["share_passing"] >= c["closure"]["share"]
-    out["closure"] = row
-
-    front = [p for p in lab if p.lip_edge is not None]
-    v = [1e3 * abs(p.lip_edge) for p in front]
-    ok = [x <= c["labiodental"]["contact_mm"] and (p.lower_teeth is None or
-                                                    1e3 * p.lower_teeth <= SEAL_MM)
-          for x, p in zip(v, front, strict=True)]
-    row = _stats(v, ok)
-    row["worst"] = _worst(front, v, max)
-    row["lower_teeth_hidden"] = sum(1 for p in front if p.lower_teeth is not None
-                                    and 1e3 * p.lower_teeth <= SEAL_MM)
-    row["met"] = bool(front) and row["share_passing"] >= c["labiodental"]["share"]
-    out["labiodental_front"] = row
-
-    seen = [p for p in rnd if p.opening_aspect is not None]
-    ratios = [p.width_ratio for p in rnd if p.width_ratio is not None]
-    v = [p.opening_aspect for p in seen]
-    ok = [x >= c["round_opening"]["aspect_min"] for x in v]
-    out["round_opening"] = {
-        "n": len(v), "sealed": len(rnd) - len(v),
-        "share_passing": round(float(np.mean(ok)), 3) if v else None,
-        "median_aspect": round(float(np.median(v)), 2) if v else None,
-        "median_width_ratio": round(float(np.median(ratios)), 2) if ratios else None,
-        "met": (not v and bool(rnd)) or (bool(v) and float(np.mean(ok))
-                                            >= c["round_opening"]["share"])}
+    out["closure"] = _closure_row(bil)
+    out["labiodental_front"] = _labiodental_front_row(lab)
+    out["round_opening"] = _round_opening_row(rnd)
 
     if peak_speeds is not None:
         s = np.asarray(peak_speeds, float) * 1e3

@@ -239,6 +239,29 @@ def decode_scene(block: dict) -> dict:
             "offsets": np.array([p["start"] for p in parts] + [n]), "gloss": gloss}
 
 
+def _measured_block(measured, mk_names: list[str], time: np.ndarray, frames: int) -> dict:
+    """The page's block of measured markers: those whose names the model's markers share,
+    interpolated onto the results' times, with a note on how they were matched; InputError
+    naming ``markers`` when no name is shared."""
+    shared = [n for n in mk_names if n in measured.names]
+    if not shared:
+        raise InputError(f"no marker name in common with the model's ({', '.join(mk_names[:8])}"
+                         f"{', ...' if len(mk_names) > 8 else ''})",
+                         source=measured.meta.get("source"), field="markers")
+    mp, coverage = resample_measured(measured, shared, time)
+    t = np.asarray(measured.time, float)
+    note = (f"{len(shared)} of {measured.n_markers} measured markers match the model's by "
+            f"name; measured {t[0]:.3f}-{t[-1]:.3f} s at {measured.rate:.4g} Hz, linearly "
+            f"interpolated onto the results' {frames} frames")
+    if not coverage:
+        note += "; no measured sample falls inside the results' time span"
+    elif coverage[0] > time[0] + 1e-9 or coverage[-1] < time[-1] - 1e-9:
+        note += f"; shown only for {coverage[0]:.3f}-{coverage[1]:.3f} s"
+    return {"names": shared, "data": _b64(mp, "f4"),
+            "source": str(measured.meta.get("source", "")), "coverage": coverage,
+            "note": note}
+
+
 def viewer_data(results, measured=None, title: str | None = None) -> dict:
     """The JSON-ready data block of the page (its keys: docs/viewer.md, "The data block").
 
@@ -285,25 +308,7 @@ def viewer_data(results, measured=None, title: str | None = None) -> dict:
     tongue = results_tongue(results)
     tongue = np.zeros((frames, 2)) if tongue is None else tongue
 
-    meas_block = None
-    if measured is not None:
-        shared = [n for n in mk_names if n in measured.names]
-        if not shared:
-            raise InputError(f"no marker name in common with the model's ({', '.join(mk_names[:8])}"
-                             f"{', ...' if len(mk_names) > 8 else ''})",
-                             source=measured.meta.get("source"), field="markers")
-        mp, coverage = resample_measured(measured, shared, time)
-        t = np.asarray(measured.time, float)
-        note = (f"{len(shared)} of {measured.n_markers} measured markers match the model's by "
-                f"name; measured {t[0]:.3f}-{t[-1]:.3f} s at {measured.rate:.4g} Hz, linearly "
-                f"interpolated onto the results' {frames} frames")
-        if not coverage:
-            note += "; no measured sample falls inside the results' time span"
-        elif coverage[0] > time[0] + 1e-9 or coverage[-1] < time[-1] - 1e-9:
-            note += f"; shown only for {coverage[0]:.3f}-{coverage[1]:.3f} s"
-        meas_block = {"names": shared, "data": _b64(mp, "f4"),
-                      "source": str(measured.meta.get("source", "")), "coverage": coverage,
-                      "note": note}
+    meas_block = None if measured is None else _measured_block(measured, mk_names, time, frames)
 
     from .scene import build_scene, look_from_dataset
 

@@ -16,48 +16,17 @@ from ..progress import StagedProgress
 from .outcome import Written
 
 
-def run_demo(out_dir: str | Path, *, integrator: str | None = None, video: bool = True,
-             preset: str = "anatomical",
-             progress: Callable[[str, int, int], None] | None = None,
-             render=None) -> DemoSummary:
-    """Build the generic face, simulate the synthetic utterance and write results and pictures.
-
-    Writes ``result.nc``, ``activity.csv``, ``kinematics.png``, ``activity.png``,
-    ``snapshot.png``, the viewer page ``view.html``, ``summary.json`` and (with ``video``)
-    ``movie.mp4`` into ``out_dir``.
-    ``preset`` names the parameter preset (:func:`facemech.params.preset`); ``integrator``
-    defaults to the preset's. ``render`` is a :class:`facemech.viz.video.RenderOptions`
-    (default: frontal and profile, 1280x720).
-    """
+def _write_figures(out: Path, sim, t, act, jaw, face, render, report) -> tuple[dict, object]:
+    """The demo's results, activity, figures, snapshot and viewer page written into ``out``;
+    (the files by kind, the scene drawn)."""
     from ..io.activity import write_activity
     from ..io.results import array_hash, write_results
-    from ..physics.model import model as face_model
-    from ..solvers.forward import simulate
-    from ..viz.movie import write_movie, write_snapshot
+    from ..viz.movie import write_snapshot
     from ..viz.plots import activity_figure, kinematics_figure
     from ..viz.render import RenderOptions
     from ..viz.scene import build_scene, look_from_model
     from ..viz.viewer import view_file
 
-    t0 = time.perf_counter()
-
-    def report(stage, done, total):
-        if progress is not None:
-            progress(stage, done, total)
-
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    report("build the face", 0, 1)
-    model = face_model("default", preset)
-    face, params = model.face, model.params
-    report("build the face", 1, 1)
-    t, act, jaw = utterance(params.frame_rate)
-
-    def step(stage):
-        return None if progress is None else (lambda d, n: progress(stage, d, n))
-
-    sim = simulate(model, act, jaw, integrator=integrator,
-                   progress=step("simulate"))
     files = {}
     report("write results and figures", 0, 5)
     write_activity(out / "activity.csv", t, act)
@@ -86,9 +55,52 @@ def run_demo(out_dir: str | Path, *, integrator: str | None = None, video: bool 
               title="facemech demo: /ba pi ma wu pa/ on the built-in face")
     files["viewer"] = "view.html"
     report("write results and figures", 5, 5)
+    return files, scene
+
+
+def run_demo(out_dir: str | Path, *, integrator: str | None = None, video: bool = True,
+             preset: str = "anatomical",
+             progress: Callable[[str, int, int], None] | None = None,
+             render=None) -> DemoSummary:
+    """Build the generic face, simulate the synthetic utterance and write results and pictures.
+
+    Writes ``result.nc``, ``activity.csv``, ``kinematics.png``, ``activity.png``,
+    ``snapshot.png``, the viewer page ``view.html``, ``summary.json`` and (with ``video``)
+    ``movie.mp4`` into ``out_dir``.
+    ``preset`` names the parameter preset (:func:`facemech.params.preset`); ``integrator``
+    defaults to the preset's. ``render`` is a :class:`facemech.viz.video.RenderOptions`
+    (default: frontal and profile, 1280x720).
+    """
+    from ..physics.model import model as face_model
+    from ..solvers.forward import simulate
+    from ..viz.render import RenderOptions
+
+    t0 = time.perf_counter()
+
+    def report(stage, done, total):
+        if progress is not None:
+            progress(stage, done, total)
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    report("build the face", 0, 1)
+    model = face_model("default", preset)
+    face, params = model.face, model.params
+    report("build the face", 1, 1)
+    t, act, jaw = utterance(params.frame_rate)
+
+    def step(stage):
+        return None if progress is None else (lambda d, n: progress(stage, d, n))
+
+    sim = simulate(model, act, jaw, integrator=integrator,
+                   progress=step("simulate"))
+    files, scene = _write_figures(out, sim, t, act, jaw, face, render, report)
     if video:
+        from ..viz.movie import write_movie
+
         write_movie(out / "movie.mp4", scene, sim.positions, sim.jaw_pose,
-                    fps=sim.params.frame_rate, options=opt, progress=step("render"))
+                    fps=sim.params.frame_rate, options=render or RenderOptions(),
+                    progress=step("render"))
         files["movie"] = "movie.mp4"
     lips = [face.landmarks[k] for k in ("upper_lip_center", "lower_lip_center",
                                         "mouth_corner_left", "mouth_corner_right")]

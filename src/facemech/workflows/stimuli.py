@@ -18,6 +18,7 @@ import json
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
+from typing import NamedTuple
 
 from ..errors import FacemechError, InputError
 from ..speech.design import (
@@ -124,9 +125,6 @@ def run_design(table_path: str | Path, out_dir: str | Path, make_item: MakeItem 
     -------
     DesignReport
     """
-    from ..analysis.describe import describe
-    from ..io.results import write_dataset
-
     table_path, out_dir = Path(table_path), Path(out_dir)
     parsed = check_design(table_path, make_item)  # the whole table, before anything is written
     specs = {spec.id: spec for spec in parsed}  # every row parsed: a RowError refused it
@@ -147,27 +145,8 @@ def run_design(table_path: str | Path, out_dir: str | Path, make_item: MakeItem 
                 report.skipped.append(spec.id)
                 _write_manifest(out_dir, table_path, render, entries, report)
                 continue
-            ds, audio, voice = _stimulus(spec, specs, make_item, cache)
-            lively = _row_call(spec, stimulus_liveliness, ds, voice, spec.settings)
-            ds.attrs["stimulus_id"] = spec.id
-            ds.attrs["stimulus_key"] = key
-            out_dir.mkdir(parents=True, exist_ok=True)
-            write_dataset(out_dir / outputs["results"], ds)
-            write_wav(out_dir / outputs["audio"], audio)
-            if video:
-                from ..viz.video import FrameMotion, render_results
-
-                render_results(ds, out_dir / outputs["movie"], options=options,
-                               audio=out_dir / outputs["audio"], source=spec.id,
-                               progress=None if progress is None else (
-                                   lambda d, n, s=spec.id: progress(f"render {s}", d, n)),
-                               motion=_motion(lively, FrameMotion))
-            desc = describe(ds, source=spec.id)
-            entries.append({"id": spec.id, "row": spec.row, "status": "made", "key": key,
-                            "settings": spec.settings, "source": spec.source,
-                            "inputs": inputs, "extra": spec.extra, "notes": spec.notes,
-                            "outputs": outputs, "description": desc.to_dict(),
-                            "flat": desc.flat(), "alive": lively.record()})
+            entries.append(_make_stimulus(spec, key, inputs, outputs, _DesignRun(
+                specs, make_item, cache, out_dir, options, video, progress)))
             report.made.append(spec.id)
         except RowError as exc:
             report.failed.append(with_source(exc, table_path))
@@ -183,6 +162,49 @@ def run_design(table_path: str | Path, out_dir: str | Path, make_item: MakeItem 
     if report.made or report.skipped:
         _write_manifest(out_dir, table_path, render, entries, report)
     return report
+
+
+class _DesignRun(NamedTuple):
+    """What every row of a design run shares: the parsed rows, the hook, the synthesis cache,
+    the output folder, the render options, whether movies are made and the progress."""
+
+    specs: dict
+    make_item: object
+    cache: dict
+    out_dir: Path
+    options: object
+    video: bool
+    progress: object
+
+
+def _make_stimulus(spec, key, inputs, outputs, run: _DesignRun) -> dict:
+    """One row's stimulus written into ``run.out_dir`` (its results, sound and, with
+    ``run.video``, movie, each atomically); its manifest entry."""
+    from ..analysis.describe import describe
+    from ..io.results import write_dataset
+
+    out_dir, options, progress = run.out_dir, run.options, run.progress
+
+    ds, audio, voice = _stimulus(spec, run.specs, run.make_item, run.cache)
+    lively = _row_call(spec, stimulus_liveliness, ds, voice, spec.settings)
+    ds.attrs["stimulus_id"] = spec.id
+    ds.attrs["stimulus_key"] = key
+    out_dir.mkdir(parents=True, exist_ok=True)
+    write_dataset(out_dir / outputs["results"], ds)
+    write_wav(out_dir / outputs["audio"], audio)
+    if run.video:
+        from ..viz.video import FrameMotion, render_results
+
+        render_results(ds, out_dir / outputs["movie"], options=options,
+                       audio=out_dir / outputs["audio"], source=spec.id,
+                       progress=None if progress is None else (
+                           lambda d, n, s=spec.id: progress(f"render {s}", d, n)),
+                       motion=_motion(lively, FrameMotion))
+    desc = describe(ds, source=spec.id)
+    return {"id": spec.id, "row": spec.row, "status": "made", "key": key,
+            "settings": spec.settings, "source": spec.source, "inputs": inputs,
+            "extra": spec.extra, "notes": spec.notes, "outputs": outputs,
+            "description": desc.to_dict(), "flat": desc.flat(), "alive": lively.record()}
 
 
 def _row_key(spec: Stimulus, specs: dict, make_item, render: dict, video: bool):
