@@ -260,3 +260,98 @@ def test_the_lips_part_along_the_model_lip_line(smiling):
     lips = (made.texture.lips.astype(float) / 255.0) @ np.array([0.2126, 0.7152, 0.0722])
     assert not (near & (luma < 0.6 * lips)).any()
     assert not (near & _tooth_coloured(image)).any()
+
+
+#: the hair colours measured on the portraits, CIELAB: (L* range, the most chroma, b* least)
+#: measured L* 46.9 (astronaut, golden brown: b* 25.8), 43.9 (obama, dark grey: chroma 7.8),
+#: 25.2 (obama2, black), 79.0 (biden, white: chroma 7.1)
+HAIR = {"astronaut": ((38, 58), 40, 15), "obama": ((30, 52), 14, -10),
+        "obama2": ((10, 35), 16, -10), "biden": ((70, 90), 12, -10)}
+
+
+@pytest.mark.parametrize("name", sorted(HAIR))
+def test_the_hair_colour_is_measured_above_the_forehead(detector, name):
+    """Dark for obama and obama2, light grey for biden, a warm brown for the astronaut; a
+    photo cropped at the brows has no hair to measure: the built-in colour, said in the note."""
+    from facemech.io.photo import frontal_landmarks
+    from facemech.viz.photo_hair import _lab, hair_colour
+
+    image = _read(f"{name}.jpg")
+    pts = frontal_landmarks(image, source=name, detector=detector).points
+    colour, note = hair_colour(image, pts)
+    lab = _lab(colour.astype(float))
+    (lo, hi), most_chroma, least_b = HAIR[name]
+    assert lo <= lab[0] <= hi and np.hypot(lab[1], lab[2]) <= most_chroma and lab[2] >= least_b
+    assert "from the photo" in note
+    top = int(pts[17:27, 1].min()) - 2
+    none, note = hair_colour(image[top:], pts - [0, top])
+    assert none is None and "built-in colour" in note
+
+
+def test_the_talker_hair_renders_in_the_photo_hair_colour(smiling):
+    """The talker's hair pixels in its frontal render at rest (the renderer's class map) have
+    the measured colour: their median within 8 sRGB levels a channel (measured at most 3 on
+    obama's portrait; 3, 5 and 10 on obama2, the astronaut and biden, whose white hair's
+    brightest strands clip); the colour is kept by the face file; the built-in face has none."""
+    from conftest import seen_triangles
+    from facemech.geometry.builder import default_face
+    from facemech.viz.look import look_from_model
+    from facemech.viz.render import Renderer
+    from facemech.viz.scene import build_scene
+
+    _, made = smiling
+    look = look_from_model(made.model)
+    assert look.hair is not None and np.array_equal(look.hair, made.texture.hair)
+    scene = build_scene(look)
+    render = Renderer(scene, "frontal", (480, 400), background="#8a9099", supersample=1)
+    image = render(look.rest)[..., :3]
+    verts, _ = scene.frame(look.rest, 0.0)
+    _, tid = seen_triangles(scene, verts, render.cameras[0])
+    starts = np.cumsum([0] + [len(p.faces) for p in scene.parts])
+    names = np.array([p.name for p in scene.parts] + ["none"])
+    hair = names[np.where(tid < 0, -1, np.searchsorted(starts, tid, side="right") - 1)] == "hair"
+    assert hair.sum() > 5000
+    median = np.median(image[hair].astype(float), axis=0)
+    assert np.abs(median - made.texture.hair).max() <= 8
+    assert look_from_model(default_face()).hair is None
+
+
+def test_the_hair_colour_is_kept_by_the_face_file_and_the_results(smiling, tmp_path):
+    import xarray as xr
+
+    from facemech.geometry.appearance import appearance_from_dataset, dataset_variables
+    from facemech.geometry.model import FaceModel
+
+    _, made = smiling
+    made.model.save(tmp_path / "talker.npz")
+    back = FaceModel.load(tmp_path / "talker.npz")
+    assert np.array_equal(back.appearance.hair, made.texture.hair)
+    variables, coords, attrs = dataset_variables(made.model.appearance)
+    ds = xr.Dataset(variables, coords=coords, attrs=attrs)
+    assert np.array_equal(appearance_from_dataset(ds).hair, made.texture.hair)
+
+
+def test_the_ears_take_the_photo_skin_tone(smiling):
+    """In profile at rest, the talker's ears (the renderer's class map) are the head's skin
+    tone: their median within 16 sRGB levels a channel of the head's beside them (measured 12
+    on obama's and 9 on biden's talker; the built-in pink ear was 57 off on biden's)."""
+    from conftest import seen_triangles
+    from facemech.viz.look import look_from_model
+    from facemech.viz.render import Renderer
+    from facemech.viz.scene import build_scene
+
+    _, made = smiling
+    look = look_from_model(made.model)
+    scene = build_scene(look)
+    render = Renderer(scene, "profile", (400, 400), background="#8a9099", supersample=1)
+    image = render(look.rest)[..., :3].astype(float)
+    verts, _ = scene.frame(look.rest, 0.0)
+    _, tid = seen_triangles(scene, verts, render.cameras[0])
+    starts = np.cumsum([0] + [len(p.faces) for p in scene.parts])
+    names = np.array([p.name for p in scene.parts] + ["none"])
+    part = names[np.where(tid < 0, -1, np.searchsorted(starts, tid, side="right") - 1)]
+    ear = np.isin(part, ["ear_left", "ear_right", "ear_left_back", "ear_right_back"])
+    assert ear.sum() > 1000
+    ear_colour = np.median(image[ear], axis=0)
+    head_colour = np.median(image[part == "head"], axis=0)
+    assert np.abs(ear_colour - head_colour).max() <= 16

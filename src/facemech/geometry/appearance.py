@@ -39,6 +39,8 @@ class Appearance:
         RGB colour of every surface vertex (epidermal node).
     source : str
         The file the appearance came from.
+    hair : (3,) uint8 array or None
+        The hair's colour (sRGB) measured on a photo; None: the renderer's own.
 
     Raises
     ------
@@ -51,6 +53,7 @@ class Appearance:
     image: np.ndarray | None = None
     vertex_colours: np.ndarray | None = None
     source: str = ""
+    hair: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         src = self.source or None
@@ -89,6 +92,12 @@ class Appearance:
                 raise InputError(f"vertex colours must be (vertices, 3) RGB, got {vc.shape}",
                                  source=src, field="vertex_colours")
             object.__setattr__(self, "vertex_colours", _as_uint8(vc, src, "vertex_colours"))
+        if self.hair is not None:
+            hair = np.asarray(self.hair).reshape(-1)
+            if hair.shape != (3,):
+                raise InputError(f"the hair colour must be (3,) RGB, got {hair.shape}",
+                                 source=src, field="hair")
+            object.__setattr__(self, "hair", _as_uint8(hair, src, "hair"))
         object.__setattr__(self, "source", str(self.source))
 
     # ---- views ---------------------------------------------------------------------------
@@ -139,7 +148,8 @@ class Appearance:
         if not isinstance(other, Appearance):
             return NotImplemented
         return all(_same(getattr(self, k), getattr(other, k))
-                   for k in ("uv", "image", "vertex_colours")) and self.source == other.source
+                   for k in ("uv", "image", "vertex_colours", "hair")) and (
+            self.source == other.source)
 
     __hash__ = None  # type: ignore[assignment]
 
@@ -187,6 +197,9 @@ def dataset_variables(appearance: Appearance | None) -> tuple[dict, dict, dict]:
     if appearance.vertex_colours is not None:
         variables["vertex_colour"] = (("node", "rgb"), appearance.vertex_colours,
                                       {"long_name": "RGB colour of each epidermal node"})
+    if appearance.hair is not None:
+        variables["hair_colour"] = (("rgb",), appearance.hair,
+                                    {"long_name": "sRGB colour of the hair"})
     return variables, coords, {"appearance_source": appearance.source}
 
 
@@ -199,7 +212,8 @@ def appearance_from_dataset(ds) -> Appearance | None:
     uv = ds["texture_uv"].values if "texture_uv" in ds else None
     image = ds["texture_image"].values if "texture_image" in ds else None
     colours = ds["vertex_colour"].values if "vertex_colour" in ds else None
+    hair = ds["hair_colour"].values if "hair_colour" in ds else None
     if uv is None and image is None and colours is None:
         return None
     return Appearance(uv=uv, image=image, vertex_colours=colours,
-                      source=str(ds.attrs.get("appearance_source", "")))
+                      source=str(ds.attrs.get("appearance_source", "")), hair=hair)

@@ -57,7 +57,8 @@ def face_arrays(model) -> dict[str, np.ndarray]:
     if model.appearance is not None:
         a = model.appearance
         appearance_source = a.source
-        for key, value in (("uv", a.uv), ("image", a.image), ("vertex_colours", a.vertex_colours)):
+        for key, value in (("uv", a.uv), ("image", a.image), ("vertex_colours", a.vertex_colours),
+                           ("hair", a.hair)):
             if value is not None:
                 arrays[f"appearance_{key}"] = value
     meta = {"format": FORMAT, "version": VERSION, "name": model.name,
@@ -132,7 +133,7 @@ def _face_from_arrays(data: dict, meta: dict, source: str, make: Callable[[dict,
                 uv=data.pop("appearance_uv", None),
                 image=data.pop("appearance_image", None),
                 vertex_colours=data.pop("appearance_vertex_colours", None),
-                source=meta["appearance_source"])
+                source=meta["appearance_source"], hair=data.pop("appearance_hair", None))
             appearance.check_surface(int(meta["n_surface"]), len(data["faces"]))
         except InputError as exc:
             raise InputError(exc.message, source=source,

@@ -11,7 +11,8 @@ is kept where its own random threshold lies under the hair's density, which ramp
 skin rather than a painted band's edge; the hairline itself wanders by up to 2 mm
 (low-frequency noise) round :func:`.head.hairline`. The strands' cut-outs are alpha-tested,
 only in that band, over a skin-coloured strip half way to the scalp (so that at the head's
-silhouette the gaps show skin, not the background).
+silhouette the gaps show skin, not the background). The strands' colour is the built-in
+:data:`.textures.HAIR`, or a colour measured on a photo (:func:`strand_base`).
 """
 
 from __future__ import annotations
@@ -32,6 +33,29 @@ WANDER = 0.002  #: m, the hairline's low-frequency wander
 HAIR_GLOSS = (0.06, 12.0)  #: specular strength and exponent of hair
 SKIN_GLOSS = (0.10, 16.0)  #: of the strip under the fringe (the skin's)
 UNDER_GAP = 0.00003  #: m, the strip under the fringe lies this far under the strands
+#: a strand's shade: the base colour times SHADE[0] + SHADE[1] rank + SHADE[2] lock, with its
+#: rank uniform in 0..1 and its lock's in -1..1 (median 0.87)
+SHADE = (0.62, 0.5, 0.18)
+#: the hair's normal a frontal view sees most, (3,): forward and up
+SEEN_NORMAL = np.array([0.0, 0.5, 0.866])
+
+
+def strand_base(colour: np.ndarray) -> np.ndarray:
+    """The strands' base colour (3,) sRGB in [0, 1] that renders as ``colour`` ((3,) uint8
+    sRGB, as a photo shows the hair) in a frontal view: the colour in linear light divided by
+    the renderer's diffuse light on :data:`SEEN_NORMAL`, back to sRGB, over the median
+    shade."""
+    from .raster import GROUND, LIGHTS, SKY, WRAP, srgb_to_linear, vertex_light
+
+    lights = np.concatenate([LIGHTS[:, :3] / np.linalg.norm(LIGHTS[:, :3], axis=1,
+                                                            keepdims=True), LIGHTS[:, 3:]],
+                            axis=1)
+    light = vertex_light(SEEN_NORMAL[None].astype(np.float64), np.array([HAIR_GLOSS]),
+                         lights, SKY, GROUND, WRAP)[0].astype(float)
+    lin = srgb_to_linear(np.asarray(colour, float) / 255.0).astype(float)
+    seen = np.clip(lin / light[0], 0.0, 1.0)
+    srgb = np.where(seen <= 0.0031308, 12.92 * seen, 1.055 * seen ** (1 / 2.4) - 0.055)
+    return np.clip(srgb / (SHADE[0] + 0.5 * SHADE[1]), 0.0, 1.0)
 
 
 def surface_radius(verts: np.ndarray, faces: np.ndarray, centre: np.ndarray, lat: np.ndarray,
@@ -66,7 +90,7 @@ def surface_radius(verts: np.ndarray, faces: np.ndarray, centre: np.ndarray, lat
 
 
 def hair_parts(verts: np.ndarray, faces: np.ndarray, centre: np.ndarray,
-               hairline) -> list[Part]:
+               hairline, colour: np.ndarray | None = None) -> list[Part]:
     """The hair layer over a closed head, and the skin-coloured strip under its fringe.
 
     Parameters
@@ -74,6 +98,7 @@ def hair_parts(verts: np.ndarray, faces: np.ndarray, centre: np.ndarray,
     verts, faces : the head's closed surface at rest (skin and closure), m
     centre : (3,) m, the head's centre
     hairline : function (longitude deg, 0 forward) -> height (m) of the hairline
+    colour : (3,) uint8 sRGB, the hair's colour as a photo shows it, or None (the built-in)
     """
     lat = np.arange(-60.0, 90.0 + 1e-9, STEP_DEG)
     lon = np.arange(-180.0, 180.0 + 1e-9, STEP_DEG)
@@ -94,7 +119,8 @@ def hair_parts(verts: np.ndarray, faces: np.ndarray, centre: np.ndarray,
     f = grid_faces(n_lat, n_lon)  # columns run towards +x from the front: outward
     keep = (above.ravel()[f] > -FRINGE).any(axis=1)
     f = f[keep]
-    tex, _ = _strand_texture(lat, lon, above)
+    base = T.HAIR if colour is None else strand_base(colour)
+    tex, _ = _strand_texture(lat, lon, above, base)
     tpd = TEXELS_PER_DEGREE
     u = (np.broadcast_to(lon[None, :], (n_lat, n_lon)) - lon[0]) * tpd
     v = (lat[-1] - np.broadcast_to(lat[:, None], (n_lat, n_lon))) * tpd
@@ -108,7 +134,7 @@ def hair_parts(verts: np.ndarray, faces: np.ndarray, centre: np.ndarray,
     uv[left, :, 1] += th + 2
     tex = np.concatenate([tex[:, :half + 1], np.repeat(tex[-1:, :half + 1], 2, axis=0),
                           tex[:, half:]])
-    albedo = np.tile(T.HAIR, (n_lat * n_lon, 1))
+    albedo = np.tile(base, (n_lat * n_lon, 1))
     hair = Part("hair", pts.reshape(-1, 3), f, albedo, HAIR_GLOSS, "skull", uv, tex,
                 alpha_test=True)
     # under the fringe, just under the strands, a skin-coloured strip: between the strands one
@@ -144,9 +170,10 @@ def _wander(lon: np.ndarray) -> np.ndarray:
     return WANDER * w / np.abs(w).max()
 
 
-def _strand_texture(lat: np.ndarray, lon: np.ndarray, above: np.ndarray):
-    """RGBA strands over the hair layer's (lon, lat) grid, row 0 at the top latitude, and the
-    density (texels) of the fringe."""
+def _strand_texture(lat: np.ndarray, lon: np.ndarray, above: np.ndarray,
+                    base: np.ndarray = T.HAIR):
+    """RGBA strands of ``base`` colour (sRGB) over the hair layer's (lon, lat) grid, row 0 at
+    the top latitude, and the density (texels) of the fringe."""
     from scipy import ndimage
 
     tpd = TEXELS_PER_DEGREE
@@ -169,6 +196,6 @@ def _strand_texture(lat: np.ndarray, lon: np.ndarray, above: np.ndarray):
     lock = ndimage.gaussian_filter(rng.standard_normal((th, tw)), (12.0, 4.0),
                                    mode=("nearest", "wrap"))
     lock = np.tanh(lock / (lock.std() + 1e-12))
-    shade = 0.62 + 0.5 * rank[..., None] + 0.18 * lock[..., None]
-    rgb = np.clip(T.HAIR * shade, 0, 1)
+    shade = SHADE[0] + SHADE[1] * rank[..., None] + SHADE[2] * lock[..., None]
+    rgb = np.clip(base * shade, 0, 1)
     return np.concatenate([rgb, alpha[..., None]], axis=-1), density

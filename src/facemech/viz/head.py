@@ -196,7 +196,7 @@ def closed_head(look: FaceLook) -> list[Part] | None:
     n = len(look.rest)
     verts = np.concatenate([look.rest, closure.rest])
     faces = np.concatenate([look.triangles, closure.joint_faces(n)])
-    hair = hair_parts(verts, faces, c, lambda lon: hairline(lon, top, nasion[1]))
+    hair = hair_parts(verts, faces, c, lambda lon: hairline(lon, top, nasion[1]), look.hair)
     if look.textured:
         # the strip under the fringe takes the colour of the skin or head nearest it, as the
         # plain skin's strip has the plain skin's (it shows below the strands' ends)
@@ -215,6 +215,12 @@ def closed_head(look: FaceLook) -> list[Part] | None:
     stops = skin_stops_at_the_ears(look)
     ears = [p for p in auricles(verts, vertex_normals(verts, faces), nasion)
             if sides[p.name.removesuffix("_back")] in stops]
+    if look.textured:
+        # a textured face's ears in its own skin tone: the built-in ear's colour (and its
+        # hollows' shading) scaled by the tone over the built-in skin's, channel by channel
+        from dataclasses import replace
+
+        ears = [replace(p, albedo=np.clip(p.albedo * tone / T.SKIN, 0.0, 1.0)) for p in ears]
     return [head, *hair, *ears]
 
 

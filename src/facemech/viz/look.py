@@ -29,6 +29,7 @@ class FaceLook:
     uv : (f, 3, 2) per-corner texture coordinates in [0, 1] (v up), or None
     image : (h, w, 3) uint8 texture, or None
     vertex_colours : (n, 3) uint8, or None
+    hair : (3,) uint8 sRGB, the hair's colour measured on a photo, or None (the renderer's)
     """
 
     rest: np.ndarray
@@ -40,6 +41,7 @@ class FaceLook:
     uv: np.ndarray | None = None
     image: np.ndarray | None = None
     vertex_colours: np.ndarray | None = None
+    hair: np.ndarray | None = None
 
     @property
     def textured(self) -> bool:
@@ -82,15 +84,15 @@ def look_from_model(model) -> FaceLook:
 
 
 def _appearance(source):
-    """(uv, image, vertex colours) of a model or dataset carrying a scan's appearance."""
+    """(uv, image, vertex colours, hair) of a model or dataset carrying a scan's appearance."""
     try:
         from ..geometry import appearance as A
     except ImportError:
-        return None, None, None
+        return None, None, None, None
     if hasattr(source, "attrs") and hasattr(source, "data_vars"):
         app = A.appearance_from_dataset(source)
     else:
         app = getattr(source, "appearance", None)
     if app is None:
-        return None, None, None
-    return app.uv, app.image, app.vertex_colours
+        return None, None, None, None
+    return app.uv, app.image, app.vertex_colours, app.hair

@@ -11,10 +11,11 @@ angle or not at all (the sides towards the ears, under the chin).
 The photo's expression is not the talker's skin: its lips, teeth and mouth interior are not
 painted on it (:func:`_neutral_mouth`). Texels on the fitted (closed) lips take the photo's lip
 colour, those around them the skin near the mouth; hair over the forehead gives way to the skin
-tone (:func:`_hair_free`). The renderer lights the texture
-(:func:`facemech.viz.raster.vertex_light`); a photo is already lit. With ``delight`` the photo is
-divided by the renderer's own light at each texel's normal (seen from the front), so that a
-frontal re-render gives the photo's colours back.
+tone (:func:`_hair_free`); the hair's colour is measured above the forehead
+(:func:`.photo_hair.hair_colour`) and kept with the texture for the renderer's hair. The
+renderer lights the texture (:func:`facemech.viz.raster.vertex_light`); a photo is already
+lit. With ``delight`` the photo is divided by the renderer's own light at each texel's normal
+(seen from the front), so that a frontal re-render gives the photo's colours back.
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ from ..geometry import generic
 from ..geometry.appearance import Appearance
 from ..geometry.mesh import vertex_normals
 from ..geometry.photo_fit import PhotoFit
+from .photo_hair import hair_colour
 
 #: texels of the baked texture, (height, width)
 TEXTURE_SIZE = (1024, 1024)
@@ -56,12 +58,17 @@ class BakedTexture:
     skin : (3,) uint8, the skin tone the unseen parts are painted with (sRGB)
     lips : (3,) uint8, the lip colour painted on the fitted lips (sRGB), or None where the
         photo's lips are not seen
+    hair : (3,) uint8, the hair's colour (sRGB), or None where no hair is found (the
+        renderer keeps its own)
+    note : a phrase on the hair's colour
     """
 
     appearance: Appearance
     coverage: np.ndarray
     skin: np.ndarray
     lips: np.ndarray | None = None
+    hair: np.ndarray | None = None
+    note: str = ""
 
 
 def grid_uv(fit: PhotoFit) -> np.ndarray:
@@ -124,10 +131,10 @@ def bake_photo_texture(fit: PhotoFit, photo: np.ndarray, *, delight: bool = True
     out = weight[:, None] * colour + (1 - weight[:, None]) * fill
     image = _linear_to_srgb8(out).reshape(th, tw, 3)
     corner_uv = uv[fit.faces].astype(np.float32)
-    app = Appearance(uv=corner_uv, image=image, source=source)
-
+    hair, note = hair_colour(photo, fit.image_points)
+    app = Appearance(uv=corner_uv, image=image, source=source, hair=hair)
     return BakedTexture(app, weight.reshape(th, tw), _linear_to_srgb8(skin),
-                        None if lips is None else _linear_to_srgb8(lips))
+                        None if lips is None else _linear_to_srgb8(lips), hair, note)
 
 
 def _lerp_axis(values: np.ndarray, at: np.ndarray, to: np.ndarray, axis: int) -> np.ndarray:

@@ -157,4 +157,4 @@ def face_from_photo_file(front: str | Path, output: str | Path, *,
                    f"{'' if profile is None else ' and ' + Path(profile).name}: "
                    f"{s['nodes_per_layer']['epidermis']} nodes per layer, {s['muscles']} "
                    f"muscles, {seen:.0%} of the texture from the photo -> {output}",
-                   f"facemech: note: {made.fit.note()}\n")
+                   f"facemech: note: {made.fit.note()}; {made.texture.note}\n")
