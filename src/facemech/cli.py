@@ -48,8 +48,10 @@ def command(group: typer.Typer = app, name: str | None = None, args: tuple[str, 
     def register(fn):
         @functools.wraps(fn)
         def run(**kw):
+            from .inverse.columns import column_workers
             from .physics.threads import set_threads
             set_threads(_threads[0])  # numba's, for this command (--threads, FACEMECH_THREADS)
+            column_workers()  # FACEMECH_WORKERS checked before anything runs
             for key, value in kw.items():
                 if isinstance(value, int | float) and not isinstance(value, bool):
                     flags = specs[key].flags if key in specs else opts.NAMES.get(

@@ -59,3 +59,17 @@ def test_step_responses_the_same_on_one_and_two_processes(seeds_face, monkeypatc
     np.testing.assert_array_equal(got["1"], got["2"])
     # every column moves the lips (mm per unit, after 3 ms: 0.01-0.04)
     assert np.all(np.abs(got["1"]).max(axis=0) > 5e-3)
+
+
+def test_a_bad_worker_count_refused_before_a_command_runs(tmp_path):
+    import os
+    import subprocess
+    import sys
+
+    out = tmp_path / "out.nc"
+    env = dict(os.environ, FACEMECH_WORKERS="zero", FACEMECH_WARMUP="0")
+    run = subprocess.run([sys.executable, "-m", "facemech", "simulate", "-o", str(out)],
+                         env=env, capture_output=True, text=True, timeout=120)
+    assert run.returncode == 2
+    assert "FACEMECH_WORKERS" in run.stderr and "Traceback" not in run.stderr
+    assert not out.exists()
