@@ -427,11 +427,11 @@ def test_the_open_rounded_vowel():
 
 
 def test_the_command_lines_default_is_the_planners():
-    from facemech.cli_options import GROUPS
     from facemech.speech.planning import PLAN_ITERATIONS
+    from facemech.workflows.inputs import Speaking
 
-    assert GROUPS["articulation"]["plan_iterations"] == (int, PLAN_ITERATIONS)
-    assert GROUPS["articulation"]["plan"] == (bool, True)
+    assert Speaking().plan_iterations == PLAN_ITERATIONS
+    assert Speaking().plan is True
 
 
 def test_a_short_closure_widens_and_raises_its_bilabials_dominance():
