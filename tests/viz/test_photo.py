@@ -14,6 +14,7 @@ import pytest
 from conftest import run_cli
 from facemech.geometry import generic
 from facemech.geometry.ibug import generic_ibug68
+from photo_render import rerender
 
 pytest.importorskip("dlib")
 pytest.importorskip("face_recognition_models")
@@ -102,20 +103,7 @@ def _fit(subject, points, *, offsets="dlib", profile=False, ipd="known"):
 
 def _rerender(made, size=SIZE) -> np.ndarray:
     """The fitted face rendered through the photo's fitted camera (frontal), (h, w, 3)."""
-    from facemech.viz.camera import Camera
-    from facemech.viz.look import look_from_model
-    from facemech.viz.render import parse_background, render_panel
-    from facemech.viz.scene import build_scene
-
-    h, w = size
-    look = look_from_model(made.model)
-    scene = build_scene(look)
-    c = made.fit.camera
-    target = c.back_project(np.array([[w / 2, h / 2]]), np.array([c.plane_z]))[0]
-    cam = Camera(np.eye(3), target, c.metres_per_px * h / 2, (h, w), c.distance)
-    verts, norms = scene.frame(look.rest, 0.0)
-    return render_panel(scene, verts, norms, cam, background=parse_background("#8a9099"))[
-        ..., :3]
+    return rerender(made, size)
 
 
 def _face_region(points: np.ndarray, size=SIZE) -> np.ndarray:
